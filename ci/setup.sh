@@ -1,0 +1,37 @@
+#!/usr/bin/env bash
+# Installs every Debian 12 package hpa-sim needs. Idempotent; run as root.
+# Why each package is here is in README.md ("Dependencies").
+set -euo pipefail
+
+packages=(
+  build-essential cmake ninja-build pkg-config git
+  libmujoco-dev            # physics (MuJoCo 2.2.2) and its renderer
+  libosmesa6-dev           # headless OpenGL context for off-screen camera rendering
+  libeigen3-dev            # linear algebra in models, estimator, controller
+  libopencv-core-dev libopencv-imgproc-dev libopencv-imgcodecs-dev libopencv-videoio-dev
+                           # payload detector, PNG frames and plots, MP4 video
+  libnlopt-cxx-dev         # fully converged NMPC solve (checks the RTI solver)
+  libyaml-cpp-dev          # params.yaml, scenario and sweep files
+  libgtest-dev libgmock-dev  # unit and integration tests
+  libbenchmark-dev         # mpc_bench and other benchmarks
+  parallel                 # shard sweeps across processes/machines (CI runs two shards)
+)
+
+if [ "$(id -u)" -ne 0 ]; then
+  echo "ci/setup.sh: must run as root (apt-get install)" >&2
+  exit 1
+fi
+
+missing=()
+for p in "${packages[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if [ ${#missing[@]} -eq 0 ]; then
+  echo "ci/setup.sh: all ${#packages[@]} packages already installed"
+  exit 0
+fi
+echo "ci/setup.sh: installing ${missing[*]}"
+export DEBIAN_FRONTEND=noninteractive
+apt-get update -qq
+apt-get install -y -qq --no-install-recommends "${missing[@]}"
+echo "ci/setup.sh: done"

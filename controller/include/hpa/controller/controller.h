@@ -1,0 +1,49 @@
+#pragma once
+// The interface every high-level controller (hpa_mpc, nonhybrid_mpc, geometric) offers the
+// runner, and the factory that builds one from a scenario's controller block.
+
+#include <memory>
+#include <string>
+
+#include "hpa/controller/reference.h"
+#include "hpa/models/params.h"
+#include "hpa/models/state.h"
+
+namespace hpa {
+
+/// What happened in one controller update (acados-style status codes).
+enum class ControlStatus { kSuccess, kMaxIterations, kQpFailure, kNonFinite, kFallback };
+
+/// Name of a status for logs.
+const char* ToString(ControlStatus status);
+
+/// One controller update's result; `command` is always safe to fly.
+struct ControlOutput {
+  BodyRateCommand command;                 // body rates and collective thrust for the rate loop
+  ControlStatus status = ControlStatus::kSuccess;
+  double solve_time_ms = 0.0;              // wall time of this update
+  double cost = 0.0;                       // optimal-control cost of the plan (0 if not an MPC)
+};
+
+/// Settings of a controller from the scenario's `controller:` block.
+struct ControllerConfig {
+  std::string type = "hpa_mpc";     // hpa_mpc | nonhybrid_mpc | geometric
+  double perception_weight = 1.0;   // scale on the tuned Q_cam; 0 turns L_cam off
+  std::string solver = "rti";       // rti | nlopt (fully converged NMPC solve)
+};
+
+/// A high-level controller running at its own rate (150 Hz for the MPCs).
+class Controller {
+ public:
+  virtual ~Controller() = default;
+  /// Computes the command from the (estimated or true) state at time state.time_s.
+  virtual ControlOutput Update(const SystemState& state) = 0;
+  /// Rate the runner should call Update at.
+  virtual double RateHz() const = 0;
+};
+
+/// Builds the controller named in config.type; throws std::invalid_argument for unknown types.
+std::unique_ptr<Controller> MakeController(const ControllerConfig& config, const Params& params,
+                                           std::shared_ptr<const Reference> reference);
+
+}  // namespace hpa

@@ -1,0 +1,86 @@
+#include "hpa/models/params.h"
+
+#include <Eigen/LU>
+#include <cmath>
+
+#include "hpa/models/input_error.h"
+#include "hpa/models/yaml_reader.h"
+
+namespace hpa {
+
+double Params::HoverMotorSpeedRadps() const {
+  return std::sqrt(HoverThrustN() / (4.0 * k_f_N_per_radps2));
+}
+
+double Params::CameraFocalPx() const {
+  return 0.5 * camera_height_px / std::tan(0.5 * camera_fovy_deg * M_PI / 180.0);
+}
+
+std::string DefaultParamsPath() { return std::string(HPA_SOURCE_DIR) + "/models/params.yaml"; }
+
+Params LoadParams(const std::string& path) {
+  const YamlMap root = YamlMap::LoadFile(path);
+  Params p;
+  p.gravity_mps2 = root.Number("gravity_mps2", 0.1, 100.0);
+
+  const YamlMap quad = root.Map("quadrotor");
+  p.quad_mass_kg = quad.Number("mass_kg", 0.01, 100.0);
+  p.inertia_B_kgm2 = quad.Vector("inertia_kgm2", 3, 1e-6, 10.0);
+  p.arm_length_m = quad.Number("arm_length_m", 0.01, 5.0);
+  p.body_half_size_m = quad.Vector("body_half_size_m", 3, 1e-3, 5.0);
+  quad.RejectUnknownKeys();
+
+  const YamlMap rotor = root.Map("rotor");
+  p.k_f_N_per_radps2 = rotor.Number("k_f_N_per_radps2", 1e-12, 1.0);
+  p.k_m_Nm_per_radps2 = rotor.Number("k_m_Nm_per_radps2", 1e-14, 1.0);
+  p.motor_time_constant_s = rotor.Number("motor_time_constant_s", 1e-4, 1.0);
+  p.motor_speed_min_radps = rotor.Number("motor_speed_min_radps", 0.0, 1e5);
+  p.motor_speed_max_radps = rotor.Number("motor_speed_max_radps", 1.0, 1e5);
+  if (p.motor_speed_max_radps <= p.motor_speed_min_radps) {
+    rotor.Fail("motor_speed_max_radps", "must be above motor_speed_min_radps");
+  }
+  rotor.RejectUnknownKeys();
+
+  const YamlMap payload = root.Map("payload");
+  p.payload_mass_kg = payload.Number("mass_kg", 1e-3, 100.0);
+  p.payload_radius_m = payload.Number("radius_m", 1e-3, 1.0);
+  payload.RejectUnknownKeys();
+
+  const YamlMap cable = root.Map("cable");
+  p.cable_length_m = cable.Number("length_m", 0.05, 10.0);
+  p.slack_epsilon_m = cable.Number("slack_epsilon_m", 0.0, 1.0);
+  cable.RejectUnknownKeys();
+
+  const YamlMap cam = root.Map("payload_camera");
+  p.camera_width_px = static_cast<int>(cam.Integer("width_px", 16, 8192));
+  p.camera_height_px = static_cast<int>(cam.Integer("height_px", 16, 8192));
+  p.camera_fovy_deg = cam.Number("fovy_deg", 1.0, 170.0);
+  p.t_BC_B_m = cam.Vector("t_BC_B_m", 3, -5.0, 5.0);
+  const YAML::Node r = cam.Node("R_BC");
+  const std::string r_expect = "expected a 3x3 rotation matrix as a list of 3 rows";
+  if (!r.IsSequence() || r.size() != 3) cam.Fail("R_BC", r_expect);
+  for (int i = 0; i < 3; ++i) {
+    if (!r[i].IsSequence() || r[i].size() != 3) cam.Fail("R_BC", r_expect);
+    for (int j = 0; j < 3; ++j) {
+      try {
+        p.R_BC(i, j) = r[i][j].as<double>();
+      } catch (const YAML::Exception&) {
+        cam.Fail("R_BC", r_expect);
+      }
+    }
+  }
+  if (!(p.R_BC.transpose() * p.R_BC).isIdentity(1e-9) || std::abs(p.R_BC.determinant() - 1) > 1e-9) {
+    cam.Fail("R_BC", "not a rotation (R^T R != I or det != 1)");
+  }
+  cam.RejectUnknownKeys();
+
+  const YamlMap vio = root.Map("vio_camera");
+  p.vio_width_px = static_cast<int>(vio.Integer("width_px", 16, 8192));
+  p.vio_height_px = static_cast<int>(vio.Integer("height_px", 16, 8192));
+  vio.RejectUnknownKeys();
+
+  root.RejectUnknownKeys();
+  return p;
+}
+
+}  // namespace hpa

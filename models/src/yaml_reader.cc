@@ -1,0 +1,151 @@
+#include "hpa/models/yaml_reader.h"
+
+#include <cmath>
+#include <fstream>
+#include <sstream>
+
+#include "hpa/models/input_error.h"
+
+namespace hpa {
+namespace {
+
+std::string Range(double min, double max) {
+  std::ostringstream out;
+  out << "[" << min << ", " << max << "]";
+  return out.str();
+}
+
+}  // namespace
+
+YamlMap::YamlMap(YAML::Node node, std::string file, std::string path)
+    : node_(std::move(node)), file_(std::move(file)), path_(std::move(path)) {
+  if (!node_.IsMap()) {
+    throw InputError(file_, path_, "expected a map of keys");
+  }
+}
+
+YamlMap YamlMap::LoadFile(const std::string& file) {
+  std::ifstream in(file);
+  if (!in) throw InputError(file, "", "cannot open file");
+  YAML::Node root;
+  try {
+    root = YAML::Load(in);
+  } catch (const YAML::Exception& e) {
+    throw InputError(file, "", std::string("malformed YAML: ") + e.what());
+  }
+  if (!root.IsMap()) throw InputError(file, "", "expected a YAML map at the top level");
+  return YamlMap(root, file, "");
+}
+
+std::string YamlMap::KeyPath(const std::string& key) const {
+  return path_.empty() ? key : path_ + "." + key;
+}
+
+void YamlMap::Fail(const std::string& key, const std::string& what) const {
+  throw InputError(file_, KeyPath(key), what);
+}
+
+bool YamlMap::Has(const std::string& key) const { return static_cast<bool>(node_[key]); }
+
+YAML::Node YamlMap::Get(const std::string& key) const {
+  YAML::Node n = node_[key];
+  if (!n) Fail(key, "missing required key");
+  read_.insert(key);
+  return n;
+}
+
+double YamlMap::Number(const std::string& key, double min, double max) const {
+  YAML::Node n = Get(key);
+  double v = 0.0;
+  try {
+    if (!n.IsScalar()) throw YAML::Exception(YAML::Mark(), "");
+    v = n.as<double>();
+  } catch (const YAML::Exception&) {
+    Fail(key, "expected a number in " + Range(min, max));
+  }
+  if (!std::isfinite(v) || v < min || v > max) {
+    std::ostringstream out;
+    out << "value " << v << " out of range, expected a number in " << Range(min, max);
+    Fail(key, out.str());
+  }
+  return v;
+}
+
+double YamlMap::Number(const std::string& key, double min, double max, double fallback) const {
+  return Has(key) ? Number(key, min, max) : fallback;
+}
+
+long YamlMap::Integer(const std::string& key, long min, long max) const {
+  const double v = Number(key, static_cast<double>(min), static_cast<double>(max));
+  if (v != std::floor(v)) Fail(key, "expected an integer in " + Range(min, max));
+  return static_cast<long>(v);
+}
+
+long YamlMap::Integer(const std::string& key, long min, long max, long fallback) const {
+  return Has(key) ? Integer(key, min, max) : fallback;
+}
+
+bool YamlMap::Bool(const std::string& key, bool fallback) const {
+  if (!Has(key)) return fallback;
+  YAML::Node n = Get(key);
+  try {
+    return n.as<bool>();
+  } catch (const YAML::Exception&) {
+    Fail(key, "expected true or false");
+  }
+}
+
+std::string YamlMap::String(const std::string& key) const {
+  YAML::Node n = Get(key);
+  if (!n.IsScalar()) Fail(key, "expected a string");
+  return n.as<std::string>();
+}
+
+std::string YamlMap::String(const std::string& key, const std::string& fallback) const {
+  return Has(key) ? String(key) : fallback;
+}
+
+std::string YamlMap::Choice(const std::string& key, const std::vector<std::string>& allowed,
+                            const std::string& fallback) const {
+  const std::string v = String(key, fallback);
+  for (const auto& a : allowed) {
+    if (v == a) return v;
+  }
+  std::string list;
+  for (const auto& a : allowed) list += (list.empty() ? "" : " | ") + a;
+  Fail(key, "unknown value '" + v + "', expected one of: " + list);
+}
+
+Eigen::VectorXd YamlMap::Vector(const std::string& key, int size, double min, double max) const {
+  YAML::Node n = Get(key);
+  std::ostringstream expect;
+  expect << "expected a list of " << size << " numbers in " << Range(min, max);
+  if (!n.IsSequence() || static_cast<int>(n.size()) != size) Fail(key, expect.str());
+  Eigen::VectorXd v(size);
+  for (int i = 0; i < size; ++i) {
+    try {
+      v(i) = n[i].as<double>();
+    } catch (const YAML::Exception&) {
+      Fail(key, expect.str());
+    }
+    if (!std::isfinite(v(i)) || v(i) < min || v(i) > max) Fail(key, expect.str());
+  }
+  return v;
+}
+
+YamlMap YamlMap::Map(const std::string& key) const {
+  YAML::Node n = Get(key);
+  if (!n.IsMap()) Fail(key, "expected a map of keys");
+  return YamlMap(n, file_, KeyPath(key));
+}
+
+YAML::Node YamlMap::Node(const std::string& key) const { return Get(key); }
+
+void YamlMap::RejectUnknownKeys() const {
+  for (const auto& kv : node_) {
+    const std::string key = kv.first.as<std::string>();
+    if (read_.count(key) == 0) Fail(key, "unknown key");
+  }
+}
+
+}  // namespace hpa

@@ -1,0 +1,147 @@
+#include "hpa/models/hybrid_model.h"
+
+#include <gtest/gtest.h>
+
+#include <random>
+
+#include "hpa/models/rotor_model.h"
+
+namespace hpa {
+namespace {
+
+// A swinging, rotating, accelerating taut state (cable length exactly l).
+StateVector SwingingState(const Params& p) {
+  SystemState s;
+  s.p_WQ_W = Eigen::Vector3d(0.1, -0.2, 1.5);
+  const Eigen::Vector3d xi = Eigen::Vector3d(0.3, -0.2, -1.0).normalized();
+  s.p_WL_W = s.p_WQ_W + p.cable_length_m * xi;
+  s.v_WQ_W = Eigen::Vector3d(0.5, 0.2, -0.1);
+  const Eigen::Vector3d xi_dot = Eigen::Vector3d(0.4, 0.7, 0.0).cross(xi);
+  s.v_WL_W = s.v_WQ_W + p.cable_length_m * xi_dot;
+  s.q_WB = Eigen::AngleAxisd(0.3, Eigen::Vector3d(1, 2, 0.5).normalized());
+  s.w_B = Eigen::Vector3d(0.5, -0.3, 0.2);
+  return s.ToVector();
+}
+
+InputVector SomeInput(const Params& p) {
+  return InputVector(1.05, 0.95, 1.02, 0.98) * p.HoverMotorSpeedRadps();
+}
+
+// Central differences of f around (x, u); step 1e-6 relative to a value of order 1 to 1e3.
+template <typename F>
+void FiniteDifferences(const F& f, const StateVector& x, const InputVector& u, StateMatrix* a,
+                       InputMatrix* b) {
+  for (int i = 0; i < kNx; ++i) {
+    const double h = 1e-6;
+    StateVector xp = x, xm = x;
+    xp(i) += h;
+    xm(i) -= h;
+    a->col(i) = (f(xp, u) - f(xm, u)) / (2 * h);
+  }
+  for (int i = 0; i < kNu; ++i) {
+    const double h = 1e-3;  // rotor speeds are ~1e3 rad/s
+    InputVector up = u, um = u;
+    up(i) += h;
+    um(i) -= h;
+    b->col(i) = (f(x, up) - f(x, um)) / (2 * h);
+  }
+}
+
+class HybridModelJacobianTest : public testing::TestWithParam<CableMode> {};
+
+TEST_P(HybridModelJacobianTest, ContinuousJacobiansMatchFiniteDifferences) {
+  const Params p;
+  const HybridModel model(p);
+  const StateVector x = SwingingState(p);
+  const InputVector u = SomeInput(p);
+  StateVector x_dot;
+  StateMatrix a, a_fd;
+  InputMatrix b, b_fd;
+  model.DerivativeJacobians(x, u, GetParam(), &x_dot, &a, &b);
+  FiniteDifferences([&](const StateVector& xx, const InputVector& uu) {
+    return model.Derivative(xx, uu, GetParam());
+  }, x, u, &a_fd, &b_fd);
+  EXPECT_LT((x_dot - model.Derivative(x, u, GetParam())).norm(), 1e-12);
+  // central differences with h = 1e-6 on O(100) second derivatives: truncation ~1e-10,
+  // round-off ~1e-16 * |f| / h ~ 1e-8; bound 1e-6 leaves 100x margin
+  EXPECT_LT((a - a_fd).cwiseAbs().maxCoeff(), 1e-6);
+  EXPECT_LT((b - b_fd).cwiseAbs().maxCoeff(), 1e-6);
+}
+
+TEST_P(HybridModelJacobianTest, DiscreteJacobiansMatchFiniteDifferences) {
+  const Params p;
+  const HybridModel model(p);
+  const StateVector x = SwingingState(p);
+  const InputVector u = SomeInput(p);
+  const double dt_s = 0.1;  // the MPC's stage length
+  StateVector x_next;
+  StateMatrix a, a_fd;
+  InputMatrix b, b_fd;
+  model.StepJacobians(x, u, GetParam(), dt_s, &x_next, &a, &b);
+  FiniteDifferences([&](const StateVector& xx, const InputVector& uu) {
+    return model.Step(xx, uu, GetParam(), dt_s);
+  }, x, u, &a_fd, &b_fd);
+  EXPECT_LT((x_next - model.Step(x, u, GetParam(), dt_s)).norm(), 1e-12);
+  EXPECT_LT((a - a_fd).cwiseAbs().maxCoeff(), 1e-6);
+  EXPECT_LT((b - b_fd).cwiseAbs().maxCoeff(), 1e-6);
+}
+
+INSTANTIATE_TEST_SUITE_P(BothModes, HybridModelJacobianTest,
+                         testing::Values(CableMode::kTaut, CableMode::kSlack));
+
+TEST(HybridModelTest, HoverIsAnEquilibriumWithTensionMLg) {
+  const Params p;
+  const HybridModel model(p);
+  const StateVector x = model.HoverState(Eigen::Vector3d(0, 0, 1.2));
+  const InputVector u = InputVector::Constant(p.HoverMotorSpeedRadps());
+  EXPECT_LT(model.Derivative(x, u, CableMode::kTaut).norm(), 1e-9);
+  EXPECT_NEAR(model.TautTensionN(x, u), p.payload_mass_kg * p.gravity_mps2, 1e-9);
+  // slack: the payload falls at g, the quadrotor rises (thrust carries both masses)
+  const StateVector x_dot = model.Derivative(x, u, CableMode::kSlack);
+  EXPECT_NEAR(x_dot(StateIndex::kPayloadVel + 2), -p.gravity_mps2, 1e-12);
+  EXPECT_NEAR(x_dot(StateIndex::kQuadVel + 2),
+              p.HoverThrustN() / p.quad_mass_kg - p.gravity_mps2, 1e-9);
+}
+
+TEST(HybridModelTest, QuaternionStaysUnitAndCableLengthHolds) {
+  const Params p;
+  const HybridModel model(p);
+  StateVector x = SwingingState(p);
+  std::mt19937_64 rng(3);
+  std::uniform_real_distribution<double> jitter(0.9, 1.1);
+  double max_length_error_m = 0.0;
+  for (int k = 0; k < 2000; ++k) {  // 20 s at 10 ms
+    InputVector u;
+    for (int i = 0; i < kNu; ++i) u(i) = p.HoverMotorSpeedRadps() * jitter(rng);
+    x = model.Step(x, u, CableMode::kTaut, 0.01);
+    ASSERT_NEAR(x.segment<4>(StateIndex::kQuat).norm(), 1.0, 1e-12);
+    const double d = (x.segment<3>(StateIndex::kPayloadPos) -
+                      x.segment<3>(StateIndex::kQuadPos)).norm();
+    max_length_error_m = std::max(max_length_error_m, std::abs(d - p.cable_length_m));
+  }
+  // Baumgarte terms hold the constraint; measured drift ~1e-6 m, bound 1 mm
+  EXPECT_LT(max_length_error_m, 1e-3);
+}
+
+TEST(HybridModelTest, Rk4OneStepErrorAgainstFineIntegration) {
+  const Params p;
+  const HybridModel model(p);
+  const StateVector x = SwingingState(p);
+  const InputVector u = SomeInput(p);
+  for (CableMode mode : {CableMode::kTaut, CableMode::kSlack}) {
+    // reference: 1000 RK4 substeps of 0.1 ms over the MPC's 0.1 s stage
+    StateVector x_ref = x;
+    for (int k = 0; k < 1000; ++k) x_ref = model.Step(x_ref, u, mode, 1e-4);
+    const StateVector x_one = model.Step(x, u, mode, 0.1);
+    const double pos_error_m = std::max(
+        (x_one - x_ref).segment<3>(StateIndex::kPayloadPos).norm(),
+        (x_one - x_ref).segment<3>(StateIndex::kQuadPos).norm());
+    RecordProperty(std::string("rk4_stage_pos_error_m_") + ToString(mode),
+                   std::to_string(pos_error_m));
+    // measured 1e-5 (taut) and 1e-6 (slack) m; 1 mm bound is what the MPC needs over a stage
+    EXPECT_LT(pos_error_m, 1e-3) << ToString(mode);
+  }
+}
+
+}  // namespace
+}  // namespace hpa

@@ -1,0 +1,65 @@
+#include "hpa/models/params.h"
+
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <fstream>
+
+#include "hpa/models/input_error.h"
+
+namespace hpa {
+namespace {
+
+std::string WriteTemp(const std::string& text) {
+  const std::string path = testing::TempDir() + "/params_test.yaml";
+  std::ofstream(path) << text;
+  return path;
+}
+
+std::string ReadDefault() {
+  std::ifstream in(DefaultParamsPath());
+  return std::string(std::istreambuf_iterator<char>(in), {});
+}
+
+TEST(ParamsTest, DefaultFileLoadsThePaperValues) {
+  const Params p = LoadParams(DefaultParamsPath());
+  EXPECT_DOUBLE_EQ(p.quad_mass_kg, 0.72);
+  EXPECT_DOUBLE_EQ(p.payload_mass_kg, 0.1);
+  EXPECT_DOUBLE_EQ(p.cable_length_m, 0.5);
+  EXPECT_DOUBLE_EQ(p.gravity_mps2, 9.81);
+  EXPECT_EQ(p.camera_width_px, 1280);
+  EXPECT_EQ(p.camera_height_px, 720);
+  // thrust-to-weight of quadrotor + payload about 2.5 (DESIGN.md section 2)
+  const double max_thrust_N = 4 * p.k_f_N_per_radps2 * std::pow(p.motor_speed_max_radps, 2);
+  EXPECT_NEAR(max_thrust_N / p.HoverThrustN(), 2.5, 0.05);
+}
+
+TEST(ParamsTest, UnknownKeyIsNamed) {
+  std::string text = ReadDefault();
+  text.replace(text.find("payload:"), 8, "payload:\n  colour: red");
+  try {
+    LoadParams(WriteTemp(text));
+    FAIL() << "expected InputError";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("payload.colour"), std::string::npos) << e.what();
+  }
+}
+
+TEST(ParamsTest, OutOfRangeValueIsNamed) {
+  std::string text = ReadDefault();
+  text.replace(text.find("mass_kg: 0.1 "), 12, "mass_kg: -1 ");
+  try {
+    LoadParams(WriteTemp(text));
+    FAIL() << "expected InputError";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("payload.mass_kg"), std::string::npos) << e.what();
+  }
+}
+
+TEST(ParamsTest, MissingAndMalformedFiles) {
+  EXPECT_THROW(LoadParams("/nonexistent/params.yaml"), InputError);
+  EXPECT_THROW(LoadParams(WriteTemp("quadrotor: [1, 2")), InputError);
+}
+
+}  // namespace
+}  // namespace hpa
