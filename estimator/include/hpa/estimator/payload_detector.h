@@ -1,0 +1,57 @@
+#pragma once
+// Payload detector: finds the red spherical payload in a payload-camera frame and recovers its
+// centre in the camera frame C from the fitted ellipse (exact perspective geometry of a sphere).
+
+#include <Eigen/Core>
+#include <opencv2/core.hpp>
+
+#include "hpa/models/params.h"
+#include "hpa/models/sensor_types.h"
+
+namespace hpa {
+
+/// Thresholds of the detector; the defaults were tuned on synthetic and rendered 1280x720 frames.
+struct PayloadDetectorConfig {
+  int hue_max_low = 10;                 // red hue band [0, hue_max_low] U [hue_min_high, 180]
+  int hue_min_high = 170;               // (OpenCV hue is 0..180)
+  int saturation_min = 110;             // the grey floor has saturation ~0, the payload ~255
+  int value_min = 40;                   // the shaded side of the sphere stays above this
+  double min_area_px2 = 200.0;          // smaller: "too small" (radius 8 px = payload 2.3 m away)
+  double min_iou = 0.90;                // blob vs fitted ellipse (clipped to the image)
+  double min_visible_outline = 0.60;    // share of the fitted outline inside the image
+  double edge_bias_px = 0.5;            // contour runs through edge pixel centres: add to axes
+};
+
+/// Pixel-outline fraction of an outline (list of points in continuous pixel coordinates, origin
+/// at the top-left image corner) that lies inside the image with a 1 px margin.
+double VisibleOutlineFraction(const Params& params, const Eigen::Matrix2Xd& outline_px);
+
+/// Exact image outline of a sphere of radius_m centred at p_CL_C: n points on the tangent cone,
+/// in continuous pixel coordinates (origin at the top-left corner, centre of the image at W/2, H/2).
+Eigen::Matrix2Xd SphereOutlinePx(const Params& params, const Eigen::Vector3d& p_CL_C,
+                                 double radius_m, int n);
+
+/// Sphere centre in C from the two major-axis end points of its image ellipse (pixels, continuous
+/// coordinates): rays r1, r2; direction normalised(r1 + r2); distance R / sin(acos(r1.r2) / 2).
+Eigen::Vector3d SphereCentreFromMajorAxis(const Params& params, const Eigen::Vector2d& end1_px,
+                                          const Eigen::Vector2d& end2_px, double radius_m);
+
+/// Red-sphere detector on 1280x720 BGR frames; stateless, deterministic.
+class PayloadDetector {
+ public:
+  /// Uses the camera intrinsics (focal from fovy, principal point at the image centre) and the
+  /// payload radius of `params`.
+  explicit PayloadDetector(const Params& params, const PayloadDetectorConfig& config = {});
+
+  /// Detects the payload in one BGR frame captured at time_s. found=false with a reason ("no
+  /// payload in view", "too small", "partly out of view", "poor ellipse fit") instead of a guess.
+  PayloadDetection Detect(const cv::Mat& bgr, double time_s) const;
+
+  const PayloadDetectorConfig& config() const { return config_; }
+
+ private:
+  Params params_;
+  PayloadDetectorConfig config_;
+};
+
+}  // namespace hpa

@@ -1,0 +1,188 @@
+#include "hpa/estimator/payload_detector.h"
+
+#include <algorithm>
+#include <cmath>
+#include <opencv2/imgproc.hpp>
+#include <vector>
+
+namespace hpa {
+namespace {
+
+// Unit ray in C through a pixel (continuous coordinates, principal point at the image centre).
+Eigen::Vector3d PixelRay_C(const Params& params, const Eigen::Vector2d& px) {
+  const double f_px = params.CameraFocalPx();
+  return Eigen::Vector3d((px.x() - 0.5 * params.camera_width_px) / f_px,
+                         (px.y() - 0.5 * params.camera_height_px) / f_px, 1.0)
+      .normalized();
+}
+
+PayloadDetection NotFound(double time_s, const char* reason) {
+  PayloadDetection d;
+  d.time_s = time_s;
+  d.found = false;
+  d.reason = reason;
+  return d;
+}
+
+}  // namespace
+
+double VisibleOutlineFraction(const Params& params, const Eigen::Matrix2Xd& outline_px) {
+  if (outline_px.cols() == 0) return 0.0;
+  int inside = 0;
+  for (int i = 0; i < outline_px.cols(); ++i) {
+    const double u = outline_px(0, i), v = outline_px(1, i);
+    if (u >= 1.0 && u <= params.camera_width_px - 1.0 && v >= 1.0 &&
+        v <= params.camera_height_px - 1.0) {
+      ++inside;
+    }
+  }
+  return static_cast<double>(inside) / outline_px.cols();
+}
+
+Eigen::Matrix2Xd SphereOutlinePx(const Params& params, const Eigen::Vector3d& p_CL_C,
+                                 double radius_m, int n) {
+  const double distance_m = p_CL_C.norm();
+  if (!(distance_m > radius_m) || n <= 0) return Eigen::Matrix2Xd(2, 0);
+  const Eigen::Vector3d d = p_CL_C / distance_m;
+  const double alpha_rad = std::asin(radius_m / distance_m);
+  // orthonormal basis (e1, e2) perpendicular to the cone axis d
+  const Eigen::Vector3d seed = std::abs(d.x()) < 0.9 ? Eigen::Vector3d::UnitX()
+                                                     : Eigen::Vector3d::UnitY();
+  const Eigen::Vector3d e1 = d.cross(seed).normalized();
+  const Eigen::Vector3d e2 = d.cross(e1);
+  const double f_px = params.CameraFocalPx();
+  Eigen::Matrix2Xd outline(2, n);
+  for (int i = 0; i < n; ++i) {
+    const double phi = 2.0 * M_PI * i / n;
+    const Eigen::Vector3d ray = std::cos(alpha_rad) * d +
+                                std::sin(alpha_rad) * (std::cos(phi) * e1 + std::sin(phi) * e2);
+    if (ray.z() <= 1e-9) {
+      // behind the camera: mark as far outside the image
+      outline.col(i).setConstant(-1e9);
+      continue;
+    }
+    outline(0, i) = 0.5 * params.camera_width_px + f_px * ray.x() / ray.z();
+    outline(1, i) = 0.5 * params.camera_height_px + f_px * ray.y() / ray.z();
+  }
+  return outline;
+}
+
+Eigen::Vector3d SphereCentreFromMajorAxis(const Params& params, const Eigen::Vector2d& end1_px,
+                                          const Eigen::Vector2d& end2_px, double radius_m) {
+  const Eigen::Vector3d r1 = PixelRay_C(params, end1_px);
+  const Eigen::Vector3d r2 = PixelRay_C(params, end2_px);
+  const double alpha_rad = 0.5 * std::acos(std::clamp(r1.dot(r2), -1.0, 1.0));
+  const double distance_m = radius_m / std::sin(alpha_rad);
+  return distance_m * (r1 + r2).normalized();
+}
+
+PayloadDetector::PayloadDetector(const Params& params, const PayloadDetectorConfig& config)
+    : params_(params), config_(config) {}
+
+PayloadDetection PayloadDetector::Detect(const cv::Mat& bgr, double time_s) const {
+  const int width = params_.camera_width_px, height = params_.camera_height_px;
+  if (bgr.empty() || bgr.type() != CV_8UC3 || bgr.cols != width || bgr.rows != height) {
+    return NotFound(time_s, "bad frame (expected 8-bit BGR of the camera's size)");
+  }
+
+  // red mask: saturated pixels in the two red hue bands
+  cv::Mat hsv, mask_low, mask_high, mask;
+  cv::cvtColor(bgr, hsv, cv::COLOR_BGR2HSV);
+  cv::inRange(hsv, cv::Scalar(0, config_.saturation_min, config_.value_min),
+              cv::Scalar(config_.hue_max_low, 255, 255), mask_low);
+  cv::inRange(hsv, cv::Scalar(config_.hue_min_high, config_.saturation_min, config_.value_min),
+              cv::Scalar(180, 255, 255), mask_high);
+  cv::bitwise_or(mask_low, mask_high, mask);
+
+  // largest blob
+  std::vector<std::vector<cv::Point>> contours;
+  cv::findContours(mask, contours, cv::RETR_EXTERNAL, cv::CHAIN_APPROX_NONE);
+  if (contours.empty()) return NotFound(time_s, "no payload in view");
+  int best = 0;
+  double best_area_px2 = -1.0;
+  for (int i = 0; i < static_cast<int>(contours.size()); ++i) {
+    const double area_px2 = cv::contourArea(contours[i]);
+    if (area_px2 > best_area_px2) {
+      best_area_px2 = area_px2;
+      best = i;
+    }
+  }
+  const std::vector<cv::Point>& contour = contours[best];
+  if (best_area_px2 < config_.min_area_px2) return NotFound(time_s, "too small");
+
+  // outline points that are not on the image border (the border cuts a partly visible blob)
+  std::vector<cv::Point2f> outline;
+  outline.reserve(contour.size());
+  for (const cv::Point& p : contour) {
+    if (p.x > 0 && p.y > 0 && p.x < width - 1 && p.y < height - 1) outline.emplace_back(p);
+  }
+  if (outline.size() < 0.25 * contour.size() || outline.size() < 16) {
+    return NotFound(time_s, "partly out of view");
+  }
+  const cv::RotatedRect fit = cv::fitEllipseDirect(outline);
+  const double semi_major_px = 0.5 * std::max(fit.size.width, fit.size.height) +
+                               config_.edge_bias_px;
+  const double semi_minor_px = 0.5 * std::min(fit.size.width, fit.size.height) +
+                               config_.edge_bias_px;
+  if (!std::isfinite(semi_major_px) || !std::isfinite(semi_minor_px) || semi_minor_px < 2.0 ||
+      semi_major_px > 2.0 * std::max(width, height)) {
+    return NotFound(time_s, "poor ellipse fit");
+  }
+  // OpenCV puts pixel centres on integers; continuous coordinates put them at +0.5
+  const Eigen::Vector2d centre_px(fit.center.x + 0.5, fit.center.y + 0.5);
+  const double angle_rad = fit.angle * M_PI / 180.0;
+  const Eigen::Vector2d width_axis(std::cos(angle_rad), std::sin(angle_rad));
+  const Eigen::Vector2d major_axis = fit.size.width >= fit.size.height
+                                         ? width_axis
+                                         : Eigen::Vector2d(-width_axis.y(), width_axis.x());
+
+  // enough of the fitted outline must lie inside the image
+  constexpr int kOutlineSamples = 72;
+  Eigen::Matrix2Xd fitted_outline(2, kOutlineSamples);
+  const Eigen::Vector2d minor_axis(-major_axis.y(), major_axis.x());
+  for (int i = 0; i < kOutlineSamples; ++i) {
+    const double phi = 2.0 * M_PI * i / kOutlineSamples;
+    fitted_outline.col(i) = centre_px + semi_major_px * std::cos(phi) * major_axis +
+                            semi_minor_px * std::sin(phi) * minor_axis;
+  }
+  if (VisibleOutlineFraction(params_, fitted_outline) < config_.min_visible_outline) {
+    return NotFound(time_s, "partly out of view");
+  }
+
+  // the blob must agree with the fitted ellipse clipped to the image (intersection over union)
+  const cv::Rect image_rect(0, 0, width, height);
+  const cv::Rect roi = (cv::boundingRect(contour) | fit.boundingRect()) & image_rect;
+  cv::Mat blob_mask = cv::Mat::zeros(roi.size(), CV_8U);
+  cv::Mat ellipse_mask = cv::Mat::zeros(roi.size(), CV_8U);
+  cv::drawContours(blob_mask, contours, best, cv::Scalar(255), cv::FILLED, cv::LINE_8,
+                   cv::noArray(), 0, -roi.tl());
+  cv::RotatedRect shifted = fit;
+  shifted.center -= cv::Point2f(roi.x, roi.y);
+  cv::ellipse(ellipse_mask, shifted, cv::Scalar(255), cv::FILLED, cv::LINE_8);
+  cv::Mat both, either;
+  cv::bitwise_and(blob_mask, ellipse_mask, both);
+  cv::bitwise_or(blob_mask, ellipse_mask, either);
+  const double iou = static_cast<double>(cv::countNonZero(both)) /
+                     std::max(1, cv::countNonZero(either));
+  if (iou < config_.min_iou) return NotFound(time_s, "poor ellipse fit");
+
+  // major axis of a sphere's image lies on the line through the principal point
+  const Eigen::Vector2d principal_px(0.5 * width, 0.5 * height);
+  const Eigen::Vector2d radial = centre_px - principal_px;
+  const Eigen::Vector2d axis = radial.norm() > 2.0 ? Eigen::Vector2d(radial.normalized())
+                                                   : major_axis;
+  const Eigen::Vector3d p_CL_C =
+      SphereCentreFromMajorAxis(params_, centre_px + semi_major_px * axis,
+                                centre_px - semi_major_px * axis, params_.payload_radius_m);
+  if (!p_CL_C.allFinite()) return NotFound(time_s, "poor ellipse fit");
+
+  PayloadDetection detection;
+  detection.time_s = time_s;
+  detection.found = true;
+  detection.p_CL_C = p_CL_C;
+  detection.centre_px = centre_px;
+  detection.radius_px = semi_minor_px;
+  return detection;
+}
+
+}  // namespace hpa
