@@ -46,16 +46,16 @@ Eigen::Matrix2Xd SphereOutlinePx(const Params& params, const Eigen::Vector3d& p_
   const Eigen::Vector3d d = p_CL_C / distance_m;
   const double alpha_rad = std::asin(radius_m / distance_m);
   // orthonormal basis (e1, e2) perpendicular to the cone axis d
-  const Eigen::Vector3d seed = std::abs(d.x()) < 0.9 ? Eigen::Vector3d::UnitX()
-                                                     : Eigen::Vector3d::UnitY();
+  const Eigen::Vector3d seed =
+      std::abs(d.x()) < 0.9 ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitY();
   const Eigen::Vector3d e1 = d.cross(seed).normalized();
   const Eigen::Vector3d e2 = d.cross(e1);
   const double f_px = params.CameraFocalPx();
   Eigen::Matrix2Xd outline(2, n);
   for (int i = 0; i < n; ++i) {
     const double phi = 2.0 * M_PI * i / n;
-    const Eigen::Vector3d ray = std::cos(alpha_rad) * d +
-                                std::sin(alpha_rad) * (std::cos(phi) * e1 + std::sin(phi) * e2);
+    const Eigen::Vector3d ray =
+        std::cos(alpha_rad) * d + std::sin(alpha_rad) * (std::cos(phi) * e1 + std::sin(phi) * e2);
     if (ray.z() <= 1e-9) {
       // behind the camera: mark as far outside the image
       outline.col(i).setConstant(-1e9);
@@ -120,10 +120,10 @@ PayloadDetection PayloadDetector::Detect(const cv::Mat& bgr, double time_s) cons
     return NotFound(time_s, "partly out of view");
   }
   const cv::RotatedRect fit = cv::fitEllipseDirect(outline);
-  const double semi_major_px = 0.5 * std::max(fit.size.width, fit.size.height) +
-                               config_.edge_bias_px;
-  const double semi_minor_px = 0.5 * std::min(fit.size.width, fit.size.height) +
-                               config_.edge_bias_px;
+  const double semi_major_px =
+      0.5 * std::max(fit.size.width, fit.size.height) + config_.edge_bias_px;
+  const double semi_minor_px =
+      0.5 * std::min(fit.size.width, fit.size.height) + config_.edge_bias_px;
   if (!std::isfinite(semi_major_px) || !std::isfinite(semi_minor_px) || semi_minor_px < 2.0 ||
       semi_major_px > 2.0 * std::max(width, height)) {
     return NotFound(time_s, "poor ellipse fit");
@@ -162,15 +162,15 @@ PayloadDetection PayloadDetector::Detect(const cv::Mat& bgr, double time_s) cons
   cv::Mat both, either;
   cv::bitwise_and(blob_mask, ellipse_mask, both);
   cv::bitwise_or(blob_mask, ellipse_mask, either);
-  const double iou = static_cast<double>(cv::countNonZero(both)) /
-                     std::max(1, cv::countNonZero(either));
+  const double iou =
+      static_cast<double>(cv::countNonZero(both)) / std::max(1, cv::countNonZero(either));
   if (iou < config_.min_iou) return NotFound(time_s, "poor ellipse fit");
 
   // major axis of a sphere's image lies on the line through the principal point
   const Eigen::Vector2d principal_px(0.5 * width, 0.5 * height);
   const Eigen::Vector2d radial = centre_px - principal_px;
-  const Eigen::Vector2d axis = radial.norm() > 2.0 ? Eigen::Vector2d(radial.normalized())
-                                                   : major_axis;
+  const Eigen::Vector2d axis =
+      radial.norm() > 2.0 ? Eigen::Vector2d(radial.normalized()) : major_axis;
   const Eigen::Vector3d p_CL_C =
       SphereCentreFromMajorAxis(params_, centre_px + semi_major_px * axis,
                                 centre_px - semi_major_px * axis, params_.payload_radius_m);

@@ -79,8 +79,8 @@ TEST(PayloadDetectorTest, ErrorStatisticsOverTheImage) {
       }
     }
   }
-  std::printf("synthetic frames: %d fully visible, %d cut, max |error| x %.2f y %.2f z %.2f mm\n", count,
-              cut, 1e3 * max_error.x(), 1e3 * max_error.y(), 1e3 * max_error.z());
+  std::printf("synthetic frames: %d fully visible, %d cut, max |error| x %.2f y %.2f z %.2f mm\n",
+              count, cut, 1e3 * max_error.x(), 1e3 * max_error.y(), 1e3 * max_error.z());
   // measured max: see the printout (about 1 mm laterally, 3 mm in depth at 0.6 m); bounds
   // chosen ~3x above it
   EXPECT_LT(max_error.x(), 5e-3);
@@ -164,8 +164,9 @@ TEST(PayloadDetectorTest, TimePerDetection) {
   const auto start = std::chrono::steady_clock::now();
   int found = 0;
   for (int i = 0; i < kRuns; ++i) found += detector.Detect(frame, 0.0).found;
-  const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() -
-                                                              start).count() / kRuns;
+  const double ms =
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count() /
+      kRuns;
   std::printf("detection: %.2f ms per 1280x720 frame\n", ms);
   EXPECT_EQ(found, kRuns);
   // the 30 Hz camera leaves 33 ms per frame; a Release build measured a few ms

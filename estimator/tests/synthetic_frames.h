@@ -35,10 +35,10 @@ inline cv::Mat RenderSphere(const Params& params, const Eigen::Vector3d& p_CL_C,
       cv::Vec3d sum(0, 0, 0);
       for (int i = 0; i < kSub; ++i) {
         for (int j = 0; j < kSub; ++j) {
-          const Eigen::Vector3d ray = Eigen::Vector3d((u + (i + 0.5) / kSub - 0.5 * width) / f_px,
-                                                      (v + (j + 0.5) / kSub - 0.5 * height) / f_px,
-                                                      1.0)
-                                          .normalized();
+          const Eigen::Vector3d ray =
+              Eigen::Vector3d((u + (i + 0.5) / kSub - 0.5 * width) / f_px,
+                              (v + (j + 0.5) / kSub - 0.5 * height) / f_px, 1.0)
+                  .normalized();
           // ray-sphere intersection: t^2 - 2 t (ray.c) + |c|^2 - R^2 = 0
           const double b = ray.dot(p_CL_C);
           const double disc = b * b - (p_CL_C.squaredNorm() - radius_m * radius_m);

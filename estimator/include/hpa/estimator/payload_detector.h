@@ -12,14 +12,14 @@ namespace hpa {
 
 /// Thresholds of the detector; the defaults were tuned on synthetic and rendered 1280x720 frames.
 struct PayloadDetectorConfig {
-  int hue_max_low = 10;                 // red hue band [0, hue_max_low] U [hue_min_high, 180]
-  int hue_min_high = 170;               // (OpenCV hue is 0..180)
-  int saturation_min = 110;             // the grey floor has saturation ~0, the payload ~255
-  int value_min = 40;                   // the shaded side of the sphere stays above this
-  double min_area_px2 = 200.0;          // smaller: "too small" (radius 8 px = payload 2.3 m away)
-  double min_iou = 0.90;                // blob vs fitted ellipse (clipped to the image)
-  double min_visible_outline = 0.60;    // share of the fitted outline inside the image
-  double edge_bias_px = 0.5;            // contour runs through edge pixel centres: add to axes
+  int hue_max_low = 10;               // red hue band [0, hue_max_low] U [hue_min_high, 180]
+  int hue_min_high = 170;             // (OpenCV hue is 0..180)
+  int saturation_min = 110;           // the grey floor has saturation ~0, the payload ~255
+  int value_min = 40;                 // the shaded side of the sphere stays above this
+  double min_area_px2 = 200.0;        // smaller: "too small" (radius 8 px = payload 2.3 m away)
+  double min_iou = 0.90;              // blob vs fitted ellipse (clipped to the image)
+  double min_visible_outline = 0.60;  // share of the fitted outline inside the image
+  double edge_bias_px = 0.5;          // contour runs through edge pixel centres: add to axes
 };
 
 /// Pixel-outline fraction of an outline (list of points in continuous pixel coordinates, origin
@@ -27,7 +27,8 @@ struct PayloadDetectorConfig {
 double VisibleOutlineFraction(const Params& params, const Eigen::Matrix2Xd& outline_px);
 
 /// Exact image outline of a sphere of radius_m centred at p_CL_C: n points on the tangent cone,
-/// in continuous pixel coordinates (origin at the top-left corner, centre of the image at W/2, H/2).
+/// in continuous pixel coordinates (origin at the top-left corner, centre of the image at W/2,
+/// H/2).
 Eigen::Matrix2Xd SphereOutlinePx(const Params& params, const Eigen::Vector3d& p_CL_C,
                                  double radius_m, int n);
 
