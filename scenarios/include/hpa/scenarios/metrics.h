@@ -1,0 +1,94 @@
+#pragma once
+// Run metrics exactly as DESIGN.md section 6 defines them, and the expect check.
+
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "hpa/controller/controller.h"
+#include "hpa/controller/reference.h"
+#include "hpa/models/state.h"
+#include "hpa/scenarios/scenario.h"
+
+namespace hpa {
+
+/// One row per control step (150 Hz): what log.csv holds.
+struct LogRow {
+  double time_s = 0.0;
+  SystemState truth;                  // true state, truth.mode = true cable mode
+  SystemState estimate;               // what flight code saw (equals truth with ground_truth)
+  ReferencePoint reference;           // payload reference and flat quadrotor reference
+  BodyRateCommand command;            // controller output
+  ControlStatus status = ControlStatus::kSuccess;
+  double solve_time_ms = 0.0;
+  double cost = 0.0;
+  double cable_tension_N = 0.0;       // true tension (MuJoCo tendon-limit force)
+  bool gripper_active = false;
+};
+
+/// Summary statistics of a sample: median, 99th percentile, max.
+struct Quantiles {
+  double median = 0.0, p99 = 0.0, max = 0.0;
+};
+
+/// The metrics.json contract (DESIGN.md section 6) plus extensions.
+struct Metrics {
+  std::string scenario, controller, camera;
+  unsigned long seed = 0;
+  double sim_time_s = 0.0, wall_time_s = 0.0;
+  bool crashed = false;
+  std::optional<double> crash_time_s;
+  std::optional<std::string> crash_reason;
+  // RMSE against the reference, per axis. Payload: over taut time only when the run had slack
+  // intervals (payload_rmse_over = "taut_time"), else over the whole run ("whole_run").
+  Eigen::Vector3d payload_rmse_m = Eigen::Vector3d::Zero();
+  std::string payload_rmse_over = "whole_run";
+  Eigen::Vector3d quad_rmse_m = Eigen::Vector3d::Zero();
+  double quad_position_deviation_max_m = 0.0;  // max |p_Q - p_Q,ref| over the run
+  double payload_max_speed_mps = 0.0;
+  double slack_time_s = 0.0;                   // true slack time
+  double mode_accuracy = 1.0;                  // share of control steps with est mode = true mode
+  std::optional<double> slack_detection_latency_mean_s, slack_detection_latency_max_s;
+  int slack_events = 0, slack_events_missed = 0;
+  double payload_in_fov_fraction = 1.0;        // share of camera frames with the payload centre in view
+  int camera_frames = 0, detections = 0;
+  int retaut_count = 0;
+  double retaut_quad_vz_min_mps = 0.0;         // lowest quad z velocity within 0.5 s of a re-taut
+  double retaut_peak_body_rate_radps = 0.0;    // highest |w_B| within 0.5 s of a re-taut
+  Quantiles mpc_solve_ms;
+  int mpc_failures = 0;
+  double closed_loop_cost = 0.0;               // sum of the controller's plan costs
+  Quantiles detector_ms;                       // per rendered frame, detection only
+  Quantiles render_ms;                         // per rendered frame
+  bool expect_passed = true;
+  std::vector<std::string> expect_failed;      // "payload_rmse_max.x: 0.071 > 0.06"
+};
+
+/// Inputs the metrics need besides the log.
+struct MetricsInputs {
+  std::vector<LogRow> rows;
+  std::vector<bool> payload_in_fov_per_frame;
+  std::vector<double> detector_ms, render_ms;
+  int detections = 0;
+};
+
+/// Computes every metric from the log (crash fields and timing are filled by the runner).
+void ComputeMetrics(const MetricsInputs& inputs, Metrics* metrics);
+
+/// Checks the scenario's expect bounds; fills expect_passed / expect_failed.
+void CheckExpectations(const ExpectSpec& expect, Metrics* metrics);
+
+/// metrics.json text (keys of DESIGN.md section 6; `wall_time_s` and `*_ms` are the only
+/// fields that differ between identical runs).
+std::string MetricsToJson(const Metrics& metrics);
+
+/// Quantiles of a sample (empty sample -> zeros).
+Quantiles ComputeQuantiles(std::vector<double> values);
+
+/// Slack intervals [start, end) of the true mode in the log, chatter shorter than 30 ms ignored.
+std::vector<std::pair<double, double>> TrueSlackIntervals(const std::vector<LogRow>& rows);
+
+/// Writes log.csv (one row per control step).
+void WriteLogCsv(const std::string& path, const std::vector<LogRow>& rows);
+
+}  // namespace hpa

@@ -1,0 +1,86 @@
+#pragma once
+// A scenario file (DESIGN.md section 5) loaded and validated: unknown keys, wrong types and
+// out-of-range values are InputErrors naming the file and the key path.
+
+#include <Eigen/Core>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "hpa/controller/controller.h"
+#include "hpa/controller/reference.h"
+
+namespace hpa {
+
+/// One scripted disturbance.
+struct EventSpec {
+  enum class Type { kGripperGrab, kGripperMove, kGripperRelease, kImpulse, kWind };
+  Type type = Type::kImpulse;
+  double at_s = 0.0;                                  // when it starts, simulated time
+  double duration_s = 0.0;                            // gripper_move, wind, impulse spread
+  Eigen::Vector3d to_W_m = Eigen::Vector3d::Zero();   // gripper_move target  (3)
+  Eigen::Vector3d impulse_W_Ns = Eigen::Vector3d::Zero();  // impulse  (3)
+  Eigen::Vector3d force_W_N = Eigen::Vector3d::Zero();     // wind on the quadrotor  (3)
+  bool on_payload = true;                             // impulse body: payload or quadrotor
+};
+
+/// Name of an event type as written in YAML.
+const char* ToString(EventSpec::Type type);
+
+/// Regression bounds; `hpa run` exits 1 if any fails. Unset bounds are not checked.
+struct ExpectSpec {
+  std::optional<bool> crashed;
+  std::optional<Eigen::Vector3d> payload_rmse_max_m;  // per axis  (3)
+  std::optional<Eigen::Vector3d> quad_rmse_max_m;     // per axis  (3)
+  std::optional<double> quad_position_deviation_max_m;
+  std::optional<double> payload_in_fov_min;           // fraction of camera frames
+  std::optional<double> mode_accuracy_min;            // fraction of control steps
+  std::optional<double> slack_detection_latency_max_s;
+  std::optional<int> mpc_failures_max;
+  std::optional<double> retaut_quad_vz_min_mps;       // lowest allowed quad z velocity at re-taut
+};
+
+/// Where the payload reference comes from.
+struct ReferenceSpec {
+  std::string type = "hover";                         // hover | lissajous | line
+  Eigen::Vector3d payload_position_W_m{0, 0, 0.7};    // hover set-point  (3)
+  LissajousSpec lissajous;
+  Eigen::Vector3d line_start_W_m = Eigen::Vector3d::Zero();  // (3)
+  Eigen::Vector3d line_end_W_m = Eigen::Vector3d::Zero();    // (3)
+  double line_duration_s = 1.0;
+  double line_start_time_s = 0.0;                     // the line starts moving at this time
+};
+
+/// Estimation block: where flight code gets its state from.
+struct EstimationSpec {
+  std::string camera = "render";   // render (OSMesa + detector) | analytic (projection + noise)
+  bool ground_truth = false;       // true: flight code sees the true state
+  double camera_latency_s = 0.03;  // capture to detection delivery
+  double detector_noise_scale = 1.0;  // analytic camera only: scale on the measured noise
+};
+
+/// A whole scenario file.
+struct Scenario {
+  std::string file;                // where it was loaded from ("" if built in code)
+  std::string name;
+  double duration_s = 10.0;
+  unsigned long seed = 1;
+  std::optional<double> world_payload_mass_kg;  // world-only overrides (model mismatch)
+  std::optional<double> world_cable_length_m;
+  ControllerConfig controller;
+  EstimationSpec estimation;
+  ReferenceSpec reference;
+  std::vector<EventSpec> events;
+  ExpectSpec expect;
+};
+
+/// Loads and validates a scenario file; throws InputError (file, key path, expectation).
+Scenario LoadScenario(const std::string& path);
+
+/// Validates an already parsed YAML node as a scenario (used by sweeps after applying `vary`).
+Scenario ParseScenario(const class YamlMap& root);
+
+/// Builds the payload reference of a scenario.
+std::shared_ptr<Reference> MakeReference(const Scenario& scenario, const Params& params);
+
+}  // namespace hpa

@@ -1,0 +1,56 @@
+#pragma once
+// Monte Carlo sweeps (DESIGN.md section 7): expansion of `vary` into runs, parallel worker
+// processes with crash isolation, JSON-lines results, shards, resume, merge and summaries.
+
+#include <yaml-cpp/yaml.h>
+
+#include <string>
+#include <vector>
+
+namespace hpa {
+
+/// One distribution of a `vary` entry.
+struct VarySpec {
+  std::string path;                  // dotted path into the scenario, e.g. events.1.to.2
+  enum class Kind { kUniform, kNormal, kGrid, kList } kind = Kind::kUniform;
+  double a = 0.0, b = 0.0;           // uniform [a, b] or normal (mean a, sigma b)
+  std::vector<std::string> values;   // grid values (product) or list values (draw i -> i % n)
+};
+
+/// A sweep file, validated.
+struct SweepSpec {
+  std::string file;
+  std::string base_path;             // scenario file, resolved against the sweep's folder
+  int runs = 1;                      // random draws; grids multiply them
+  unsigned long seed = 1;
+  double time_limit_s = 600.0;       // per run; a run past it is killed and recorded as an error
+  std::vector<VarySpec> vary;
+  std::string sweep_id;              // hash of the sweep and base files: merge refuses mixes
+};
+
+/// One expanded run: which draw, which grid cell, its seed and its values.
+struct SweepRun {
+  int index = 0;                     // 0 .. runs * grid_size - 1
+  int draw = 0;
+  unsigned long seed = 0;            // scenario seed (same for every grid value of a draw)
+  std::vector<std::pair<std::string, std::string>> values;  // path -> YAML scalar text
+};
+
+/// Loads and validates a sweep file (paths are checked against the base scenario).
+SweepSpec LoadSweep(const std::string& path);
+
+/// Expands the sweep into its runs (deterministic in the sweep seed).
+std::vector<SweepRun> ExpandSweep(const SweepSpec& spec);
+
+/// Sets a dotted path in a YAML tree to a scalar; throws InputError if the path does not exist
+/// (maps may gain a missing last key; list indices must exist).
+void SetDottedPath(YAML::Node root, const std::string& path, const std::string& value,
+                   const std::string& file);
+
+/// `hpa sweep` entry point; returns the exit code.
+int SweepMain(int argc, char** argv);
+
+/// `hpa merge` entry point; returns the exit code.
+int MergeMain(int argc, char** argv);
+
+}  // namespace hpa

@@ -1,0 +1,50 @@
+#pragma once
+// MP4 of a run: chase camera with the onboard payload-camera image inset and a heads-up line.
+
+#include <deque>
+#include <opencv2/core.hpp>
+#include <opencv2/videoio.hpp>
+#include <string>
+
+#include "hpa/models/state.h"
+
+namespace hpa {
+
+/// Writes frames through OpenCV's video writer (mp4v); optionally only around slack events.
+class VideoRecorder {
+ public:
+  static constexpr int kWidthPx = 960;
+  static constexpr int kHeightPx = 540;
+  static constexpr double kSlackWindow_s = 1.0;  // kept before and after each slack event
+
+  /// What the heads-up line shows.
+  struct Hud {
+    double time_s;
+    CableMode true_mode;
+    CableMode estimated_mode;
+    double thrust_N;
+    double tension_N;
+  };
+
+  /// Opens the file; throws InputError if it cannot be written.
+  VideoRecorder(const std::string& path, double rate_hz, bool slack_events_only);
+
+  /// Adds one frame (chase view kWidthPx x kHeightPx, onboard frame any size, BGR).
+  void AddFrame(const cv::Mat& chase_bgr, const cv::Mat& onboard_bgr, const Hud& hud);
+
+  /// Flushes and closes; returns the number of frames written.
+  int Finish();
+
+ private:
+  cv::Mat Compose(const cv::Mat& chase_bgr, const cv::Mat& onboard_bgr, const Hud& hud) const;
+
+  std::string path_;
+  cv::VideoWriter writer_;
+  double rate_hz_;
+  bool slack_events_only_;
+  std::deque<cv::Mat> pre_buffer_;  // frames before a slack event (slack_events_only)
+  double keep_until_s_ = -1.0;      // write frames up to this time
+  int frames_written_ = 0;
+};
+
+}  // namespace hpa

@@ -1,0 +1,309 @@
+// The `hpa` command line (DESIGN.md section 6).
+
+#include <sys/stat.h>
+
+#include <cstdio>
+#include <cstring>
+#include <fstream>
+#include <iostream>
+#include <map>
+#include <opencv2/imgcodecs.hpp>
+#include <string>
+#include <vector>
+
+#include "hpa/models/input_error.h"
+#include "hpa/models/params.h"
+#include "hpa/models/yaml_reader.h"
+#include "hpa/scenarios/plots.h"
+#include "hpa/scenarios/runner.h"
+#include "hpa/scenarios/sweep.h"
+#include "hpa/sim/world.h"
+
+namespace hpa {
+namespace {
+
+constexpr int kExitOk = 0;
+constexpr int kExitExpectFailed = 1;
+constexpr int kExitBadInput = 2;
+constexpr int kExitInternal = 3;
+
+const char* kUsage = R"(hpa: software-in-the-loop simulator for HPA-MPC (quadrotor + cable-suspended payload)
+
+usage:
+  hpa run SCENARIO.yaml [--out DIR] [--seed N] [--controller TYPE] [--camera render|analytic]
+                        [--video FILE.mp4] [--video-slack-events] [--plots] [--quiet]
+                        [--params FILE] [--set PATH=VALUE]...
+      Runs one scenario; writes DIR/metrics.json and DIR/log.csv (one row per control step),
+      plus PNG plots with --plots and an MP4 with --video. DIR defaults to out/<scenario name>.
+      TYPE: hpa_mpc | nonhybrid_mpc | geometric. --set changes one dotted key of the
+      scenario (e.g. --set events.1.impulse.2=0.5); sweeps print such replay commands.
+  hpa compare SCENARIO.yaml --out DIR [--controllers A,B] [--camera render|analytic]
+                        [--video-slack-events] [--quiet]
+      Runs the scenario once per controller (default hpa_mpc,nonhybrid_mpc) into DIR/<type>/
+      and writes DIR/comparison.png; with --video-slack-events, a slack-event video per run.
+  hpa render-frame SCENARIO.yaml --at T --out FILE.png [--params FILE]
+      Runs the scenario to time T (s) and writes one 1280x720 onboard payload-camera frame.
+  hpa sweep SWEEP.yaml --out DIR [--jobs N] [--shard K/N] [--resume]
+      Monte Carlo sweep: one JSON line per run in DIR/runs.jsonl, then a summary.
+  hpa merge DIR... --out DIR
+      Joins sweep shards and writes DIR/summary.json, DIR/summary.md and plots.
+  hpa --help
+
+exit codes: 0 ok and every `expect` bound holds; 1 an expectation failed (or an unexpected
+crash); 2 bad input (file, key, value; the message names them); 3 internal error.
+)";
+
+// Command-line arguments: positionals and --flags (with or without a value).
+struct Args {
+  std::vector<std::string> positional;
+  std::vector<std::string> sets;  // --set PATH=VALUE, repeatable
+  std::map<std::string, std::string> flags;
+
+  bool Has(const std::string& f) const { return flags.count(f) > 0; }
+  std::string Get(const std::string& f, const std::string& fallback = "") const {
+    auto it = flags.find(f);
+    return it == flags.end() ? fallback : it->second;
+  }
+};
+
+Args Parse(int argc, char** argv, int first, const std::vector<std::string>& valued,
+           const std::vector<std::string>& switches) {
+  Args a;
+  for (int i = first; i < argc; ++i) {
+    const std::string s = argv[i];
+    if (s.rfind("--", 0) != 0) {
+      a.positional.push_back(s);
+      continue;
+    }
+    if (s == "--set" && std::find(valued.begin(), valued.end(), s) != valued.end()) {
+      if (i + 1 >= argc) throw InputError("", s, "expects PATH=VALUE");
+      a.sets.push_back(argv[++i]);
+    } else if (std::find(switches.begin(), switches.end(), s) != switches.end()) {
+      a.flags[s] = "1";
+    } else if (std::find(valued.begin(), valued.end(), s) != valued.end()) {
+      if (i + 1 >= argc) throw InputError("", s, "expects a value");
+      a.flags[s] = argv[++i];
+    } else {
+      throw InputError("", s, "unknown option (see hpa --help)");
+    }
+  }
+  return a;
+}
+
+void MakeDirs(const std::string& dir) {
+  std::string partial;
+  for (size_t i = 0; i <= dir.size(); ++i) {
+    if (i == dir.size() || dir[i] == '/') {
+      if (!partial.empty()) mkdir(partial.c_str(), 0755);
+    }
+    if (i < dir.size()) partial += dir[i];
+  }
+  struct stat st;
+  if (stat(dir.c_str(), &st) != 0 || !S_ISDIR(st.st_mode)) {
+    throw InputError(dir, "--out", "cannot create the output directory");
+  }
+}
+
+double ParseNumber(const std::string& flag, const std::string& text) {
+  char* end = nullptr;
+  const double v = std::strtod(text.c_str(), &end);
+  if (text.empty() || *end != '\0' || !std::isfinite(v)) {
+    throw InputError("", flag, "expected a number, got '" + text + "'");
+  }
+  return v;
+}
+
+// Loads a scenario with --set PATH=VALUE applied (the form summary.md's replay commands use).
+Scenario LoadWithSets(const std::string& path, const std::vector<std::string>& sets) {
+  if (sets.empty()) return LoadScenario(path);
+  YAML::Node root;
+  try {
+    root = YAML::LoadFile(path);
+  } catch (const YAML::BadFile&) {
+    throw InputError(path, "", "cannot open file");
+  } catch (const YAML::Exception& e) {
+    throw InputError(path, "", std::string("malformed YAML: ") + e.what());
+  }
+  for (const std::string& set : sets) {
+    const size_t eq = set.find('=');
+    if (eq == std::string::npos || eq == 0) throw InputError("", "--set", "expected PATH=VALUE, got '" + set + "'");
+    SetDottedPath(root, set.substr(0, eq), set.substr(eq + 1), "--set");
+  }
+  return ParseScenario(YamlMap(root, path, ""));
+}
+
+// Applies --seed, --controller and --camera to a loaded scenario.
+void ApplyOverrides(const Args& a, Scenario* s) {
+  if (a.Has("--seed")) {
+    const double seed = ParseNumber("--seed", a.Get("--seed"));
+    if (seed < 0 || seed != std::floor(seed)) throw InputError("", "--seed", "expected an integer >= 0");
+    s->seed = static_cast<unsigned long>(seed);
+  }
+  if (a.Has("--controller")) {
+    const std::string c = a.Get("--controller");
+    if (c != "hpa_mpc" && c != "nonhybrid_mpc" && c != "geometric") {
+      throw InputError("", "--controller", "expected hpa_mpc | nonhybrid_mpc | geometric");
+    }
+    s->controller.type = c;
+  }
+  if (a.Has("--camera")) {
+    const std::string c = a.Get("--camera");
+    if (c != "render" && c != "analytic") {
+      throw InputError("", "--camera", "expected render | analytic");
+    }
+    s->estimation.camera = c;
+  }
+}
+
+void WriteText(const std::string& path, const std::string& text) {
+  std::ofstream out(path);
+  if (!out) throw InputError(path, "", "cannot write file");
+  out << text;
+}
+
+void PrintSummary(const Metrics& m, const std::string& out_dir) {
+  std::printf("%s [%s, %s, seed %lu]: %.2f s simulated in %.2f s wall (%.2f sim s per wall s)\n",
+              m.scenario.c_str(), m.controller.c_str(), m.camera.c_str(), m.seed, m.sim_time_s,
+              m.wall_time_s, m.sim_time_s / std::max(m.wall_time_s, 1e-9));
+  std::printf("  crashed %s%s  payload RMSE [%.3f %.3f %.3f] m  quad dev max %.3f m\n",
+              m.crashed ? "YES: " : "no", m.crashed ? m.crash_reason->c_str() : "",
+              m.payload_rmse_m.x(), m.payload_rmse_m.y(), m.payload_rmse_m.z(),
+              m.quad_position_deviation_max_m);
+  std::printf("  slack %.2f s (%d events), mode accuracy %.3f, payload in view %.3f, "
+              "solve median %.3f ms, failures %d\n",
+              m.slack_time_s, m.slack_events, m.mode_accuracy, m.payload_in_fov_fraction,
+              m.mpc_solve_ms.median, m.mpc_failures);
+  for (const auto& f : m.expect_failed) std::printf("  EXPECT FAILED %s\n", f.c_str());
+  std::printf("  wrote %s/metrics.json, %s/log.csv\n", out_dir.c_str(), out_dir.c_str());
+}
+
+int Run(int argc, char** argv) {
+  const Args a = Parse(argc, argv, 2,
+                       {"--out", "--seed", "--controller", "--camera", "--video", "--params",
+                        "--set"},
+                       {"--video-slack-events", "--quiet", "--plots"});
+  if (a.positional.size() != 1) throw InputError("", "", "hpa run takes one SCENARIO.yaml");
+  const Params params = LoadParams(a.Get("--params", DefaultParamsPath()));
+  Scenario scenario = LoadWithSets(a.positional[0], a.sets);
+  ApplyOverrides(a, &scenario);
+  const std::string out_dir = a.Get("--out", "out/" + scenario.name);
+  MakeDirs(out_dir);
+
+  RunOptions options;
+  options.progress = !a.Has("--quiet");
+  options.video_path = a.Get("--video");
+  options.video_slack_events_only = a.Has("--video-slack-events");
+  if (options.video_slack_events_only && options.video_path.empty()) {
+    options.video_path = out_dir + "/slack_events.mp4";
+  }
+  const RunResult result = RunScenario(scenario, params, options);
+  WriteText(out_dir + "/metrics.json", MetricsToJson(result.metrics));
+  WriteLogCsv(out_dir + "/log.csv", result.rows);
+  if (a.Has("--plots")) {
+    for (const std::string& png : WriteRunPlots(result, params, out_dir)) {
+      if (!a.Has("--quiet")) std::printf("  plot %s\n", png.c_str());
+    }
+  }
+  if (!a.Has("--quiet")) {
+    PrintSummary(result.metrics, out_dir);
+    if (!options.video_path.empty()) std::printf("  video %s\n", options.video_path.c_str());
+  }
+  return result.metrics.expect_passed ? kExitOk : kExitExpectFailed;
+}
+
+int Compare(int argc, char** argv) {
+  const Args a = Parse(argc, argv, 2, {"--out", "--controllers", "--camera", "--params", "--seed"},
+                       {"--video-slack-events", "--quiet"});
+  if (a.positional.size() != 1) throw InputError("", "", "hpa compare takes one SCENARIO.yaml");
+  if (!a.Has("--out")) throw InputError("", "--out", "hpa compare needs --out DIR");
+  const Params params = LoadParams(a.Get("--params", DefaultParamsPath()));
+  Scenario base = LoadScenario(a.positional[0]);
+  ApplyOverrides(a, &base);
+  const std::string out_dir = a.Get("--out");
+  std::vector<std::string> types;
+  std::string list = a.Get("--controllers", "hpa_mpc,nonhybrid_mpc") + ",";
+  for (size_t p = 0; (p = list.find(',')) != std::string::npos; list.erase(0, p + 1)) {
+    if (p > 0) types.push_back(list.substr(0, p));
+  }
+  std::vector<RunResult> results;
+  bool all_passed = true;
+  for (const std::string& type : types) {
+    Args one = a;
+    one.flags["--controller"] = type;
+    Scenario s = base;
+    ApplyOverrides(one, &s);
+    const std::string dir = out_dir + "/" + type;
+    MakeDirs(dir);
+    RunOptions options;
+    options.progress = !a.Has("--quiet");
+    if (a.Has("--video-slack-events")) {
+      options.video_path = dir + "/slack_events.mp4";
+      options.video_slack_events_only = true;
+    }
+    results.push_back(RunScenario(s, params, options));
+    WriteText(dir + "/metrics.json", MetricsToJson(results.back().metrics));
+    WriteLogCsv(dir + "/log.csv", results.back().rows);
+    all_passed = all_passed && results.back().metrics.expect_passed;
+    if (!a.Has("--quiet")) {
+      PrintSummary(results.back().metrics, dir);
+      if (!options.video_path.empty()) std::printf("  video %s\n", options.video_path.c_str());
+    }
+  }
+  const std::string png = out_dir + "/comparison.png";
+  WriteComparisonPlot(results, params, png);
+  if (!a.Has("--quiet")) std::printf("comparison plot %s\n", png.c_str());
+  return all_passed ? kExitOk : kExitExpectFailed;
+}
+
+int RenderFrame(int argc, char** argv) {
+  const Args a = Parse(argc, argv, 2, {"--at", "--out", "--params", "--seed", "--controller"}, {});
+  if (a.positional.size() != 1) throw InputError("", "", "hpa render-frame takes one SCENARIO.yaml");
+  if (!a.Has("--at")) throw InputError("", "--at", "hpa render-frame needs --at T (seconds)");
+  if (!a.Has("--out")) throw InputError("", "--out", "hpa render-frame needs --out FILE.png");
+  const Params params = LoadParams(a.Get("--params", DefaultParamsPath()));
+  Scenario scenario = LoadScenario(a.positional[0]);
+  ApplyOverrides(a, &scenario);
+  const double at_s = ParseNumber("--at", a.Get("--at"));
+  if (at_s < 0 || at_s > scenario.duration_s) {
+    throw InputError("", "--at", "expected a time in [0, duration] of the scenario");
+  }
+  const std::string out = a.Get("--out");
+  RunOptions options;
+  options.stop_at_s = at_s;
+  bool written = false;
+  options.at_stop = [&](sim::World& world) {
+    written = cv::imwrite(out, world.RenderPayloadCamera());
+  };
+  RunScenario(scenario, params, options);
+  if (!written) throw InputError(out, "--out", "cannot write the PNG");
+  std::printf("wrote %s (payload camera at t = %.3f s)\n", out.c_str(), at_s);
+  return kExitOk;
+}
+
+int Main(int argc, char** argv) {
+  if (argc < 2 || !std::strcmp(argv[1], "--help") || !std::strcmp(argv[1], "-h") ||
+      !std::strcmp(argv[1], "help")) {
+    std::fputs(kUsage, argc < 2 ? stderr : stdout);
+    return argc < 2 ? kExitBadInput : kExitOk;
+  }
+  const std::string command = argv[1];
+  try {
+    if (command == "run") return Run(argc, argv);
+    if (command == "compare") return Compare(argc, argv);
+    if (command == "render-frame") return RenderFrame(argc, argv);
+    if (command == "sweep") return SweepMain(argc, argv);
+    if (command == "merge") return MergeMain(argc, argv);
+    throw InputError("", "", "unknown command '" + command + "' (see hpa --help)");
+  } catch (const InputError& e) {
+    std::fprintf(stderr, "hpa: error: %s\n", e.what());
+    return kExitBadInput;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "hpa: internal error: %s\n", e.what());
+    return kExitInternal;
+  }
+}
+
+}  // namespace
+}  // namespace hpa
+
+int main(int argc, char** argv) { return hpa::Main(argc, argv); }

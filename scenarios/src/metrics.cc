@@ -1,0 +1,296 @@
+#include "hpa/scenarios/metrics.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <iomanip>
+#include <sstream>
+
+#include "hpa/models/input_error.h"
+
+namespace hpa {
+namespace {
+
+constexpr double kMinSlackInterval_s = 0.03;  // shorter true-mode flips are tendon chatter
+constexpr double kRetautWindow_s = 0.5;       // window after a re-taut for vz and body rates
+constexpr double kDetectionWindow_s = 0.5;    // a slack onset not flagged within this is missed
+
+std::string Num(double v) {
+  if (!std::isfinite(v)) return "null";
+  std::ostringstream out;
+  out << std::setprecision(9) << v;
+  return out.str();
+}
+
+std::string Vec(const Eigen::Vector3d& v) {
+  return "[" + Num(v.x()) + ", " + Num(v.y()) + ", " + Num(v.z()) + "]";
+}
+
+std::string Quote(const std::string& s) {
+  std::string out = "\"";
+  for (char c : s) {
+    if (c == '"' || c == '\\') out += '\\';
+    out += c;
+  }
+  return out + "\"";
+}
+
+std::string QuantilesJson(const Quantiles& q) {
+  return "{\"median\": " + Num(q.median) + ", \"p99\": " + Num(q.p99) + ", \"max\": " +
+         Num(q.max) + "}";
+}
+
+}  // namespace
+
+Quantiles ComputeQuantiles(std::vector<double> values) {
+  Quantiles q;
+  if (values.empty()) return q;
+  std::sort(values.begin(), values.end());
+  auto at = [&](double f) {
+    const size_t i = static_cast<size_t>(std::ceil(f * values.size())) - 1;
+    return values[std::min(values.size() - 1, std::max<size_t>(0, i))];
+  };
+  const size_t n = values.size();
+  q.median = n % 2 == 1 ? values[n / 2] : 0.5 * (values[n / 2 - 1] + values[n / 2]);
+  q.p99 = at(0.99);
+  q.max = values.back();
+  return q;
+}
+
+std::vector<std::pair<double, double>> TrueSlackIntervals(const std::vector<LogRow>& rows) {
+  std::vector<std::pair<double, double>> intervals;
+  for (size_t i = 0; i < rows.size();) {
+    if (rows[i].truth.mode != CableMode::kSlack) {
+      ++i;
+      continue;
+    }
+    size_t j = i;
+    while (j < rows.size() && rows[j].truth.mode == CableMode::kSlack) ++j;
+    const double end = j < rows.size() ? rows[j].time_s : rows.back().time_s;
+    if (end - rows[i].time_s >= kMinSlackInterval_s) intervals.emplace_back(rows[i].time_s, end);
+    i = j;
+  }
+  return intervals;
+}
+
+void ComputeMetrics(const MetricsInputs& in, Metrics* m) {
+  const auto& rows = in.rows;
+  const auto slack = TrueSlackIntervals(rows);
+  m->slack_events = static_cast<int>(slack.size());
+  auto in_slack = [&](double t) {
+    for (const auto& s : slack) {
+      if (t >= s.first && t < s.second) return true;
+    }
+    return false;
+  };
+
+  // tracking errors, speeds and mode agreement
+  Eigen::Vector3d payload_sq = Eigen::Vector3d::Zero(), quad_sq = Eigen::Vector3d::Zero();
+  int payload_n = 0, mode_agree = 0;
+  m->payload_rmse_over = slack.empty() ? "whole_run" : "taut_time";
+  for (const LogRow& r : rows) {
+    const Eigen::Vector3d e_Q = r.truth.p_WQ_W - r.reference.p_WQ_W;
+    quad_sq += e_Q.cwiseAbs2();
+    m->quad_position_deviation_max_m = std::max(m->quad_position_deviation_max_m, e_Q.norm());
+    if (slack.empty() || !in_slack(r.time_s)) {
+      payload_sq += (r.truth.p_WL_W - r.reference.p_WL_W).cwiseAbs2();
+      ++payload_n;
+    }
+    m->payload_max_speed_mps = std::max(m->payload_max_speed_mps, r.truth.v_WL_W.norm());
+    if (r.truth.mode == r.estimate.mode) ++mode_agree;
+    m->closed_loop_cost += r.cost;
+  }
+  if (!rows.empty()) {
+    m->quad_rmse_m = (quad_sq / rows.size()).cwiseSqrt();
+    m->mode_accuracy = static_cast<double>(mode_agree) / rows.size();
+  }
+  if (payload_n > 0) m->payload_rmse_m = (payload_sq / payload_n).cwiseSqrt();
+
+  // slack time, detection latency and re-taut impact
+  m->slack_time_s = 0.0;
+  std::vector<double> latencies;
+  double vz_min = 0.0, rate_peak = 0.0;
+  for (const auto& [start, end] : slack) {
+    m->slack_time_s += end - start;
+    bool detected = false;
+    for (const LogRow& r : rows) {
+      if (r.time_s >= start && r.time_s <= start + kDetectionWindow_s &&
+          r.estimate.mode == CableMode::kSlack) {
+        latencies.push_back(r.time_s - start);
+        detected = true;
+        break;
+      }
+    }
+    if (!detected) ++m->slack_events_missed;
+    if (end < rows.back().time_s) {
+      ++m->retaut_count;
+      for (const LogRow& r : rows) {
+        if (r.time_s >= end - 0.05 && r.time_s <= end + kRetautWindow_s) {
+          vz_min = std::min(vz_min, r.truth.v_WQ_W.z());
+          rate_peak = std::max(rate_peak, r.truth.w_B.norm());
+        }
+      }
+    }
+  }
+  m->retaut_quad_vz_min_mps = vz_min;
+  m->retaut_peak_body_rate_radps = rate_peak;
+  if (!latencies.empty()) {
+    double sum = 0.0;
+    for (double l : latencies) sum += l;
+    m->slack_detection_latency_mean_s = sum / latencies.size();
+    m->slack_detection_latency_max_s = *std::max_element(latencies.begin(), latencies.end());
+  }
+
+  // camera field of view
+  m->camera_frames = static_cast<int>(in.payload_in_fov_per_frame.size());
+  m->detections = in.detections;
+  if (m->camera_frames > 0) {
+    const auto visible = std::count(in.payload_in_fov_per_frame.begin(),
+                                    in.payload_in_fov_per_frame.end(), true);
+    m->payload_in_fov_fraction = static_cast<double>(visible) / m->camera_frames;
+  }
+
+  // solver statistics
+  std::vector<double> solve_ms;
+  m->mpc_failures = 0;
+  for (const LogRow& r : rows) {
+    solve_ms.push_back(r.solve_time_ms);
+    if (r.status != ControlStatus::kSuccess) ++m->mpc_failures;
+  }
+  m->mpc_solve_ms = ComputeQuantiles(solve_ms);
+  m->detector_ms = ComputeQuantiles(in.detector_ms);
+  m->render_ms = ComputeQuantiles(in.render_ms);
+}
+
+void CheckExpectations(const ExpectSpec& e, Metrics* m) {
+  m->expect_failed.clear();
+  auto fail = [&](const std::string& key, double value, const char* op, double bound) {
+    std::ostringstream out;
+    out << key << ": " << value << " " << op << " " << bound;
+    m->expect_failed.push_back(out.str());
+  };
+  if (e.crashed && *e.crashed != m->crashed) {
+    m->expect_failed.push_back(std::string("crashed: ") + (m->crashed ? "true" : "false") +
+                               (m->crashed ? " (" + m->crash_reason.value_or("") + ")" : "") +
+                               ", expected " + (*e.crashed ? "true" : "false"));
+  }
+  static const char* kAxes[3] = {"x", "y", "z"};
+  for (int i = 0; i < 3; ++i) {
+    if (e.payload_rmse_max_m && m->payload_rmse_m(i) > (*e.payload_rmse_max_m)(i)) {
+      fail(std::string("payload_rmse_max.") + kAxes[i], m->payload_rmse_m(i), ">",
+           (*e.payload_rmse_max_m)(i));
+    }
+    if (e.quad_rmse_max_m && m->quad_rmse_m(i) > (*e.quad_rmse_max_m)(i)) {
+      fail(std::string("quad_rmse_max.") + kAxes[i], m->quad_rmse_m(i), ">",
+           (*e.quad_rmse_max_m)(i));
+    }
+  }
+  if (e.quad_position_deviation_max_m &&
+      m->quad_position_deviation_max_m > *e.quad_position_deviation_max_m) {
+    fail("quad_position_deviation_max", m->quad_position_deviation_max_m, ">",
+         *e.quad_position_deviation_max_m);
+  }
+  if (e.payload_in_fov_min && m->payload_in_fov_fraction < *e.payload_in_fov_min) {
+    fail("payload_in_fov_min", m->payload_in_fov_fraction, "<", *e.payload_in_fov_min);
+  }
+  if (e.mode_accuracy_min && m->mode_accuracy < *e.mode_accuracy_min) {
+    fail("mode_accuracy_min", m->mode_accuracy, "<", *e.mode_accuracy_min);
+  }
+  if (e.slack_detection_latency_max_s) {
+    if (m->slack_events_missed > 0) {
+      fail("slack_detection_latency_max (missed slack events)", m->slack_events_missed, ">", 0);
+    } else if (m->slack_detection_latency_max_s &&
+               *m->slack_detection_latency_max_s > *e.slack_detection_latency_max_s) {
+      fail("slack_detection_latency_max", *m->slack_detection_latency_max_s, ">",
+           *e.slack_detection_latency_max_s);
+    }
+  }
+  if (e.mpc_failures_max && m->mpc_failures > *e.mpc_failures_max) {
+    fail("mpc_failures_max", m->mpc_failures, ">", *e.mpc_failures_max);
+  }
+  if (e.retaut_quad_vz_min_mps && m->retaut_quad_vz_min_mps < *e.retaut_quad_vz_min_mps) {
+    fail("retaut_quad_vz_min", m->retaut_quad_vz_min_mps, "<", *e.retaut_quad_vz_min_mps);
+  }
+  m->expect_passed = m->expect_failed.empty();
+}
+
+std::string MetricsToJson(const Metrics& m) {
+  std::ostringstream o;
+  o << "{\n";
+  o << "  \"scenario\": " << Quote(m.scenario) << ",\n";
+  o << "  \"controller\": " << Quote(m.controller) << ",\n";
+  o << "  \"camera\": " << Quote(m.camera) << ",\n";
+  o << "  \"seed\": " << m.seed << ",\n";
+  o << "  \"sim_time_s\": " << Num(m.sim_time_s) << ",\n";
+  o << "  \"wall_time_s\": " << Num(m.wall_time_s) << ",\n";
+  o << "  \"crashed\": " << (m.crashed ? "true" : "false") << ",\n";
+  o << "  \"crash_time_s\": " << (m.crash_time_s ? Num(*m.crash_time_s) : "null") << ",\n";
+  o << "  \"crash_reason\": " << (m.crash_reason ? Quote(*m.crash_reason) : "null") << ",\n";
+  o << "  \"payload_rmse_m\": " << Vec(m.payload_rmse_m) << ",\n";
+  o << "  \"payload_rmse_over\": " << Quote(m.payload_rmse_over) << ",\n";
+  o << "  \"quad_rmse_m\": " << Vec(m.quad_rmse_m) << ",\n";
+  o << "  \"quad_position_deviation_max_m\": " << Num(m.quad_position_deviation_max_m) << ",\n";
+  o << "  \"payload_max_speed_mps\": " << Num(m.payload_max_speed_mps) << ",\n";
+  o << "  \"slack_time_s\": " << Num(m.slack_time_s) << ",\n";
+  o << "  \"slack_events\": " << m.slack_events << ",\n";
+  o << "  \"mode_accuracy\": " << Num(m.mode_accuracy) << ",\n";
+  o << "  \"slack_detection_latency_s\": {\"mean\": "
+    << (m.slack_detection_latency_mean_s ? Num(*m.slack_detection_latency_mean_s) : "null")
+    << ", \"max\": "
+    << (m.slack_detection_latency_max_s ? Num(*m.slack_detection_latency_max_s) : "null")
+    << ", \"missed\": " << m.slack_events_missed << "},\n";
+  o << "  \"payload_in_fov_fraction\": " << Num(m.payload_in_fov_fraction) << ",\n";
+  o << "  \"camera_frames\": " << m.camera_frames << ",\n";
+  o << "  \"detections\": " << m.detections << ",\n";
+  o << "  \"retaut\": {\"count\": " << m.retaut_count
+    << ", \"quad_vz_min_mps\": " << Num(m.retaut_quad_vz_min_mps)
+    << ", \"peak_body_rate_radps\": " << Num(m.retaut_peak_body_rate_radps) << "},\n";
+  o << "  \"mpc_solve_ms\": " << QuantilesJson(m.mpc_solve_ms) << ",\n";
+  o << "  \"mpc_failures\": " << m.mpc_failures << ",\n";
+  o << "  \"closed_loop_cost\": " << Num(m.closed_loop_cost) << ",\n";
+  o << "  \"render_ms\": " << QuantilesJson(m.render_ms) << ",\n";
+  o << "  \"detector_ms\": " << QuantilesJson(m.detector_ms) << ",\n";
+  o << "  \"expect\": {\"passed\": " << (m.expect_passed ? "true" : "false") << ", \"failed\": [";
+  for (size_t i = 0; i < m.expect_failed.size(); ++i) {
+    o << (i ? ", " : "") << Quote(m.expect_failed[i]);
+  }
+  o << "]}\n}\n";
+  return o.str();
+}
+
+void WriteLogCsv(const std::string& path, const std::vector<LogRow>& rows) {
+  std::ofstream out(path);
+  if (!out) throw InputError(path, "", "cannot write file");
+  auto header_state = [&](const std::string& p) {
+    for (const char* n : {"pL_x", "pL_y", "pL_z", "vL_x", "vL_y", "vL_z", "pQ_x", "pQ_y", "pQ_z",
+                          "vQ_x", "vQ_y", "vQ_z", "q_w", "q_x", "q_y", "q_z", "w_x", "w_y",
+                          "w_z"}) {
+      out << "," << p << n;
+    }
+    out << "," << p << "mode";
+  };
+  out << "time_s";
+  header_state("true_");
+  header_state("est_");
+  out << ",ref_pL_x,ref_pL_y,ref_pL_z,ref_pQ_x,ref_pQ_y,ref_pQ_z"
+      << ",cmd_w_x,cmd_w_y,cmd_w_z,cmd_thrust_N,status,solve_ms,cost,tension_N,gripper\n";
+  out << std::setprecision(7);
+  for (const LogRow& r : rows) {
+    out << r.time_s;
+    for (const SystemState* s : {&r.truth, &r.estimate}) {
+      const StateVector x = s->ToVector();
+      for (int i = 0; i < kNx; ++i) out << "," << x(i);
+      out << "," << (s->mode == CableMode::kTaut ? 1 : 0);
+    }
+    const auto& ref = r.reference;
+    out << "," << ref.p_WL_W.x() << "," << ref.p_WL_W.y() << "," << ref.p_WL_W.z() << ","
+        << ref.p_WQ_W.x() << "," << ref.p_WQ_W.y() << "," << ref.p_WQ_W.z();
+    out << "," << r.command.w_B_radps.x() << "," << r.command.w_B_radps.y() << ","
+        << r.command.w_B_radps.z() << "," << r.command.thrust_N << "," << ToString(r.status)
+        << "," << r.solve_time_ms << "," << r.cost << "," << r.cable_tension_N << ","
+        << (r.gripper_active ? 1 : 0) << "\n";
+  }
+}
+
+}  // namespace hpa

@@ -1,0 +1,182 @@
+#include "hpa/scenarios/plots.h"
+
+#include <opencv2/imgcodecs.hpp>
+
+#include "hpa/models/input_error.h"
+#include "hpa/scenarios/plot_canvas.h"
+
+namespace hpa {
+namespace {
+
+const cv::Scalar kSlackShade(0, 165, 255);  // orange (BGR)
+const cv::Scalar kReference(90, 90, 90);
+
+// A column of the log as a vector.
+template <typename F>
+std::vector<double> Column(const std::vector<LogRow>& rows, F f) {
+  std::vector<double> out;
+  out.reserve(rows.size());
+  for (const LogRow& r : rows) out.push_back(f(r));
+  return out;
+}
+
+void Save(const std::string& path, const cv::Mat& image) {
+  if (!cv::imwrite(path, image)) throw InputError(path, "", "cannot write the PNG");
+}
+
+void ShadeSlack(PlotPanel* panel, const std::vector<LogRow>& rows) {
+  for (const auto& [a, b] : TrueSlackIntervals(rows)) panel->ShadeX(a, b, kSlackShade);
+}
+
+}  // namespace
+
+std::vector<std::string> WriteRunPlots(const RunResult& result, const Params& params,
+                                       const std::string& dir) {
+  const auto& rows = result.rows;
+  std::vector<std::string> written;
+  if (rows.empty()) return written;
+  const auto t = Column(rows, [](const LogRow& r) { return r.time_s; });
+  const std::string title_suffix = " - " + result.metrics.scenario + " (" +
+                                   result.metrics.controller + ")";
+
+  // payload x, y, z against the reference, slack shaded
+  {
+    cv::Mat fig = BlankFigure(1200, 900);
+    static const char* kAxis[3] = {"x", "y", "z"};
+    for (int i = 0; i < 3; ++i) {
+      PlotPanel p(&fig, cv::Rect(0, i * 300, 1200, 300),
+                  std::string("payload ") + kAxis[i] + (i == 0 ? title_suffix : ""), "t [s]",
+                  std::string(kAxis[i]) + "_L [m]");
+      const auto actual = Column(rows, [i](const LogRow& r) { return r.truth.p_WL_W(i); });
+      const auto estimate = Column(rows, [i](const LogRow& r) { return r.estimate.p_WL_W(i); });
+      const auto ref = Column(rows, [i](const LogRow& r) { return r.reference.p_WL_W(i); });
+      p.FitRange({t}, {actual, ref});
+      ShadeSlack(&p, rows);
+      p.DrawAxes();
+      p.Line(t, ref, kReference, 2, true);
+      p.Line(t, estimate, SeriesColour(1), 1);
+      p.Line(t, actual, SeriesColour(0), 2);
+      if (i == 0) {
+        p.Legend({{"true", SeriesColour(0)}, {"estimate", SeriesColour(1)},
+                  {"reference", kReference}, {"slack (shaded)", kSlackShade}});
+      }
+    }
+    written.push_back(dir + "/tracking.png");
+    Save(written.back(), fig);
+  }
+
+  // x-y path coloured by payload speed
+  {
+    cv::Mat fig = BlankFigure(900, 800);
+    PlotPanel p(&fig, cv::Rect(0, 0, 900, 800), "payload x-y path" + title_suffix, "x [m]",
+                "y [m]");
+    const auto x = Column(rows, [](const LogRow& r) { return r.truth.p_WL_W.x(); });
+    const auto y = Column(rows, [](const LogRow& r) { return r.truth.p_WL_W.y(); });
+    const auto xr = Column(rows, [](const LogRow& r) { return r.reference.p_WL_W.x(); });
+    const auto yr = Column(rows, [](const LogRow& r) { return r.reference.p_WL_W.y(); });
+    const auto speed = Column(rows, [](const LogRow& r) { return r.truth.v_WL_W.norm(); });
+    // equal scales on both axes
+    double x0 = 1e9, x1 = -1e9, y0 = 1e9, y1 = -1e9;
+    for (size_t i = 0; i < x.size(); ++i) {
+      x0 = std::min({x0, x[i], xr[i]}), x1 = std::max({x1, x[i], xr[i]});
+      y0 = std::min({y0, y[i], yr[i]}), y1 = std::max({y1, y[i], yr[i]});
+    }
+    const double half = 0.55 * std::max({x1 - x0, y1 - y0, 0.2});
+    const double cx = 0.5 * (x0 + x1), cy = 0.5 * (y0 + y1);
+    p.SetRange(cx - half * 1.1, cx + half * 1.1, cy - half, cy + half);
+    p.DrawAxes();
+    p.Line(xr, yr, kReference, 1, true);
+    const double v_max = std::max(1e-3, result.metrics.payload_max_speed_mps);
+    p.ColouredPath(x, y, speed, 0.0, v_max);
+    p.ColourBar(0.0, v_max, "|v_L| m/s");
+    written.push_back(dir + "/xy_path.png");
+    Save(written.back(), fig);
+  }
+
+  // quadrotor deviation, vertical velocity and body rates, slack shaded
+  {
+    cv::Mat fig = BlankFigure(1200, 900);
+    const auto dev = Column(rows, [](const LogRow& r) {
+      return (r.truth.p_WQ_W - r.reference.p_WQ_W).norm();
+    });
+    const auto vz = Column(rows, [](const LogRow& r) { return r.truth.v_WQ_W.z(); });
+    PlotPanel p0(&fig, cv::Rect(0, 0, 1200, 300), "quadrotor deviation |p_Q - p_Q,ref|" +
+                 title_suffix, "t [s]", "[m]");
+    p0.FitRange({t}, {dev});
+    ShadeSlack(&p0, rows);
+    p0.DrawAxes();
+    p0.Line(t, dev, SeriesColour(0));
+    PlotPanel p1(&fig, cv::Rect(0, 300, 1200, 300), "quadrotor vertical velocity", "t [s]",
+                 "v_z [m/s]");
+    p1.FitRange({t}, {vz});
+    ShadeSlack(&p1, rows);
+    p1.DrawAxes();
+    p1.Line(t, vz, SeriesColour(0));
+    PlotPanel p2(&fig, cv::Rect(0, 600, 1200, 300), "body rates", "t [s]", "[rad/s]");
+    std::vector<std::vector<double>> rates;
+    for (int i = 0; i < 3; ++i) {
+      rates.push_back(Column(rows, [i](const LogRow& r) { return r.truth.w_B(i); }));
+    }
+    p2.FitRange({t}, rates);
+    ShadeSlack(&p2, rows);
+    p2.DrawAxes();
+    for (int i = 0; i < 3; ++i) p2.Line(t, rates[i], SeriesColour(i));
+    p2.Legend({{"w_x", SeriesColour(0)}, {"w_y", SeriesColour(1)}, {"w_z", SeriesColour(2)}});
+    written.push_back(dir + "/retaut.png");
+    Save(written.back(), fig);
+  }
+  return written;
+}
+
+void WriteComparisonPlot(const std::vector<RunResult>& results, const Params& params,
+                         const std::string& png) {
+  cv::Mat fig = BlankFigure(1400, 1000);
+  const std::string name = results.empty() ? "" : results.front().metrics.scenario;
+  struct Panel {
+    const char* title;
+    const char* unit;
+    double (*value)(const LogRow&);
+  };
+  const Panel panels[4] = {
+      {"payload z (dashed: reference)", "z_L [m]", [](const LogRow& r) { return r.truth.p_WL_W.z(); }},
+      {"quadrotor z (dashed: reference)", "z_Q [m]", [](const LogRow& r) { return r.truth.p_WQ_W.z(); }},
+      {"quadrotor deviation |p_Q - p_Q,ref|", "[m]",
+       [](const LogRow& r) { return (r.truth.p_WQ_W - r.reference.p_WQ_W).norm(); }},
+      {"body-rate norm", "|w_B| [rad/s]", [](const LogRow& r) { return r.truth.w_B.norm(); }}};
+  for (int k = 0; k < 4; ++k) {
+    PlotPanel p(&fig, cv::Rect(0, k * 250, 1400, 250),
+                std::string(panels[k].title) + (k == 0 ? " - " + name : ""), "t [s]",
+                panels[k].unit);
+    std::vector<std::vector<double>> ts, ys;
+    for (const RunResult& r : results) {
+      ts.push_back(Column(r.rows, [](const LogRow& row) { return row.time_s; }));
+      ys.push_back(Column(r.rows, panels[k].value));
+    }
+    p.FitRange(ts, ys);
+    // slack shading from the first run (its colour is the first series')
+    for (size_t i = 0; i < results.size(); ++i) {
+      for (const auto& [a, b] : TrueSlackIntervals(results[i].rows)) {
+        p.ShadeX(a, b, i == 0 ? cv::Scalar(0, 200, 255) : cv::Scalar(255, 200, 150));
+      }
+    }
+    p.DrawAxes();
+    std::vector<std::pair<std::string, cv::Scalar>> legend;
+    for (size_t i = 0; i < results.size(); ++i) {
+      if (k <= 1) {
+        const auto ref = Column(results[i].rows, [k](const LogRow& r) {
+          return k == 0 ? r.reference.p_WL_W.z() : r.reference.p_WQ_W.z();
+        });
+        p.Line(ts[i], ref, SeriesColour(static_cast<int>(i)), 1, true);
+      }
+      p.Line(ts[i], ys[i], SeriesColour(static_cast<int>(i)), 2);
+      const Metrics& m = results[i].metrics;
+      legend.emplace_back(m.controller + (m.crashed ? " (CRASHED)" : ""),
+                          SeriesColour(static_cast<int>(i)));
+    }
+    if (k == 0) legend.emplace_back("slack (shaded per run)", cv::Scalar(0, 200, 255));
+    p.Legend(legend);
+  }
+  if (!cv::imwrite(png, fig)) throw InputError(png, "", "cannot write the PNG");
+}
+
+}  // namespace hpa

@@ -1,0 +1,175 @@
+#include "hpa/scenarios/scenario.h"
+
+#include "hpa/models/input_error.h"
+#include "hpa/models/yaml_reader.h"
+
+namespace hpa {
+namespace {
+
+constexpr double kBig = 1e3;  // generous bound on positions (m), forces (N), impulses (N s)
+
+Eigen::Vector3d Vec3(const YamlMap& map, const std::string& key, double min, double max) {
+  return map.Vector(key, 3, min, max);
+}
+
+EventSpec ParseEvent(const YamlMap& e) {
+  EventSpec ev;
+  ev.at_s = e.Number("at", 0.0, 1e5);
+  const std::string type = e.Choice(
+      "type", {"gripper_grab", "gripper_move", "gripper_release", "impulse", "wind"}, "");
+  if (type == "gripper_grab") {
+    ev.type = EventSpec::Type::kGripperGrab;
+  } else if (type == "gripper_move") {
+    ev.type = EventSpec::Type::kGripperMove;
+    ev.to_W_m = Vec3(e, "to", -kBig, kBig);
+    ev.duration_s = e.Number("duration", 0.0, 1e4);
+  } else if (type == "gripper_release") {
+    ev.type = EventSpec::Type::kGripperRelease;
+  } else if (type == "impulse") {
+    ev.type = EventSpec::Type::kImpulse;
+    ev.on_payload = e.Choice("body", {"payload", "quadrotor"}, "payload") == "payload";
+    ev.impulse_W_Ns = Vec3(e, "impulse", -kBig, kBig);
+    ev.duration_s = e.Number("duration", 1e-3, 1.0, 0.01);
+  } else {
+    ev.type = EventSpec::Type::kWind;
+    ev.force_W_N = Vec3(e, "force", -kBig, kBig);
+    ev.duration_s = e.Number("duration", 0.0, 1e5);
+  }
+  e.RejectUnknownKeys();
+  return ev;
+}
+
+ExpectSpec ParseExpect(const YamlMap& e) {
+  ExpectSpec x;
+  if (e.Has("crashed")) x.crashed = e.Bool("crashed", false);
+  if (e.Has("payload_rmse_max")) x.payload_rmse_max_m = Vec3(e, "payload_rmse_max", 0, kBig);
+  if (e.Has("quad_rmse_max")) x.quad_rmse_max_m = Vec3(e, "quad_rmse_max", 0, kBig);
+  if (e.Has("quad_position_deviation_max")) {
+    x.quad_position_deviation_max_m = e.Number("quad_position_deviation_max", 0, kBig);
+  }
+  if (e.Has("payload_in_fov_min")) x.payload_in_fov_min = e.Number("payload_in_fov_min", 0, 1);
+  if (e.Has("mode_accuracy_min")) x.mode_accuracy_min = e.Number("mode_accuracy_min", 0, 1);
+  if (e.Has("slack_detection_latency_max")) {
+    x.slack_detection_latency_max_s = e.Number("slack_detection_latency_max", 0, kBig);
+  }
+  if (e.Has("mpc_failures_max")) {
+    x.mpc_failures_max = static_cast<int>(e.Integer("mpc_failures_max", 0, 1000000000));
+  }
+  if (e.Has("retaut_quad_vz_min")) {
+    x.retaut_quad_vz_min_mps = e.Number("retaut_quad_vz_min", -kBig, kBig);
+  }
+  e.RejectUnknownKeys();
+  return x;
+}
+
+ReferenceSpec ParseReference(const YamlMap& r) {
+  ReferenceSpec ref;
+  ref.type = r.Choice("type", {"hover", "lissajous", "line"}, "hover");
+  if (ref.type == "hover") {
+    ref.payload_position_W_m = Vec3(r, "payload_position", -kBig, kBig);
+  } else if (ref.type == "lissajous") {
+    LissajousSpec& s = ref.lissajous;
+    s.a = r.Number("a", -100, 100, s.a);
+    s.b = r.Number("b", -100, 100, s.b);
+    s.c = r.Number("c", -100, 100, s.c);
+    s.n = r.Number("n", -100, 100, s.n);
+    s.m = r.Number("m", -100, 100, s.m);
+    s.phi = r.Number("phi", -100, 100, s.phi);
+    s.psi = r.Number("psi", -100, 100, s.psi);
+    s.period_s = r.Number("period", 0.1, 1e4, s.period_s);
+    s.ramp_s = r.Number("ramp", 0.0, 1e4, s.ramp_s);
+    if (r.Has("centre")) s.centre = Vec3(r, "centre", -kBig, kBig);
+  } else {
+    ref.line_start_W_m = Vec3(r, "start", -kBig, kBig);
+    ref.line_end_W_m = Vec3(r, "end", -kBig, kBig);
+    ref.line_duration_s = r.Number("duration", 1e-3, 1e5);
+    ref.line_start_time_s = r.Number("start_time", 0.0, 1e5, 0.0);
+  }
+  r.RejectUnknownKeys();
+  return ref;
+}
+
+}  // namespace
+
+const char* ToString(EventSpec::Type type) {
+  switch (type) {
+    case EventSpec::Type::kGripperGrab: return "gripper_grab";
+    case EventSpec::Type::kGripperMove: return "gripper_move";
+    case EventSpec::Type::kGripperRelease: return "gripper_release";
+    case EventSpec::Type::kImpulse: return "impulse";
+    case EventSpec::Type::kWind: return "wind";
+  }
+  return "?";
+}
+
+Scenario ParseScenario(const YamlMap& root) {
+  Scenario s;
+  s.file = root.file();
+  s.name = root.String("name");
+  s.duration_s = root.Number("duration", 1e-3, 1e5);
+  s.seed = static_cast<unsigned long>(root.Integer("seed", 0, 4294967295L, 1));
+
+  if (root.Has("world")) {
+    const YamlMap w = root.Map("world");
+    if (w.Has("payload_mass")) s.world_payload_mass_kg = w.Number("payload_mass", 1e-3, 10.0);
+    if (w.Has("cable_length")) s.world_cable_length_m = w.Number("cable_length", 0.05, 5.0);
+    w.RejectUnknownKeys();
+  }
+  if (root.Has("controller")) {
+    const YamlMap c = root.Map("controller");
+    s.controller.type = c.Choice("type", {"hpa_mpc", "nonhybrid_mpc", "geometric"}, "hpa_mpc");
+    s.controller.perception_weight = c.Number("perception_weight", 0.0, 1e3, 1.0);
+    s.controller.solver = c.Choice("solver", {"rti", "nlopt"}, "rti");
+    c.RejectUnknownKeys();
+  }
+  if (root.Has("estimation")) {
+    const YamlMap e = root.Map("estimation");
+    s.estimation.camera = e.Choice("camera", {"render", "analytic"}, "render");
+    s.estimation.ground_truth = e.Bool("ground_truth", false);
+    s.estimation.camera_latency_s = e.Number("camera_latency", 0.0, 1.0, 0.03);
+    s.estimation.detector_noise_scale = e.Number("detector_noise_scale", 0.0, 100.0, 1.0);
+    e.RejectUnknownKeys();
+  }
+  if (root.Has("reference")) s.reference = ParseReference(root.Map("reference"));
+  if (root.Has("events")) {
+    const YAML::Node list = root.Node("events");
+    if (!list.IsSequence()) root.Fail("events", "expected a list of events");
+    for (size_t i = 0; i < list.size(); ++i) {
+      const std::string path = root.KeyPath("events") + "." + std::to_string(i);
+      if (!list[i].IsMap()) throw InputError(root.file(), path, "expected an event map");
+      s.events.push_back(ParseEvent(YamlMap(list[i], root.file(), path)));
+      if (s.events.back().at_s > s.duration_s) {
+        throw InputError(root.file(), path + ".at", "event after the end of the scenario");
+      }
+    }
+  }
+  if (root.Has("expect")) s.expect = ParseExpect(root.Map("expect"));
+  root.RejectUnknownKeys();
+  return s;
+}
+
+Scenario LoadScenario(const std::string& path) { return ParseScenario(YamlMap::LoadFile(path)); }
+
+std::shared_ptr<Reference> MakeReference(const Scenario& scenario, const Params& params) {
+  const ReferenceSpec& r = scenario.reference;
+  if (r.type == "lissajous") return MakeLissajousReference(params, r.lissajous);
+  if (r.type == "line") {
+    // the line reference holds its start before t = 0; shift time so it starts at start_time
+    class Delayed : public Reference {
+     public:
+      Delayed(std::shared_ptr<Reference> inner, double delay_s)
+          : inner_(std::move(inner)), delay_s_(delay_s) {}
+      ReferencePoint At(double t_s) const override { return inner_->At(t_s - delay_s_); }
+
+     private:
+      std::shared_ptr<Reference> inner_;
+      double delay_s_;
+    };
+    return std::make_shared<Delayed>(
+        MakeLineReference(params, r.line_start_W_m, r.line_end_W_m, r.line_duration_s),
+        r.line_start_time_s);
+  }
+  return MakeHoverReference(params, r.payload_position_W_m);
+}
+
+}  // namespace hpa

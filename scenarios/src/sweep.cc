@@ -1,0 +1,809 @@
+#include "hpa/scenarios/sweep.h"
+
+#include <signal.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <fstream>
+#include <functional>
+#include <iomanip>
+#include <map>
+#include <random>
+#include <set>
+#include <sstream>
+#include <thread>
+
+#include "hpa/models/input_error.h"
+#include "hpa/models/params.h"
+#include "hpa/models/yaml_reader.h"
+#include "hpa/scenarios/plot_canvas.h"
+#include "hpa/scenarios/runner.h"
+#include "hpa/scenarios/scenario.h"
+
+#include <opencv2/imgcodecs.hpp>
+
+namespace hpa {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+// SplitMix64: derives independent seeds from the sweep seed (stable across platforms).
+uint64_t SplitMix64(uint64_t x) {
+  x += 0x9E3779B97F4A7C15ULL;
+  x = (x ^ (x >> 30)) * 0xBF58476D1CE4E5B9ULL;
+  x = (x ^ (x >> 27)) * 0x94D049BB133111EBULL;
+  return x ^ (x >> 31);
+}
+
+std::string ReadFile(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw InputError(path, "", "cannot open file");
+  return std::string(std::istreambuf_iterator<char>(in), {});
+}
+
+std::string Hex(uint64_t v) {
+  std::ostringstream out;
+  out << std::hex << std::setw(16) << std::setfill('0') << v;
+  return out.str();
+}
+
+// FNV-1a of a text: identifies a sweep (its file and its base scenario's text).
+uint64_t Fnv1a(const std::string& text) {
+  uint64_t h = 1469598103934665603ULL;
+  for (unsigned char c : text) h = (h ^ c) * 1099511628211ULL;
+  return h;
+}
+
+std::string FormatNumber(double v) {
+  std::ostringstream out;
+  out << std::setprecision(17) << v;
+  return out.str();
+}
+
+bool IsNumber(const std::string& s, double* v = nullptr) {
+  char* end = nullptr;
+  const double d = std::strtod(s.c_str(), &end);
+  if (s.empty() || *end != '\0' || !std::isfinite(d)) return false;
+  if (v) *v = d;
+  return true;
+}
+
+std::string JsonString(const std::string& s) {
+  std::string out = "\"";
+  for (char c : s) {
+    if (c == '"' || c == '\\') out += '\\';
+    if (c == '\n') {
+      out += "\\n";
+      continue;
+    }
+    out += c;
+  }
+  return out + "\"";
+}
+
+std::string JsonValue(const std::string& s) { return IsNumber(s) ? s : JsonString(s); }
+
+std::string Dirname(const std::string& path) {
+  const size_t slash = path.rfind('/');
+  return slash == std::string::npos ? "." : path.substr(0, slash);
+}
+
+void MakeDir(const std::string& dir) {
+  std::string partial;
+  for (size_t i = 0; i <= dir.size(); ++i) {
+    if ((i == dir.size() || dir[i] == '/') && !partial.empty()) mkdir(partial.c_str(), 0755);
+    if (i < dir.size()) partial += dir[i];
+  }
+  struct stat st;
+  if (stat(dir.c_str(), &st) != 0 || !S_ISDIR(st.st_mode)) {
+    throw InputError(dir, "--out", "cannot create the output directory");
+  }
+}
+
+// Builds the scenario of one run: the base file with the run's values set, validated.
+Scenario BuildScenario(const SweepSpec& spec, const SweepRun& run) {
+  YAML::Node root;
+  try {
+    root = YAML::LoadFile(spec.base_path);
+  } catch (const YAML::Exception& e) {
+    throw InputError(spec.base_path, "", std::string("malformed YAML: ") + e.what());
+  }
+  for (const auto& [path, value] : run.values) SetDottedPath(root, path, value, spec.file);
+  Scenario s = ParseScenario(YamlMap(root, spec.base_path, ""));
+  s.seed = run.seed;
+  return s;
+}
+
+// One parsed line of runs.jsonl.
+struct Record {
+  int run = -1;
+  unsigned long seed = 0;
+  std::string sweep_id, sweep_file, base;
+  std::vector<std::pair<std::string, std::string>> values;
+  std::string controller;
+  bool error = false;
+  std::string error_text;
+  bool crashed = false;
+  double payload_rmse_norm_m = 0, quad_dev_max_m = 0, solve_median_ms = 0, slack_time_s = 0;
+  double payload_in_fov = 1;
+  std::string line;  // the raw JSON line
+};
+
+std::vector<Record> ReadRecords(const std::string& path) {
+  std::vector<Record> out;
+  std::ifstream in(path);
+  std::string line;
+  int line_no = 0;
+  while (std::getline(in, line)) {
+    ++line_no;
+    if (line.empty()) continue;
+    Record r;
+    r.line = line;
+    try {
+      const YAML::Node n = YAML::Load(line);
+      r.run = n["run"].as<int>();
+      r.seed = n["seed"].as<unsigned long>();
+      r.sweep_id = n["sweep_id"].as<std::string>();
+      r.sweep_file = n["sweep"].as<std::string>();
+      r.base = n["base"].as<std::string>();
+      for (const auto& kv : n["values"]) {
+        r.values.emplace_back(kv.first.as<std::string>(), kv.second.as<std::string>());
+      }
+      r.controller = n["controller"].as<std::string>();
+      r.error = n["status"].as<std::string>() != "ok";
+      if (r.error) {
+        r.error_text = n["error"].as<std::string>();
+      } else {
+        const YAML::Node m = n["metrics"];
+        r.crashed = m["crashed"].as<bool>();
+        const YAML::Node e = m["payload_rmse_m"];
+        r.payload_rmse_norm_m = std::sqrt(std::pow(e[0].as<double>(), 2) +
+                                          std::pow(e[1].as<double>(), 2) +
+                                          std::pow(e[2].as<double>(), 2));
+        r.quad_dev_max_m = m["quad_position_deviation_max_m"].as<double>();
+        r.solve_median_ms = m["mpc_solve_ms"]["median"].as<double>();
+        r.slack_time_s = m["slack_time_s"].as<double>();
+        r.payload_in_fov = m["payload_in_fov_fraction"].as<double>();
+      }
+    } catch (const YAML::Exception& e) {
+      // a torn last line (the sweep was killed mid-write) is skipped; it will be re-run
+      std::fprintf(stderr, "hpa: warning: %s:%d: unreadable line skipped (%s)\n", path.c_str(),
+                   line_no, e.what());
+      continue;
+    }
+    out.push_back(r);
+  }
+  return out;
+}
+
+// Wilson score interval for k successes in n trials (95 %).
+std::pair<double, double> Wilson(int k, int n) {
+  if (n == 0) return {0.0, 1.0};
+  const double z = 1.959963984540054, p = static_cast<double>(k) / n;
+  const double denom = 1 + z * z / n;
+  const double centre = (p + z * z / (2 * n)) / denom;
+  const double half = z * std::sqrt(p * (1 - p) / n + z * z / (4.0 * n * n)) / denom;
+  return {std::max(0.0, centre - half), std::min(1.0, centre + half)};
+}
+
+double Quantile(std::vector<double> v, double q) {
+  if (v.empty()) return NAN;
+  std::sort(v.begin(), v.end());
+  const size_t i = static_cast<size_t>(std::ceil(q * v.size())) - 1;
+  return v[std::min(v.size() - 1, i)];
+}
+
+std::string Fixed(double v, int decimals = 3) {
+  if (!std::isfinite(v)) return "-";
+  std::ostringstream out;
+  out << std::fixed << std::setprecision(decimals) << v;
+  return out.str();
+}
+
+// Writes summary.json, summary.md and crash_rate.png from the records of one sweep.
+void WriteSummary(const std::vector<Record>& records, const std::string& dir) {
+  // the main varied quantity: the first numeric vary path that is not the controller type
+  std::string main_path;
+  for (const Record& r : records) {
+    for (const auto& [path, value] : r.values) {
+      if (path != "controller.type" && IsNumber(value) && main_path.empty()) main_path = path;
+    }
+    if (!main_path.empty()) break;
+  }
+  auto main_value = [&](const Record& r) {
+    for (const auto& [path, value] : r.values) {
+      double v;
+      if (path == main_path && IsNumber(value, &v)) return v;
+    }
+    return 0.0;
+  };
+
+  // bins over the main quantity: its distinct values if few, else 6 equal-width bins
+  std::set<double> distinct;
+  for (const Record& r : records) distinct.insert(main_value(r));
+  std::vector<std::pair<double, double>> bins;  // [lo, hi]
+  if (distinct.size() <= 8) {
+    for (double v : distinct) bins.emplace_back(v, v);
+  } else {
+    const double lo = *distinct.begin(), hi = *distinct.rbegin();
+    for (int i = 0; i < 6; ++i) {
+      bins.emplace_back(lo + (hi - lo) * i / 6.0, lo + (hi - lo) * (i + 1) / 6.0);
+    }
+  }
+  auto bin_of = [&](double v) {
+    for (size_t i = 0; i < bins.size(); ++i) {
+      if (v >= bins[i].first - 1e-12 && v <= bins[i].second + 1e-12) return static_cast<int>(i);
+    }
+    return static_cast<int>(bins.size()) - 1;
+  };
+
+  std::set<std::string> controllers;
+  for (const Record& r : records) controllers.insert(r.controller);
+
+  struct Cell {
+    int n = 0, crashes = 0, errors = 0;
+    std::vector<double> rmse, dev, solve;
+  };
+  std::map<std::string, Cell> total;
+  std::map<std::string, std::vector<Cell>> per_bin;
+  for (const auto& c : controllers) per_bin[c].resize(bins.size());
+  for (const Record& r : records) {
+    for (Cell* cell : {&total[r.controller], &per_bin[r.controller][bin_of(main_value(r))]}) {
+      if (r.error) {
+        ++cell->errors;
+        continue;
+      }
+      ++cell->n;
+      if (r.crashed) ++cell->crashes;
+      if (!r.crashed) cell->rmse.push_back(r.payload_rmse_norm_m);
+      cell->dev.push_back(r.quad_dev_max_m);
+      cell->solve.push_back(r.solve_median_ms);
+    }
+  }
+
+  // summary.json
+  std::ostringstream js;
+  js << "{\n  \"runs\": " << records.size() << ",\n  \"main_varied\": " << JsonString(main_path)
+     << ",\n  \"controllers\": {";
+  bool first_c = true;
+  for (const auto& c : controllers) {
+    const Cell& t = total[c];
+    const auto ci = Wilson(t.crashes, t.n);
+    js << (first_c ? "\n" : ",\n") << "    " << JsonString(c) << ": {\"runs\": " << t.n
+       << ", \"errors\": " << t.errors << ", \"crashes\": " << t.crashes
+       << ", \"crash_rate\": " << (t.n ? static_cast<double>(t.crashes) / t.n : 0.0)
+       << ", \"crash_rate_ci95\": [" << ci.first << ", " << ci.second << "]"
+       << ", \"payload_rmse_norm_m\": {\"median\": " << FormatNumber(Quantile(t.rmse, 0.5))
+       << ", \"p90\": " << FormatNumber(Quantile(t.rmse, 0.9)) << "}"
+       << ", \"quad_deviation_max_m\": {\"median\": " << FormatNumber(Quantile(t.dev, 0.5))
+       << ", \"p90\": " << FormatNumber(Quantile(t.dev, 0.9)) << "}"
+       << ", \"mpc_solve_median_ms\": {\"median\": " << FormatNumber(Quantile(t.solve, 0.5))
+       << ", \"p99\": " << FormatNumber(Quantile(t.solve, 0.99)) << "}, \"bins\": [";
+    for (size_t b = 0; b < bins.size(); ++b) {
+      const Cell& cell = per_bin[c][b];
+      const auto bci = Wilson(cell.crashes, cell.n);
+      js << (b ? ", " : "") << "{\"lo\": " << bins[b].first << ", \"hi\": " << bins[b].second
+         << ", \"runs\": " << cell.n << ", \"crashes\": " << cell.crashes
+         << ", \"crash_rate\": " << (cell.n ? static_cast<double>(cell.crashes) / cell.n : 0.0)
+         << ", \"ci95\": [" << bci.first << ", " << bci.second << "]}";
+    }
+    js << "]}";
+    first_c = false;
+  }
+  js << "\n  }\n}\n";
+  std::ofstream(dir + "/summary.json") << js.str();
+
+  // summary.md
+  std::ostringstream md;
+  md << "# Sweep summary\n\n" << records.size() << " runs";
+  if (!records.empty()) md << " of `" << records.front().sweep_file << "` (base `" << records.front().base << "`)";
+  md << ". Crash rates with 95 % Wilson intervals; RMSE is the norm of the per-axis payload RMSE "
+        "over runs that did not crash.\n\n";
+  md << "| controller | runs | errors | crashes | crash rate [95% CI] | payload RMSE median / p90 "
+        "[m] | quad deviation median / p90 [m] | solve median [ms] |\n|---|---|---|---|---|---|---|---|\n";
+  for (const auto& c : controllers) {
+    const Cell& t = total[c];
+    const auto ci = Wilson(t.crashes, t.n);
+    md << "| " << c << " | " << t.n << " | " << t.errors << " | " << t.crashes << " | "
+       << Fixed(t.n ? 1.0 * t.crashes / t.n : 0.0, 3) << " [" << Fixed(ci.first, 3) << ", "
+       << Fixed(ci.second, 3) << "] | " << Fixed(Quantile(t.rmse, 0.5)) << " / "
+       << Fixed(Quantile(t.rmse, 0.9)) << " | " << Fixed(Quantile(t.dev, 0.5)) << " / "
+       << Fixed(Quantile(t.dev, 0.9)) << " | " << Fixed(Quantile(t.solve, 0.5)) << " |\n";
+  }
+  if (!main_path.empty()) {
+    md << "\n## Crash rate against `" << main_path << "`\n\n| bin |";
+    for (const auto& c : controllers) md << " " << c << " |";
+    md << "\n|---|";
+    for (size_t i = 0; i < controllers.size(); ++i) md << "---|";
+    md << "\n";
+    for (size_t b = 0; b < bins.size(); ++b) {
+      md << "| " << Fixed(bins[b].first) << (bins[b].first == bins[b].second ? "" : " - " + Fixed(bins[b].second)) << " |";
+      for (const auto& c : controllers) {
+        const Cell& cell = per_bin[c][b];
+        const auto ci = Wilson(cell.crashes, cell.n);
+        md << " " << cell.crashes << "/" << cell.n << " [" << Fixed(ci.first, 2) << ", "
+           << Fixed(ci.second, 2) << "] |";
+      }
+      md << "\n";
+    }
+  }
+  // worst runs, with the command that replays each exactly
+  std::vector<const Record*> worst;
+  for (const Record& r : records) worst.push_back(&r);
+  std::sort(worst.begin(), worst.end(), [](const Record* a, const Record* b) {
+    if (a->error != b->error) return a->error;
+    if (a->crashed != b->crashed) return a->crashed;
+    return a->quad_dev_max_m > b->quad_dev_max_m;
+  });
+  md << "\n## Worst runs (errors, crashes, then largest quadrotor deviation)\n\n";
+  for (size_t i = 0; i < std::min<size_t>(8, worst.size()); ++i) {
+    const Record& r = *worst[i];
+    md << "- run " << r.run << " (" << r.controller << "): "
+       << (r.error ? "ERROR " + r.error_text
+                   : (r.crashed ? std::string("crashed") : std::string("ok")) +
+                         ", quad deviation " + Fixed(r.quad_dev_max_m) + " m")
+       << "\n  `hpa run " << r.base << " --seed " << r.seed;
+    for (const auto& [path, value] : r.values) md << " --set " << path << "=" << value;
+    md << "`\n";
+  }
+  std::ofstream(dir + "/summary.md") << md.str();
+
+  // crash rate plot, one line per controller
+  if (!main_path.empty()) {
+    cv::Mat fig = BlankFigure(1000, 600);
+    PlotPanel p(&fig, cv::Rect(0, 0, 1000, 600), "crash rate (95% Wilson CI)", main_path,
+                "crash rate");
+    double x0 = bins.front().first, x1 = bins.back().second;
+    if (x1 <= x0) x1 = x0 + 1;
+    const double pad = 0.05 * (x1 - x0);
+    p.SetRange(x0 - pad, x1 + pad, -0.02, 1.02);
+    p.DrawAxes();
+    std::vector<std::pair<std::string, cv::Scalar>> legend;
+    int k = 0;
+    for (const auto& c : controllers) {
+      std::vector<double> x, y, lo, hi;
+      for (size_t b = 0; b < bins.size(); ++b) {
+        const Cell& cell = per_bin[c][b];
+        if (cell.n == 0) continue;
+        const auto ci = Wilson(cell.crashes, cell.n);
+        x.push_back(0.5 * (bins[b].first + bins[b].second));
+        y.push_back(1.0 * cell.crashes / cell.n);
+        lo.push_back(ci.first);
+        hi.push_back(ci.second);
+      }
+      p.Line(x, y, SeriesColour(k), 2);
+      p.ErrorBars(x, y, lo, hi, SeriesColour(k));
+      legend.emplace_back(c, SeriesColour(k));
+      ++k;
+    }
+    p.Legend(legend);
+    cv::imwrite(dir + "/crash_rate.png", fig);
+  }
+}
+
+// Runs one sweep run in this (child) process and returns its JSON line.
+std::string RunOne(const SweepSpec& spec, const SweepRun& run, const Params& params) {
+  std::ostringstream line;
+  line << "{\"sweep_id\": " << JsonString(spec.sweep_id) << ", \"sweep\": " << JsonString(spec.file)
+       << ", \"base\": " << JsonString(spec.base_path) << ", \"run\": " << run.index
+       << ", \"draw\": " << run.draw << ", \"seed\": " << run.seed << ", \"values\": {";
+  for (size_t i = 0; i < run.values.size(); ++i) {
+    line << (i ? ", " : "") << JsonString(run.values[i].first) << ": "
+         << JsonValue(run.values[i].second);
+  }
+  line << "}";
+  std::string controller = "?";
+  try {
+    const Scenario scenario = BuildScenario(spec, run);
+    controller = scenario.controller.type;
+    const RunResult result = RunScenario(scenario, params, RunOptions{});
+    std::string metrics = MetricsToJson(result.metrics);
+    std::replace(metrics.begin(), metrics.end(), '\n', ' ');
+    line << ", \"controller\": " << JsonString(controller)
+         << ", \"status\": \"ok\", \"error\": null, \"metrics\": " << metrics << "}";
+  } catch (const std::exception& e) {
+    line << ", \"controller\": " << JsonString(controller)
+         << ", \"status\": \"error\", \"error\": " << JsonString(e.what()) << ", \"metrics\": null}";
+  }
+  return line.str();
+}
+
+std::string ErrorLine(const SweepSpec& spec, const SweepRun& run, const std::string& controller,
+                      const std::string& error) {
+  std::ostringstream line;
+  line << "{\"sweep_id\": " << JsonString(spec.sweep_id) << ", \"sweep\": " << JsonString(spec.file)
+       << ", \"base\": " << JsonString(spec.base_path) << ", \"run\": " << run.index
+       << ", \"draw\": " << run.draw << ", \"seed\": " << run.seed << ", \"values\": {";
+  for (size_t i = 0; i < run.values.size(); ++i) {
+    line << (i ? ", " : "") << JsonString(run.values[i].first) << ": "
+         << JsonValue(run.values[i].second);
+  }
+  line << "}, \"controller\": " << JsonString(controller)
+       << ", \"status\": \"error\", \"error\": " << JsonString(error) << ", \"metrics\": null}";
+  return line.str();
+}
+
+}  // namespace
+
+void SetDottedPath(YAML::Node root, const std::string& path, const std::string& value,
+                   const std::string& file) {
+  std::vector<std::string> parts;
+  std::stringstream ss(path);
+  for (std::string p; std::getline(ss, p, '.');) parts.push_back(p);
+  if (parts.empty()) throw InputError(file, path, "empty key path");
+  // walk with node handles; yaml-cpp nodes are references into the tree
+  std::vector<YAML::Node> chain{root};
+  std::string walked;
+  for (size_t i = 0; i + 1 < parts.size(); ++i) {
+    YAML::Node cur = chain.back();
+    walked += (walked.empty() ? "" : ".") + parts[i];
+    YAML::Node next;
+    if (cur.IsSequence()) {
+      double idx;
+      if (!IsNumber(parts[i], &idx) || idx < 0 || idx >= cur.size() || idx != std::floor(idx)) {
+        throw InputError(file, path, "'" + walked + "' is not an index of the list (size " +
+                                         std::to_string(cur.size()) + ")");
+      }
+      next = cur[static_cast<size_t>(idx)];
+    } else if (cur.IsMap()) {
+      if (!cur[parts[i]]) cur[parts[i]] = YAML::Node(YAML::NodeType::Map);
+      next = cur[parts[i]];
+    } else {
+      throw InputError(file, path, "'" + walked + "' is not a map or a list in the base scenario");
+    }
+    chain.push_back(next);
+  }
+  YAML::Node parent = chain.back();
+  const std::string& last = parts.back();
+  if (parent.IsSequence()) {
+    double idx;
+    if (!IsNumber(last, &idx) || idx < 0 || idx >= parent.size()) {
+      throw InputError(file, path, "'" + last + "' is not an index of the list");
+    }
+    parent[static_cast<size_t>(idx)] = YAML::Load(value);
+  } else if (parent.IsMap() || parent.IsNull()) {
+    parent[last] = YAML::Load(value);
+  } else {
+    throw InputError(file, path, "parent of the last key is a scalar in the base scenario");
+  }
+}
+
+SweepSpec LoadSweep(const std::string& path) {
+  const YamlMap root = YamlMap::LoadFile(path);
+  SweepSpec s;
+  s.file = path;
+  const std::string base = root.String("base");
+  s.base_path = (!base.empty() && base[0] == '/') ? base : Dirname(path) + "/" + base;
+  s.runs = static_cast<int>(root.Integer("runs", 1, 1000000));
+  s.seed = static_cast<unsigned long>(root.Integer("seed", 0, 4294967295L, 1));
+  s.time_limit_s = root.Number("time_limit", 1.0, 1e6, 600.0);
+  if (root.Has("vary")) {
+    const YamlMap vary = root.Map("vary");
+    const YAML::Node node = root.Node("vary");
+    for (const auto& kv : node) {
+      VarySpec v;
+      v.path = kv.first.as<std::string>();
+      const YamlMap d = vary.Map(v.path);
+      const std::vector<std::string> kinds = {"uniform", "normal", "grid", "list"};
+      int found = 0;
+      for (const auto& k : kinds) found += d.Has(k) ? 1 : 0;
+      if (found != 1) d.Fail("", "expected exactly one of uniform | normal | grid | list");
+      if (d.Has("uniform")) {
+        const Eigen::VectorXd ab = d.Vector("uniform", 2, -1e9, 1e9);
+        if (ab(1) < ab(0)) d.Fail("uniform", "expected [low, high] with low <= high");
+        v.kind = VarySpec::Kind::kUniform, v.a = ab(0), v.b = ab(1);
+      } else if (d.Has("normal")) {
+        const Eigen::VectorXd ab = d.Vector("normal", 2, -1e9, 1e9);
+        if (ab(1) < 0) d.Fail("normal", "expected [mean, sigma] with sigma >= 0");
+        v.kind = VarySpec::Kind::kNormal, v.a = ab(0), v.b = ab(1);
+      } else {
+        const std::string key = d.Has("grid") ? "grid" : "list";
+        v.kind = key == "grid" ? VarySpec::Kind::kGrid : VarySpec::Kind::kList;
+        const YAML::Node list = d.Node(key);
+        if (!list.IsSequence() || list.size() == 0) d.Fail(key, "expected a non-empty list");
+        for (const auto& item : list) {
+          if (!item.IsScalar()) d.Fail(key, "expected a list of scalars");
+          v.values.push_back(item.as<std::string>());
+        }
+      }
+      d.RejectUnknownKeys();
+      s.vary.push_back(v);
+    }
+  }
+  root.RejectUnknownKeys();
+  s.sweep_id = Hex(Fnv1a(ReadFile(path) + "\n--base--\n" + ReadFile(s.base_path)));
+
+  // validate every path against the base scenario before anything runs (first value of each)
+  SweepRun probe;
+  for (const VarySpec& v : s.vary) {
+    const std::string value = v.values.empty() ? FormatNumber(v.a) : v.values.front();
+    probe.values.emplace_back(v.path, value);
+  }
+  try {
+    BuildScenario(s, probe);
+    // every grid and list value must be valid too
+    for (size_t i = 0; i < s.vary.size(); ++i) {
+      for (const std::string& value : s.vary[i].values) {
+        SweepRun one = probe;
+        one.values[i].second = value;
+        BuildScenario(s, one);
+      }
+    }
+  } catch (const InputError& e) {
+    throw InputError(path, "vary", std::string("applying the vary paths to the base scenario: ") +
+                                       e.what());
+  }
+  return s;
+}
+
+std::vector<SweepRun> ExpandSweep(const SweepSpec& spec) {
+  // grid cells: the cartesian product of every grid entry, in file order
+  std::vector<std::vector<std::pair<std::string, std::string>>> cells{{}};
+  for (const VarySpec& v : spec.vary) {
+    if (v.kind != VarySpec::Kind::kGrid) continue;
+    std::vector<std::vector<std::pair<std::string, std::string>>> next;
+    for (const auto& cell : cells) {
+      for (const auto& value : v.values) {
+        auto c = cell;
+        c.emplace_back(v.path, value);
+        next.push_back(c);
+      }
+    }
+    cells = next;
+  }
+  std::vector<SweepRun> runs;
+  for (int d = 0; d < spec.runs; ++d) {
+    // each draw has its own generator: its values do not depend on the other draws
+    const uint64_t draw_seed = SplitMix64(spec.seed * 1000003ULL + static_cast<uint64_t>(d));
+    std::mt19937_64 rng(draw_seed);
+    std::vector<std::pair<std::string, std::string>> drawn;
+    for (const VarySpec& v : spec.vary) {
+      switch (v.kind) {
+        case VarySpec::Kind::kUniform:
+          drawn.emplace_back(v.path, FormatNumber(std::uniform_real_distribution<double>(v.a, v.b)(rng)));
+          break;
+        case VarySpec::Kind::kNormal:
+          drawn.emplace_back(v.path, FormatNumber(v.b > 0 ? std::normal_distribution<double>(v.a, v.b)(rng) : v.a));
+          break;
+        case VarySpec::Kind::kList:
+          drawn.emplace_back(v.path, v.values[d % v.values.size()]);
+          break;
+        case VarySpec::Kind::kGrid:
+          break;
+      }
+    }
+    for (size_t g = 0; g < cells.size(); ++g) {
+      SweepRun r;
+      r.index = static_cast<int>(d * cells.size() + g);
+      r.draw = d;
+      r.seed = static_cast<unsigned long>(SplitMix64(draw_seed) & 0xFFFFFFFFULL);
+      r.values = drawn;
+      r.values.insert(r.values.end(), cells[g].begin(), cells[g].end());
+      runs.push_back(r);
+    }
+  }
+  return runs;
+}
+
+int SweepMain(int argc, char** argv) {
+  std::string sweep_file, out_dir;
+  int jobs = 1, shard_k = 1, shard_n = 1;
+  bool resume = false;
+  for (int i = 2; i < argc; ++i) {
+    const std::string a = argv[i];
+    auto value = [&](const std::string& flag) -> std::string {
+      if (i + 1 >= argc) throw InputError("", flag, "expects a value");
+      return argv[++i];
+    };
+    if (a == "--out") {
+      out_dir = value(a);
+    } else if (a == "--jobs") {
+      double j;
+      if (!IsNumber(value(a), &j) || j < 1 || j > 256 || j != std::floor(j)) {
+        throw InputError("", "--jobs", "expected an integer in [1, 256]");
+      }
+      jobs = static_cast<int>(j);
+    } else if (a == "--shard") {
+      const std::string s = value(a);
+      if (std::sscanf(s.c_str(), "%d/%d", &shard_k, &shard_n) != 2 || shard_n < 1 ||
+          shard_k < 1 || shard_k > shard_n) {
+        throw InputError("", "--shard", "expected K/N with 1 <= K <= N, got '" + s + "'");
+      }
+    } else if (a == "--resume") {
+      resume = true;
+    } else if (a.rfind("--", 0) == 0) {
+      throw InputError("", a, "unknown option (see hpa --help)");
+    } else if (sweep_file.empty()) {
+      sweep_file = a;
+    } else {
+      throw InputError("", "", "hpa sweep takes one SWEEP.yaml");
+    }
+  }
+  if (sweep_file.empty()) throw InputError("", "", "hpa sweep needs a SWEEP.yaml");
+  if (out_dir.empty()) throw InputError("", "--out", "hpa sweep needs --out DIR");
+
+  const SweepSpec spec = LoadSweep(sweep_file);
+  const Params params = LoadParams(DefaultParamsPath());
+  std::vector<SweepRun> runs = ExpandSweep(spec);
+  const size_t total_runs = runs.size();
+  runs.erase(std::remove_if(runs.begin(), runs.end(),
+                            [&](const SweepRun& r) { return r.index % shard_n != shard_k - 1; }),
+             runs.end());
+  MakeDir(out_dir);
+  const std::string jsonl = out_dir + "/runs.jsonl";
+
+  // resume: skip what is recorded; refuse to mix sweeps in one folder
+  std::set<int> done;
+  for (const Record& r : ReadRecords(jsonl)) {
+    if (r.sweep_id != spec.sweep_id) {
+      throw InputError(jsonl, "", "holds runs of a different sweep (sweep_id " + r.sweep_id +
+                                      "); use another --out");
+    }
+    done.insert(r.run);
+  }
+  if (!done.empty() && !resume) {
+    throw InputError(jsonl, "", "already holds " + std::to_string(done.size()) +
+                                    " runs; pass --resume to continue or use another --out");
+  }
+  runs.erase(std::remove_if(runs.begin(), runs.end(),
+                            [&](const SweepRun& r) { return done.count(r.index) > 0; }),
+             runs.end());
+  const std::string tmp_dir = out_dir + "/.running";
+  MakeDir(tmp_dir);
+  FILE* out = std::fopen(jsonl.c_str(), "a");
+  if (!out) throw InputError(jsonl, "", "cannot append to the results file");
+
+  std::printf("sweep %s: %zu runs in all, shard %d/%d: %zu to run (%zu already done), %d jobs\n",
+              spec.file.c_str(), total_runs, shard_k, shard_n, runs.size(), done.size(), jobs);
+  std::fflush(stdout);
+  const bool tty = isatty(STDOUT_FILENO);
+  struct Child {
+    pid_t pid;
+    size_t run;
+    Clock::time_point start;
+  };
+  std::vector<Child> children;
+  size_t next = 0, finished = 0;
+  int failures = 0;
+  const auto start = Clock::now();
+  auto record = [&](const std::string& line, bool failed, const SweepRun& run) {
+    std::fprintf(out, "%s\n", line.c_str());
+    std::fflush(out);
+    fsync(fileno(out));
+    ++finished;
+    failures += failed ? 1 : 0;
+    const double elapsed = std::chrono::duration<double>(Clock::now() - start).count();
+    const double eta = elapsed / finished * (runs.size() - finished);
+    if (tty) {
+      const int width = 30, filled = static_cast<int>(width * finished / std::max<size_t>(1, runs.size()));
+      std::printf("\r[%s%s] %zu/%zu  failures %d  ETA %.0f s   ", std::string(filled, '#').c_str(),
+                  std::string(width - filled, '.').c_str(), finished, runs.size(), failures, eta);
+    } else {
+      std::printf("run %d done (%zu/%zu, failures %d, ETA %.0f s)\n", run.index, finished,
+                  runs.size(), failures, eta);
+    }
+    std::fflush(stdout);
+  };
+
+  while (next < runs.size() || !children.empty()) {
+    // start workers up to --jobs
+    while (next < runs.size() && static_cast<int>(children.size()) < jobs) {
+      const SweepRun& run = runs[next];
+      std::fflush(nullptr);
+      const pid_t pid = fork();
+      if (pid < 0) throw std::runtime_error("fork failed");
+      if (pid == 0) {
+        std::fclose(out);
+        const std::string line = RunOne(spec, run, params);
+        const std::string path = tmp_dir + "/" + std::to_string(run.index) + ".json";
+        std::ofstream(path) << line;
+        _exit(0);
+      }
+      children.push_back({pid, next, Clock::now()});
+      ++next;
+    }
+    // collect finished, crashed or timed-out workers
+    bool progressed = false;
+    for (size_t c = 0; c < children.size();) {
+      int status = 0;
+      const SweepRun& run = runs[children[c].run];
+      const pid_t r = waitpid(children[c].pid, &status, WNOHANG);
+      const double age_s = std::chrono::duration<double>(Clock::now() - children[c].start).count();
+      if (r == 0 && age_s > spec.time_limit_s) {
+        kill(children[c].pid, SIGKILL);
+        waitpid(children[c].pid, &status, 0);
+        record(ErrorLine(spec, run, "?", "killed after the time limit of " +
+                                             FormatNumber(spec.time_limit_s) + " s"),
+               true, run);
+      } else if (r == 0) {
+        ++c;
+        continue;
+      } else {
+        const std::string path = tmp_dir + "/" + std::to_string(run.index) + ".json";
+        std::ifstream in(path);
+        std::string line;
+        if (WIFEXITED(status) && WEXITSTATUS(status) == 0 && std::getline(in, line) && !line.empty()) {
+          record(line, line.find("\"status\": \"error\"") != std::string::npos, run);
+        } else {
+          const std::string why = WIFSIGNALED(status)
+                                      ? std::string("worker killed by signal ") + strsignal(WTERMSIG(status))
+                                      : "worker exited with status " + std::to_string(WEXITSTATUS(status));
+          record(ErrorLine(spec, run, "?", why), true, run);
+        }
+        std::remove(path.c_str());
+      }
+      children.erase(children.begin() + c);
+      progressed = true;
+    }
+    if (!progressed) std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  std::fclose(out);
+  rmdir(tmp_dir.c_str());
+  if (tty) std::printf("\n");
+  std::printf("sweep done: %zu runs, %d failures; results in %s\n", finished, failures,
+              jsonl.c_str());
+  if (shard_n == 1) {
+    WriteSummary(ReadRecords(jsonl), out_dir);
+    std::printf("summary: %s/summary.md, %s/summary.json, %s/crash_rate.png\n", out_dir.c_str(),
+                out_dir.c_str(), out_dir.c_str());
+  } else {
+    std::printf("shard %d/%d done; join the shards with: hpa merge DIR... --out DIR\n", shard_k,
+                shard_n);
+  }
+  return 0;
+}
+
+int MergeMain(int argc, char** argv) {
+  std::vector<std::string> dirs;
+  std::string out_dir;
+  for (int i = 2; i < argc; ++i) {
+    const std::string a = argv[i];
+    if (a == "--out") {
+      if (i + 1 >= argc) throw InputError("", "--out", "expects a value");
+      out_dir = argv[++i];
+    } else if (a.rfind("--", 0) == 0) {
+      throw InputError("", a, "unknown option (see hpa --help)");
+    } else {
+      dirs.push_back(a);
+    }
+  }
+  if (dirs.empty()) throw InputError("", "", "hpa merge needs at least one sweep DIR");
+  if (out_dir.empty()) throw InputError("", "--out", "hpa merge needs --out DIR");
+  std::map<int, Record> by_run;
+  std::string sweep_id;
+  for (const std::string& d : dirs) {
+    const std::string path = d + "/runs.jsonl";
+    struct stat st;
+    if (stat(path.c_str(), &st) != 0) throw InputError(path, "", "no runs.jsonl in this folder");
+    for (Record& r : ReadRecords(path)) {
+      if (sweep_id.empty()) sweep_id = r.sweep_id;
+      if (r.sweep_id != sweep_id) {
+        throw InputError(path, "sweep_id", "mixes sweeps (" + r.sweep_id + " vs " + sweep_id +
+                                               "); merge only shards of one sweep");
+      }
+      by_run[r.run] = r;  // a run recorded twice (resume after a torn write) counts once
+    }
+  }
+  MakeDir(out_dir);
+  std::vector<Record> records;
+  {
+    std::ofstream merged(out_dir + "/runs.jsonl.tmp");
+    for (auto& [index, r] : by_run) {
+      merged << r.line << "\n";
+      records.push_back(r);
+    }
+  }
+  std::rename((out_dir + "/runs.jsonl.tmp").c_str(), (out_dir + "/runs.jsonl").c_str());
+  WriteSummary(records, out_dir);
+  std::printf("merged %zu runs from %zu folders into %s (summary.md, summary.json, crash_rate.png)\n",
+              records.size(), dirs.size(), out_dir.c_str());
+  return 0;
+}
+
+}  // namespace hpa

@@ -1,0 +1,79 @@
+#include "hpa/scenarios/video_recorder.h"
+
+#include <cstdio>
+#include <opencv2/imgproc.hpp>
+
+#include "hpa/models/input_error.h"
+
+namespace hpa {
+
+VideoRecorder::VideoRecorder(const std::string& path, double rate_hz, bool slack_events_only)
+    : path_(path), rate_hz_(rate_hz), slack_events_only_(slack_events_only) {
+  writer_.open(path, cv::VideoWriter::fourcc('m', 'p', '4', 'v'), rate_hz,
+               cv::Size(kWidthPx, kHeightPx));
+  if (!writer_.isOpened()) {
+    throw InputError(path, "--video", "cannot open an MP4 writer for this file");
+  }
+}
+
+cv::Mat VideoRecorder::Compose(const cv::Mat& chase_bgr, const cv::Mat& onboard_bgr,
+                               const Hud& hud) const {
+  cv::Mat frame;
+  cv::resize(chase_bgr, frame, cv::Size(kWidthPx, kHeightPx));
+  // onboard inset, top right, a third of the width
+  if (!onboard_bgr.empty()) {
+    const int w = kWidthPx / 3;
+    const int h = w * onboard_bgr.rows / onboard_bgr.cols;
+    cv::Mat inset;
+    cv::resize(onboard_bgr, inset, cv::Size(w, h), 0, 0, cv::INTER_AREA);
+    const cv::Rect roi(kWidthPx - w - 8, 8, w, h);
+    inset.copyTo(frame(roi));
+    cv::rectangle(frame, roi, cv::Scalar(255, 255, 255), 1);
+  }
+  // heads-up line; the whole bar turns orange while the cable is truly slack
+  const bool slack = hud.true_mode == CableMode::kSlack;
+  cv::rectangle(frame, cv::Rect(0, kHeightPx - 34, kWidthPx, 34),
+                slack ? cv::Scalar(0, 140, 255) : cv::Scalar(40, 40, 40), cv::FILLED);
+  char text[200];
+  std::snprintf(text, sizeof(text), "t %6.2f s   true %-5s   est %-5s   thrust %5.2f N   T %5.2f N",
+                hud.time_s, ToString(hud.true_mode), ToString(hud.estimated_mode), hud.thrust_N,
+                hud.tension_N);
+  cv::putText(frame, text, cv::Point(10, kHeightPx - 10), cv::FONT_HERSHEY_SIMPLEX, 0.65,
+              cv::Scalar(255, 255, 255), 1, cv::LINE_AA);
+  return frame;
+}
+
+void VideoRecorder::AddFrame(const cv::Mat& chase_bgr, const cv::Mat& onboard_bgr,
+                             const Hud& hud) {
+  cv::Mat frame = Compose(chase_bgr, onboard_bgr, hud);
+  if (!slack_events_only_) {
+    writer_.write(frame);
+    ++frames_written_;
+    return;
+  }
+  if (hud.true_mode == CableMode::kSlack) {
+    // flush what led up to the event, then keep a window after it ends
+    for (const cv::Mat& f : pre_buffer_) {
+      writer_.write(f);
+      ++frames_written_;
+    }
+    pre_buffer_.clear();
+    keep_until_s_ = hud.time_s + kSlackWindow_s;
+  }
+  if (hud.time_s <= keep_until_s_) {
+    writer_.write(frame);
+    ++frames_written_;
+    return;
+  }
+  pre_buffer_.push_back(frame);
+  while (pre_buffer_.size() > static_cast<size_t>(kSlackWindow_s * rate_hz_)) {
+    pre_buffer_.pop_front();
+  }
+}
+
+int VideoRecorder::Finish() {
+  writer_.release();
+  return frames_written_;
+}
+
+}  // namespace hpa

@@ -1,0 +1,81 @@
+#include "hpa/scenarios/metrics.h"
+
+#include <gtest/gtest.h>
+
+namespace hpa {
+namespace {
+
+// 150 Hz rows of a run whose payload is offset by `error` and is slack in [2, 3) s.
+std::vector<LogRow> Rows(const Eigen::Vector3d& error) {
+  std::vector<LogRow> rows;
+  for (int k = 0; k < 600; ++k) {
+    LogRow r;
+    r.time_s = k / 150.0;
+    r.reference.p_WL_W = Eigen::Vector3d(0, 0, 0.7);
+    r.reference.p_WQ_W = Eigen::Vector3d(0, 0, 1.2);
+    r.truth.p_WQ_W = r.reference.p_WQ_W;
+    r.truth.p_WL_W = r.reference.p_WL_W + error;
+    const bool slack = r.time_s >= 2.0 && r.time_s < 3.0;
+    r.truth.mode = slack ? CableMode::kSlack : CableMode::kTaut;
+    if (slack) r.truth.p_WL_W.z() += 0.3;  // lifted: must not count in the payload RMSE
+    // the estimate flags slack 4 rows (26.7 ms) late
+    const bool est_slack = r.time_s >= 2.0 + 4 / 150.0 - 1e-9 && r.time_s < 3.0;
+    r.estimate = r.truth;
+    r.estimate.mode = est_slack ? CableMode::kSlack : CableMode::kTaut;
+    r.solve_time_ms = 0.1 * (k % 10);
+    rows.push_back(r);
+  }
+  return rows;
+}
+
+TEST(MetricsTest, PayloadRmseOnlyOverTautTimeWhenSlack) {
+  MetricsInputs in;
+  in.rows = Rows(Eigen::Vector3d(0.01, -0.02, 0.03));
+  Metrics m;
+  ComputeMetrics(in, &m);
+  EXPECT_EQ(m.payload_rmse_over, "taut_time");
+  EXPECT_NEAR(m.payload_rmse_m.x(), 0.01, 1e-12);
+  EXPECT_NEAR(m.payload_rmse_m.y(), 0.02, 1e-12);
+  EXPECT_NEAR(m.payload_rmse_m.z(), 0.03, 1e-12);
+  EXPECT_EQ(m.slack_events, 1);
+  EXPECT_NEAR(m.slack_time_s, 1.0, 1.0 / 150 + 1e-9);  // one control period of resolution
+  ASSERT_TRUE(m.slack_detection_latency_max_s.has_value());
+  EXPECT_NEAR(*m.slack_detection_latency_max_s, 4 / 150.0, 1e-9);
+  EXPECT_NEAR(m.mode_accuracy, 1.0 - 4.0 / 600.0, 1e-12);
+  EXPECT_EQ(m.retaut_count, 1);
+  EXPECT_NEAR(m.mpc_solve_ms.max, 0.9, 1e-12);
+}
+
+TEST(MetricsTest, ExpectBoundsFailWithTheKeyNamed) {
+  MetricsInputs in;
+  in.rows = Rows(Eigen::Vector3d(0.1, 0, 0));
+  Metrics m;
+  ComputeMetrics(in, &m);
+  ExpectSpec e;
+  e.payload_rmse_max_m = Eigen::Vector3d(0.05, 0.05, 0.05);
+  e.crashed = false;
+  CheckExpectations(e, &m);
+  EXPECT_FALSE(m.expect_passed);
+  ASSERT_EQ(m.expect_failed.size(), 1u);
+  EXPECT_NE(m.expect_failed[0].find("payload_rmse_max.x"), std::string::npos);
+  e.payload_rmse_max_m = Eigen::Vector3d(0.2, 0.2, 0.2);
+  CheckExpectations(e, &m);
+  EXPECT_TRUE(m.expect_passed);
+}
+
+TEST(MetricsTest, QuantilesAndJson) {
+  const Quantiles q = ComputeQuantiles({5, 1, 3, 2, 4});
+  EXPECT_DOUBLE_EQ(q.median, 3);
+  EXPECT_DOUBLE_EQ(q.max, 5);
+  Metrics m;
+  m.scenario = "s";
+  const std::string json = MetricsToJson(m);
+  for (const char* key : {"\"scenario\"", "\"crash_time_s\": null", "\"payload_rmse_m\"",
+                          "\"slack_detection_latency_s\"", "\"retaut\"", "\"mpc_solve_ms\"",
+                          "\"expect\": {\"passed\": true"}) {
+    EXPECT_NE(json.find(key), std::string::npos) << key;
+  }
+}
+
+}  // namespace
+}  // namespace hpa

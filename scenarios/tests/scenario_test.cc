@@ -1,0 +1,101 @@
+#include "hpa/scenarios/scenario.h"
+
+#include <gtest/gtest.h>
+
+#include <dirent.h>
+
+#include <fstream>
+
+#include "hpa/models/input_error.h"
+
+namespace hpa {
+namespace {
+
+const std::string kDir = std::string(HPA_SOURCE_DIR) + "/scenarios";
+
+std::string Write(const std::string& name, const std::string& text) {
+  const std::string path = testing::TempDir() + "/" + name;
+  std::ofstream(path) << text;
+  return path;
+}
+
+// Expects LoadScenario to throw an InputError whose message contains every fragment.
+void ExpectError(const std::string& text, const std::vector<std::string>& fragments) {
+  const std::string path = Write("bad.yaml", text);
+  try {
+    LoadScenario(path);
+    FAIL() << "expected an InputError for:\n" << text;
+  } catch (const InputError& e) {
+    const std::string msg = e.what();
+    EXPECT_NE(msg.find(path), std::string::npos) << msg;
+    for (const auto& f : fragments) EXPECT_NE(msg.find(f), std::string::npos) << msg;
+  }
+}
+
+const char* kMinimal = "name: t\nduration: 1.0\n";
+
+TEST(ScenarioTest, EveryShippedScenarioLoads) {
+  int loaded = 0;
+  for (const std::string sub : {"", "/ci"}) {
+    DIR* dir = opendir((kDir + sub).c_str());
+    ASSERT_NE(dir, nullptr);
+    while (dirent* e = readdir(dir)) {
+      const std::string name = e->d_name;
+      if (name.size() < 5 || name.substr(name.size() - 5) != ".yaml") continue;
+      EXPECT_NO_THROW(LoadScenario(kDir + sub + "/" + name)) << name;
+      ++loaded;
+    }
+    closedir(dir);
+  }
+  EXPECT_GE(loaded, 2);
+}
+
+TEST(ScenarioTest, ParsesTheDesignExample) {
+  const Scenario s = LoadScenario(kDir + "/hover_gripper_pull.yaml");
+  EXPECT_EQ(s.name, "hover_gripper_pull");
+  EXPECT_EQ(s.controller.type, "hpa_mpc");
+  ASSERT_EQ(s.events.size(), 4u);
+  EXPECT_EQ(s.events[1].type, EventSpec::Type::kGripperMove);
+  EXPECT_DOUBLE_EQ(s.events[1].to_W_m.z(), 0.95);
+  EXPECT_TRUE(s.expect.crashed.has_value());
+}
+
+TEST(ScenarioTest, DefaultsWhenBlocksAreLeftOut) {
+  const Scenario s = LoadScenario(Write("min.yaml", kMinimal));
+  EXPECT_EQ(s.controller.type, "hpa_mpc");
+  EXPECT_EQ(s.estimation.camera, "render");
+  EXPECT_FALSE(s.estimation.ground_truth);
+  EXPECT_EQ(s.reference.type, "hover");
+}
+
+TEST(ScenarioTest, UnknownKeysAreNamedWithTheirPath) {
+  ExpectError(std::string(kMinimal) + "colour: red\n", {"colour", "unknown key"});
+  ExpectError(std::string(kMinimal) + "world:\n  payload_mas: 0.2\n",
+              {"world.payload_mas", "unknown key"});
+  ExpectError(std::string(kMinimal) + "events:\n  - {at: 0.5, type: wind, force: [1, 0, 0], "
+                                      "duration: 1, gust: 2}\n",
+              {"events.0.gust"});
+}
+
+TEST(ScenarioTest, WrongTypesAndRangesAreNamed) {
+  ExpectError("name: t\nduration: long\n", {"duration", "expected a number"});
+  ExpectError("name: t\nduration: -1\n", {"duration", "out of range"});
+  ExpectError(std::string(kMinimal) + "controller: {type: pid}\n",
+              {"controller.type", "hpa_mpc | nonhybrid_mpc | geometric"});
+  ExpectError(std::string(kMinimal) + "reference: {type: hover, payload_position: [0, 0]}\n",
+              {"reference.payload_position", "list of 3 numbers"});
+  ExpectError(std::string(kMinimal) + "events:\n  - {at: 5.0, type: gripper_grab}\n",
+              {"events.0.at", "after the end"});
+  ExpectError(std::string(kMinimal) + "estimation: {ground_truth: maybe}\n",
+              {"estimation.ground_truth", "true or false"});
+  ExpectError("duration: 1.0\n", {"name", "missing"});
+}
+
+TEST(ScenarioTest, MissingAndMalformedFiles) {
+  EXPECT_THROW(LoadScenario("/nonexistent.yaml"), InputError);
+  ExpectError("name: [unclosed\n", {"malformed YAML"});
+  ExpectError("- just\n- a list\n", {"map"});
+}
+
+}  // namespace
+}  // namespace hpa
