@@ -1,0 +1,183 @@
+#pragma once
+// The simulated world (DESIGN.md sections 2, 3, 6, 8, 9): MuJoCo physics of the quadrotor, the
+// cable (a length-limited tendon) and the payload at 1 kHz, first-order motors, IMU and VIO
+// models, disturbances, the gripper, crash detection and the rendered cameras.
+// The only place (with offscreen_renderer.h) that includes MuJoCo; flight code never sees it.
+
+#include <mujoco/mujoco.h>
+
+#include <Eigen/Core>
+#include <cstdint>
+#include <deque>
+#include <memory>
+#include <opencv2/core.hpp>
+#include <optional>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "hpa/models/params.h"
+#include "hpa/models/sensor_types.h"
+#include "hpa/models/state.h"
+#include "hpa/sim/sensor_models.h"
+
+namespace hpa::sim {
+
+class OffscreenRenderer;
+
+/// Perturbations of the simulated world only (the flight code keeps Params): model mismatch.
+struct WorldOverrides {
+  std::optional<double> payload_mass_kg;  // payload mass; inertia scaled with it
+  std::optional<double> cable_length_m;   // cable (tendon range) length
+};
+
+/// Everything a World is built from.
+struct WorldConfig {
+  Params params;             // flight parameters (params.yaml)
+  WorldOverrides overrides;  // perturb the WORLD only (mass, cable length): model mismatch
+  std::string scene_path = std::string(HPA_SOURCE_DIR) + "/models/scene.xml";  // MJCF file
+  uint64_t seed = 1;         // the one generator for all sensor noise
+  SensorNoiseConfig noise;   // IMU and VIO noise
+};
+
+/// Ground truth at the current time.
+struct Truth {
+  SystemState state;               // true state; mode = kTaut iff cable length >= l - 1 mm
+  double cable_tension_N = 0.0;    // tendon limit force (tendonlimitfrc sensor)
+  double cable_length_m = 0.0;     // tendon length |x_L - x_Q|
+  InputVector motor_speed_radps = InputVector::Zero();  // actual (lagged) rotor speeds  (4)
+};
+
+/// Latched crash flag (DESIGN.md section 6).
+struct CrashStatus {
+  bool crashed = false;
+  double time_s = 0;   // time of the first crash condition
+  std::string reason;  // which condition ("ground contact", "tilt > 90 deg", ...)
+};
+
+/// Body selector for disturbances.
+enum class Body { kQuadrotor, kPayload };
+
+/// The simulated world the scenario runner steps in lockstep with the flight code.
+class World {
+ public:
+  /// Loads the MJCF, applies params and overrides; throws hpa::InputError naming the file for a
+  /// bad or missing MJCF (or one without the named bodies, tendon, actuators and cameras).
+  explicit World(const WorldConfig& config);
+  ~World();
+  World(const World&) = delete;
+  World& operator=(const World&) = delete;
+
+  static constexpr double kPhysicsDt_s = 0.001;  // MuJoCo timestep (s)
+  static constexpr double kImuPeriod_s = 0.002;  // 500 Hz
+  static constexpr double kVioRate_Hz = 30.0;    // VIO capture rate
+  /// Truth mode threshold: taut when the cable length >= l - kTautLengthTolerance_m.
+  static constexpr double kTautLengthTolerance_m = 0.001;
+
+  /// Places quad + payload at `initial` (velocities and body rate as given, zero by default),
+  /// motors at hover speed (also the command), time = initial.time_s; clears disturbances,
+  /// gripper, sensor queues, biases and the crash flag.
+  void Reset(const SystemState& initial);
+  /// New rotor speed command (rad/s), clamped to the motor bounds; the motors follow it with
+  /// the first-order lag motor_time_constant_s. Non-finite entries throw std::invalid_argument.
+  void SetMotorSpeedCommand(const InputVector& w_cmd_radps);
+  /// Advances 1 ms: motors, disturbances, gripper, mj_step, sensors, crash check.
+  void Step();
+  /// Simulated time (s), exact multiple of kPhysicsDt_s from the Reset time.
+  double time_s() const;
+
+  /// Ground truth now.
+  Truth GetTruth() const;
+  /// Oldest undelivered IMU sample (a new one every 2 ms), if any.
+  std::optional<ImuSample> TakeImu();
+  /// Oldest VIO sample whose latency has elapsed (30 Hz capture), if any.
+  std::optional<VioSample> TakeVio();
+
+  /// Applies impulse_W_Ns (N s, world frame) at the body's centre of mass as a constant force
+  /// over duration_s (rounded to whole steps, at least one).
+  void ApplyImpulse(Body body, const Eigen::Vector3d& impulse_W_Ns, double duration_s = 0.01);
+  /// Constant force (N, world frame) on the quadrotor's centre of mass for duration_s.
+  void SetWind(const Eigen::Vector3d& force_W_N, double duration_s);
+
+  /// Welds the payload to the gripper where it is now (moves the mocap body onto it first).
+  void GripperGrab();
+  /// Moves the gripper (and a held payload) to to_W_m along a minimum-jerk path over duration_s.
+  void GripperMove(const Eigen::Vector3d& to_W_m, double duration_s);
+  /// Lets the payload go.
+  void GripperRelease();
+  /// True while the gripper holds the payload.
+  bool gripper_active() const;
+
+  /// Latched: quad body contact with ground/obstacle, tilt > 90 deg, outside the 20x20x10 m
+  /// arena (|x|, |y| <= 10 m, 0 <= z <= 10 m), non-finite state.
+  CrashStatus Crash() const;
+
+  /// Payload camera frame, CV_8UC3 BGR, 1280x720, top row first (first call creates OSMesa).
+  cv::Mat RenderPayloadCamera();
+  /// Chase camera frame for videos, CV_8UC3 BGR, top row first (at most 1280x720).
+  cv::Mat RenderChaseCamera(int width_px, int height_px);
+
+  /// For tests: sets qpos/qvel exactly from x and the actual motor speeds (and the command) to
+  /// motor_speed_radps, then recomputes kinematics; no lag transient follows.
+  void SetState(const StateVector& x, const InputVector& motor_speed_radps);
+
+  /// Parameters the world actually simulates (params with overrides applied).
+  const Params& world_params() const { return world_params_; }
+  const mjModel* model() const;
+  mjData* data();
+
+ private:
+  struct Ids {
+    int quad_body, payload_body, gripper_body, gripper_mocap, gripper_weld;
+    int quad_jnt_qpos, quad_jnt_dof, payload_jnt_qpos, payload_jnt_dof;
+    int cable_tendon, tension_sensor_adr, payload_camera, chase_camera;
+    int rotor_actuator[4];
+  };
+  struct TimedForce {
+    Body body;
+    Eigen::Vector3d force_W_N;  // (3)
+    int64_t end_step;           // applied while step < end_step
+  };
+
+  void ApplyWorldParams();
+  void WriteMotorControls();
+  void UpdateGripper();
+  void ApplyDisturbances();
+  void UpdateSensors();
+  void CheckCrash();
+  void CheckWarnings();
+  void LatchCrash(const std::string& reason);
+  Eigen::Vector3d QuadSpecificForce_B() const;
+
+  WorldConfig config_;
+  Params world_params_;
+  mjModel* model_ = nullptr;
+  mjData* data_ = nullptr;
+  Ids ids_{};
+  double t0_s_ = 0.0;
+  int64_t step_ = 0;
+  int warning_count_[mjNWARNING] = {};
+
+  InputVector motor_speed_radps_ = InputVector::Zero();      // actual (4)
+  InputVector motor_command_radps_ = InputVector::Zero();    // commanded, clamped (4)
+
+  std::vector<TimedForce> forces_;
+
+  // gripper motion: min-jerk from start to goal over [start_step, end_step]
+  bool gripper_moving_ = false;
+  Eigen::Vector3d gripper_from_W_m_ = Eigen::Vector3d::Zero();  // (3)
+  Eigen::Vector3d gripper_to_W_m_ = Eigen::Vector3d::Zero();    // (3)
+  int64_t gripper_start_step_ = 0;
+  int64_t gripper_end_step_ = 0;
+
+  std::mt19937_64 rng_;
+  ImuModel imu_;
+  VioModel vio_;
+  std::deque<ImuSample> imu_queue_;
+  int64_t last_vio_slot_ = -1;
+
+  CrashStatus crash_;
+  std::unique_ptr<OffscreenRenderer> renderer_;
+};
+
+}  // namespace hpa::sim

@@ -1,0 +1,442 @@
+#include "hpa/sim/world.h"
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <mutex>
+#include <stdexcept>
+#include <string>
+
+#include "hpa/models/input_error.h"
+#include "hpa/sim/offscreen_renderer.h"
+
+namespace hpa::sim {
+namespace {
+
+// MuJoCo reports warnings through one global callback; we collect them per thread so a load or a
+// step can turn them into an error message instead of a line on stderr.
+thread_local std::string t_mujoco_warnings;
+
+void CollectWarning(const char* message) {
+  if (!t_mujoco_warnings.empty()) t_mujoco_warnings += "; ";
+  t_mujoco_warnings += message;
+}
+
+void InstallWarningHandler() {
+  static std::once_flag once;
+  std::call_once(once, [] { mju_user_warning = CollectWarning; });
+}
+
+std::string TakeWarnings() {
+  std::string w;
+  w.swap(t_mujoco_warnings);
+  return w;
+}
+
+int RequireId(const mjModel* m, const std::string& file, mjtObj type, const char* name,
+              const char* what) {
+  const int id = mj_name2id(m, type, name);
+  if (id < 0) throw InputError(file, name, std::string("the scene needs a ") + what + " named " + name);
+  return id;
+}
+
+const char* kRotorActuatorNames[4] = {"rotor0", "rotor1", "rotor2", "rotor3"};
+
+}  // namespace
+
+World::World(const WorldConfig& config)
+    : config_(config),
+      world_params_(config.params),
+      rng_(config.seed),
+      imu_(config.noise, kImuPeriod_s, &rng_),
+      vio_(config.noise, &rng_) {
+  InstallWarningHandler();
+  const std::string& file = config_.scene_path;
+
+  // load the MJCF; any load error or warning is bad input naming the file
+  if (!std::ifstream(file).good()) throw InputError(file, "", "cannot open the MJCF scene file");
+  TakeWarnings();
+  char error[1024] = "";
+  model_ = mj_loadXML(file.c_str(), nullptr, error, sizeof(error));
+  if (model_ == nullptr) throw InputError(file, "", std::string("MuJoCo cannot load it: ") + error);
+  const std::string load_warnings = TakeWarnings();
+  if (!load_warnings.empty() || error[0] != '\0') {
+    mj_deleteModel(model_);
+    throw InputError(file, "", "MuJoCo warning while loading: " + load_warnings + error);
+  }
+  if (std::abs(model_->opt.timestep - kPhysicsDt_s) > 1e-12) {
+    mj_deleteModel(model_);
+    throw InputError(file, "option.timestep", "must be 0.001 s (World::kPhysicsDt_s)");
+  }
+
+  // named elements the world drives
+  try {
+    ids_.quad_body = RequireId(model_, file, mjOBJ_BODY, "quadrotor", "body");
+    ids_.payload_body = RequireId(model_, file, mjOBJ_BODY, "payload", "body");
+    ids_.gripper_body = RequireId(model_, file, mjOBJ_BODY, "gripper", "mocap body");
+    ids_.gripper_mocap = model_->body_mocapid[ids_.gripper_body];
+    if (ids_.gripper_mocap < 0) throw InputError(file, "gripper", "must be a mocap body");
+    ids_.gripper_weld = RequireId(model_, file, mjOBJ_EQUALITY, "gripper_weld", "weld");
+    const int quad_jnt = RequireId(model_, file, mjOBJ_JOINT, "quadrotor_joint", "free joint");
+    const int payload_jnt = RequireId(model_, file, mjOBJ_JOINT, "payload_joint", "free joint");
+    if (model_->jnt_type[quad_jnt] != mjJNT_FREE || model_->jnt_type[payload_jnt] != mjJNT_FREE) {
+      throw InputError(file, "quadrotor_joint", "quadrotor and payload joints must be free joints");
+    }
+    ids_.quad_jnt_qpos = model_->jnt_qposadr[quad_jnt];
+    ids_.quad_jnt_dof = model_->jnt_dofadr[quad_jnt];
+    ids_.payload_jnt_qpos = model_->jnt_qposadr[payload_jnt];
+    ids_.payload_jnt_dof = model_->jnt_dofadr[payload_jnt];
+    ids_.cable_tendon = RequireId(model_, file, mjOBJ_TENDON, "cable", "tendon");
+    const int sensor = RequireId(model_, file, mjOBJ_SENSOR, "cable_tension", "sensor");
+    ids_.tension_sensor_adr = model_->sensor_adr[sensor];
+    ids_.payload_camera = RequireId(model_, file, mjOBJ_CAMERA, "payload_camera", "camera");
+    ids_.chase_camera = RequireId(model_, file, mjOBJ_CAMERA, "chase", "camera");
+    for (int i = 0; i < 4; ++i) {
+      ids_.rotor_actuator[i] =
+          RequireId(model_, file, mjOBJ_ACTUATOR, kRotorActuatorNames[i], "actuator");
+    }
+  } catch (...) {
+    mj_deleteModel(model_);
+    throw;
+  }
+
+  // the world's own parameters: flight params with the scenario's overrides
+  if (config_.overrides.payload_mass_kg) {
+    if (!(*config_.overrides.payload_mass_kg > 0)) {
+      mj_deleteModel(model_);
+      throw InputError("", "world.payload_mass", "must be positive");
+    }
+    world_params_.payload_mass_kg = *config_.overrides.payload_mass_kg;
+  }
+  if (config_.overrides.cable_length_m) {
+    if (!(*config_.overrides.cable_length_m > 0)) {
+      mj_deleteModel(model_);
+      throw InputError("", "world.cable_length", "must be positive");
+    }
+    world_params_.cable_length_m = *config_.overrides.cable_length_m;
+  }
+  data_ = mj_makeData(model_);
+  ApplyWorldParams();
+  renderer_ = std::make_unique<OffscreenRenderer>(model_);
+
+  // start hovering 1 m up, payload hanging
+  SystemState initial;
+  initial.p_WQ_W = Eigen::Vector3d(0, 0, 1.0);
+  initial.p_WL_W = initial.p_WQ_W - Eigen::Vector3d(0, 0, world_params_.cable_length_m);
+  Reset(initial);
+}
+
+World::~World() {
+  renderer_.reset();
+  if (data_ != nullptr) mj_deleteData(data_);
+  if (model_ != nullptr) mj_deleteModel(model_);
+}
+
+void World::ApplyWorldParams() {
+  const Params& p = world_params_;
+  model_->opt.gravity[0] = 0;
+  model_->opt.gravity[1] = 0;
+  model_->opt.gravity[2] = -p.gravity_mps2;
+
+  // quadrotor mass and inertia
+  model_->body_mass[ids_.quad_body] = p.quad_mass_kg;
+  for (int i = 0; i < 3; ++i) model_->body_inertia[3 * ids_.quad_body + i] = p.inertia_B_kgm2(i);
+
+  // payload mass; its inertia scales with it (same sphere, different density)
+  const double mass_scale = p.payload_mass_kg / model_->body_mass[ids_.payload_body];
+  model_->body_mass[ids_.payload_body] = p.payload_mass_kg;
+  for (int i = 0; i < 3; ++i) model_->body_inertia[3 * ids_.payload_body + i] *= mass_scale;
+
+  // cable length = the tendon's upper limit
+  model_->tendon_range[2 * ids_.cable_tendon + 0] = 0.0;
+  model_->tendon_range[2 * ids_.cable_tendon + 1] = p.cable_length_m;
+
+  // rotor thrust range from the motor bounds
+  for (int i = 0; i < 4; ++i) {
+    const int a = ids_.rotor_actuator[i];
+    model_->actuator_ctrlrange[2 * a + 0] =
+        p.k_f_N_per_radps2 * p.motor_speed_min_radps * p.motor_speed_min_radps;
+    model_->actuator_ctrlrange[2 * a + 1] =
+        p.k_f_N_per_radps2 * p.motor_speed_max_radps * p.motor_speed_max_radps;
+  }
+
+  // derived constants (subtree masses, invweight0 used by the constraint softness)
+  mj_setConst(model_, data_);
+}
+
+void World::Reset(const SystemState& initial) {
+  mj_resetData(model_, data_);
+  t0_s_ = initial.time_s;
+  step_ = 0;
+  data_->time = t0_s_;
+  for (int i = 0; i < mjNWARNING; ++i) warning_count_[i] = 0;
+
+  // disturbances, gripper, sensors, crash flag
+  forces_.clear();
+  gripper_moving_ = false;
+  model_->eq_active[ids_.gripper_weld] = 0;
+  rng_.seed(config_.seed);
+  imu_.ResetBias();
+  vio_.Clear();
+  imu_queue_.clear();
+  last_vio_slot_ = -1;
+  crash_ = CrashStatus{};
+
+  // motors at hover speed of the simulated system
+  const double w_hover = world_params_.HoverMotorSpeedRadps();
+  SetState(initial.ToVector(), InputVector::Constant(w_hover));
+}
+
+void World::SetState(const StateVector& x, const InputVector& motor_speed_radps) {
+  if (!x.allFinite() || !motor_speed_radps.allFinite()) {
+    throw std::invalid_argument("World::SetState: non-finite state or motor speed");
+  }
+  using I = StateIndex;
+  mjtNum* qpos = data_->qpos;
+  mjtNum* qvel = data_->qvel;
+  const Eigen::Vector4d q = x.segment<4>(I::kQuat).normalized();
+  for (int i = 0; i < 3; ++i) {
+    qpos[ids_.quad_jnt_qpos + i] = x(I::kQuadPos + i);
+    qpos[ids_.payload_jnt_qpos + i] = x(I::kPayloadPos + i);
+    qvel[ids_.quad_jnt_dof + i] = x(I::kQuadVel + i);         // world frame
+    qvel[ids_.quad_jnt_dof + 3 + i] = x(I::kBodyRate + i);    // body frame (free joint)
+    qvel[ids_.payload_jnt_dof + i] = x(I::kPayloadVel + i);
+    qvel[ids_.payload_jnt_dof + 3 + i] = 0.0;
+  }
+  for (int i = 0; i < 4; ++i) {
+    qpos[ids_.quad_jnt_qpos + 3 + i] = q(i);
+    qpos[ids_.payload_jnt_qpos + 3 + i] = (i == 0) ? 1.0 : 0.0;
+  }
+  motor_speed_radps_ = motor_speed_radps.cwiseMax(world_params_.motor_speed_min_radps)
+                           .cwiseMin(world_params_.motor_speed_max_radps);
+  motor_command_radps_ = motor_speed_radps_;
+  WriteMotorControls();
+  UpdateGripper();
+  mj_forward(model_, data_);
+  CheckWarnings();
+}
+
+void World::SetMotorSpeedCommand(const InputVector& w_cmd_radps) {
+  if (!w_cmd_radps.allFinite()) {
+    throw std::invalid_argument("World::SetMotorSpeedCommand: non-finite motor speed command");
+  }
+  motor_command_radps_ = w_cmd_radps.cwiseMax(world_params_.motor_speed_min_radps)
+                             .cwiseMin(world_params_.motor_speed_max_radps);
+}
+
+void World::WriteMotorControls() {
+  for (int i = 0; i < 4; ++i) {
+    const double w = motor_speed_radps_(i);
+    data_->ctrl[ids_.rotor_actuator[i]] = world_params_.k_f_N_per_radps2 * w * w;
+  }
+}
+
+void World::UpdateGripper() {
+  if (!gripper_moving_) return;
+  const int64_t span = std::max<int64_t>(1, gripper_end_step_ - gripper_start_step_);
+  const double s = std::clamp(static_cast<double>(step_ - gripper_start_step_) / span, 0.0, 1.0);
+  // minimum-jerk profile: zero velocity and acceleration at both ends
+  const double blend = s * s * s * (10.0 - 15.0 * s + 6.0 * s * s);
+  const Eigen::Vector3d p = gripper_from_W_m_ + blend * (gripper_to_W_m_ - gripper_from_W_m_);
+  for (int i = 0; i < 3; ++i) data_->mocap_pos[3 * ids_.gripper_mocap + i] = p(i);
+  if (s >= 1.0) gripper_moving_ = false;
+}
+
+void World::ApplyDisturbances() {
+  mju_zero(data_->xfrc_applied, 6 * model_->nbody);
+  for (const TimedForce& f : forces_) {
+    if (step_ >= f.end_step) continue;
+    const int body = f.body == Body::kQuadrotor ? ids_.quad_body : ids_.payload_body;
+    for (int i = 0; i < 3; ++i) data_->xfrc_applied[6 * body + i] += f.force_W_N(i);
+  }
+  forces_.erase(std::remove_if(forces_.begin(), forces_.end(),
+                               [this](const TimedForce& f) { return step_ + 1 >= f.end_step; }),
+                forces_.end());
+}
+
+void World::Step() {
+  // state at t_k is current (mj_forward / mj_step1 ran): sample what the sensors need from it
+  const bool imu_due = step_ % 2 == 0;
+  const int64_t vio_slot = (step_ * 30) / 1000;  // 30 Hz capture slots of whole 1 ms steps
+  const bool vio_due = vio_slot != last_vio_slot_;
+  const SystemState before = GetTruth().state;
+
+  // first-order motor lag, exact for the 1 ms step; thrust to the actuators
+  const double alpha = 1.0 - std::exp(-kPhysicsDt_s / world_params_.motor_time_constant_s);
+  motor_speed_radps_ += alpha * (motor_command_radps_ - motor_speed_radps_);
+  WriteMotorControls();
+  ApplyDisturbances();
+
+  // dynamics at t_k and integration to t_{k+1}, then kinematics at t_{k+1}
+  mj_step2(model_, data_);
+  ++step_;
+  UpdateGripper();
+  mj_step1(model_, data_);
+  CheckWarnings();
+
+  // sensors, stamped with t_k (qacc from mj_step2 is the acceleration at t_k)
+  const double t_k = t0_s_ + (step_ - 1) * kPhysicsDt_s;
+  if (imu_due) {
+    imu_queue_.push_back(imu_.Measure(t_k, before.w_B, QuadSpecificForce_B()));
+    constexpr size_t kMaxQueued = 1000;  // 2 s of samples if the caller never takes them
+    if (imu_queue_.size() > kMaxQueued) imu_queue_.pop_front();
+  }
+  if (vio_due) {
+    vio_.Capture(t_k, before.p_WQ_W, before.q_WB, before.v_WQ_W);
+    last_vio_slot_ = vio_slot;
+  }
+  CheckCrash();
+}
+
+Eigen::Vector3d World::QuadSpecificForce_B() const {
+  const mjtNum* q = data_->qpos + ids_.quad_jnt_qpos + 3;
+  const Eigen::Quaterniond q_WB(q[0], q[1], q[2], q[3]);
+  const Eigen::Vector3d a_W(data_->qacc[ids_.quad_jnt_dof], data_->qacc[ids_.quad_jnt_dof + 1],
+                            data_->qacc[ids_.quad_jnt_dof + 2]);
+  const Eigen::Vector3d g_W(0, 0, world_params_.gravity_mps2);
+  return q_WB.normalized().toRotationMatrix().transpose() * (a_W + g_W);
+}
+
+double World::time_s() const { return t0_s_ + step_ * kPhysicsDt_s; }
+
+Truth World::GetTruth() const {
+  Truth t;
+  const mjtNum* qpos = data_->qpos;
+  const mjtNum* qvel = data_->qvel;
+  SystemState& s = t.state;
+  s.time_s = time_s();
+  s.p_WQ_W = Eigen::Map<const Eigen::Vector3d>(qpos + ids_.quad_jnt_qpos);
+  s.q_WB = Eigen::Quaterniond(qpos[ids_.quad_jnt_qpos + 3], qpos[ids_.quad_jnt_qpos + 4],
+                              qpos[ids_.quad_jnt_qpos + 5], qpos[ids_.quad_jnt_qpos + 6]);
+  s.v_WQ_W = Eigen::Map<const Eigen::Vector3d>(qvel + ids_.quad_jnt_dof);
+  s.w_B = Eigen::Map<const Eigen::Vector3d>(qvel + ids_.quad_jnt_dof + 3);
+  s.p_WL_W = Eigen::Map<const Eigen::Vector3d>(qpos + ids_.payload_jnt_qpos);
+  s.v_WL_W = Eigen::Map<const Eigen::Vector3d>(qvel + ids_.payload_jnt_dof);
+  t.cable_length_m = (s.p_WL_W - s.p_WQ_W).norm();
+  t.cable_tension_N = data_->sensordata[ids_.tension_sensor_adr];
+  s.mode = t.cable_length_m >= world_params_.cable_length_m - kTautLengthTolerance_m
+               ? CableMode::kTaut
+               : CableMode::kSlack;
+  s.payload_visible = true;
+  t.motor_speed_radps = motor_speed_radps_;
+  return t;
+}
+
+std::optional<ImuSample> World::TakeImu() {
+  if (imu_queue_.empty()) return std::nullopt;
+  ImuSample s = imu_queue_.front();
+  imu_queue_.pop_front();
+  return s;
+}
+
+std::optional<VioSample> World::TakeVio() { return vio_.Take(time_s()); }
+
+void World::ApplyImpulse(Body body, const Eigen::Vector3d& impulse_W_Ns, double duration_s) {
+  if (!impulse_W_Ns.allFinite() || !std::isfinite(duration_s)) {
+    throw std::invalid_argument("World::ApplyImpulse: non-finite impulse or duration");
+  }
+  const int64_t steps = std::max<int64_t>(1, std::llround(duration_s / kPhysicsDt_s));
+  forces_.push_back({body, impulse_W_Ns / (steps * kPhysicsDt_s), step_ + steps});
+}
+
+void World::SetWind(const Eigen::Vector3d& force_W_N, double duration_s) {
+  if (!force_W_N.allFinite() || !std::isfinite(duration_s)) {
+    throw std::invalid_argument("World::SetWind: non-finite force or duration");
+  }
+  const int64_t steps = std::max<int64_t>(0, std::llround(duration_s / kPhysicsDt_s));
+  forces_.push_back({Body::kQuadrotor, force_W_N, step_ + steps});
+}
+
+void World::GripperGrab() {
+  // put the mocap body on the payload's current pose, then switch the weld on
+  const mjtNum* qpos = data_->qpos + ids_.payload_jnt_qpos;
+  for (int i = 0; i < 3; ++i) data_->mocap_pos[3 * ids_.gripper_mocap + i] = qpos[i];
+  for (int i = 0; i < 4; ++i) data_->mocap_quat[4 * ids_.gripper_mocap + i] = qpos[3 + i];
+  gripper_moving_ = false;
+  model_->eq_active[ids_.gripper_weld] = 1;
+}
+
+void World::GripperMove(const Eigen::Vector3d& to_W_m, double duration_s) {
+  if (!to_W_m.allFinite() || !std::isfinite(duration_s)) {
+    throw std::invalid_argument("World::GripperMove: non-finite target or duration");
+  }
+  gripper_from_W_m_ = Eigen::Map<const Eigen::Vector3d>(data_->mocap_pos + 3 * ids_.gripper_mocap);
+  gripper_to_W_m_ = to_W_m;
+  gripper_start_step_ = step_;
+  gripper_end_step_ = step_ + std::max<int64_t>(1, std::llround(duration_s / kPhysicsDt_s));
+  gripper_moving_ = true;
+}
+
+void World::GripperRelease() {
+  model_->eq_active[ids_.gripper_weld] = 0;
+  gripper_moving_ = false;
+}
+
+bool World::gripper_active() const { return model_->eq_active[ids_.gripper_weld] != 0; }
+
+CrashStatus World::Crash() const { return crash_; }
+
+void World::LatchCrash(const std::string& reason) {
+  if (crash_.crashed) return;
+  crash_.crashed = true;
+  crash_.time_s = time_s();
+  crash_.reason = reason;
+}
+
+void World::CheckWarnings() {
+  for (int i = 0; i < mjNWARNING; ++i) {
+    const int n = data_->warning[i].number;
+    if (n == warning_count_[i]) continue;
+    warning_count_[i] = n;
+    const std::string text = TakeWarnings();
+    if (i == mjWARN_BADQPOS || i == mjWARN_BADQVEL || i == mjWARN_BADQACC) {
+      // MuJoCo has reset mjData: the state went non-finite (DESIGN.md section 6: a crash)
+      LatchCrash("non-finite state (MuJoCo: " + text + ")");
+      continue;
+    }
+    throw std::runtime_error("MuJoCo warning at t = " + std::to_string(time_s()) + " s: " + text);
+  }
+}
+
+void World::CheckCrash() {
+  if (crash_.crashed) return;
+  const Truth t = GetTruth();
+  const SystemState& s = t.state;
+  if (!s.AllFinite()) return LatchCrash("non-finite state");
+
+  // any contact of the quadrotor body (ground or an obstacle)
+  for (int i = 0; i < data_->ncon; ++i) {
+    const mjContact& c = data_->contact[i];
+    const int b1 = model_->geom_bodyid[c.geom1], b2 = model_->geom_bodyid[c.geom2];
+    if (b1 == ids_.quad_body || b2 == ids_.quad_body) {
+      const int other = b1 == ids_.quad_body ? c.geom2 : c.geom1;
+      const char* name = mj_id2name(model_, mjOBJ_GEOM, other);
+      return LatchCrash(std::string("quadrotor contact with ") + (name ? name : "a geom"));
+    }
+  }
+
+  // tilt past 90 deg: body z points below the horizon
+  if (s.q_WB.normalized().toRotationMatrix()(2, 2) < 0.0) return LatchCrash("tilt > 90 deg");
+
+  // arena 20 x 20 x 10 m
+  constexpr double kArenaHalfWidth_m = 10.0, kArenaHeight_m = 10.0;
+  const Eigen::Vector3d& p = s.p_WQ_W;
+  if (std::abs(p.x()) > kArenaHalfWidth_m || std::abs(p.y()) > kArenaHalfWidth_m || p.z() < 0.0 ||
+      p.z() > kArenaHeight_m) {
+    return LatchCrash("left the 20x20x10 m arena");
+  }
+}
+
+cv::Mat World::RenderPayloadCamera() {
+  return renderer_->Render(data_, ids_.payload_camera, model_->vis.global.offwidth,
+                           model_->vis.global.offheight);
+}
+
+cv::Mat World::RenderChaseCamera(int width_px, int height_px) {
+  return renderer_->Render(data_, ids_.chase_camera, width_px, height_px);
+}
+
+const mjModel* World::model() const { return model_; }
+mjData* World::data() { return data_; }
+
+}  // namespace hpa::sim
