@@ -38,7 +38,7 @@ TEST(CableTest, StretchAtHoverIsBelowFiveMillimetres) {
   const double mean_tension_N = sum_tension_N / n;
   std::printf("[measured] hover stretch %.3g mm, tension %.4f N (m_L g = %.4f N)\n",
               1e3 * max_stretch_m, mean_tension_N, p.payload_mass_kg * p.gravity_mps2);
-  // requirement (task spec): taut stretch < 5 mm at hover
+  // requirement (task spec): taut stretch < 5 mm at hover (measured 0.04 mm)
   EXPECT_LT(max_stretch_m, 0.005);
   EXPECT_GT(max_stretch_m, 0.0) << "a limit constraint that never stretches is not engaged";
   // static tension = payload weight; 1e-3 relative: the quad drifts a hair in 1 s (measured 2e-5)
@@ -73,6 +73,7 @@ RetautResult RunRetaut(const StateVector& x0, double window_s, double watch_s) {
 
   // through the impact window (counted from the last slack state)
   RetautResult r;
+  r.peak_tension_N = world.GetTruth().cable_tension_N;
   const int window_steps = static_cast<int>(std::lround(window_s / World::kPhysicsDt_s)) - 1;
   for (int k = 0; k < window_steps; ++k) {
     world.Step();
@@ -117,6 +118,21 @@ void Print(const char* name, const RetautResult& r) {
       r.max_separating_vel_mps);
 }
 
+// Bounds from the measured values with solreflimit (0.002, 10) (models/scene.xml):
+//   velocity error / jump: measured 0.1 % (vertical), 0.8 % (oblique; the rest is the centripetal
+//   pull during the 5 ms window) -> bound 5 % (6x the worst);
+//   closing speed after the snap: measured <= 4.1 mm/s -> bound 40 mm/s (10x);
+//   cable length after the snap: measured >= l (never slack again) -> bound l - 1 mm, the truth
+//   mode's taut threshold (a rebound would flip the true mode to slack).
+void ExpectInelasticWithoutRebound(const RetautResult& r) {
+  const double l = LoadParams(DefaultParamsPath()).cable_length_m;
+  EXPECT_GT(r.jump_mps, 1.0) << "the case must actually snap";
+  EXPECT_LT((r.v_Q_post - r.v_Q_predicted).norm(), 0.05 * r.jump_mps);
+  EXPECT_LT((r.v_L_post - r.v_L_predicted).norm(), 0.05 * r.jump_mps);
+  EXPECT_LT(r.max_separating_vel_mps, 0.04);
+  EXPECT_GE(r.min_length_after_m, l - World::kTautLengthTolerance_m);
+}
+
 StateVector DropState(const Eigen::Vector3d& p_QL_W, const Eigen::Vector3d& v_L_W) {
   SystemState s;
   s.p_WQ_W = Eigen::Vector3d(0, 0, 3.0);
@@ -126,20 +142,18 @@ StateVector DropState(const Eigen::Vector3d& p_QL_W, const Eigen::Vector3d& v_L_
 }
 
 TEST(CableTest, VerticalSnapIsAnInelasticCollision) {
-  // payload 0.35 m below the quadrotor falling at 2 m/s: snaps taut at about 2.2 m/s
+  // payload 0.35 m below the quadrotor falling at 2 m/s: snaps taut at about 2.6 m/s
   const RetautResult r =
-      RunRetaut(DropState({0, 0, -0.35}, {0, 0, -2.0}), /*window_s=*/0.02, /*watch_s=*/0.3);
+      RunRetaut(DropState({0, 0, -0.35}, {0, 0, -2.0}), /*window_s=*/0.005, /*watch_s=*/0.3);
   Print("vertical", r);
-  EXPECT_LT((r.v_Q_post - r.v_Q_predicted).norm(), 1.0);
-  EXPECT_LT((r.v_L_post - r.v_L_predicted).norm(), 1.0);
+  ExpectInelasticWithoutRebound(r);
 }
 
 TEST(CableTest, ObliqueSnapIsAnInelasticCollision) {
   // payload thrown sideways and down from 0.3 m off the quadrotor
-  const RetautResult r = RunRetaut(DropState({0.2, 0.0, -0.2}, {1.0, 0.5, -1.5}), 0.02, 0.3);
+  const RetautResult r = RunRetaut(DropState({0.2, 0.0, -0.2}, {1.0, 0.5, -1.5}), 0.005, 0.3);
   Print("oblique", r);
-  EXPECT_LT((r.v_Q_post - r.v_Q_predicted).norm(), 1.0);
-  EXPECT_LT((r.v_L_post - r.v_L_predicted).norm(), 1.0);
+  ExpectInelasticWithoutRebound(r);
 }
 
 }  // namespace
