@@ -1,0 +1,79 @@
+#pragma once
+// Cable EKF of the paper's section V: state (xi, xi_dot) in the world frame, process model driven
+// by the commanded thrust and the attitude, measurement of the payload position in the body frame.
+
+#include <Eigen/Core>
+#include <deque>
+
+#include "hpa/estimator/filter_status.h"
+#include "hpa/models/params.h"
+
+namespace hpa {
+
+/// Noise model and tuning of the cable EKF (1-sigma values).
+struct CableEkfConfig {
+  double xi_noise_per_sqrts = 1e-3;       // process noise density on xi (model slip)
+  double xi_ddot_noise_per_s15 = 1.0;     // process noise density on xi_ddot (thrust lag,
+                                          // attitude error, unmodelled payload drag)
+  double initial_xi_std = 0.3;            // per axis, unit-vector components
+  double initial_xi_dot_std_per_s = 1.0;  // per axis
+  double history_s = 0.5;                 // how late a detection may arrive
+  double gate_chi2 = 30.0;                // innovation gate (3 dof; 99.99% ~ 21)
+  int max_consecutive_rejections = 3;     // then the next measurement is accepted anyway
+};
+
+/// Cable state: unit vector from the quadrotor to the payload and its rate (world frame).
+using CableVector = Eigen::Matrix<double, 6, 1>;  // [xi_W, xi_dot_W]
+using CableMatrix = Eigen::Matrix<double, 6, 6>;
+
+/// EKF on (xi, xi_dot) with xi_ddot = 1/(m l) xi x (xi x f R e3) - |xi_dot|^2 xi; after every
+/// step xi is renormalised to the unit sphere and xi_dot projected onto its tangent plane.
+class CableEkf {
+ public:
+  /// Starts at (xi_W, xi_dot_W) at time_s with the configured initial covariance.
+  CableEkf(const Params& params, const CableEkfConfig& config, const Eigen::Vector3d& xi_W,
+           const Eigen::Vector3d& xi_dot_W, double time_s);
+
+  /// Propagates to time_s under collective thrust thrust_N and attitude R_WB (both held).
+  FilterStatus Predict(double time_s, double thrust_N, const Eigen::Matrix3d& R_WB);
+
+  /// Fuses p_BL_B (payload position in the body frame, measured at capture_time_s with body
+  /// attitude R_WB then) with covariance cov_B_m2: rewinds to the capture time, updates with
+  /// h = R^T l xi, re-propagates the stored inputs.
+  FilterStatus Update(double capture_time_s, const Eigen::Vector3d& p_BL_B,
+                      const Eigen::Matrix3d& R_WB, const Eigen::Matrix3d& cov_B_m2);
+
+  /// Restarts at (xi_W, xi_dot_W) with covariance `covariance` (e.g. at a slack-to-taut switch).
+  void Reset(double time_s, const Eigen::Vector3d& xi_W, const Eigen::Vector3d& xi_dot_W,
+             const CableMatrix& covariance);
+
+  Eigen::Vector3d xi_W() const { return x_.head<3>(); }
+  Eigen::Vector3d xi_dot_W() const { return x_.tail<3>(); }
+  const CableMatrix& covariance() const { return covariance_; }
+  double time_s() const { return time_s_; }
+
+  /// Continuous-time derivative of [xi, xi_dot] (the paper's process model).
+  static CableVector Derivative(const CableVector& x, const Eigen::Vector3d& force_W_N,
+                                double quad_mass_kg, double cable_length_m);
+
+ private:
+  struct Entry {
+    double time_s;
+    CableVector x;
+    CableMatrix covariance;
+    double thrust_N;  // input that brought the filter to this entry
+    Eigen::Matrix3d R_WB;
+  };
+  void Propagate(double dt_s, double thrust_N, const Eigen::Matrix3d& R_WB, CableVector* x,
+                 CableMatrix* covariance) const;
+
+  Params params_;
+  CableEkfConfig config_;
+  double time_s_;
+  CableVector x_;
+  CableMatrix covariance_;
+  std::deque<Entry> history_;  // one entry per prediction, oldest first
+  int consecutive_rejections_ = 0;
+};
+
+}  // namespace hpa
