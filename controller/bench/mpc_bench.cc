@@ -1,0 +1,141 @@
+// mpc_bench: cost of one HPA-MPC update (RTI and NLopt) from a realistic warm-started state,
+// and of its parts. Run with --benchmark_repetitions=20 --benchmark_report_aggregates_only=true
+// for the median; BM_HpaMpcRtiStepDistribution reports p50/p99 of single calls.
+
+#include <benchmark/benchmark.h>
+
+#include <algorithm>
+#include <chrono>
+
+#include "../tests/closed_loop_sim.h"
+#include "hpa/controller/condensing.h"
+#include "hpa/controller/hpa_mpc.h"
+
+namespace hpa {
+namespace {
+
+// A controller and state 3 s into the paper's Lissajous (a = 2, b = 0.5, n = 2, T = 5 s),
+// reached by flying the closed loop on the analytic plant, so the plan is warm.
+struct WarmScenario {
+  Params params;
+  std::shared_ptr<Reference> ref;
+  std::unique_ptr<HpaMpc> mpc;
+  SystemState state;
+
+  explicit WarmScenario(const std::string& solver) {
+    ref = MakeLissajousReference(params, LissajousSpec());
+    MpcSettings settings;
+    settings.solver = solver;
+    mpc = std::make_unique<HpaMpc>(params, ref, settings);
+    HpaMpc rti(params, ref, MpcSettings());
+    testing_util::HybridPlant plant(params, HybridModel(params).HoverState(ref->At(0).p_WQ_W),
+                                    CableMode::kTaut);
+    testing_util::RunClosedLoop(params, &rti, &plant, 3.0);
+    state = plant.State(3.0);
+    // give the benchmarked controller the plan of the flown one
+    *mpc = rti;
+    if (solver == "nlopt") {
+      MpcSettings s = settings;
+      *mpc = HpaMpc(params, ref, s);
+      mpc->Update(state);
+    }
+    state.time_s += 1.0 / 150.0;
+  }
+};
+
+void BM_HpaMpcRtiStep(benchmark::State& st) {
+  WarmScenario sc("rti");
+  const HpaMpc saved = *sc.mpc;
+  for (auto _ : st) {
+    st.PauseTiming();
+    *sc.mpc = saved;
+    st.ResumeTiming();
+    benchmark::DoNotOptimize(sc.mpc->Update(sc.state));
+  }
+}
+BENCHMARK(BM_HpaMpcRtiStep)->Unit(benchmark::kMicrosecond);
+
+// Single-call distribution over consecutive control steps of a flown Lissajous (p50, p99).
+void BM_HpaMpcRtiStepDistribution(benchmark::State& st) {
+  WarmScenario sc("rti");
+  std::vector<double> times_ms;
+  for (auto _ : st) {
+    times_ms.clear();
+    HpaMpc mpc = *sc.mpc;
+    SystemState s = sc.state;
+    for (int i = 0; i < 300; ++i) {
+      s.time_s += 1.0 / 150.0;
+      times_ms.push_back(mpc.Update(s).solve_time_ms);
+    }
+  }
+  std::sort(times_ms.begin(), times_ms.end());
+  st.counters["p50_ms"] = times_ms[times_ms.size() / 2];
+  st.counters["p99_ms"] = times_ms[times_ms.size() * 99 / 100];
+  st.counters["max_ms"] = times_ms.back();
+}
+BENCHMARK(BM_HpaMpcRtiStepDistribution)->Unit(benchmark::kMillisecond)->Iterations(3);
+
+void BM_HpaMpcNloptSolve(benchmark::State& st) {
+  WarmScenario sc("nlopt");
+  const HpaMpc saved = *sc.mpc;
+  for (auto _ : st) {
+    st.PauseTiming();
+    *sc.mpc = saved;
+    st.ResumeTiming();
+    benchmark::DoNotOptimize(sc.mpc->Update(sc.state));
+  }
+}
+BENCHMARK(BM_HpaMpcNloptSolve)->Unit(benchmark::kMillisecond);
+
+// Parts of one RTI call.
+void BM_StepJacobians(benchmark::State& st) {
+  WarmScenario sc("rti");
+  const InputVector u = sc.mpc->plan_inputs()[0];
+  StateVector x_next;
+  StateMatrix a;
+  InputMatrix b;
+  for (auto _ : st) {
+    sc.mpc->model().StepJacobians(sc.state.ToVector(), u, CableMode::kTaut, 0.1, &x_next, &a, &b);
+    benchmark::DoNotOptimize(a);
+  }
+}
+BENCHMARK(BM_StepJacobians)->Unit(benchmark::kMicrosecond);
+
+void BM_CondenseAndQp(benchmark::State& st) {
+  WarmScenario sc("rti");
+  const Ocp ocp = sc.mpc->BuildProblem(sc.state);
+  const int n = ocp.horizon_steps;
+  std::vector<StateMatrix> a(n);
+  std::vector<InputMatrix> b(n);
+  std::vector<StageQuadratic> stages(n + 1);
+  StateVector x = sc.state.ToVector();
+  ResidualVector r;
+  ResidualStateJacobian r_x;
+  ResidualInputJacobian r_u;
+  const std::vector<InputVector> u = sc.mpc->WarmStart(sc.state.time_s);
+  for (int k = 0; k < n; ++k) {
+    StageResidual(ocp, k, x, u[k], &r, &r_x, &r_u);
+    stages[k] = GaussNewtonStage(r, r_x, r_u);
+    sc.mpc->model().StepJacobians(x, u[k], ocp.mode, ocp.stage_dt_s, &x, &a[k], &b[k]);
+  }
+  StageResidual(ocp, n, x, InputVector::Zero(), &r, &r_x, &r_u);
+  stages[n] = GaussNewtonStage(r, r_x, ResidualInputJacobian::Zero());
+  Eigen::VectorXd lb(kNu * n), ub(kNu * n);
+  for (int k = 0; k < n; ++k) {
+    lb.segment<kNu>(kNu * k) = ocp.u_min_radps - u[k];
+    ub.segment<kNu>(kNu * k) = ocp.u_max_radps - u[k];
+  }
+  Eigen::MatrixXd h;
+  Eigen::VectorXd g;
+  for (auto _ : st) {
+    Condense(a, b, stages, &h, &g);
+    Eigen::VectorXd du = Eigen::VectorXd::Zero(kNu * n);
+    benchmark::DoNotOptimize(SolveBoxQp(h, g, lb, ub, &du));
+  }
+}
+BENCHMARK(BM_CondenseAndQp)->Unit(benchmark::kMicrosecond);
+
+}  // namespace
+}  // namespace hpa
+
+BENCHMARK_MAIN();

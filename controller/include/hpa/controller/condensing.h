@@ -1,0 +1,33 @@
+#pragma once
+// Condensing of a linearised OCP onto its inputs (single shooting, dx_0 = 0):
+//   dx_{k+1} = A_k dx_k + B_k du_k,
+//   cost = sum_k 1/2 [dx;du]^T [Hxx Hxu; Hxu^T Huu] [dx;du] + gx^T dx + gu^T du  (+ terminal)
+// becomes the dense QP  min 1/2 du^T H du + g^T du  over du = [du_0 .. du_{N-1}].
+
+#include <Eigen/Core>
+#include <vector>
+
+#include "hpa/controller/ocp.h"
+#include "hpa/models/hybrid_model.h"
+
+namespace hpa {
+
+/// Quadratic model of one stage's cost around the current trajectory.
+struct StageQuadratic {
+  StateMatrix hxx = StateMatrix::Zero();                                          // (19 x 19)
+  Eigen::Matrix<double, kNx, kNu> hxu = Eigen::Matrix<double, kNx, kNu>::Zero();  // (19 x 4)
+  Eigen::Matrix<double, kNu, kNu> huu = Eigen::Matrix<double, kNu, kNu>::Zero();  // (4 x 4)
+  StateVector gx = StateVector::Zero();                                           // (19)
+  InputVector gu = InputVector::Zero();                                           // (4)
+};
+
+/// Gauss-Newton model of |r + R_x dx + R_u du|^2 / 2: H = J^T J, g = J^T r.
+StageQuadratic GaussNewtonStage(const ResidualVector& r, const ResidualStateJacobian& r_x,
+                                const ResidualInputJacobian& r_u);
+
+/// Condenses N stages (a, b: N each; stages: N + 1, the last one terminal, its u-blocks
+/// ignored) into h (4N x 4N) and g (4N). O(N^2) block operations, no dense sensitivity matrix.
+void Condense(const std::vector<StateMatrix>& a, const std::vector<InputMatrix>& b,
+              const std::vector<StageQuadratic>& stages, Eigen::MatrixXd* h, Eigen::VectorXd* g);
+
+}  // namespace hpa

@@ -1,0 +1,130 @@
+#include "hpa/controller/hpa_mpc.h"
+
+#include <chrono>
+#include <cmath>
+#include <stdexcept>
+
+namespace hpa {
+
+HpaMpc::HpaMpc(const Params& params, std::shared_ptr<const Reference> reference,
+               const MpcSettings& settings)
+    : params_(params), model_(params), reference_(std::move(reference)), settings_(settings) {
+  if (settings_.solver != "rti" && settings_.solver != "nlopt") {
+    throw std::invalid_argument("controller.solver: expected rti or nlopt, got '" +
+                                settings_.solver + "'");
+  }
+  if (!std::isfinite(settings_.perception_weight) || settings_.perception_weight < 0.0) {
+    throw std::invalid_argument("controller.perception_weight: expected a finite value >= 0");
+  }
+  if (settings_.rate_output_stage < 0 || settings_.rate_output_stage > kOcpHorizonSteps ||
+      settings_.thrust_output_stage < 0 || settings_.thrust_output_stage >= kOcpHorizonSteps) {
+    throw std::invalid_argument("mpc output_stage outside the horizon");
+  }
+  if (!reference_) throw std::invalid_argument("mpc: null reference");
+}
+
+void HpaMpc::Reset() {
+  plan_u_.clear();
+  plan_x_.clear();
+}
+
+Ocp HpaMpc::BuildProblem(const SystemState& state) const {
+  const CableMode mode = settings_.hybrid ? state.mode : CableMode::kTaut;
+  const double perception = settings_.hybrid ? settings_.perception_weight : 0.0;
+  return BuildOcp(params_, *reference_, state.time_s, mode, perception, settings_.weights);
+}
+
+std::vector<InputVector> HpaMpc::WarmStart(double t_s) const {
+  const int n = kOcpHorizonSteps;
+  const double dt = kOcpStageDtS;
+  const double elapsed_s = t_s - plan_time_s_;
+  if (plan_u_.size() != static_cast<size_t>(n) || !std::isfinite(elapsed_s) || elapsed_s < 0.0 ||
+      elapsed_s > n * dt) {
+    return std::vector<InputVector>(n, InputVector::Constant(params_.HoverMotorSpeedRadps()));
+  }
+  std::vector<InputVector> u(n);
+  for (int k = 0; k < n; ++k) {
+    const double tau = (k * dt + elapsed_s) / dt;  // position in the old plan, in stages
+    const int i = static_cast<int>(std::floor(tau));
+    if (i >= n - 1) {
+      u[k] = plan_u_[n - 1];
+    } else {
+      const double frac = tau - i;
+      u[k] = (1.0 - frac) * plan_u_[i] + frac * plan_u_[i + 1];
+    }
+  }
+  return u;
+}
+
+BodyRateCommand HpaMpc::CommandFromPlan() const {
+  BodyRateCommand cmd;
+  cmd.w_B_radps = plan_x_[settings_.rate_output_stage].segment<3>(StateIndex::kBodyRate);
+  cmd.thrust_N = params_.k_f_N_per_radps2 * plan_u_[settings_.thrust_output_stage].squaredNorm();
+  return cmd;
+}
+
+ControlOutput HpaMpc::Update(const SystemState& state) {
+  const auto start = std::chrono::steady_clock::now();
+  ControlOutput out;
+  const auto finish = [&start, &out]() {
+    out.solve_time_ms =
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+    return out;
+  };
+  BodyRateCommand hover;
+  hover.thrust_N = params_.HoverThrustN();
+
+  // non-finite state: safe level hover, plan kept
+  if (!state.AllFinite() || !std::isfinite(state.time_s)) {
+    out.status = ControlStatus::kNonFinite;
+    out.command = hover;
+    return finish();
+  }
+
+  const Ocp ocp = BuildProblem(state);
+  const StateVector x0 = state.ToVector();
+  const std::vector<InputVector> guess = WarmStart(state.time_s);
+  const bool had_plan = plan_u_.size() == static_cast<size_t>(ocp.horizon_steps);
+
+  ControlStatus status;
+  std::vector<InputVector> u;
+  std::vector<StateVector> x;
+  double cost = 0.0;
+  if (settings_.solver == "nlopt") {
+    NloptResult r = NloptSolve(ocp, model_, x0, guess, settings_.nlopt);
+    status = r.status;
+    u = std::move(r.u);
+    x = std::move(r.x);
+    cost = r.cost;
+  } else {
+    RtiResult r = RtiIteration(ocp, model_, x0, guess);
+    status = r.status;
+    u = std::move(r.u);
+    x = std::move(r.x);
+    cost = r.cost;
+  }
+
+  const bool solved = status == ControlStatus::kSuccess || status == ControlStatus::kMaxIterations;
+  if (!solved) {
+    // fallback 1: the previous plan shifted; fallback 2: hover
+    u = guess;
+    cost = OcpCost(ocp, model_, x0, u, &x);
+    bool usable = had_plan && std::isfinite(cost);
+    for (const StateVector& xi : x) usable = usable && xi.allFinite();
+    if (!usable) {
+      Reset();
+      out.status = ControlStatus::kFallback;
+      out.command = hover;
+      return finish();
+    }
+  }
+  plan_u_ = std::move(u);
+  plan_x_ = std::move(x);
+  plan_time_s_ = state.time_s;
+  out.status = status;
+  out.cost = cost;
+  out.command = CommandFromPlan();
+  return finish();
+}
+
+}  // namespace hpa
