@@ -39,7 +39,8 @@ cv::Mat OffscreenRenderer::Render(mjData* data, int camera_id, int width_px, int
                                 std::to_string(max_w) + "x" + std::to_string(max_h));
   }
   if (camera_id < 0 || camera_id >= model_->ncam) {
-    throw std::invalid_argument("OffscreenRenderer: no camera with id " + std::to_string(camera_id));
+    throw std::invalid_argument("OffscreenRenderer: no camera with id " +
+                                std::to_string(camera_id));
   }
 
   // first frame: create the OSMesa context and MuJoCo's GL resources
@@ -48,8 +49,7 @@ cv::Mat OffscreenRenderer::Render(mjData* data, int camera_id, int width_px, int
     gl->context = OSMesaCreateContextExt(OSMESA_RGBA, 24, 8, 8, nullptr);
     if (gl->context == nullptr) throw std::runtime_error("OSMesaCreateContextExt failed");
     gl->window_buffer.resize(static_cast<size_t>(max_w) * max_h * 4);
-    if (!OSMesaMakeCurrent(gl->context, gl->window_buffer.data(), GL_UNSIGNED_BYTE, max_w,
-                           max_h)) {
+    if (!OSMesaMakeCurrent(gl->context, gl->window_buffer.data(), GL_UNSIGNED_BYTE, max_w, max_h)) {
       OSMesaDestroyContext(gl->context);
       throw std::runtime_error("OSMesaMakeCurrent failed");
     }

@@ -36,7 +36,8 @@ std::string TakeWarnings() {
 int RequireId(const mjModel* m, const std::string& file, mjtObj type, const char* name,
               const char* what) {
   const int id = mj_name2id(m, type, name);
-  if (id < 0) throw InputError(file, name, std::string("the scene needs a ") + what + " named " + name);
+  if (id < 0)
+    throw InputError(file, name, std::string("the scene needs a ") + what + " named " + name);
   return id;
 }
 
@@ -198,8 +199,8 @@ void World::SetState(const StateVector& x, const InputVector& motor_speed_radps)
   for (int i = 0; i < 3; ++i) {
     qpos[ids_.quad_jnt_qpos + i] = x(I::kQuadPos + i);
     qpos[ids_.payload_jnt_qpos + i] = x(I::kPayloadPos + i);
-    qvel[ids_.quad_jnt_dof + i] = x(I::kQuadVel + i);         // world frame
-    qvel[ids_.quad_jnt_dof + 3 + i] = x(I::kBodyRate + i);    // body frame (free joint)
+    qvel[ids_.quad_jnt_dof + i] = x(I::kQuadVel + i);       // world frame
+    qvel[ids_.quad_jnt_dof + 3 + i] = x(I::kBodyRate + i);  // body frame (free joint)
     qvel[ids_.payload_jnt_dof + i] = x(I::kPayloadVel + i);
     qvel[ids_.payload_jnt_dof + 3 + i] = 0.0;
   }

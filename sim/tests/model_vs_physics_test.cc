@@ -89,15 +89,15 @@ class ModelVsPhysicsTest : public ::testing::Test {
  protected:
   Params p_ = LoadParams(DefaultParamsPath());
   HybridModel model_{p_};
-  double w_hover_ = p_.HoverMotorSpeedRadps();                 // quad + payload
+  double w_hover_ = p_.HoverMotorSpeedRadps();                    // quad + payload
   double w_quad_ = std::sqrt(p_.quad_mass_kg * p_.gravity_mps2 /  // quad alone
                              (4 * p_.k_f_N_per_radps2));
 };
 
 TEST_F(ModelVsPhysicsTest, TautHangingAtHover) {
   const StateVector x0 = model_.HoverState(Eigen::Vector3d(0, 0, 2));
-  const Residual r = Rollout("taut hover", x0, InputVector::Constant(w_hover_), CableMode::kTaut,
-                             0.5);
+  const Residual r =
+      Rollout("taut hover", x0, InputVector::Constant(w_hover_), CableMode::kTaut, 0.5);
   ExpectAgree(r);
 }
 
@@ -107,9 +107,8 @@ TEST_F(ModelVsPhysicsTest, TautSwinging) {
   s.p_WQ_W = Eigen::Vector3d(0, 0, 2);
   const double a = 25.0 * M_PI / 180.0;
   s.p_WL_W = s.p_WQ_W + p_.cable_length_m * Eigen::Vector3d(std::sin(a), 0, -std::cos(a));
-  const Residual r =
-      Rollout("taut swinging", s.ToVector(), InputVector::Constant(w_hover_), CableMode::kTaut,
-              0.5);
+  const Residual r = Rollout("taut swinging", s.ToVector(), InputVector::Constant(w_hover_),
+                             CableMode::kTaut, 0.5);
   ExpectAgree(r);
 }
 

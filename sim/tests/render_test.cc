@@ -61,9 +61,10 @@ TEST(RenderTest, PayloadIsARedBlobAtTheImageCentre) {
   const double f_px = p.CameraFocalPx();
   const double r_m = p.payload_radius_m;
   const double expected_radius_px = f_px * r_m / std::sqrt(d_m * d_m - r_m * r_m);
-  std::printf("[measured] blob centre (%.1f, %.1f) px (image centre (%.1f, %.1f)), radius %.2f px "
-              "(f R / d = %.2f px)\n",
-              u, v, 0.5 * frame.cols, 0.5 * frame.rows, radius_px, expected_radius_px);
+  std::printf(
+      "[measured] blob centre (%.1f, %.1f) px (image centre (%.1f, %.1f)), radius %.2f px "
+      "(f R / d = %.2f px)\n",
+      u, v, 0.5 * frame.cols, 0.5 * frame.rows, radius_px, expected_radius_px);
   // centre: measured exactly at the image centre -> 0.5 px (a one-pixel shift or flip fails)
   EXPECT_NEAR(u, 0.5 * frame.cols, 0.5);
   EXPECT_NEAR(v, 0.5 * frame.rows, 0.5);

@@ -1,5 +1,7 @@
 // hpa::sim::World: loading errors, hover, motors, sensors (rates, noise, determinism),
 // disturbances, gripper, crash detection and world overrides.
+#include "hpa/sim/world.h"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -9,7 +11,6 @@
 
 #include "hpa/models/input_error.h"
 #include "hpa/models/params.h"
-#include "hpa/sim/world.h"
 
 namespace hpa::sim {
 namespace {
@@ -99,7 +100,9 @@ TEST(WorldTest, ImuAt500HzVioAt30HzWithLatency) {
   for (int k = 0; k < 1000; ++k) {
     world.Step();
     while (auto imu = world.TakeImu()) {
-      if (last_imu_t >= 0) EXPECT_NEAR(imu->time_s - last_imu_t, 0.002, 1e-12);
+      if (last_imu_t >= 0) {
+        EXPECT_NEAR(imu->time_s - last_imu_t, 0.002, 1e-12);
+      }
       last_imu_t = imu->time_s;
       accel_sum += imu->accel_B_mps2;
       ++n_imu;
@@ -147,8 +150,8 @@ TEST(WorldTest, ImpulseOnThePayloadChangesItsMomentum) {
   s.p_WQ_W = Eigen::Vector3d(0, 0, 2);
   s.p_WL_W = Eigen::Vector3d(0, 0, 1.7);
   const Params& p = world.world_params();
-  world.SetState(s.ToVector(), InputVector::Constant(std::sqrt(
-                                   p.quad_mass_kg * p.gravity_mps2 / (4 * p.k_f_N_per_radps2))));
+  world.SetState(s.ToVector(), InputVector::Constant(std::sqrt(p.quad_mass_kg * p.gravity_mps2 /
+                                                               (4 * p.k_f_N_per_radps2))));
   const Eigen::Vector3d impulse_Ns(0.02, -0.01, 0.03);
   world.ApplyImpulse(Body::kPayload, impulse_Ns, 0.01);
   for (int k = 0; k < 20; ++k) world.Step();
@@ -182,8 +185,8 @@ TEST(WorldTest, GripperHoldsMovesAndReleasesThePayload) {
   EXPECT_TRUE(world.gripper_active());
   // the quadrotor now carries itself only (the gripper carries the payload)
   const Params& p = world.world_params();
-  world.SetMotorSpeedCommand(InputVector::Constant(
-      std::sqrt(p.quad_mass_kg * p.gravity_mps2 / (4 * p.k_f_N_per_radps2))));
+  world.SetMotorSpeedCommand(
+      InputVector::Constant(std::sqrt(p.quad_mass_kg * p.gravity_mps2 / (4 * p.k_f_N_per_radps2))));
   for (int k = 0; k < 100; ++k) world.Step();
   // held where it was grabbed (weld is soft: 2 mm)
   EXPECT_LT((world.GetTruth().state.p_WL_W - p0).norm(), 2e-3);

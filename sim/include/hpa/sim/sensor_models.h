@@ -16,14 +16,14 @@ namespace hpa::sim {
 /// bias walks typical of Kalibr/VINS configs for such parts) and a camera-IMU VIO of the kind the
 /// paper flies (cm-level position, ~0.5 deg attitude, 20 ms latency).
 struct SensorNoiseConfig {
-  double gyro_noise_density_radps_rthz = 2.4e-4;   // BMI088: 0.014 deg/s/sqrt(Hz)
-  double gyro_bias_walk_radps2_rthz = 2.0e-5;      // gyro bias random walk
-  double accel_noise_density_mps2_rthz = 1.7e-3;   // BMI088: 175 ug/sqrt(Hz)
-  double accel_bias_walk_mps3_rthz = 3.0e-4;       // accel bias random walk
-  double vio_position_sigma_m = 0.01;              // per-sample position noise (1 sigma)
-  double vio_attitude_sigma_rad = 0.01;            // per-sample attitude noise, each axis
-  double vio_velocity_sigma_mps = 0.02;            // per-sample velocity noise
-  double vio_latency_s = 0.02;                     // capture -> delivery delay
+  double gyro_noise_density_radps_rthz = 2.4e-4;  // BMI088: 0.014 deg/s/sqrt(Hz)
+  double gyro_bias_walk_radps2_rthz = 2.0e-5;     // gyro bias random walk
+  double accel_noise_density_mps2_rthz = 1.7e-3;  // BMI088: 175 ug/sqrt(Hz)
+  double accel_bias_walk_mps3_rthz = 3.0e-4;      // accel bias random walk
+  double vio_position_sigma_m = 0.01;             // per-sample position noise (1 sigma)
+  double vio_attitude_sigma_rad = 0.01;           // per-sample attitude noise, each axis
+  double vio_velocity_sigma_mps = 0.02;           // per-sample velocity noise
+  double vio_latency_s = 0.02;                    // capture -> delivery delay
 };
 
 /// IMU model: adds white noise and a random-walk bias to the true body rate and specific force.

@@ -36,15 +36,15 @@ struct WorldConfig {
   Params params;             // flight parameters (params.yaml)
   WorldOverrides overrides;  // perturb the WORLD only (mass, cable length): model mismatch
   std::string scene_path = std::string(HPA_SOURCE_DIR) + "/models/scene.xml";  // MJCF file
-  uint64_t seed = 1;         // the one generator for all sensor noise
-  SensorNoiseConfig noise;   // IMU and VIO noise
+  uint64_t seed = 1;        // the one generator for all sensor noise
+  SensorNoiseConfig noise;  // IMU and VIO noise
 };
 
 /// Ground truth at the current time.
 struct Truth {
-  SystemState state;               // true state; mode = kTaut iff cable length >= l - 1 mm
-  double cable_tension_N = 0.0;    // tendon limit force (tendonlimitfrc sensor)
-  double cable_length_m = 0.0;     // tendon length |x_L - x_Q|
+  SystemState state;             // true state; mode = kTaut iff cable length >= l - 1 mm
+  double cable_tension_N = 0.0;  // tendon limit force (tendonlimitfrc sensor)
+  double cable_length_m = 0.0;   // tendon length |x_L - x_Q|
   InputVector motor_speed_radps = InputVector::Zero();  // actual (lagged) rotor speeds  (4)
 };
 
@@ -76,7 +76,8 @@ class World {
 
   /// Places quad + payload at `initial` (velocities and body rate as given, zero by default),
   /// motors at hover speed (also the command), time = initial.time_s; clears disturbances,
-  /// gripper, sensor queues, biases and the crash flag.
+  /// gripper, sensor queues, biases and the crash flag; re-seeds the noise generator with
+  /// config.seed, so a Reset world replays the same noise.
   void Reset(const SystemState& initial);
   /// New rotor speed command (rad/s), clamped to the motor bounds; the motors follow it with
   /// the first-order lag motor_time_constant_s. Non-finite entries throw std::invalid_argument.
@@ -158,8 +159,8 @@ class World {
   int64_t step_ = 0;
   int warning_count_[mjNWARNING] = {};
 
-  InputVector motor_speed_radps_ = InputVector::Zero();      // actual (4)
-  InputVector motor_command_radps_ = InputVector::Zero();    // commanded, clamped (4)
+  InputVector motor_speed_radps_ = InputVector::Zero();    // actual (4)
+  InputVector motor_command_radps_ = InputVector::Zero();  // commanded, clamped (4)
 
   std::vector<TimedForce> forces_;
 
