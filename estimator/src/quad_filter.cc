@@ -92,7 +92,7 @@ FilterStatus QuadFilter::Predict(const ImuSample& imu) {
 }
 
 FilterStatus QuadFilter::Correct(const VioSample& vio, QuadFilterState* state,
-                                 Matrix15d* covariance) const {
+                                 Matrix15d* covariance) {
   // residual [p; theta; v] with the attitude residual on the right of the estimate
   Eigen::Matrix<double, 9, 1> r;
   r << vio.p_WB_W - state->p_WB_W,
@@ -110,7 +110,13 @@ FilterStatus QuadFilter::Correct(const VioSample& vio, QuadFilterState* state,
   const Eigen::Matrix<double, 9, 9> S = H * *covariance * H.transpose() + Rn;
   const Eigen::LDLT<Eigen::Matrix<double, 9, 9>> S_ldlt(S);
   if (S_ldlt.info() != Eigen::Success) return FilterStatus::kNonFinite;
-  if (r.dot(S_ldlt.solve(r)) > config_.vio_gate_chi2) return FilterStatus::kRejected;
+  // gate outliers, but a run of rejections means the filter (not VIO) is off: accept then
+  if (r.dot(S_ldlt.solve(r)) > config_.vio_gate_chi2 &&
+      consecutive_rejections_ < config_.max_consecutive_rejections) {
+    ++consecutive_rejections_;
+    return FilterStatus::kRejected;
+  }
+  consecutive_rejections_ = 0;
   const Eigen::Matrix<double, 15, 9> K =
       S_ldlt.solve(H * covariance->transpose()).transpose();  // P H^T S^-1 (P symmetric)
   const Vector15d dx = K * r;

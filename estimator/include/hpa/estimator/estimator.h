@@ -4,6 +4,11 @@
 
 #include <memory>
 
+#include "hpa/estimator/analytic_camera.h"
+#include "hpa/estimator/cable_ekf.h"
+#include "hpa/estimator/mode_detector.h"
+#include "hpa/estimator/payload_tracker.h"
+#include "hpa/estimator/quad_filter.h"
 #include "hpa/models/params.h"
 #include "hpa/models/sensor_types.h"
 #include "hpa/models/state.h"
@@ -13,6 +18,13 @@ namespace hpa {
 /// Settings of the estimator from the scenario's `estimation:` block.
 struct EstimatorConfig {
   bool hybrid = true;  // true: mode detector (hpa_mpc); false: always taut (nonhybrid_mpc)
+  // Added by the estimator issue (defaults are the tuned values; scenarios need not set them):
+  QuadFilterConfig quad_filter;            // IMU + VIO error-state EKF
+  CableEkfConfig cable_ekf;                // (xi, xi_dot) EKF
+  ModeDetectorConfig mode_detector;        // low-pass cable length vs l - epsilon
+  PayloadTrackerConfig payload_tracker;    // free-fall payload filter used while slack
+  CameraNoiseModel detection_noise;        // detector noise -> measurement covariances
+  double detection_noise_floor_m = 0.002;  // added per axis (attitude and sync errors)
 };
 
 /// Full onboard estimator: quadrotor filter (IMU + VIO), cable EKF, mode detector.

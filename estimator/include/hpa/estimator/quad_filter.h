@@ -15,20 +15,21 @@ namespace hpa {
 
 /// Noise model and tuning of the quadrotor filter (continuous-time densities, 1-sigma values).
 struct QuadFilterConfig {
-  double gyro_noise_radps_per_sqrthz = 3e-3;       // white gyro noise density
-  double accel_noise_mps2_per_sqrthz = 3e-2;       // white accelerometer noise density
-  double gyro_bias_walk_radps2_per_sqrthz = 1e-4;  // gyro bias random walk
-  double accel_bias_walk_mps3_per_sqrthz = 1e-3;   // accelerometer bias random walk
+  double gyro_noise_radps_per_sqrthz = 2.4e-4;     // white gyro noise density
+  double accel_noise_mps2_per_sqrthz = 1.7e-3;     // white accelerometer noise density
+  double gyro_bias_walk_radps2_per_sqrthz = 2e-5;  // gyro bias random walk
+  double accel_bias_walk_mps3_per_sqrthz = 3e-4;   // accelerometer bias random walk
   double vio_position_std_m = 0.01;                // VIO position noise, per axis
   double vio_attitude_std_rad = 0.01;              // VIO attitude noise, per axis
-  double vio_velocity_std_mps = 0.03;              // VIO velocity noise, per axis
+  double vio_velocity_std_mps = 0.02;              // VIO velocity noise, per axis
   double initial_position_std_m = 0.02;
   double initial_velocity_std_mps = 0.05;
   double initial_attitude_std_rad = 0.02;
   double initial_gyro_bias_std_radps = 0.01;
   double initial_accel_bias_std_mps2 = 0.1;
-  double history_s = 0.5;       // how late a VIO sample may arrive
-  double vio_gate_chi2 = 50.0;  // innovation gate (9 dof; 99.9999% ~ 45)
+  double history_s = 0.5;              // how late a VIO sample may arrive
+  int max_consecutive_rejections = 3;  // then the next VIO sample is accepted anyway
+  double vio_gate_chi2 = 50.0;         // innovation gate (9 dof; 99.9999% ~ 45)
 };
 
 /// Nominal state of the quadrotor filter.
@@ -77,7 +78,7 @@ class QuadFilter {
   };
   void Propagate(const ImuSample& previous, const ImuSample& imu, QuadFilterState* state,
                  Matrix15d* covariance) const;
-  FilterStatus Correct(const VioSample& vio, QuadFilterState* state, Matrix15d* covariance) const;
+  FilterStatus Correct(const VioSample& vio, QuadFilterState* state, Matrix15d* covariance);
 
   Params params_;
   QuadFilterConfig config_;
@@ -85,6 +86,7 @@ class QuadFilter {
   Matrix15d covariance_;
   std::optional<ImuSample> last_imu_;
   std::deque<Entry> history_;  // one entry per IMU sample, oldest first
+  int consecutive_rejections_ = 0;
 };
 
 /// SO(3) exponential of a rotation vector (rad).

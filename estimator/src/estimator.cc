@@ -1,0 +1,171 @@
+#include "hpa/estimator/estimator.h"
+
+#include <cmath>
+
+namespace hpa {
+namespace {
+
+// Quadrotor filter + cable EKF + (hybrid) mode detector and free-fall payload tracker.
+class HybridEstimator final : public Estimator {
+ public:
+  HybridEstimator(const EstimatorConfig& config, const Params& params, const SystemState& initial)
+      : config_(config),
+        params_(params),
+        quad_(params, config.quad_filter, QuadInitial(initial)),
+        cable_(params, config.cable_ekf, InitialXi(initial, params.cable_length_m),
+               InitialXiDot(initial, params.cable_length_m), initial.time_s),
+        mode_detector_(params, config.mode_detector, InitialMode(config, params, initial),
+                       (initial.p_WL_W - initial.p_WQ_W).norm()),
+        tracker_(params, config.payload_tracker),
+        thrust_N_(params.HoverThrustN()),
+        mode_(InitialMode(config, params, initial)) {
+    Matrix6d tracker_cov = Matrix6d::Zero();
+    tracker_cov.diagonal() << Eigen::Vector3d::Constant(1e-4), Eigen::Vector3d::Constant(0.01);
+    tracker_.Reset(initial.time_s, initial.p_WL_W, initial.v_WL_W, tracker_cov);
+  }
+
+  void OnImu(const ImuSample& imu) override {
+    if (quad_.Predict(imu) != FilterStatus::kOk) return;
+    // while slack the taut process model does not hold: the cable EKF restarts at re-taut
+    if (mode_ == CableMode::kTaut) {
+      cable_.Predict(imu.time_s, thrust_N_, quad_.state().q_WB.toRotationMatrix());
+    }
+  }
+
+  void OnVio(const VioSample& vio) override { quad_.UpdateVio(vio); }
+
+  void OnThrustCommand(double thrust_N) override {
+    if (std::isfinite(thrust_N)) thrust_N_ = thrust_N;
+  }
+
+  void OnPayloadDetection(const PayloadDetection& detection) override {
+    payload_visible_ = detection.found;
+    if (!detection.found || !detection.p_CL_C.allFinite() || !std::isfinite(detection.time_s)) {
+      payload_visible_ = false;
+      return;
+    }
+    // body-frame payload position and its covariance
+    const Eigen::Vector3d p_BL_B = params_.t_BC_B_m + params_.R_BC * detection.p_CL_C;
+    const Eigen::Matrix3d cov_B =
+        params_.R_BC * DetectionCovariance_C(params_, config_.detection_noise, detection.p_CL_C) *
+            params_.R_BC.transpose() +
+        Eigen::Matrix3d::Identity() * std::pow(config_.detection_noise_floor_m, 2);
+    // quadrotor pose at the capture time
+    const QuadFilterState quad_then = quad_.StateAt(detection.time_s).value_or(quad_.state());
+    const Eigen::Matrix3d R_WB = quad_then.q_WB.toRotationMatrix();
+    const Eigen::Vector3d p_WL_W = quad_then.p_WB_W + R_WB * p_BL_B;
+
+    // always-taut variant: the EKF takes the raw measurement whatever its length
+    if (!config_.hybrid) {
+      cable_.Update(detection.time_s, p_BL_B, R_WB, cov_B);
+      return;
+    }
+
+    const CableMode previous = mode_;
+    mode_ = mode_detector_.Update(detection.time_s, p_BL_B.norm());
+    const Eigen::Matrix3d cov_W =
+        R_WB * cov_B * R_WB.transpose() + quad_.covariance().block<3, 3>(0, 0);
+    if (mode_ == CableMode::kSlack) {
+      if (previous == CableMode::kTaut) {
+        // enter slack: start the free-fall tracker at the detection, velocity from the taut model
+        Matrix6d cov = Matrix6d::Zero();
+        cov.block<3, 3>(0, 0) = cov_W;
+        cov.block<3, 3>(3, 3).diagonal().setConstant(std::pow(0.3, 2));
+        tracker_.Reset(detection.time_s, p_WL_W,
+                       quad_then.v_WB_W + params_.cable_length_m * cable_.xi_dot_W(), cov);
+      } else {
+        tracker_.Update(detection.time_s, p_WL_W, cov_W);
+      }
+      return;
+    }
+    if (previous == CableMode::kSlack) {
+      // re-taut: restart the cable EKF on the measured direction and the tracker's velocity
+      // (radial part removed, as in the inelastic collision of DESIGN.md section 9)
+      Eigen::Vector3d p_L, v_L;
+      tracker_.PredictTo(quad_.state().time_s, &p_L, &v_L);
+      const Eigen::Vector3d xi = (R_WB * p_BL_B).normalized();
+      const Eigen::Vector3d xi_dot = (v_L - quad_.state().v_WB_W) / params_.cable_length_m;
+      CableMatrix cov = CableMatrix::Zero();
+      cov.diagonal() << Eigen::Vector3d::Constant(std::pow(0.03, 2)),
+          Eigen::Vector3d::Constant(std::pow(1.0, 2));
+      cable_.Reset(quad_.state().time_s, xi, xi_dot, cov);
+      return;
+    }
+    cable_.Update(detection.time_s, p_BL_B, R_WB, cov_B);
+  }
+
+  SystemState Estimate(double time_s) const override {
+    const QuadFilterState& quad = quad_.state();
+    SystemState out;
+    out.time_s = time_s;
+    // short extrapolation if the caller asks slightly ahead of the last IMU sample
+    const double ahead_s = std::clamp(time_s - quad.time_s, 0.0, 0.05);
+    out.p_WQ_W = quad.p_WB_W + quad.v_WB_W * ahead_s;
+    out.v_WQ_W = quad.v_WB_W;
+    out.q_WB = quad.q_WB;
+    out.w_B = quad.w_B_radps;
+    out.mode = config_.hybrid ? mode_ : CableMode::kTaut;
+    out.payload_visible = payload_visible_;
+    if (out.mode == CableMode::kTaut) {
+      out.p_WL_W = out.p_WQ_W + params_.cable_length_m * cable_.xi_W();
+      out.v_WL_W = out.v_WQ_W + params_.cable_length_m * cable_.xi_dot_W();
+    } else {
+      tracker_.PredictTo(time_s, &out.p_WL_W, &out.v_WL_W);
+      // the cable cannot stretch: between the true re-taut and its detection, free fall would
+      // carry the payload past the sphere |x_L - x_Q| = l; hold it on the sphere instead
+      const Eigen::Vector3d d = out.p_WL_W - out.p_WQ_W;
+      if (d.norm() > params_.cable_length_m) {
+        const Eigen::Vector3d xi = d.normalized();
+        out.p_WL_W = out.p_WQ_W + params_.cable_length_m * xi;
+        const double outward_mps = (out.v_WL_W - out.v_WQ_W).dot(xi);
+        if (outward_mps > 0) out.v_WL_W -= outward_mps * xi;
+      }
+    }
+    return out;
+  }
+
+ private:
+  static QuadFilterState QuadInitial(const SystemState& s) {
+    QuadFilterState q;
+    q.time_s = s.time_s;
+    q.p_WB_W = s.p_WQ_W;
+    q.v_WB_W = s.v_WQ_W;
+    q.q_WB = s.q_WB;
+    q.w_B_radps = s.w_B;
+    return q;
+  }
+  static Eigen::Vector3d InitialXi(const SystemState& s, double l_m) {
+    const Eigen::Vector3d d = s.p_WL_W - s.p_WQ_W;
+    return d.norm() > 1e-6 ? Eigen::Vector3d(d.normalized()) : Eigen::Vector3d(0, 0, -1);
+  }
+  static Eigen::Vector3d InitialXiDot(const SystemState& s, double l_m) {
+    const Eigen::Vector3d xi = InitialXi(s, l_m);
+    const Eigen::Vector3d rel = (s.v_WL_W - s.v_WQ_W) / l_m;
+    return rel - xi.dot(rel) * xi;
+  }
+  static CableMode InitialMode(const EstimatorConfig& config, const Params& p,
+                               const SystemState& s) {
+    if (!config.hybrid) return CableMode::kTaut;
+    return (s.p_WL_W - s.p_WQ_W).norm() < p.cable_length_m - p.slack_epsilon_m ? CableMode::kSlack
+                                                                               : CableMode::kTaut;
+  }
+
+  EstimatorConfig config_;
+  Params params_;
+  QuadFilter quad_;
+  CableEkf cable_;
+  ModeDetector mode_detector_;
+  PayloadTracker tracker_;
+  double thrust_N_;              // last commanded collective thrust
+  CableMode mode_;               // estimated mode (always taut when !hybrid)
+  bool payload_visible_ = true;  // last camera frame had a detection
+};
+
+}  // namespace
+
+std::unique_ptr<Estimator> MakeEstimator(const EstimatorConfig& config, const Params& params,
+                                         const SystemState& initial) {
+  return std::make_unique<HybridEstimator>(config, params, initial);
+}
+
+}  // namespace hpa
