@@ -35,7 +35,9 @@ TEST(BodyRateControllerTest, MomentSignsFollowRateErrors) {
     const BodyRateGains gains;
     EXPECT_NEAR(wrench(1 + axis), params.inertia_B_kgm2(axis) * gains.kp_per_s(axis), 1e-9);
     for (int other = 0; other < 3; ++other) {
-      if (other != axis) EXPECT_NEAR(wrench(1 + other), 0.0, 1e-9);
+      if (other != axis) {
+        EXPECT_NEAR(wrench(1 + other), 0.0, 1e-9);
+      }
     }
     EXPECT_NEAR(wrench(0), params.HoverThrustN(), 1e-9);
   }
