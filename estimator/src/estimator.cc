@@ -63,16 +63,30 @@ class HybridEstimator final : public Estimator {
 
     const CableMode previous = mode_;
     mode_ = mode_detector_.Update(detection.time_s, p_BL_B.norm());
+    const bool had_last = has_last_detection_;
+    const Eigen::Vector3d last_p_WL_W = last_p_WL_W_;
+    const double last_time_s = last_detection_time_s_;
+    has_last_detection_ = true;
+    last_p_WL_W_ = p_WL_W;
+    last_detection_time_s_ = detection.time_s;
     const Eigen::Matrix3d cov_W =
         R_WB * cov_B * R_WB.transpose() + quad_.covariance().block<3, 3>(0, 0);
     if (mode_ == CableMode::kSlack) {
       if (previous == CableMode::kTaut) {
-        // enter slack: start the free-fall tracker at the detection, velocity from the taut model
+        // enter slack: start the free-fall tracker at the detection; velocity from the last two
+        // detections (free fall between them) when recent, else from the taut model
         Matrix6d cov = Matrix6d::Zero();
         cov.block<3, 3>(0, 0) = cov_W;
-        cov.block<3, 3>(3, 3).diagonal().setConstant(std::pow(0.3, 2));
-        tracker_.Reset(detection.time_s, p_WL_W,
-                       quad_then.v_WB_W + params_.cable_length_m * cable_.xi_dot_W(), cov);
+        Eigen::Vector3d v_WL_W = quad_then.v_WB_W + params_.cable_length_m * cable_.xi_dot_W();
+        double velocity_std_mps = 0.5;
+        const double gap_s = detection.time_s - last_time_s;
+        if (had_last && gap_s > 1e-3 && gap_s < 0.1) {
+          v_WL_W = (p_WL_W - last_p_WL_W) / gap_s -
+                   Eigen::Vector3d(0, 0, 0.5 * params_.gravity_mps2 * gap_s);
+          velocity_std_mps = std::sqrt(2.0 * cov_W.trace() / 3.0) / gap_s;
+        }
+        cov.block<3, 3>(3, 3).diagonal().setConstant(std::pow(velocity_std_mps, 2));
+        tracker_.Reset(detection.time_s, p_WL_W, v_WL_W, cov);
       } else {
         tracker_.Update(detection.time_s, p_WL_W, cov_W);
       }
@@ -156,9 +170,12 @@ class HybridEstimator final : public Estimator {
   CableEkf cable_;
   ModeDetector mode_detector_;
   PayloadTracker tracker_;
-  double thrust_N_;              // last commanded collective thrust
-  CableMode mode_;               // estimated mode (always taut when !hybrid)
-  bool payload_visible_ = true;  // last camera frame had a detection
+  double thrust_N_;                  // last commanded collective thrust
+  CableMode mode_;                   // estimated mode (always taut when !hybrid)
+  bool payload_visible_ = true;      // last camera frame had a detection
+  bool has_last_detection_ = false;  // for the slack-entry velocity
+  Eigen::Vector3d last_p_WL_W_ = Eigen::Vector3d::Zero();  // previous detection, world  (3)
+  double last_detection_time_s_ = 0.0;                     // its capture time
 };
 
 }  // namespace
