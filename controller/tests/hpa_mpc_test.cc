@@ -44,6 +44,32 @@ TEST(OcpTest, CameraTransformOfHangingPayload) {
   EXPECT_NEAR(p_C2.y(), -0.1, 1e-12);  // camera y = -body y
 }
 
+TEST(OcpTest, SoftLimitsArePenalisedOnlyBeyondTheirBounds) {
+  const Params params;
+  const Ocp ocp = BuildOcp(params, *HoverRef(params), 0.0, CableMode::kTaut, 1.0);
+  const HybridModel model(params);
+  const InputVector u = ocp.u_ref[0];
+  ResidualVector r;
+  constexpr int kTiltRow = kNx + kNu + 2;
+  constexpr int kRateRow = kTiltRow + 1;
+  SystemState s;
+  s.FromVector(model.HoverState(Eigen::Vector3d(0, 0, 1.5)));
+  // 40 deg tilt and 5.9 rad/s: inside the 45 deg / 6 rad/s limits, no penalty
+  s.q_WB = Eigen::AngleAxisd(40 * M_PI / 180, Eigen::Vector3d::UnitX());
+  s.w_B = Eigen::Vector3d(5.9, -5.9, 0);
+  StageResidual(ocp, 1, s.ToVector(), u, &r, nullptr, nullptr);
+  EXPECT_EQ(r(kTiltRow), 0.0);
+  EXPECT_TRUE(r.segment<3>(kRateRow).isZero(0.0));
+  // 50 deg and 7 rad/s: one-sided quadratic penalty with the closed-form residual
+  s.q_WB = Eigen::AngleAxisd(50 * M_PI / 180, Eigen::Vector3d::UnitY());
+  s.w_B = Eigen::Vector3d(0, -7.0, 0);
+  StageResidual(ocp, 1, s.ToVector(), u, &r, nullptr, nullptr);
+  const OcpWeights& w = ocp.weights;
+  const double h_tilt = std::cos(w.tilt_max_rad) - std::cos(50 * M_PI / 180);
+  EXPECT_NEAR(r(kTiltRow), std::sqrt(w.tilt_weight) * h_tilt, 1e-12);
+  EXPECT_NEAR(r(kRateRow + 1), std::sqrt(w.body_rate_weight) * 1.0, 1e-12);
+}
+
 TEST(OcpTest, CostGradientMatchesFiniteDifferences) {
   const Params params;
   LissajousSpec spec;
