@@ -191,6 +191,14 @@ void CheckExpectations(const ExpectSpec& e, Metrics* m) {
     fail("quad_position_deviation_max", m->quad_position_deviation_max_m, ">",
          *e.quad_position_deviation_max_m);
   }
+  if (e.quad_position_deviation_min_m &&
+      m->quad_position_deviation_max_m < *e.quad_position_deviation_min_m) {
+    fail("quad_position_deviation_min", m->quad_position_deviation_max_m, "<",
+         *e.quad_position_deviation_min_m);
+  }
+  if (e.payload_in_fov_max && m->payload_in_fov_fraction > *e.payload_in_fov_max) {
+    fail("payload_in_fov_max", m->payload_in_fov_fraction, ">", *e.payload_in_fov_max);
+  }
   if (e.payload_in_fov_min && m->payload_in_fov_fraction < *e.payload_in_fov_min) {
     fail("payload_in_fov_min", m->payload_in_fov_fraction, "<", *e.payload_in_fov_min);
   }

@@ -96,7 +96,10 @@ RunResult RunScenario(const Scenario& scenario, const Params& params, const RunO
   const bool ground_truth = scenario.estimation.ground_truth;
   const bool render_camera = scenario.estimation.camera == "render";
   PayloadDetector detector(params);
-  AnalyticCamera analytic_camera(params, scenario.estimation.detector_noise_scale);
+  CameraNoiseModel camera_noise = MeasuredDetectorNoise();
+  camera_noise.centre_std_px *= scenario.estimation.detector_noise_scale;
+  camera_noise.semi_major_std_px *= scenario.estimation.detector_noise_scale;
+  AnalyticCamera analytic_camera(params, camera_noise);
   std::mt19937_64 camera_rng(scenario.seed * 0x9E3779B97F4A7C15ULL + 17);
 
   std::unique_ptr<VideoRecorder> video;

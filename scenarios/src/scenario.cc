@@ -47,7 +47,11 @@ ExpectSpec ParseExpect(const YamlMap& e) {
   if (e.Has("quad_position_deviation_max")) {
     x.quad_position_deviation_max_m = e.Number("quad_position_deviation_max", 0, kBig);
   }
+  if (e.Has("quad_position_deviation_min")) {
+    x.quad_position_deviation_min_m = e.Number("quad_position_deviation_min", 0, kBig);
+  }
   if (e.Has("payload_in_fov_min")) x.payload_in_fov_min = e.Number("payload_in_fov_min", 0, 1);
+  if (e.Has("payload_in_fov_max")) x.payload_in_fov_max = e.Number("payload_in_fov_max", 0, 1);
   if (e.Has("mode_accuracy_min")) x.mode_accuracy_min = e.Number("mode_accuracy_min", 0, 1);
   if (e.Has("slack_detection_latency_max")) {
     x.slack_detection_latency_max_s = e.Number("slack_detection_latency_max", 0, kBig);

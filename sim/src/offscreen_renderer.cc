@@ -30,7 +30,8 @@ OffscreenRenderer::~OffscreenRenderer() {
 
 bool OffscreenRenderer::initialized() const { return gl_ != nullptr; }
 
-cv::Mat OffscreenRenderer::Render(mjData* data, int camera_id, int width_px, int height_px) {
+cv::Mat OffscreenRenderer::Render(mjData* data, int camera_id, int width_px, int height_px,
+                                  bool show_tendons) {
   const int max_w = model_->vis.global.offwidth;
   const int max_h = model_->vis.global.offheight;
   if (width_px <= 0 || height_px <= 0 || width_px > max_w || height_px > max_h) {
@@ -77,6 +78,7 @@ cv::Mat OffscreenRenderer::Render(mjData* data, int camera_id, int width_px, int
   // scene from the current kinematics, seen from the fixed camera
   gl_->camera.type = mjCAMERA_FIXED;
   gl_->camera.fixedcamid = camera_id;
+  for (int g = 0; g < mjNGROUP; ++g) gl_->option.tendongroup[g] = show_tendons ? 1 : 0;
   mjv_updateScene(model_, data, &gl_->option, nullptr, &gl_->camera, mjCAT_ALL, &gl_->scene);
   const mjrRect viewport = {0, 0, width_px, height_px};
   mjr_render(viewport, &gl_->scene, &gl_->render_context);

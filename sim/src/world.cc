@@ -429,8 +429,12 @@ void World::CheckCrash() {
 }
 
 cv::Mat World::RenderPayloadCamera() {
+  // The cable leaves the body origin 5 cm above the lens, so drawn it would pass within
+  // millimetres of the camera and fill a wedge of the image over the payload; a real payload
+  // camera sits beside the attachment point, where the cable is a thin line. Not drawn here.
   return renderer_->Render(data_, ids_.payload_camera, model_->vis.global.offwidth,
-                           model_->vis.global.offheight);
+                           model_->vis.global.offheight,
+                           /*show_tendons=*/false);
 }
 
 cv::Mat World::RenderChaseCamera(int width_px, int height_px) {

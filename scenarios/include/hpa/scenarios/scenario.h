@@ -33,7 +33,9 @@ struct ExpectSpec {
   std::optional<Eigen::Vector3d> payload_rmse_max_m;  // per axis  (3)
   std::optional<Eigen::Vector3d> quad_rmse_max_m;     // per axis  (3)
   std::optional<double> quad_position_deviation_max_m;
+  std::optional<double> quad_position_deviation_min_m;  // a baseline must show its failure mode
   std::optional<double> payload_in_fov_min;           // fraction of camera frames
+  std::optional<double> payload_in_fov_max;
   std::optional<double> mode_accuracy_min;            // fraction of control steps
   std::optional<double> slack_detection_latency_max_s;
   std::optional<int> mpc_failures_max;

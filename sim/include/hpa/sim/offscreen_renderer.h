@@ -22,7 +22,9 @@ class OffscreenRenderer {
   /// Renders camera `camera_id` of the current `data` (kinematics must be up to date) at
   /// width x height (at most the model's offwidth x offheight) as CV_8UC3 BGR, top row first.
   /// Throws std::runtime_error if the GL context cannot be made or the size is too large.
-  cv::Mat Render(mjData* data, int camera_id, int width_px, int height_px);
+  /// show_tendons = false leaves the cable out (the onboard camera: see world.cc).
+  cv::Mat Render(mjData* data, int camera_id, int width_px, int height_px,
+                 bool show_tendons = true);
 
   /// True once the OSMesa context exists (after the first Render).
   bool initialized() const;

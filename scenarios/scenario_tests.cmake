@@ -1,0 +1,1 @@
+# Scenario regression tests (filled below)
