@@ -189,6 +189,23 @@ TEST(HpaMpcTest, NonFiniteStateGivesSafeHover) {
   }
 }
 
+TEST(HpaMpcTest, UnsolvableStateFallsBackToHover) {
+  // finite state whose prediction overflows: the solve fails, the shifted previous plan is not
+  // usable either (same overflow), so the controller must fall back to a level hover command
+  const Params params;
+  HpaMpc mpc(params, HoverRef(params), MpcSettings());
+  SystemState s = HoverAt(params, Eigen::Vector3d(0, 0, 1.5));
+  ASSERT_EQ(mpc.Update(s).status, ControlStatus::kSuccess);
+  s.time_s = 1.0 / 150.0;
+  s.w_B = Eigen::Vector3d(1e155, 0, 0);  // its square overflows to inf in the dynamics
+  ASSERT_TRUE(s.AllFinite());
+  const ControlOutput out = mpc.Update(s);
+  EXPECT_EQ(out.status, ControlStatus::kFallback);
+  EXPECT_TRUE(out.command.w_B_radps.isZero(0.0));
+  EXPECT_DOUBLE_EQ(out.command.thrust_N, params.HoverThrustN());
+  EXPECT_TRUE(mpc.plan_inputs().empty());  // next call starts again from hover
+}
+
 TEST(HpaMpcTest, FactoryAndModes) {
   const Params params;
   ControllerConfig config;
