@@ -110,11 +110,27 @@ PayloadDetection PayloadDetector::Detect(const cv::Mat& bgr, double time_s) cons
   const std::vector<cv::Point>& contour = contours[best];
   if (best_area_px2 < config_.min_area_px2) return NotFound(time_s, "too small");
 
-  // outline points that are not on the image border (the border cuts a partly visible blob)
+  // occluders: very dark pixels (the cable seen from a camera next to it is a black wedge);
+  // where they touch the blob, its outline is not the sphere's and must not be fitted
+  cv::Mat occluder;
+  cv::inRange(hsv, cv::Scalar(0, 0, 0), cv::Scalar(180, 255, config_.occluder_value_max), occluder);
+  const cv::Rect image_rect(0, 0, width, height);
+  const int grow_px = 3;
+  const cv::Rect blob_rect = cv::boundingRect(contour);
+  const cv::Rect near_blob(blob_rect.x - grow_px, blob_rect.y - grow_px,
+                           blob_rect.width + 2 * grow_px, blob_rect.height + 2 * grow_px);
+  cv::Mat occluded_near = cv::Mat::zeros(height, width, CV_8U);
+  cv::dilate(occluder(near_blob & image_rect), occluded_near(near_blob & image_rect),
+             cv::Mat::ones(2 * grow_px + 1, 2 * grow_px + 1, CV_8U));
+
+  // outline points that are neither on the image border nor next to an occluder
   std::vector<cv::Point2f> outline;
   outline.reserve(contour.size());
   for (const cv::Point& p : contour) {
-    if (p.x > 0 && p.y > 0 && p.x < width - 1 && p.y < height - 1) outline.emplace_back(p);
+    if (p.x > 0 && p.y > 0 && p.x < width - 1 && p.y < height - 1 &&
+        occluded_near.at<uint8_t>(p) == 0) {
+      outline.emplace_back(p);
+    }
   }
   if (outline.size() < 0.25 * contour.size() || outline.size() < 16) {
     return NotFound(time_s, "partly out of view");
@@ -136,22 +152,29 @@ PayloadDetection PayloadDetector::Detect(const cv::Mat& bgr, double time_s) cons
                                          ? width_axis
                                          : Eigen::Vector2d(-width_axis.y(), width_axis.x());
 
-  // enough of the fitted outline must lie inside the image
+  // region where the blob and the fitted ellipse are compared; occluders grown there too
+  const cv::Rect roi = (blob_rect | fit.boundingRect()) & image_rect;
+  cv::Mat occluded_roi;
+  cv::dilate(occluder(roi), occluded_roi, cv::Mat::ones(2 * grow_px + 1, 2 * grow_px + 1, CV_8U));
+
+  // enough of the fitted outline must be seen: inside the image and not behind an occluder
   constexpr int kOutlineSamples = 72;
-  Eigen::Matrix2Xd fitted_outline(2, kOutlineSamples);
   const Eigen::Vector2d minor_axis(-major_axis.y(), major_axis.x());
+  int seen = 0;
   for (int i = 0; i < kOutlineSamples; ++i) {
     const double phi = 2.0 * M_PI * i / kOutlineSamples;
-    fitted_outline.col(i) = centre_px + semi_major_px * std::cos(phi) * major_axis +
-                            semi_minor_px * std::sin(phi) * minor_axis;
+    const Eigen::Vector2d q = centre_px + semi_major_px * std::cos(phi) * major_axis +
+                              semi_minor_px * std::sin(phi) * minor_axis;
+    if (q.x() < 1.0 || q.y() < 1.0 || q.x() > width - 1.0 || q.y() > height - 1.0) continue;
+    const cv::Point pixel(static_cast<int>(q.x()), static_cast<int>(q.y()));
+    if (!roi.contains(pixel) || occluded_roi.at<uint8_t>(pixel - roi.tl()) == 0) ++seen;
   }
-  if (VisibleOutlineFraction(params_, fitted_outline) < config_.min_visible_outline) {
+  if (seen < config_.min_visible_outline * kOutlineSamples) {
     return NotFound(time_s, "partly out of view");
   }
 
-  // the blob must agree with the fitted ellipse clipped to the image (intersection over union)
-  const cv::Rect image_rect(0, 0, width, height);
-  const cv::Rect roi = (cv::boundingRect(contour) | fit.boundingRect()) & image_rect;
+  // the blob must agree with the fitted ellipse (clipped to the image, occluders left out):
+  // intersection over union
   cv::Mat blob_mask = cv::Mat::zeros(roi.size(), CV_8U);
   cv::Mat ellipse_mask = cv::Mat::zeros(roi.size(), CV_8U);
   cv::drawContours(blob_mask, contours, best, cv::Scalar(255), cv::FILLED, cv::LINE_8,
@@ -159,9 +182,11 @@ PayloadDetection PayloadDetector::Detect(const cv::Mat& bgr, double time_s) cons
   cv::RotatedRect shifted = fit;
   shifted.center -= cv::Point2f(roi.x, roi.y);
   cv::ellipse(ellipse_mask, shifted, cv::Scalar(255), cv::FILLED, cv::LINE_8);
-  cv::Mat both, either;
-  cv::bitwise_and(blob_mask, ellipse_mask, both);
+  cv::Mat both, either, visible;
+  cv::bitwise_not(occluded_roi, visible);
+  cv::bitwise_and(blob_mask, ellipse_mask, both, visible);
   cv::bitwise_or(blob_mask, ellipse_mask, either);
+  cv::bitwise_and(either, visible, either);
   const double iou =
       static_cast<double>(cv::countNonZero(both)) / std::max(1, cv::countNonZero(either));
   if (iou < config_.min_iou) return NotFound(time_s, "poor ellipse fit");

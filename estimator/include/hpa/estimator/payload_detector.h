@@ -19,6 +19,7 @@ struct PayloadDetectorConfig {
   double min_area_px2 = 200.0;        // smaller: "too small" (radius 8 px = payload 2.3 m away)
   double min_iou = 0.90;              // blob vs fitted ellipse (clipped to the image)
   double min_visible_outline = 0.60;  // share of the fitted outline inside the image
+  int occluder_value_max = 50;        // darker pixels occlude (the cable; floor is >= 75)
   double edge_bias_px = 0.5;          // contour runs through edge pixel centres: add to axes
 };
 

@@ -1,0 +1,213 @@
+// Detector accuracy on frames rendered by the simulator (MuJoCo 2.2 + OSMesa): payload placed at
+// many camera-frame positions (centre, off-centre, near the edge, partly out of view), position
+// error statistics against ground truth, frames without the payload, and ms per detection.
+// These measurements are the source of CameraNoiseModel's defaults (analytic_camera.h).
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <map>
+#include <opencv2/imgcodecs.hpp>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "hpa/estimator/analytic_camera.h"
+#include "hpa/estimator/payload_detector.h"
+#include "hpa/models/camera_model.h"
+#include "hpa/models/params.h"
+#include "hpa/sim/world.h"
+
+namespace hpa {
+namespace {
+
+// Per-axis error statistics of one image region.
+struct AxisStats {
+  std::vector<Eigen::Vector3d> errors;
+  std::vector<double> centre_errors_px;      // ellipse centre vs exact, per image axis
+  std::vector<double> semi_major_errors_px;  // implied by the range error
+  Eigen::Vector3d Mean() const {
+    Eigen::Vector3d m = Eigen::Vector3d::Zero();
+    for (const auto& e : errors) m += e;
+    return m / std::max<size_t>(1, errors.size());
+  }
+  Eigen::Vector3d Std() const {
+    const Eigen::Vector3d m = Mean();
+    Eigen::Vector3d s = Eigen::Vector3d::Zero();
+    for (const auto& e : errors) s += (e - m).cwiseAbs2();
+    return (s / std::max<size_t>(1, errors.size())).cwiseSqrt();
+  }
+  Eigen::Vector3d Max() const {
+    Eigen::Vector3d m = Eigen::Vector3d::Zero();
+    for (const auto& e : errors) m = m.cwiseMax(e.cwiseAbs());
+    return m;
+  }
+};
+
+double MeanOf(const std::vector<double>& v) {
+  double s = 0;
+  for (double x : v) s += x;
+  return s / std::max<size_t>(1, v.size());
+}
+double StdOf(const std::vector<double>& v) {
+  const double m = MeanOf(v);
+  double s = 0;
+  for (double x : v) s += (x - m) * (x - m);
+  return std::sqrt(s / std::max<size_t>(1, v.size()));
+}
+
+class RenderedDetectorTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    sim::WorldConfig config;
+    config.params = LoadParams(DefaultParamsPath());
+    params_ = config.params;
+    world_ = std::make_unique<sim::World>(config);
+  }
+
+  // Places the quadrotor at 1.5 m with attitude q_WB and the payload at p_CL_C in its camera.
+  cv::Mat RenderAt(const Eigen::Vector3d& p_CL_C, const Eigen::Quaterniond& q_WB,
+                   SystemState* truth) {
+    SystemState s;
+    s.p_WQ_W = Eigen::Vector3d(0.2, -0.1, 1.5);
+    s.q_WB = q_WB;
+    const Eigen::Matrix3d R_WB = q_WB.toRotationMatrix();
+    s.p_WL_W = s.p_WQ_W + R_WB * (params_.t_BC_B_m + params_.R_BC * p_CL_C);
+    world_->SetState(s.ToVector(), InputVector::Constant(params_.HoverMotorSpeedRadps()));
+    *truth = world_->GetTruth().state;
+    return world_->RenderPayloadCamera();
+  }
+
+  Params params_;
+  std::unique_ptr<sim::World> world_;
+};
+
+TEST_F(RenderedDetectorTest, ErrorStatisticsByRegion) {
+  const PayloadDetector detector(params_);
+  const AnalyticCamera exact(params_, CameraNoiseModel{0.0, 0.0, 0.0, 0.0});
+  std::mt19937_64 rng(1);  // unused by the noiseless camera
+  const double f_px = params_.CameraFocalPx();
+  const double half_w = 0.5 * params_.camera_width_px, half_h = 0.5 * params_.camera_height_px;
+  std::map<std::string, AxisStats> regions;
+  int must_miss = 0, missed = 0, lost_visible = 0, frames = 0;
+  double detect_ms = 0.0;
+  const Eigen::Quaterniond tilted(Eigen::AngleAxisd(0.15, Eigen::Vector3d(1, 2, 0).normalized()));
+  // image positions as fractions of the half width/height, distances from the camera
+  for (double distance_m : {0.25, 0.35, 0.45}) {
+    for (double fx : {-1.02, -0.9, -0.6, -0.25, 0.0, 0.3, 0.65, 0.85, 0.97}) {
+      for (double fy : {-0.9, -0.3, 0.0, 0.5, 0.95}) {
+        const Eigen::Vector3d ray((fx * half_w) / f_px, (fy * half_h) / f_px, 1.0);
+        const Eigen::Vector3d p_CL_C = distance_m * ray.normalized();
+        const Eigen::Quaterniond q = (frames % 2 == 0) ? Eigen::Quaterniond::Identity() : tilted;
+        SystemState truth;
+        const cv::Mat frame = RenderAt(p_CL_C, q, &truth);
+        const Eigen::Vector3d true_C = PayloadInCamera_C(params_, truth);
+        ++frames;
+        const auto start = std::chrono::steady_clock::now();
+        const PayloadDetection d = detector.Detect(frame, 0.0);
+        detect_ms +=
+            std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
+                .count();
+        const double visible = VisibleOutlineFraction(
+            params_, SphereOutlinePx(params_, true_C, params_.payload_radius_m, 360));
+        if (visible < detector.config().min_visible_outline - 0.1) {
+          ++must_miss;
+          EXPECT_FALSE(d.found) << "visible " << visible << " at " << true_C.transpose();
+          missed += !d.found;
+          continue;
+        }
+        if (std::getenv("EST_DUMP") && frames < 200) {
+          char name[128];
+          std::snprintf(name, sizeof(name), "/tmp/est_frame_%03d_%s.png", frames,
+                        d.found ? "found" : "lost");
+          cv::imwrite(name, frame);
+          std::printf("%s: true %.0f %.0f %.0f det %.0f %.0f %.0f mm, %s\n", name, 1e3 * true_C.x(),
+                      1e3 * true_C.y(), 1e3 * true_C.z(), 1e3 * d.p_CL_C.x(), 1e3 * d.p_CL_C.y(),
+                      1e3 * d.p_CL_C.z(), d.reason.c_str());
+        }
+        if (!d.found) {
+          if (visible >= 1.0) ++lost_visible;
+          EXPECT_LT(visible, 1.0) << d.reason << " at " << true_C.transpose();
+          continue;
+        }
+        // region by where the exact ellipse lies
+        const PayloadDetection ideal = exact.Measure(true_C, 0.0, rng);
+        const Eigen::Vector2d c = ideal.centre_px;
+        const double edge_px = std::min({c.x(), 2 * half_w - c.x(), c.y(), 2 * half_h - c.y()});
+        const double off_axis =
+            std::max(std::abs(c.x() - half_w) / half_w, std::abs(c.y() - half_h) / half_h);
+        std::string region = visible < 1.0                     ? "partly out"
+                             : edge_px < 2.5 * ideal.radius_px ? "near edge"
+                             : off_axis < 0.35                 ? "centre"
+                                                               : "off-centre";
+        AxisStats& stats = regions[region];
+        stats.errors.push_back(d.p_CL_C - true_C);
+        if (region == "partly out") continue;
+        stats.centre_errors_px.push_back(d.centre_px.x() - ideal.centre_px.x());
+        stats.centre_errors_px.push_back(d.centre_px.y() - ideal.centre_px.y());
+        const double D = true_C.norm();
+        const double cos2 = std::pow(true_C.z() / D, 2);
+        stats.semi_major_errors_px.push_back(-(d.p_CL_C.norm() - D) * f_px *
+                                             params_.payload_radius_m * cos2 / (D * D));
+      }
+    }
+  }
+  std::printf("rendered frames: %d, %d out of view (all missed: %d), mean detection %.2f ms\n",
+              frames, must_miss, missed, detect_ms / frames);
+  std::vector<double> all_centre, all_axis;
+  for (const auto& [name, s] : regions) {
+    const Eigen::Vector3d m = 1e3 * s.Mean(), sd = 1e3 * s.Std(), mx = 1e3 * s.Max();
+    std::printf(
+        "%-10s n=%3zu  mean [%5.2f %5.2f %5.2f] std [%5.2f %5.2f %5.2f] "
+        "max [%5.2f %5.2f %5.2f] mm",
+        name.c_str(), s.errors.size(), m.x(), m.y(), m.z(), sd.x(), sd.y(), sd.z(), mx.x(), mx.y(),
+        mx.z());
+    if (!s.centre_errors_px.empty()) {
+      std::printf("  centre %.2f+-%.2f px, semi-major %.2f+-%.2f px", MeanOf(s.centre_errors_px),
+                  StdOf(s.centre_errors_px), MeanOf(s.semi_major_errors_px),
+                  StdOf(s.semi_major_errors_px));
+      all_centre.insert(all_centre.end(), s.centre_errors_px.begin(), s.centre_errors_px.end());
+      all_axis.insert(all_axis.end(), s.semi_major_errors_px.begin(), s.semi_major_errors_px.end());
+    }
+    std::printf("\n");
+  }
+  std::printf("fully visible: centre error %.3f +- %.3f px, semi-major error %.3f +- %.3f px\n",
+              MeanOf(all_centre), StdOf(all_centre), MeanOf(all_axis), StdOf(all_axis));
+  EXPECT_EQ(lost_visible, 0);
+  EXPECT_EQ(missed, must_miss);
+  ASSERT_TRUE(regions.count("centre") && regions.count("off-centre") && regions.count("near edge"));
+  // bounds ~3x above the measured maxima (0.72 mm lateral, 1.08 mm along z over the fully
+  // visible regions; 1.18 mm partly out of view), so a regression of the fit, of the occluder
+  // handling or of the geometry fails
+  for (const char* name : {"centre", "off-centre", "near edge"}) {
+    const Eigen::Vector3d mx = regions[name].Max();
+    EXPECT_LT(mx.head<2>().maxCoeff(), 0.002) << name;
+    EXPECT_LT(mx.z(), 0.003) << name;
+  }
+  if (regions.count("partly out")) {
+    EXPECT_LT(regions["partly out"].Max().maxCoeff(), 0.004);
+  }
+  // the analytic camera's noise model is this measurement (measured 0.075 px centre, 0.073 px
+  // semi-major, bias -0.03 px): it must stay within 0.03 px of it
+  const CameraNoiseModel model = MeasuredDetectorNoise();
+  EXPECT_NEAR(StdOf(all_centre), model.centre_std_px, 0.03);
+  EXPECT_NEAR(StdOf(all_axis), model.semi_major_std_px, 0.03);
+  EXPECT_NEAR(MeanOf(all_axis), model.semi_major_bias_px, 0.03);
+}
+
+TEST_F(RenderedDetectorTest, NoDetectionWithoutThePayload) {
+  const PayloadDetector detector(params_);
+  // payload above the camera (behind it) and far to the side: the frame shows floor only
+  for (const Eigen::Vector3d& p_CL_C :
+       {Eigen::Vector3d(0, 0, -0.3), Eigen::Vector3d(2.0, 0, 0.3)}) {
+    SystemState truth;
+    const cv::Mat frame = RenderAt(p_CL_C, Eigen::Quaterniond::Identity(), &truth);
+    const PayloadDetection d = detector.Detect(frame, 0.0);
+    EXPECT_FALSE(d.found) << "at " << p_CL_C.transpose();
+  }
+}
+
+}  // namespace
+}  // namespace hpa
