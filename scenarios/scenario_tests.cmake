@@ -1,1 +1,23 @@
-# Scenario regression tests (filled below)
+# Scenario regressions: every paper scenario and the CI variants run through the real `hpa`
+# binary with their expect bounds (exit 0 required), plus CLI contract checks.
+set(HPA_BIN $<TARGET_FILE:hpa>)
+set(SCEN ${CMAKE_CURRENT_SOURCE_DIR})
+set(SCEN_OUT ${CMAKE_BINARY_DIR}/scenario_out)
+
+foreach(file
+    hover lissajous_T5 lissajous_T4 lissajous_T3_5 hover_gripper_pull line_impulse
+    person_moves_payload person_moves_payload_no_perception
+    ci/hover_gripper_pull_nonhybrid ci/line_impulse_nonhybrid ci/lissajous_T5_onboard)
+  string(REPLACE "/" "_" name ${file})
+  add_test(NAME scenario.${name}
+           COMMAND ${HPA_BIN} run ${SCEN}/${file}.yaml --out ${SCEN_OUT}/${name} --quiet)
+  set_tests_properties(scenario.${name} PROPERTIES LABELS scenario TIMEOUT 600)
+endforeach()
+
+# CLI contracts: exit codes, error messages, determinism, render-frame, sweeps
+add_test(NAME cli.contract
+         COMMAND bash ${SCEN}/tests/cli_contract_test.sh ${HPA_BIN} ${SCEN} ${SCEN_OUT}/cli)
+set_tests_properties(cli.contract PROPERTIES LABELS cli TIMEOUT 600)
+add_test(NAME cli.sweep
+         COMMAND bash ${SCEN}/tests/sweep_cli_test.sh ${HPA_BIN} ${SCEN} ${SCEN_OUT}/sweep)
+set_tests_properties(cli.sweep PROPERTIES LABELS cli TIMEOUT 900)

@@ -1,0 +1,75 @@
+#!/usr/bin/env bash
+# CLI contract checks for `hpa` (DESIGN.md section 6): exit codes 0/1/2, error messages that
+# name the file and the key, determinism of metrics.json, render-frame output.
+# usage: cli_contract_test.sh HPA_BIN SCENARIOS_DIR OUT_DIR
+set -uo pipefail
+hpa=$1; scen=$2; out=$3
+rm -rf "$out"; mkdir -p "$out"
+failures=0
+fail() { echo "FAIL: $*"; failures=$((failures + 1)); }
+
+# expect_exit CODE PATTERN ARGS...: runs hpa ARGS, checks the exit code and that stderr+stdout
+# contains PATTERN (an extended regex)
+expect_exit() {
+  local code=$1 pattern=$2; shift 2
+  local text status
+  text=$("$hpa" "$@" 2>&1); status=$?
+  [ "$status" -eq "$code" ] || fail "hpa $* exited $status, expected $code: $text"
+  echo "$text" | grep -Eq -- "$pattern" || fail "hpa $* output lacks /$pattern/: $text"
+}
+
+base="$out/base.yaml"
+printf 'name: base\nduration: 1.0\ncontroller: {type: geometric}\nestimation: {ground_truth: true, camera: analytic}\n' > "$base"
+
+echo "== bad input: exit 2, message names the file and the key"
+expect_exit 2 "nonexistent.yaml.*cannot open" run "$out/nonexistent.yaml" --out "$out/x"
+printf 'name: [broken\n' > "$out/broken.yaml"
+expect_exit 2 "broken.yaml.*malformed YAML" run "$out/broken.yaml" --out "$out/x"
+printf 'name: t\nduration: 1.0\ncontroler: {type: hpa_mpc}\n' > "$out/typo.yaml"
+expect_exit 2 "typo.yaml: key 'controler': unknown key" run "$out/typo.yaml" --out "$out/x"
+printf 'name: t\nduration: 1.0\nworld: {payload_mass: -0.1}\n' > "$out/range.yaml"
+expect_exit 2 "range.yaml: key 'world.payload_mass'.*out of range" run "$out/range.yaml" --out "$out/x"
+printf 'name: t\nduration: 1.0\nevents:\n  - {at: 0.5, type: impulse, impulse: up}\n' > "$out/type.yaml"
+expect_exit 2 "type.yaml: key 'events.0.impulse': expected a list of 3 numbers" run "$out/type.yaml" --out "$out/x"
+expect_exit 2 "key '--controller'.*hpa_mpc" run "$base" --controller pid --out "$out/x"
+expect_exit 2 "key '--camera'" run "$base" --camera lidar --out "$out/x"
+expect_exit 2 "key '--frobnicate'.*unknown option" run "$base" --frobnicate
+expect_exit 2 "key 'events.4'.*not an index" run "$base" --set events.4.at=1 --out "$out/x"
+expect_exit 2 "unknown command" fly "$base"
+printf 'gravity_mps2: 9.81\n' > "$out/params.yaml"
+expect_exit 2 "params.yaml: key 'quadrotor': missing" run "$base" --params "$out/params.yaml" --out "$out/x"
+expect_exit 0 "hpa run SCENARIO.yaml" --help
+
+echo "== exit 0 when every bound holds, 1 when one fails (named)"
+expect_exit 0 "wrote" run "$base" --out "$out/ok"
+expect_exit 1 "EXPECT FAILED quad_position_deviation_min" run "$base" --out "$out/fail" \
+  --set expect.quad_position_deviation_min=1.0
+[ -s "$out/fail/metrics.json" ] || fail "a failed expectation must still write metrics.json"
+grep -q '"passed": false' "$out/fail/metrics.json" || fail "metrics.json lacks expect.passed false"
+
+echo "== determinism: same scenario and seed -> identical metrics (but wall-time fields)"
+strip() { sed -E 's/"wall_time_s": [^,]*,//; s/"(mpc_solve|render|detector)_ms": \{[^}]*\},//' "$1"; }
+args=(run "$scen/lissajous_T5.yaml" --set duration=6 --set estimation.ground_truth=false --camera analytic --quiet)
+"$hpa" "${args[@]}" --out "$out/det1" >/dev/null 2>&1
+"$hpa" "${args[@]}" --out "$out/det2" >/dev/null 2>&1
+"$hpa" "${args[@]}" --out "$out/det3" --seed 2 >/dev/null 2>&1
+diff <(strip "$out/det1/metrics.json") <(strip "$out/det2/metrics.json") > /dev/null \
+  || fail "two runs with the same seed differ: $(diff <(strip "$out/det1/metrics.json") <(strip "$out/det2/metrics.json"))"
+cmp -s "$out/det1/log.csv" "$out/det2/log.csv" || true  # solve_ms differs; not compared
+diff <(strip "$out/det1/metrics.json") <(strip "$out/det3/metrics.json") > /dev/null \
+  && fail "a different seed gave identical metrics: the noise is not seeded by the scenario"
+
+echo "== render-frame writes a 1280x720 PNG"
+expect_exit 0 "wrote" render-frame "$scen/hover.yaml" --at 1.0 --out "$out/frame.png"
+size=$(od -An -tu1 -j16 -N8 "$out/frame.png" | tr -s ' ')
+[ "$size" = " 0 0 5 0 0 0 2 208" ] || fail "frame.png is not 1280x720 (IHDR bytes:$size)"
+expect_exit 2 "key '--at'" render-frame "$scen/hover.yaml" --at 99 --out "$out/frame2.png"
+
+echo "== plots and video"
+expect_exit 0 "plot" run "$base" --out "$out/plots" --plots --video "$out/plots/run.mp4"
+for f in tracking.png xy_path.png retaut.png run.mp4; do
+  [ -s "$out/plots/$f" ] || fail "missing $out/plots/$f"
+done
+
+if [ $failures -ne 0 ]; then echo "$failures failure(s)"; exit 1; fi
+echo "all CLI contract checks passed"

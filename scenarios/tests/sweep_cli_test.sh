@@ -1,0 +1,111 @@
+#!/usr/bin/env bash
+# Sweep checks (DESIGN.md section 7): shards through GNU parallel merge to exactly the unsharded
+# sweep; resume after a killed sweep loses nothing and repeats nothing; a worker that dies is
+# recorded as an error and the others go on; the time limit kills a hung run.
+# usage: sweep_cli_test.sh HPA_BIN SCENARIOS_DIR OUT_DIR
+set -uo pipefail
+hpa=$1; scen=$2; out=$3
+rm -rf "$out"; mkdir -p "$out"
+failures=0
+fail() { echo "FAIL: $*"; failures=$((failures + 1)); }
+strip() { sed -E 's/"wall_time_s": [^,]*,//; s/"(mpc_solve|render|detector)_ms": \{[^}]*\},//' "$@" | sort; }
+count_runs() { grep -c '"run": ' "$1" 2>/dev/null || echo 0; }
+unique_runs() { grep -o '"run": [0-9]*' "$1" | sort -u | wc -l; }
+
+# a fast base: geometric controller on ground truth, a vertical impulse on the payload
+cat > "$out/base.yaml" <<'YAML'
+name: sweep_base
+duration: 2.0
+controller: {type: geometric}
+estimation: {ground_truth: true, camera: analytic}
+reference: {type: hover, payload_position: [0, 0, 0.7]}
+events:
+  - {at: 0.5, type: impulse, body: payload, impulse: [0, 0, 0.1]}
+YAML
+cat > "$out/tiny.yaml" <<'YAML'
+base: base.yaml
+runs: 5
+seed: 3
+vary:
+  events.0.impulse.2: {uniform: [0.05, 0.4]}
+  world.payload_mass: {normal: [0.1, 0.01]}
+  controller.type: {grid: [geometric, hpa_mpc]}
+YAML
+
+echo "== unsharded vs two shards through GNU parallel, merged"
+"$hpa" sweep "$out/tiny.yaml" --out "$out/full" --jobs 2 > "$out/full.log" 2>&1 || fail "unsharded sweep failed: $(cat "$out/full.log")"
+parallel -j2 "$hpa" sweep "$out/tiny.yaml" --out "$out/shard{}" --shard {}/2 ::: 1 2 > "$out/shards.log" 2>&1 \
+  || fail "sharded sweep failed: $(cat "$out/shards.log")"
+"$hpa" merge "$out/shard1" "$out/shard2" --out "$out/merged" > /dev/null || fail "merge failed"
+[ "$(count_runs "$out/full/runs.jsonl")" -eq 10 ] || fail "unsharded sweep has $(count_runs "$out/full/runs.jsonl") runs, expected 10"
+[ "$(count_runs "$out/shard1/runs.jsonl")" -eq 5 ] || fail "shard 1 has $(count_runs "$out/shard1/runs.jsonl") runs, expected 5"
+diff <(strip "$out/full/runs.jsonl") <(strip "$out/merged/runs.jsonl") > /dev/null \
+  || fail "merged shards differ from the unsharded sweep"
+for f in summary.md summary.json crash_rate.png; do
+  [ -s "$out/merged/$f" ] || fail "merge did not write $f"
+done
+grep -q -- "--seed" "$out/merged/summary.md" || fail "summary.md lacks replay commands"
+
+echo "== merge refuses mixed sweeps; re-running into a used folder needs --resume"
+sed 's/seed: 3/seed: 4/' "$out/tiny.yaml" > "$out/other.yaml"
+"$hpa" sweep "$out/other.yaml" --out "$out/other" --shard 1/5 > /dev/null 2>&1
+"$hpa" merge "$out/shard1" "$out/other" --out "$out/mixed" > /dev/null 2>&1
+[ $? -eq 2 ] || fail "merge of two different sweeps did not exit 2"
+"$hpa" sweep "$out/tiny.yaml" --out "$out/full" > /dev/null 2>&1
+[ $? -eq 2 ] || fail "sweep into a used folder without --resume did not exit 2"
+
+echo "== a replay command from summary.md reproduces its run exactly"
+replay=$(grep -m1 -o 'hpa run [^`]*' "$out/full/summary.md" | sed "s|^hpa |$hpa |")
+run_index=$(grep -m1 -o '^- run [0-9]*' "$out/full/summary.md" | grep -o '[0-9]*$')
+$replay --out "$out/replay" --quiet > /dev/null 2>&1
+line=$(grep "\"run\": $run_index," "$out/full/runs.jsonl")
+for key in payload_rmse_m quad_position_deviation_max_m slack_time_s; do
+  a=$(echo "$line" | grep -o "\"$key\": [^,]*" | head -1)
+  b=$(tr -d '\n' < "$out/replay/metrics.json" | grep -o "\"$key\": [^,]*" | head -1)
+  [ "$a" = "$b" ] || fail "replay of run $run_index differs in $key: '$a' vs '$b'"
+done
+
+echo "== resume after killing the sweep: nothing lost, nothing repeated"
+cat > "$out/slow.yaml" <<'YAML'
+base: base.yaml
+runs: 8
+seed: 5
+vary:
+  events.0.impulse.2: {uniform: [0.05, 0.4]}
+  duration: {list: [6.0]}
+  controller.type: {list: [hpa_mpc]}
+YAML
+setsid "$hpa" sweep "$out/slow.yaml" --out "$out/resume" --jobs 1 > /dev/null 2>&1 &
+pid=$!
+for _ in $(seq 1 600); do
+  [ "$(count_runs "$out/resume/runs.jsonl")" -ge 2 ] && break
+  sleep 0.1
+done
+kill -9 -- -"$pid" 2>/dev/null; wait "$pid" 2>/dev/null
+before=$(count_runs "$out/resume/runs.jsonl")
+[ "$before" -ge 2 ] && [ "$before" -lt 8 ] || fail "kill came at a bad time ($before runs recorded)"
+"$hpa" sweep "$out/slow.yaml" --out "$out/resume" --jobs 2 --resume > /dev/null 2>&1 || fail "resume failed"
+[ "$(count_runs "$out/resume/runs.jsonl")" -eq 8 ] || fail "after resume: $(count_runs "$out/resume/runs.jsonl") lines, expected 8"
+[ "$(unique_runs "$out/resume/runs.jsonl")" -eq 8 ] || fail "after resume: runs repeated or lost"
+
+echo "== a worker killed mid-run is recorded as an error; the sweep goes on"
+"$hpa" sweep "$out/slow.yaml" --out "$out/isolation" --jobs 1 > /dev/null 2>&1 &
+pid=$!
+victim=""
+for _ in $(seq 1 600); do
+  victim=$(pgrep -P "$pid" | head -1)
+  [ -n "$victim" ] && break
+  sleep 0.05
+done
+[ -n "$victim" ] && kill -9 "$victim"
+wait "$pid" || fail "the sweep stopped because a worker died"
+[ "$(count_runs "$out/isolation/runs.jsonl")" -eq 8 ] || fail "crash isolation: $(count_runs "$out/isolation/runs.jsonl") lines, expected 8"
+grep -q 'worker killed by signal' "$out/isolation/runs.jsonl" || fail "the killed worker was not recorded as an error"
+
+echo "== the time limit kills a run that takes too long"
+printf 'base: base.yaml\nruns: 1\ntime_limit: 1\nvary:\n  duration: {list: [600.0]}\n  controller.type: {list: [hpa_mpc]}\n' > "$out/hang.yaml"
+"$hpa" sweep "$out/hang.yaml" --out "$out/hang" > /dev/null 2>&1
+grep -q 'killed after the time limit' "$out/hang/runs.jsonl" || fail "time limit not enforced"
+
+if [ $failures -ne 0 ]; then echo "$failures failure(s)"; exit 1; fi
+echo "all sweep checks passed"
