@@ -81,8 +81,8 @@ TEST(PayloadDetectorTest, ErrorStatisticsOverTheImage) {
   }
   std::printf("synthetic frames: %d fully visible, %d cut, max |error| x %.2f y %.2f z %.2f mm\n",
               count, cut, 1e3 * max_error.x(), 1e3 * max_error.y(), 1e3 * max_error.z());
-  // measured max: see the printout (about 1 mm laterally, 3 mm in depth at 0.6 m); bounds
-  // chosen ~3x above it
+  // measured max (seed 42): x 2.9, y 1.3, z 3.0 mm with 3-grey-level pixel noise; bounds
+  // ~2-3x above it
   EXPECT_LT(max_error.x(), 5e-3);
   EXPECT_LT(max_error.y(), 5e-3);
   EXPECT_LT(max_error.z(), 1e-2);

@@ -14,6 +14,8 @@
 namespace hpa {
 
 /// Noise model and tuning of the quadrotor filter (continuous-time densities, 1-sigma values).
+/// Defaults: a BMI088-class IMU's datasheet densities and a cm-level VIO, the same figures the
+/// simulator's SensorNoiseConfig uses (sim/include/hpa/sim/sensor_models.h).
 struct QuadFilterConfig {
   double gyro_noise_radps_per_sqrthz = 2.4e-4;     // white gyro noise density
   double accel_noise_mps2_per_sqrthz = 1.7e-3;     // white accelerometer noise density
