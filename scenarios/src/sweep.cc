@@ -452,7 +452,13 @@ void SetDottedPath(YAML::Node root, const std::string& path, const std::string& 
       }
       next = cur[static_cast<size_t>(idx)];
     } else if (cur.IsMap()) {
-      if (!cur[parts[i]]) cur[parts[i]] = YAML::Node(YAML::NodeType::Map);
+      if (!cur[parts[i]]) {
+        if (IsNumber(parts[i + 1])) {
+          throw InputError(file, path, "'" + walked + "' is not in the base scenario, so '" +
+                                           parts[i + 1] + "' is not an index of a list");
+        }
+        cur[parts[i]] = YAML::Node(YAML::NodeType::Map);
+      }
       next = cur[parts[i]];
     } else {
       throw InputError(file, path, "'" + walked + "' is not a map or a list in the base scenario");

@@ -34,7 +34,7 @@ expect_exit 2 "type.yaml: key 'events.0.impulse': expected a list of 3 numbers" 
 expect_exit 2 "key '--controller'.*hpa_mpc" run "$base" --controller pid --out "$out/x"
 expect_exit 2 "key '--camera'" run "$base" --camera lidar --out "$out/x"
 expect_exit 2 "key '--frobnicate'.*unknown option" run "$base" --frobnicate
-expect_exit 2 "key 'events.4'.*not an index" run "$base" --set events.4.at=1 --out "$out/x"
+expect_exit 2 "key 'events.4.at'.*not an index" run "$base" --set events.4.at=1 --out "$out/x"
 expect_exit 2 "unknown command" fly "$base"
 printf 'gravity_mps2: 9.81\n' > "$out/params.yaml"
 expect_exit 2 "params.yaml: key 'quadrotor': missing" run "$base" --params "$out/params.yaml" --out "$out/x"
