@@ -180,6 +180,9 @@ void World::Reset(const SystemState& initial) {
   imu_.ResetBias();
   vio_.Clear();
   imu_queue_.clear();
+  imu_sum_w_B_radps_.setZero();
+  imu_sum_specific_force_B_mps2_.setZero();
+  imu_sum_count_ = 0;
   last_vio_slot_ = -1;
   crash_ = CrashStatus{};
 
@@ -257,7 +260,6 @@ void World::ApplyDisturbances() {
 
 void World::Step() {
   // state at t_k is current (mj_forward / mj_step1 ran): sample what the sensors need from it
-  const bool imu_due = step_ % 2 == 0;
   const int64_t vio_slot = (step_ * 30) / 1000;  // 30 Hz capture slots of whole 1 ms steps
   const bool vio_due = vio_slot != last_vio_slot_;
   const SystemState before = GetTruth().state;
@@ -276,9 +278,19 @@ void World::Step() {
   CheckWarnings();
 
   // sensors, stamped with t_k (qacc from mj_step2 is the acceleration at t_k)
+  // The IMU averages over its 2 ms period (a real IMU's internal high-rate sampling and
+  // decimation filter): a point sample every other step would alias the 2 ms tension spike of a
+  // re-taut into a velocity error of either twice or none of the true impulse.
   const double t_k = t0_s_ + (step_ - 1) * kPhysicsDt_s;
-  if (imu_due) {
-    imu_queue_.push_back(imu_.Measure(t_k, before.w_B, QuadSpecificForce_B()));
+  imu_sum_w_B_radps_ += before.w_B;
+  imu_sum_specific_force_B_mps2_ += QuadSpecificForce_B();
+  if (++imu_sum_count_ == 2) {
+    const double interval_start_s = t_k - kPhysicsDt_s;
+    imu_queue_.push_back(imu_.Measure(interval_start_s, imu_sum_w_B_radps_ / imu_sum_count_,
+                                      imu_sum_specific_force_B_mps2_ / imu_sum_count_));
+    imu_sum_w_B_radps_.setZero();
+    imu_sum_specific_force_B_mps2_.setZero();
+    imu_sum_count_ = 0;
     constexpr size_t kMaxQueued = 1000;  // 2 s of samples if the caller never takes them
     if (imu_queue_.size() > kMaxQueued) imu_queue_.pop_front();
   }

@@ -155,6 +155,9 @@ class World {
   mjModel* model_ = nullptr;
   mjData* data_ = nullptr;
   Ids ids_{};
+  Eigen::Vector3d imu_sum_w_B_radps_ = Eigen::Vector3d::Zero();             // (3)
+  Eigen::Vector3d imu_sum_specific_force_B_mps2_ = Eigen::Vector3d::Zero();  // (3)
+  int imu_sum_count_ = 0;  // physics steps summed into the next IMU sample
   double t0_s_ = 0.0;
   int64_t step_ = 0;
   int warning_count_[mjNWARNING] = {};
