@@ -82,7 +82,10 @@ ControlOutput HpaMpc::Update(const SystemState& state) {
   }
 
   const Ocp ocp = BuildProblem(state);
-  const StateVector x0 = state.ToVector();
+  // the taut flow holds only on the taut manifold: a state just past the guard (the cable
+  // snapping taut, or an estimate off the constraint) goes through the jump map first
+  const StateVector x0 = ocp.mode == CableMode::kTaut ? model_.ProjectToTaut(state.ToVector())
+                                                       : state.ToVector();
   const std::vector<InputVector> guess = WarmStart(state.time_s);
   const bool had_plan = plan_u_.size() == static_cast<size_t>(ocp.horizon_steps);
 

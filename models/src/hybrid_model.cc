@@ -143,6 +143,28 @@ void HybridModel::StepJacobians(const StateVector& x, const InputVector& u, Cabl
   Unpack(Rk4<AdScalar>(params_, allocation_, x_ad, u_ad, mode, dt_s), x_next, a, b);
 }
 
+StateVector HybridModel::ProjectToTaut(const StateVector& x) const {
+  using I = StateIndex;
+  const double m = params_.quad_mass_kg, m_L = params_.payload_mass_kg, l = params_.cable_length_m;
+  const Eigen::Vector3d p_L = x.segment<3>(I::kPayloadPos), p_Q = x.segment<3>(I::kQuadPos);
+  const Eigen::Vector3d v_L = x.segment<3>(I::kPayloadVel), v_Q = x.segment<3>(I::kQuadVel);
+  const Eigen::Vector3d r = p_L - p_Q;
+  const double d = r.norm();
+  const Eigen::Vector3d xi = d > 1e-6 ? Eigen::Vector3d(r / d) : Eigen::Vector3d(0, 0, -1);
+
+  // positions: same centre of mass, cable at its length
+  const Eigen::Vector3d p_com = (m * p_Q + m_L * p_L) / (m + m_L);
+  StateVector y = x;
+  y.segment<3>(I::kQuadPos) = p_com - m_L / (m + m_L) * l * xi;
+  y.segment<3>(I::kPayloadPos) = p_com + m / (m + m_L) * l * xi;
+
+  // velocities: perfectly inelastic collision along xi
+  const double v_c = (m * v_Q.dot(xi) + m_L * v_L.dot(xi)) / (m + m_L);
+  y.segment<3>(I::kQuadVel) = v_Q + (v_c - v_Q.dot(xi)) * xi;
+  y.segment<3>(I::kPayloadVel) = v_L + (v_c - v_L.dot(xi)) * xi;
+  return y;
+}
+
 double HybridModel::TautTensionN(const StateVector& x, const InputVector& u) const {
   // m_L (a_L + g e3) = -T xi  =>  T = -m_L (a_L + g e3) . xi
   const StateVector x_dot = Derivative(x, u, CableMode::kTaut);

@@ -143,5 +143,33 @@ TEST(HybridModelTest, Rk4OneStepErrorAgainstFineIntegration) {
   }
 }
 
+TEST(HybridModelTest, ProjectToTautIsTheInelasticCollision) {
+  const Params p;
+  const HybridModel model(p);
+  // payload 0.4 m below and falling faster than the quadrotor: just past the guard
+  SystemState s;
+  s.p_WQ_W = Eigen::Vector3d(0, 0, 1.2);
+  s.p_WL_W = Eigen::Vector3d(0.1, 0, 0.8);
+  s.v_WQ_W = Eigen::Vector3d(0.2, 0, 0.1);
+  s.v_WL_W = Eigen::Vector3d(0.3, 0.1, -2.0);
+  const StateVector x = s.ToVector();
+  const StateVector y = model.ProjectToTaut(x);
+  using I = StateIndex;
+  const Eigen::Vector3d r = y.segment<3>(I::kPayloadPos) - y.segment<3>(I::kQuadPos);
+  EXPECT_NEAR(r.norm(), p.cable_length_m, 1e-12);
+  const Eigen::Vector3d xi = r.normalized();
+  const double m = p.quad_mass_kg, m_L = p.payload_mass_kg;
+  // momentum and centre of mass kept, no relative velocity along the cable
+  const Eigen::Vector3d momentum = m * s.v_WQ_W + m_L * s.v_WL_W;
+  EXPECT_LT((m * y.segment<3>(I::kQuadVel) + m_L * y.segment<3>(I::kPayloadVel) - momentum).norm(),
+            1e-12);
+  EXPECT_LT((m * y.segment<3>(I::kQuadPos) + m_L * y.segment<3>(I::kPayloadPos) -
+             (m * s.p_WQ_W + m_L * s.p_WL_W)).norm(), 1e-12);
+  EXPECT_NEAR((y.segment<3>(I::kPayloadVel) - y.segment<3>(I::kQuadVel)).dot(xi), 0.0, 1e-12);
+  // a state already on the manifold is a fixed point
+  const StateVector h = model.HoverState(Eigen::Vector3d(0, 0, 1));
+  EXPECT_LT((model.ProjectToTaut(h) - h).norm(), 1e-12);
+}
+
 }  // namespace
 }  // namespace hpa

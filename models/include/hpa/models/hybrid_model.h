@@ -39,6 +39,12 @@ class HybridModel {
   void StepJacobians(const StateVector& x, const InputVector& u, CableMode mode, double dt_s,
                      StateVector* x_next, StateMatrix* a, InputMatrix* b) const;
 
+  /// The jump map onto the taut manifold (DESIGN.md section 9): positions moved along xi to
+  /// |x_L - x_Q| = l keeping the centre of mass, velocities along xi made equal by a perfectly
+  /// inelastic collision (momentum kept). The taut flow assumes this; a state just past the
+  /// guard (re-taut, or an estimate off the constraint) must be projected before predicting.
+  StateVector ProjectToTaut(const StateVector& x) const;
+
   /// Cable tension (N) that the taut model implies at x under u.
   double TautTensionN(const StateVector& x, const InputVector& u) const;
 
