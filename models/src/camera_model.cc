@@ -4,8 +4,7 @@ namespace hpa {
 
 Eigen::Vector3d PayloadInCamera_C(const Params& params, const SystemState& state) {
   const Eigen::Matrix3d R_WB = state.q_WB.toRotationMatrix();
-  return (R_WB * params.R_BC).transpose() *
-         (state.p_WL_W - state.p_WQ_W - R_WB * params.t_BC_B_m);
+  return (R_WB * params.R_BC).transpose() * (state.p_WL_W - state.p_WQ_W - R_WB * params.t_BC_B_m);
 }
 
 std::optional<Eigen::Vector2d> ProjectToPixels(const Params& params, const Eigen::Vector3d& p_C) {

@@ -69,7 +69,8 @@ Params LoadParams(const std::string& path) {
       }
     }
   }
-  if (!(p.R_BC.transpose() * p.R_BC).isIdentity(1e-9) || std::abs(p.R_BC.determinant() - 1) > 1e-9) {
+  if (!(p.R_BC.transpose() * p.R_BC).isIdentity(1e-9) ||
+      std::abs(p.R_BC.determinant() - 1) > 1e-9) {
     cam.Fail("R_BC", "not a rotation (R^T R != I or det != 1)");
   }
   cam.RejectUnknownKeys();

@@ -34,8 +34,7 @@ InputVector RotorSpeedsFromWrench(const Params& params, const Eigen::Vector4d& w
   InputVector w;
   for (int i = 0; i < 4; ++i) {
     const double w_sq = std::max(0.0, f(i)) / params.k_f_N_per_radps2;
-    w(i) = std::clamp(std::sqrt(w_sq), params.motor_speed_min_radps,
-                      params.motor_speed_max_radps);
+    w(i) = std::clamp(std::sqrt(w_sq), params.motor_speed_min_radps, params.motor_speed_max_radps);
   }
   return w;
 }

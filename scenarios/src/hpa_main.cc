@@ -27,7 +27,8 @@ constexpr int kExitExpectFailed = 1;
 constexpr int kExitBadInput = 2;
 constexpr int kExitInternal = 3;
 
-const char* kUsage = R"(hpa: software-in-the-loop simulator for HPA-MPC (quadrotor + cable-suspended payload)
+const char* kUsage =
+    R"(hpa: software-in-the-loop simulator for HPA-MPC (quadrotor + cable-suspended payload)
 
 usage:
   hpa run SCENARIO.yaml [--out DIR] [--seed N] [--controller TYPE] [--camera render|analytic]
@@ -126,7 +127,8 @@ Scenario LoadWithSets(const std::string& path, const std::vector<std::string>& s
   }
   for (const std::string& set : sets) {
     const size_t eq = set.find('=');
-    if (eq == std::string::npos || eq == 0) throw InputError("", "--set", "expected PATH=VALUE, got '" + set + "'");
+    if (eq == std::string::npos || eq == 0)
+      throw InputError("", "--set", "expected PATH=VALUE, got '" + set + "'");
     SetDottedPath(root, set.substr(0, eq), set.substr(eq + 1), "--set");
   }
   return ParseScenario(YamlMap(root, path, ""));
@@ -136,7 +138,8 @@ Scenario LoadWithSets(const std::string& path, const std::vector<std::string>& s
 void ApplyOverrides(const Args& a, Scenario* s) {
   if (a.Has("--seed")) {
     const double seed = ParseNumber("--seed", a.Get("--seed"));
-    if (seed < 0 || seed != std::floor(seed)) throw InputError("", "--seed", "expected an integer >= 0");
+    if (seed < 0 || seed != std::floor(seed))
+      throw InputError("", "--seed", "expected an integer >= 0");
     s->seed = static_cast<unsigned long>(seed);
   }
   if (a.Has("--controller")) {
@@ -169,19 +172,20 @@ void PrintSummary(const Metrics& m, const std::string& out_dir) {
               m.crashed ? "YES: " : "no", m.crashed ? m.crash_reason->c_str() : "",
               m.payload_rmse_m.x(), m.payload_rmse_m.y(), m.payload_rmse_m.z(),
               m.quad_position_deviation_max_m);
-  std::printf("  slack %.2f s (%d events), mode accuracy %.3f, payload in view %.3f, "
-              "solve median %.3f ms, failures %d\n",
-              m.slack_time_s, m.slack_events, m.mode_accuracy, m.payload_in_fov_fraction,
-              m.mpc_solve_ms.median, m.mpc_failures);
+  std::printf(
+      "  slack %.2f s (%d events), mode accuracy %.3f, payload in view %.3f, "
+      "solve median %.3f ms, failures %d\n",
+      m.slack_time_s, m.slack_events, m.mode_accuracy, m.payload_in_fov_fraction,
+      m.mpc_solve_ms.median, m.mpc_failures);
   for (const auto& f : m.expect_failed) std::printf("  EXPECT FAILED %s\n", f.c_str());
   std::printf("  wrote %s/metrics.json, %s/log.csv\n", out_dir.c_str(), out_dir.c_str());
 }
 
 int Run(int argc, char** argv) {
-  const Args a = Parse(argc, argv, 2,
-                       {"--out", "--seed", "--controller", "--camera", "--video", "--params",
-                        "--set"},
-                       {"--video-slack-events", "--quiet", "--plots"});
+  const Args a =
+      Parse(argc, argv, 2,
+            {"--out", "--seed", "--controller", "--camera", "--video", "--params", "--set"},
+            {"--video-slack-events", "--quiet", "--plots"});
   if (a.positional.size() != 1) throw InputError("", "", "hpa run takes one SCENARIO.yaml");
   const Params params = LoadParams(a.Get("--params", DefaultParamsPath()));
   Scenario scenario = LoadWithSets(a.positional[0], a.sets);
@@ -257,7 +261,8 @@ int Compare(int argc, char** argv) {
 
 int RenderFrame(int argc, char** argv) {
   const Args a = Parse(argc, argv, 2, {"--at", "--out", "--params", "--seed", "--controller"}, {});
-  if (a.positional.size() != 1) throw InputError("", "", "hpa render-frame takes one SCENARIO.yaml");
+  if (a.positional.size() != 1)
+    throw InputError("", "", "hpa render-frame takes one SCENARIO.yaml");
   if (!a.Has("--at")) throw InputError("", "--at", "hpa render-frame needs --at T (seconds)");
   if (!a.Has("--out")) throw InputError("", "--out", "hpa render-frame needs --out FILE.png");
   const Params params = LoadParams(a.Get("--params", DefaultParamsPath()));

@@ -37,8 +37,8 @@ std::string Quote(const std::string& s) {
 }
 
 std::string QuantilesJson(const Quantiles& q) {
-  return "{\"median\": " + Num(q.median) + ", \"p99\": " + Num(q.p99) + ", \"max\": " +
-         Num(q.max) + "}";
+  return "{\"median\": " + Num(q.median) + ", \"p99\": " + Num(q.p99) + ", \"max\": " + Num(q.max) +
+         "}";
 }
 
 }  // namespace
@@ -146,8 +146,8 @@ void ComputeMetrics(const MetricsInputs& in, Metrics* m) {
   m->camera_frames = static_cast<int>(in.payload_in_fov_per_frame.size());
   m->detections = in.detections;
   if (m->camera_frames > 0) {
-    const auto visible = std::count(in.payload_in_fov_per_frame.begin(),
-                                    in.payload_in_fov_per_frame.end(), true);
+    const auto visible =
+        std::count(in.payload_in_fov_per_frame.begin(), in.payload_in_fov_per_frame.end(), true);
     m->payload_in_fov_fraction = static_cast<double>(visible) / m->camera_frames;
   }
 
@@ -271,9 +271,9 @@ void WriteLogCsv(const std::string& path, const std::vector<LogRow>& rows) {
   std::ofstream out(path);
   if (!out) throw InputError(path, "", "cannot write file");
   auto header_state = [&](const std::string& p) {
-    for (const char* n : {"pL_x", "pL_y", "pL_z", "vL_x", "vL_y", "vL_z", "pQ_x", "pQ_y", "pQ_z",
-                          "vQ_x", "vQ_y", "vQ_z", "q_w", "q_x", "q_y", "q_z", "w_x", "w_y",
-                          "w_z"}) {
+    for (const char* n :
+         {"pL_x", "pL_y", "pL_z", "vL_x", "vL_y", "vL_z", "pQ_x", "pQ_y", "pQ_z", "vQ_x", "vQ_y",
+          "vQ_z", "q_w", "q_x", "q_y", "q_z", "w_x", "w_y", "w_z"}) {
       out << "," << p << n;
     }
     out << "," << p << "mode";
@@ -295,8 +295,8 @@ void WriteLogCsv(const std::string& path, const std::vector<LogRow>& rows) {
     out << "," << ref.p_WL_W.x() << "," << ref.p_WL_W.y() << "," << ref.p_WL_W.z() << ","
         << ref.p_WQ_W.x() << "," << ref.p_WQ_W.y() << "," << ref.p_WQ_W.z();
     out << "," << r.command.w_B_radps.x() << "," << r.command.w_B_radps.y() << ","
-        << r.command.w_B_radps.z() << "," << r.command.thrust_N << "," << ToString(r.status)
-        << "," << r.solve_time_ms << "," << r.cost << "," << r.cable_tension_N << ","
+        << r.command.w_B_radps.z() << "," << r.command.thrust_N << "," << ToString(r.status) << ","
+        << r.solve_time_ms << "," << r.cost << "," << r.cable_tension_N << ","
         << (r.gripper_active ? 1 : 0) << "\n";
   }
 }

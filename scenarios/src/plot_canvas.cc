@@ -36,14 +36,17 @@ cv::Mat BlankFigure(int width_px, int height_px) {
 }
 
 cv::Scalar SeriesColour(int i) {
-  static const cv::Scalar kColours[] = {
-      {180, 119, 31}, {14, 127, 255}, {44, 160, 44}, {40, 39, 214}, {189, 103, 148}, {75, 86, 140}};
+  static const cv::Scalar kColours[] = {{180, 119, 31}, {14, 127, 255},  {44, 160, 44},
+                                        {40, 39, 214},  {189, 103, 148}, {75, 86, 140}};
   return kColours[i % 6];
 }
 
 PlotPanel::PlotPanel(cv::Mat* image, cv::Rect area, std::string title, std::string x_label,
                      std::string y_label)
-    : image_(image), area_(area), title_(std::move(title)), x_label_(std::move(x_label)),
+    : image_(image),
+      area_(area),
+      title_(std::move(title)),
+      x_label_(std::move(x_label)),
       y_label_(std::move(y_label)) {
   plot_ = cv::Rect(area.x + 70, area.y + 30, area.width - 90, area.height - 75);
 }
@@ -104,8 +107,9 @@ void PlotPanel::DrawAxes() {
   cv::rectangle(*image_, plot_, kBlack, 1);
   cv::putText(*image_, title_, cv::Point(plot_.x, area_.y + 20), kFont, 0.55, kBlack, 1,
               cv::LINE_AA);
-  cv::putText(*image_, x_label_, cv::Point(plot_.x + plot_.width / 2 - 30, plot_.y + plot_.height + 38),
-              kFont, 0.45, kBlack, 1, cv::LINE_AA);
+  cv::putText(*image_, x_label_,
+              cv::Point(plot_.x + plot_.width / 2 - 30, plot_.y + plot_.height + 38), kFont, 0.45,
+              kBlack, 1, cv::LINE_AA);
   cv::putText(*image_, y_label_, cv::Point(area_.x + 8, plot_.y - 8), kFont, 0.45, kBlack, 1,
               cv::LINE_AA);
 }

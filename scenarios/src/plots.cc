@@ -36,8 +36,8 @@ std::vector<std::string> WriteRunPlots(const RunResult& result, const Params& pa
   std::vector<std::string> written;
   if (rows.empty()) return written;
   const auto t = Column(rows, [](const LogRow& r) { return r.time_s; });
-  const std::string title_suffix = " - " + result.metrics.scenario + " (" +
-                                   result.metrics.controller + ")";
+  const std::string title_suffix =
+      " - " + result.metrics.scenario + " (" + result.metrics.controller + ")";
 
   // payload x, y, z against the reference, slack shaded
   {
@@ -57,8 +57,10 @@ std::vector<std::string> WriteRunPlots(const RunResult& result, const Params& pa
       p.Line(t, estimate, SeriesColour(1), 1);
       p.Line(t, actual, SeriesColour(0), 2);
       if (i == 0) {
-        p.Legend({{"true", SeriesColour(0)}, {"estimate", SeriesColour(1)},
-                  {"reference", kReference}, {"slack (shaded)", kSlackShade}});
+        p.Legend({{"true", SeriesColour(0)},
+                  {"estimate", SeriesColour(1)},
+                  {"reference", kReference},
+                  {"slack (shaded)", kSlackShade}});
       }
     }
     written.push_back(dir + "/tracking.png");
@@ -96,12 +98,11 @@ std::vector<std::string> WriteRunPlots(const RunResult& result, const Params& pa
   // quadrotor deviation, vertical velocity and body rates, slack shaded
   {
     cv::Mat fig = BlankFigure(1200, 900);
-    const auto dev = Column(rows, [](const LogRow& r) {
-      return (r.truth.p_WQ_W - r.reference.p_WQ_W).norm();
-    });
+    const auto dev =
+        Column(rows, [](const LogRow& r) { return (r.truth.p_WQ_W - r.reference.p_WQ_W).norm(); });
     const auto vz = Column(rows, [](const LogRow& r) { return r.truth.v_WQ_W.z(); });
-    PlotPanel p0(&fig, cv::Rect(0, 0, 1200, 300), "quadrotor deviation |p_Q - p_Q,ref|" +
-                 title_suffix, "t [s]", "[m]");
+    PlotPanel p0(&fig, cv::Rect(0, 0, 1200, 300),
+                 "quadrotor deviation |p_Q - p_Q,ref|" + title_suffix, "t [s]", "[m]");
     p0.FitRange({t}, {dev});
     ShadeSlack(&p0, rows);
     p0.DrawAxes();
@@ -138,8 +139,10 @@ void WriteComparisonPlot(const std::vector<RunResult>& results, const Params& pa
     double (*value)(const LogRow&);
   };
   const Panel panels[4] = {
-      {"payload z (dashed: reference)", "z_L [m]", [](const LogRow& r) { return r.truth.p_WL_W.z(); }},
-      {"quadrotor z (dashed: reference)", "z_Q [m]", [](const LogRow& r) { return r.truth.p_WQ_W.z(); }},
+      {"payload z (dashed: reference)", "z_L [m]",
+       [](const LogRow& r) { return r.truth.p_WL_W.z(); }},
+      {"quadrotor z (dashed: reference)", "z_Q [m]",
+       [](const LogRow& r) { return r.truth.p_WQ_W.z(); }},
       {"quadrotor deviation |p_Q - p_Q,ref|", "[m]",
        [](const LogRow& r) { return (r.truth.p_WQ_W - r.reference.p_WQ_W).norm(); }},
       {"body-rate norm", "|w_B| [rad/s]", [](const LogRow& r) { return r.truth.w_B.norm(); }}};

@@ -21,8 +21,8 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-constexpr int kImuDecimation = 2;        // 500 Hz body-rate loop on the 1 kHz physics clock
-constexpr double kCameraRateHz = 30.0;   // payload camera and detector
+constexpr int kImuDecimation = 2;       // 500 Hz body-rate loop on the 1 kHz physics clock
+constexpr double kCameraRateHz = 30.0;  // payload camera and detector
 constexpr double kVideoRateHz = 30.0;
 
 double Ms(Clock::time_point a, Clock::time_point b) {
@@ -46,14 +46,22 @@ long TickOf(long k, double rate_hz) {
 
 void ApplyEvent(const EventSpec& e, sim::World* world) {
   switch (e.type) {
-    case EventSpec::Type::kGripperGrab: world->GripperGrab(); break;
-    case EventSpec::Type::kGripperMove: world->GripperMove(e.to_W_m, e.duration_s); break;
-    case EventSpec::Type::kGripperRelease: world->GripperRelease(); break;
+    case EventSpec::Type::kGripperGrab:
+      world->GripperGrab();
+      break;
+    case EventSpec::Type::kGripperMove:
+      world->GripperMove(e.to_W_m, e.duration_s);
+      break;
+    case EventSpec::Type::kGripperRelease:
+      world->GripperRelease();
+      break;
     case EventSpec::Type::kImpulse:
       world->ApplyImpulse(e.on_payload ? sim::Body::kPayload : sim::Body::kQuadrotor,
                           e.impulse_W_Ns, e.duration_s);
       break;
-    case EventSpec::Type::kWind: world->SetWind(e.force_W_N, e.duration_s); break;
+    case EventSpec::Type::kWind:
+      world->SetWind(e.force_W_N, e.duration_s);
+      break;
   }
 }
 
@@ -87,8 +95,7 @@ RunResult RunScenario(const Scenario& scenario, const Params& params, const RunO
   const std::shared_ptr<const Reference> reference = MakeReference(scenario, params);
   const SystemState initial = InitialState(*reference, WorldParams(scenario, params));
   world.Reset(initial);
-  std::unique_ptr<Controller> controller =
-      MakeController(scenario.controller, params, reference);
+  std::unique_ptr<Controller> controller = MakeController(scenario.controller, params, reference);
   BodyRateController rate_controller(params);
   EstimatorConfig estimator_config;
   estimator_config.hybrid = scenario.controller.type != "nonhybrid_mpc";

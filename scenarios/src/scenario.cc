@@ -15,8 +15,8 @@ Eigen::Vector3d Vec3(const YamlMap& map, const std::string& key, double min, dou
 EventSpec ParseEvent(const YamlMap& e) {
   EventSpec ev;
   ev.at_s = e.Number("at", 0.0, 1e5);
-  const std::string type = e.Choice(
-      "type", {"gripper_grab", "gripper_move", "gripper_release", "impulse", "wind"}, "");
+  const std::string type =
+      e.Choice("type", {"gripper_grab", "gripper_move", "gripper_release", "impulse", "wind"}, "");
   if (type == "gripper_grab") {
     ev.type = EventSpec::Type::kGripperGrab;
   } else if (type == "gripper_move") {
@@ -97,11 +97,16 @@ ReferenceSpec ParseReference(const YamlMap& r) {
 
 const char* ToString(EventSpec::Type type) {
   switch (type) {
-    case EventSpec::Type::kGripperGrab: return "gripper_grab";
-    case EventSpec::Type::kGripperMove: return "gripper_move";
-    case EventSpec::Type::kGripperRelease: return "gripper_release";
-    case EventSpec::Type::kImpulse: return "impulse";
-    case EventSpec::Type::kWind: return "wind";
+    case EventSpec::Type::kGripperGrab:
+      return "gripper_grab";
+    case EventSpec::Type::kGripperMove:
+      return "gripper_move";
+    case EventSpec::Type::kGripperRelease:
+      return "gripper_release";
+    case EventSpec::Type::kImpulse:
+      return "impulse";
+    case EventSpec::Type::kWind:
+      return "wind";
   }
   return "?";
 }

@@ -14,6 +14,7 @@
 #include <functional>
 #include <iomanip>
 #include <map>
+#include <opencv2/imgcodecs.hpp>
 #include <random>
 #include <set>
 #include <sstream>
@@ -25,8 +26,6 @@
 #include "hpa/scenarios/plot_canvas.h"
 #include "hpa/scenarios/runner.h"
 #include "hpa/scenarios/scenario.h"
-
-#include <opencv2/imgcodecs.hpp>
 
 namespace hpa {
 namespace {
@@ -163,9 +162,9 @@ std::vector<Record> ReadRecords(const std::string& path) {
         const YAML::Node m = n["metrics"];
         r.crashed = m["crashed"].as<bool>();
         const YAML::Node e = m["payload_rmse_m"];
-        r.payload_rmse_norm_m = std::sqrt(std::pow(e[0].as<double>(), 2) +
-                                          std::pow(e[1].as<double>(), 2) +
-                                          std::pow(e[2].as<double>(), 2));
+        r.payload_rmse_norm_m =
+            std::sqrt(std::pow(e[0].as<double>(), 2) + std::pow(e[1].as<double>(), 2) +
+                      std::pow(e[2].as<double>(), 2));
         r.quad_dev_max_m = m["quad_position_deviation_max_m"].as<double>();
         r.solve_median_ms = m["mpc_solve_ms"]["median"].as<double>();
         r.slack_time_s = m["slack_time_s"].as<double>();
@@ -302,11 +301,13 @@ void WriteSummary(const std::vector<Record>& records, const std::string& dir) {
   // summary.md
   std::ostringstream md;
   md << "# Sweep summary\n\n" << records.size() << " runs";
-  if (!records.empty()) md << " of `" << records.front().sweep_file << "` (base `" << records.front().base << "`)";
+  if (!records.empty())
+    md << " of `" << records.front().sweep_file << "` (base `" << records.front().base << "`)";
   md << ". Crash rates with 95 % Wilson intervals; RMSE is the norm of the per-axis payload RMSE "
         "over runs that did not crash.\n\n";
   md << "| controller | runs | errors | crashes | crash rate [95% CI] | payload RMSE median / p90 "
-        "[m] | quad deviation median / p90 [m] | solve median [ms] |\n|---|---|---|---|---|---|---|---|\n";
+        "[m] | quad deviation median / p90 [m] | solve median [ms] "
+        "|\n|---|---|---|---|---|---|---|---|\n";
   for (const auto& c : controllers) {
     const Cell& t = total[c];
     const auto ci = Wilson(t.crashes, t.n);
@@ -323,7 +324,8 @@ void WriteSummary(const std::vector<Record>& records, const std::string& dir) {
     for (size_t i = 0; i < controllers.size(); ++i) md << "---|";
     md << "\n";
     for (size_t b = 0; b < bins.size(); ++b) {
-      md << "| " << Fixed(bins[b].first) << (bins[b].first == bins[b].second ? "" : " - " + Fixed(bins[b].second)) << " |";
+      md << "| " << Fixed(bins[b].first)
+         << (bins[b].first == bins[b].second ? "" : " - " + Fixed(bins[b].second)) << " |";
       for (const auto& c : controllers) {
         const Cell& cell = per_bin[c][b];
         const auto ci = Wilson(cell.crashes, cell.n);
@@ -409,7 +411,8 @@ std::string RunOne(const SweepSpec& spec, const SweepRun& run, const Params& par
          << ", \"status\": \"ok\", \"error\": null, \"metrics\": " << metrics << "}";
   } catch (const std::exception& e) {
     line << ", \"controller\": " << JsonString(controller)
-         << ", \"status\": \"error\", \"error\": " << JsonString(e.what()) << ", \"metrics\": null}";
+         << ", \"status\": \"error\", \"error\": " << JsonString(e.what())
+         << ", \"metrics\": null}";
   }
   return line.str();
 }
@@ -447,15 +450,17 @@ void SetDottedPath(YAML::Node root, const std::string& path, const std::string& 
     if (cur.IsSequence()) {
       double idx;
       if (!IsNumber(parts[i], &idx) || idx < 0 || idx >= cur.size() || idx != std::floor(idx)) {
-        throw InputError(file, path, "'" + walked + "' is not an index of the list (size " +
-                                         std::to_string(cur.size()) + ")");
+        throw InputError(file, path,
+                         "'" + walked + "' is not an index of the list (size " +
+                             std::to_string(cur.size()) + ")");
       }
       next = cur[static_cast<size_t>(idx)];
     } else if (cur.IsMap()) {
       if (!cur[parts[i]]) {
         if (IsNumber(parts[i + 1])) {
-          throw InputError(file, path, "'" + walked + "' is not in the base scenario, so '" +
-                                           parts[i + 1] + "' is not an index of a list");
+          throw InputError(file, path,
+                           "'" + walked + "' is not in the base scenario, so '" + parts[i + 1] +
+                               "' is not an index of a list");
         }
         cur[parts[i]] = YAML::Node(YAML::NodeType::Map);
       }
@@ -542,8 +547,8 @@ SweepSpec LoadSweep(const std::string& path) {
       }
     }
   } catch (const InputError& e) {
-    throw InputError(path, "vary", std::string("applying the vary paths to the base scenario: ") +
-                                       e.what());
+    throw InputError(path, "vary",
+                     std::string("applying the vary paths to the base scenario: ") + e.what());
   }
   return s;
 }
@@ -572,10 +577,13 @@ std::vector<SweepRun> ExpandSweep(const SweepSpec& spec) {
     for (const VarySpec& v : spec.vary) {
       switch (v.kind) {
         case VarySpec::Kind::kUniform:
-          drawn.emplace_back(v.path, FormatNumber(std::uniform_real_distribution<double>(v.a, v.b)(rng)));
+          drawn.emplace_back(v.path,
+                             FormatNumber(std::uniform_real_distribution<double>(v.a, v.b)(rng)));
           break;
         case VarySpec::Kind::kNormal:
-          drawn.emplace_back(v.path, FormatNumber(v.b > 0 ? std::normal_distribution<double>(v.a, v.b)(rng) : v.a));
+          drawn.emplace_back(
+              v.path,
+              FormatNumber(v.b > 0 ? std::normal_distribution<double>(v.a, v.b)(rng) : v.a));
           break;
         case VarySpec::Kind::kList:
           drawn.emplace_back(v.path, v.values[d % v.values.size()]);
@@ -617,8 +625,8 @@ int SweepMain(int argc, char** argv) {
       jobs = static_cast<int>(j);
     } else if (a == "--shard") {
       const std::string s = value(a);
-      if (std::sscanf(s.c_str(), "%d/%d", &shard_k, &shard_n) != 2 || shard_n < 1 ||
-          shard_k < 1 || shard_k > shard_n) {
+      if (std::sscanf(s.c_str(), "%d/%d", &shard_k, &shard_n) != 2 || shard_n < 1 || shard_k < 1 ||
+          shard_k > shard_n) {
         throw InputError("", "--shard", "expected K/N with 1 <= K <= N, got '" + s + "'");
       }
     } else if (a == "--resume") {
@@ -648,14 +656,16 @@ int SweepMain(int argc, char** argv) {
   std::set<int> done;
   for (const Record& r : ReadRecords(jsonl)) {
     if (r.sweep_id != spec.sweep_id) {
-      throw InputError(jsonl, "", "holds runs of a different sweep (sweep_id " + r.sweep_id +
-                                      "); use another --out");
+      throw InputError(
+          jsonl, "",
+          "holds runs of a different sweep (sweep_id " + r.sweep_id + "); use another --out");
     }
     done.insert(r.run);
   }
   if (!done.empty() && !resume) {
-    throw InputError(jsonl, "", "already holds " + std::to_string(done.size()) +
-                                    " runs; pass --resume to continue or use another --out");
+    throw InputError(jsonl, "",
+                     "already holds " + std::to_string(done.size()) +
+                         " runs; pass --resume to continue or use another --out");
   }
   runs.erase(std::remove_if(runs.begin(), runs.end(),
                             [&](const SweepRun& r) { return done.count(r.index) > 0; }),
@@ -687,7 +697,8 @@ int SweepMain(int argc, char** argv) {
     const double elapsed = std::chrono::duration<double>(Clock::now() - start).count();
     const double eta = elapsed / finished * (runs.size() - finished);
     if (tty) {
-      const int width = 30, filled = static_cast<int>(width * finished / std::max<size_t>(1, runs.size()));
+      const int width = 30,
+                filled = static_cast<int>(width * finished / std::max<size_t>(1, runs.size()));
       std::printf("\r[%s%s] %zu/%zu  failures %d  ETA %.0f s   ", std::string(filled, '#').c_str(),
                   std::string(width - filled, '.').c_str(), finished, runs.size(), failures, eta);
     } else {
@@ -724,9 +735,10 @@ int SweepMain(int argc, char** argv) {
       if (r == 0 && age_s > spec.time_limit_s) {
         kill(children[c].pid, SIGKILL);
         waitpid(children[c].pid, &status, 0);
-        record(ErrorLine(spec, run, "?", "killed after the time limit of " +
-                                             FormatNumber(spec.time_limit_s) + " s"),
-               true, run);
+        record(
+            ErrorLine(spec, run, "?",
+                      "killed after the time limit of " + FormatNumber(spec.time_limit_s) + " s"),
+            true, run);
       } else if (r == 0) {
         ++c;
         continue;
@@ -734,12 +746,14 @@ int SweepMain(int argc, char** argv) {
         const std::string path = tmp_dir + "/" + std::to_string(run.index) + ".json";
         std::ifstream in(path);
         std::string line;
-        if (WIFEXITED(status) && WEXITSTATUS(status) == 0 && std::getline(in, line) && !line.empty()) {
+        if (WIFEXITED(status) && WEXITSTATUS(status) == 0 && std::getline(in, line) &&
+            !line.empty()) {
           record(line, line.find("\"status\": \"error\"") != std::string::npos, run);
         } else {
-          const std::string why = WIFSIGNALED(status)
-                                      ? std::string("worker killed by signal ") + strsignal(WTERMSIG(status))
-                                      : "worker exited with status " + std::to_string(WEXITSTATUS(status));
+          const std::string why =
+              WIFSIGNALED(status)
+                  ? std::string("worker killed by signal ") + strsignal(WTERMSIG(status))
+                  : "worker exited with status " + std::to_string(WEXITSTATUS(status));
           record(ErrorLine(spec, run, "?", why), true, run);
         }
         std::remove(path.c_str());
@@ -752,8 +766,11 @@ int SweepMain(int argc, char** argv) {
   std::fclose(out);
   rmdir(tmp_dir.c_str());
   if (tty) std::printf("\n");
-  std::printf("sweep done: %zu runs, %d failures; results in %s\n", finished, failures,
-              jsonl.c_str());
+  const double wall_s = std::chrono::duration<double>(Clock::now() - start).count();
+  std::printf(
+      "sweep done: %zu runs, %d failures in %.1f s wall (%.1f runs per minute); "
+      "results in %s\n",
+      finished, failures, wall_s, finished * 60.0 / std::max(wall_s, 1e-9), jsonl.c_str());
   if (shard_n == 1) {
     WriteSummary(ReadRecords(jsonl), out_dir);
     std::printf("summary: %s/summary.md, %s/summary.json, %s/crash_rate.png\n", out_dir.c_str(),
@@ -790,8 +807,9 @@ int MergeMain(int argc, char** argv) {
     for (Record& r : ReadRecords(path)) {
       if (sweep_id.empty()) sweep_id = r.sweep_id;
       if (r.sweep_id != sweep_id) {
-        throw InputError(path, "sweep_id", "mixes sweeps (" + r.sweep_id + " vs " + sweep_id +
-                                               "); merge only shards of one sweep");
+        throw InputError(path, "sweep_id",
+                         "mixes sweeps (" + r.sweep_id + " vs " + sweep_id +
+                             "); merge only shards of one sweep");
       }
       by_run[r.run] = r;  // a run recorded twice (resume after a torn write) counts once
     }
@@ -807,8 +825,9 @@ int MergeMain(int argc, char** argv) {
   }
   std::rename((out_dir + "/runs.jsonl.tmp").c_str(), (out_dir + "/runs.jsonl").c_str());
   WriteSummary(records, out_dir);
-  std::printf("merged %zu runs from %zu folders into %s (summary.md, summary.json, crash_rate.png)\n",
-              records.size(), dirs.size(), out_dir.c_str());
+  std::printf(
+      "merged %zu runs from %zu folders into %s (summary.md, summary.json, crash_rate.png)\n",
+      records.size(), dirs.size(), out_dir.c_str());
   return 0;
 }
 

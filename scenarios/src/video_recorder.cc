@@ -43,8 +43,7 @@ cv::Mat VideoRecorder::Compose(const cv::Mat& chase_bgr, const cv::Mat& onboard_
   return frame;
 }
 
-void VideoRecorder::AddFrame(const cv::Mat& chase_bgr, const cv::Mat& onboard_bgr,
-                             const Hud& hud) {
+void VideoRecorder::AddFrame(const cv::Mat& chase_bgr, const cv::Mat& onboard_bgr, const Hud& hud) {
   cv::Mat frame = Compose(chase_bgr, onboard_bgr, hud);
   if (!slack_events_only_) {
     writer_.write(frame);

@@ -1,8 +1,7 @@
 #include "hpa/scenarios/scenario.h"
 
-#include <gtest/gtest.h>
-
 #include <dirent.h>
+#include <gtest/gtest.h>
 
 #include <fstream>
 
@@ -72,8 +71,9 @@ TEST(ScenarioTest, UnknownKeysAreNamedWithTheirPath) {
   ExpectError(std::string(kMinimal) + "colour: red\n", {"colour", "unknown key"});
   ExpectError(std::string(kMinimal) + "world:\n  payload_mas: 0.2\n",
               {"world.payload_mas", "unknown key"});
-  ExpectError(std::string(kMinimal) + "events:\n  - {at: 0.5, type: wind, force: [1, 0, 0], "
-                                      "duration: 1, gust: 2}\n",
+  ExpectError(std::string(kMinimal) +
+                  "events:\n  - {at: 0.5, type: wind, force: [1, 0, 0], "
+                  "duration: 1, gust: 2}\n",
               {"events.0.gust"});
 }
 

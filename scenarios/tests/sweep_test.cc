@@ -39,9 +39,10 @@ double Value(const SweepRun& r, const std::string& path) {
 }
 
 TEST(SweepTest, UniformAndNormalDraws) {
-  const auto runs = ExpandSweep(Spec("  events.0.impulse.2: {uniform: [0.2, 0.6]}\n"
-                                     "  world.payload_mass: {normal: [0.1, 0.01]}\n",
-                                     400));
+  const auto runs =
+      ExpandSweep(Spec("  events.0.impulse.2: {uniform: [0.2, 0.6]}\n"
+                       "  world.payload_mass: {normal: [0.1, 0.01]}\n",
+                       400));
   ASSERT_EQ(runs.size(), 400u);
   double sum = 0, sum_sq = 0;
   for (const auto& r : runs) {
@@ -60,9 +61,10 @@ TEST(SweepTest, UniformAndNormalDraws) {
 }
 
 TEST(SweepTest, GridMultipliesDrawsAndPairsThem) {
-  const auto runs = ExpandSweep(Spec("  events.0.impulse.2: {uniform: [0.2, 0.6]}\n"
-                                     "  controller.type: {grid: [hpa_mpc, nonhybrid_mpc]}\n",
-                                     10));
+  const auto runs =
+      ExpandSweep(Spec("  events.0.impulse.2: {uniform: [0.2, 0.6]}\n"
+                       "  controller.type: {grid: [hpa_mpc, nonhybrid_mpc]}\n",
+                       10));
   ASSERT_EQ(runs.size(), 20u);
   for (int d = 0; d < 10; ++d) {
     const SweepRun& a = runs[2 * d];

@@ -12,8 +12,8 @@ struct Params {
 
   double quad_mass_kg = 0.72;
   Eigen::Vector3d inertia_B_kgm2{0.0025, 0.0025, 0.0043};  // diagonal of J  (3)
-  double arm_length_m = 0.15;                               // centre to rotor axis, X frame
-  Eigen::Vector3d body_half_size_m{0.1, 0.1, 0.03};         // collision box half sizes  (3)
+  double arm_length_m = 0.15;                              // centre to rotor axis, X frame
+  Eigen::Vector3d body_half_size_m{0.1, 0.1, 0.03};        // collision box half sizes  (3)
 
   double k_f_N_per_radps2 = 1.5e-6;   // rotor thrust f_i = k_f w_i^2
   double k_m_Nm_per_radps2 = 2.4e-8;  // rotor drag torque tau_i = k_m w_i^2
@@ -30,7 +30,7 @@ struct Params {
   int camera_width_px = 1280;
   int camera_height_px = 720;
   double camera_fovy_deg = 75.0;
-  Eigen::Vector3d t_BC_B_m{0.0, 0.0, -0.05};                  // camera origin in body  (3)
+  Eigen::Vector3d t_BC_B_m{0.0, 0.0, -0.05};                       // camera origin in body  (3)
   Eigen::Matrix3d R_BC = Eigen::Vector3d(1, -1, -1).asDiagonal();  // camera axes in body (3x3)
 
   int vio_width_px = 640;

@@ -32,13 +32,13 @@ const char* ToString(CableMode mode);
 /// Full system state as flight code sees it, from truth or from the estimator.
 struct SystemState {
   double time_s = 0.0;
-  Eigen::Vector3d p_WL_W = Eigen::Vector3d::Zero();  // payload position, world  (3)
-  Eigen::Vector3d v_WL_W = Eigen::Vector3d::Zero();  // payload velocity, world  (3)
-  Eigen::Vector3d p_WQ_W = Eigen::Vector3d::Zero();  // quadrotor position, world  (3)
-  Eigen::Vector3d v_WQ_W = Eigen::Vector3d::Zero();  // quadrotor velocity, world  (3)
+  Eigen::Vector3d p_WL_W = Eigen::Vector3d::Zero();          // payload position, world  (3)
+  Eigen::Vector3d v_WL_W = Eigen::Vector3d::Zero();          // payload velocity, world  (3)
+  Eigen::Vector3d p_WQ_W = Eigen::Vector3d::Zero();          // quadrotor position, world  (3)
+  Eigen::Vector3d v_WQ_W = Eigen::Vector3d::Zero();          // quadrotor velocity, world  (3)
   Eigen::Quaterniond q_WB = Eigen::Quaterniond::Identity();  // body attitude in world
-  Eigen::Vector3d w_B = Eigen::Vector3d::Zero();     // body rate, body frame  (3)
-  CableMode mode = CableMode::kTaut;                 // cable mode (estimated or true)
+  Eigen::Vector3d w_B = Eigen::Vector3d::Zero();             // body rate, body frame  (3)
+  CableMode mode = CableMode::kTaut;                         // cable mode (estimated or true)
   bool payload_visible = true;  // payload seen in the last camera frame (false: predicted)
 
   /// Packs into the 19-vector layout of StateIndex.

@@ -15,14 +15,14 @@ namespace hpa {
 /// One row per control step (150 Hz): what log.csv holds.
 struct LogRow {
   double time_s = 0.0;
-  SystemState truth;                  // true state, truth.mode = true cable mode
-  SystemState estimate;               // what flight code saw (equals truth with ground_truth)
-  ReferencePoint reference;           // payload reference and flat quadrotor reference
-  BodyRateCommand command;            // controller output
+  SystemState truth;         // true state, truth.mode = true cable mode
+  SystemState estimate;      // what flight code saw (equals truth with ground_truth)
+  ReferencePoint reference;  // payload reference and flat quadrotor reference
+  BodyRateCommand command;   // controller output
   ControlStatus status = ControlStatus::kSuccess;
   double solve_time_ms = 0.0;
   double cost = 0.0;
-  double cable_tension_N = 0.0;       // true tension (MuJoCo tendon-limit force)
+  double cable_tension_N = 0.0;  // true tension (MuJoCo tendon-limit force)
   bool gripper_active = false;
 };
 
@@ -46,22 +46,22 @@ struct Metrics {
   Eigen::Vector3d quad_rmse_m = Eigen::Vector3d::Zero();
   double quad_position_deviation_max_m = 0.0;  // max |p_Q - p_Q,ref| over the run
   double payload_max_speed_mps = 0.0;
-  double slack_time_s = 0.0;                   // true slack time
-  double mode_accuracy = 1.0;                  // share of control steps with est mode = true mode
+  double slack_time_s = 0.0;   // true slack time
+  double mode_accuracy = 1.0;  // share of control steps with est mode = true mode
   std::optional<double> slack_detection_latency_mean_s, slack_detection_latency_max_s;
   int slack_events = 0, slack_events_missed = 0;
-  double payload_in_fov_fraction = 1.0;        // share of camera frames with the payload centre in view
+  double payload_in_fov_fraction = 1.0;  // share of camera frames with the payload centre in view
   int camera_frames = 0, detections = 0;
   int retaut_count = 0;
-  double retaut_quad_vz_min_mps = 0.0;         // lowest quad z velocity within 0.5 s of a re-taut
-  double retaut_peak_body_rate_radps = 0.0;    // highest |w_B| within 0.5 s of a re-taut
+  double retaut_quad_vz_min_mps = 0.0;       // lowest quad z velocity within 0.5 s of a re-taut
+  double retaut_peak_body_rate_radps = 0.0;  // highest |w_B| within 0.5 s of a re-taut
   Quantiles mpc_solve_ms;
   int mpc_failures = 0;
-  double closed_loop_cost = 0.0;               // sum of the controller's plan costs
-  Quantiles detector_ms;                       // per rendered frame, detection only
-  Quantiles render_ms;                         // per rendered frame
+  double closed_loop_cost = 0.0;  // sum of the controller's plan costs
+  Quantiles detector_ms;          // per rendered frame, detection only
+  Quantiles render_ms;            // per rendered frame
   bool expect_passed = true;
-  std::vector<std::string> expect_failed;      // "payload_rmse_max.x: 0.071 > 0.06"
+  std::vector<std::string> expect_failed;  // "payload_rmse_max.x: 0.071 > 0.06"
 };
 
 /// Inputs the metrics need besides the log.

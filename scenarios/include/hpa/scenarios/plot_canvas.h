@@ -44,8 +44,8 @@ class PlotPanel {
   cv::Point ToPixel(double x, double y) const;
 
   cv::Mat* image_;
-  cv::Rect area_;   // whole panel
-  cv::Rect plot_;   // inner plotting rectangle
+  cv::Rect area_;  // whole panel
+  cv::Rect plot_;  // inner plotting rectangle
   std::string title_, x_label_, y_label_;
   double x_min_ = 0, x_max_ = 1, y_min_ = 0, y_max_ = 1;
 };

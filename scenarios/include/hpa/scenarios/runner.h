@@ -18,10 +18,10 @@ class World;
 
 /// How to run (not what: that is the Scenario).
 struct RunOptions {
-  bool progress = false;                 // progress line on stderr
-  std::string video_path;                // MP4 of the chase camera with the onboard inset
-  bool video_slack_events_only = false;  // keep only a window around each slack event
-  std::optional<double> stop_at_s;       // stop early (render-frame)
+  bool progress = false;                     // progress line on stderr
+  std::string video_path;                    // MP4 of the chase camera with the onboard inset
+  bool video_slack_events_only = false;      // keep only a window around each slack event
+  std::optional<double> stop_at_s;           // stop early (render-frame)
   std::function<void(sim::World&)> at_stop;  // called with the world when the run stops
 };
 

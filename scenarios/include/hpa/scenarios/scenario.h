@@ -16,12 +16,12 @@ namespace hpa {
 struct EventSpec {
   enum class Type { kGripperGrab, kGripperMove, kGripperRelease, kImpulse, kWind };
   Type type = Type::kImpulse;
-  double at_s = 0.0;                                  // when it starts, simulated time
-  double duration_s = 0.0;                            // gripper_move, wind, impulse spread
-  Eigen::Vector3d to_W_m = Eigen::Vector3d::Zero();   // gripper_move target  (3)
+  double at_s = 0.0;                                       // when it starts, simulated time
+  double duration_s = 0.0;                                 // gripper_move, wind, impulse spread
+  Eigen::Vector3d to_W_m = Eigen::Vector3d::Zero();        // gripper_move target  (3)
   Eigen::Vector3d impulse_W_Ns = Eigen::Vector3d::Zero();  // impulse  (3)
   Eigen::Vector3d force_W_N = Eigen::Vector3d::Zero();     // wind on the quadrotor  (3)
-  bool on_payload = true;                             // impulse body: payload or quadrotor
+  bool on_payload = true;                                  // impulse body: payload or quadrotor
 };
 
 /// Name of an event type as written in YAML.
@@ -34,36 +34,36 @@ struct ExpectSpec {
   std::optional<Eigen::Vector3d> quad_rmse_max_m;     // per axis  (3)
   std::optional<double> quad_position_deviation_max_m;
   std::optional<double> quad_position_deviation_min_m;  // a baseline must show its failure mode
-  std::optional<double> payload_in_fov_min;           // fraction of camera frames
+  std::optional<double> payload_in_fov_min;             // fraction of camera frames
   std::optional<double> payload_in_fov_max;
-  std::optional<double> mode_accuracy_min;            // fraction of control steps
+  std::optional<double> mode_accuracy_min;  // fraction of control steps
   std::optional<double> slack_detection_latency_max_s;
   std::optional<int> mpc_failures_max;
-  std::optional<double> retaut_quad_vz_min_mps;       // lowest allowed quad z velocity at re-taut
+  std::optional<double> retaut_quad_vz_min_mps;  // lowest allowed quad z velocity at re-taut
 };
 
 /// Where the payload reference comes from.
 struct ReferenceSpec {
-  std::string type = "hover";                         // hover | lissajous | line
-  Eigen::Vector3d payload_position_W_m{0, 0, 0.7};    // hover set-point  (3)
+  std::string type = "hover";                       // hover | lissajous | line
+  Eigen::Vector3d payload_position_W_m{0, 0, 0.7};  // hover set-point  (3)
   LissajousSpec lissajous;
   Eigen::Vector3d line_start_W_m = Eigen::Vector3d::Zero();  // (3)
   Eigen::Vector3d line_end_W_m = Eigen::Vector3d::Zero();    // (3)
   double line_duration_s = 1.0;
-  double line_start_time_s = 0.0;                     // the line starts moving at this time
+  double line_start_time_s = 0.0;  // the line starts moving at this time
 };
 
 /// Estimation block: where flight code gets its state from.
 struct EstimationSpec {
-  std::string camera = "render";   // render (OSMesa + detector) | analytic (projection + noise)
-  bool ground_truth = false;       // true: flight code sees the true state
-  double camera_latency_s = 0.03;  // capture to detection delivery
+  std::string camera = "render";      // render (OSMesa + detector) | analytic (projection + noise)
+  bool ground_truth = false;          // true: flight code sees the true state
+  double camera_latency_s = 0.03;     // capture to detection delivery
   double detector_noise_scale = 1.0;  // analytic camera only: scale on the measured noise
 };
 
 /// A whole scenario file.
 struct Scenario {
-  std::string file;                // where it was loaded from ("" if built in code)
+  std::string file;  // where it was loaded from ("" if built in code)
   std::string name;
   double duration_s = 10.0;
   unsigned long seed = 1;

@@ -11,28 +11,28 @@ namespace hpa {
 
 /// One distribution of a `vary` entry.
 struct VarySpec {
-  std::string path;                  // dotted path into the scenario, e.g. events.1.to.2
+  std::string path;  // dotted path into the scenario, e.g. events.1.to.2
   enum class Kind { kUniform, kNormal, kGrid, kList } kind = Kind::kUniform;
-  double a = 0.0, b = 0.0;           // uniform [a, b] or normal (mean a, sigma b)
-  std::vector<std::string> values;   // grid values (product) or list values (draw i -> i % n)
+  double a = 0.0, b = 0.0;          // uniform [a, b] or normal (mean a, sigma b)
+  std::vector<std::string> values;  // grid values (product) or list values (draw i -> i % n)
 };
 
 /// A sweep file, validated.
 struct SweepSpec {
   std::string file;
-  std::string base_path;             // scenario file, resolved against the sweep's folder
-  int runs = 1;                      // random draws; grids multiply them
+  std::string base_path;  // scenario file, resolved against the sweep's folder
+  int runs = 1;           // random draws; grids multiply them
   unsigned long seed = 1;
-  double time_limit_s = 600.0;       // per run; a run past it is killed and recorded as an error
+  double time_limit_s = 600.0;  // per run; a run past it is killed and recorded as an error
   std::vector<VarySpec> vary;
-  std::string sweep_id;              // hash of the sweep and base files: merge refuses mixes
+  std::string sweep_id;  // hash of the sweep and base files: merge refuses mixes
 };
 
 /// One expanded run: which draw, which grid cell, its seed and its values.
 struct SweepRun {
-  int index = 0;                     // 0 .. runs * grid_size - 1
+  int index = 0;  // 0 .. runs * grid_size - 1
   int draw = 0;
-  unsigned long seed = 0;            // scenario seed (same for every grid value of a draw)
+  unsigned long seed = 0;  // scenario seed (same for every grid value of a draw)
   std::vector<std::pair<std::string, std::string>> values;  // path -> YAML scalar text
 };
 
