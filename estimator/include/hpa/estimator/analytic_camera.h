@@ -14,7 +14,7 @@ namespace hpa {
 /// error ~ D sigma_c / f) and the major semi-axis (range error ~ D^2 sigma_a / (f R)).
 ///
 /// Defaults MEASURED with estimator_render_test (RenderedDetectorTest.ErrorStatisticsByRegion):
-/// PayloadDetector on 135 MuJoCo 2.2.2 / OSMesa frames (1280x720, payload 0.25-0.45 m from the
+/// PayloadDetector on 135 frames rendered off-screen by sim/ (1280x720, payload 0.25-0.45 m from the
 /// camera, 9x5 image positions, level and tilted quadrotor): 31 out of view (all rejected), 64
 /// detected (45 fully visible, 19 partly cut), 40 cut near the 60% visible-outline threshold.
 /// Errors against the exact ellipse of the true position, over the 45 fully visible frames:
