@@ -100,7 +100,7 @@ ControlOutput HpaMpc::Update(const SystemState& state) {
     x = std::move(r.x);
     cost = r.cost;
   } else {
-    RtiResult r = RtiIteration(ocp, model_, x0, guess);
+    RtiResult r = RtiIteration(ocp, model_, x0, guess, settings_.rti);
     status = r.status;
     u = std::move(r.u);
     x = std::move(r.x);

@@ -7,7 +7,7 @@
 namespace hpa {
 
 RtiResult RtiIteration(const Ocp& ocp, const HybridModel& model, const StateVector& x0,
-                       const std::vector<InputVector>& u_guess) {
+                       const std::vector<InputVector>& u_guess, const RtiSettings& settings) {
   const int n = ocp.horizon_steps;
   RtiResult result;
   result.u.resize(n);
@@ -43,7 +43,7 @@ RtiResult RtiIteration(const Ocp& ocp, const HybridModel& model, const StateVect
     return result;
   }
 
-  // condense and solve the box QP on du
+  // condense; the QP on du has bounds u_min - u <= du <= u_max - u
   Eigen::MatrixXd h;
   Eigen::VectorXd g;
   Condense(a, b, stages, &h, &g);
@@ -52,34 +52,58 @@ RtiResult RtiIteration(const Ocp& ocp, const HybridModel& model, const StateVect
     lb.segment<kNu>(kNu * k) = ocp.u_min_radps - result.u[k];
     ub.segment<kNu>(kNu * k) = ocp.u_max_radps - result.u[k];
   }
-  Eigen::VectorXd du = Eigen::VectorXd::Zero(kNu * n);
-  result.qp = SolveBoxQp(h, g, lb, ub, &du);
-  if (result.qp.status == BoxQpStatus::kNotPositiveDefinite ||
-      result.qp.status == BoxQpStatus::kNonFinite || !du.allFinite()) {
-    result.status = result.qp.status == BoxQpStatus::kNonFinite ? ControlStatus::kNonFinite
-                                                                : ControlStatus::kQpFailure;
-    return result;
-  }
+  const double lm_unit = ocp.weights.r_input.mean() / (ocp.u_hover_radps * ocp.u_hover_radps);
 
-  // full step (RTI), then the new plan's exact trajectory and cost
-  std::vector<InputVector> u_new(n);
-  for (int k = 0; k < n; ++k) {
-    // du respects the box by construction; the min/max only removes rounding at the bounds
-    u_new[k] = (result.u[k] + du.segment<kNu>(kNu * k))
-                   .cwiseMax(ocp.u_min_radps)
-                   .cwiseMin(ocp.u_max_radps);
+  // LM loop: QP on the regularised Hessian, then backtracking along its du
+  double mu = settings.lm_initial;
+  bool any_qp_solved = false;
+  Eigen::MatrixXd h_reg;
+  Eigen::VectorXd du(kNu * n);
+  std::vector<InputVector> u_try(n);
+  std::vector<StateVector> x_try;
+  for (int attempt = 0; attempt < settings.lm_max_tries; ++attempt) {
+    if (attempt > 0) mu = mu > 0.0 ? mu * settings.lm_growth : settings.lm_first_increase;
+    const Eigen::MatrixXd* h_qp = &h;
+    if (mu > 0.0) {
+      h_reg = h;
+      h_reg.diagonal().array() += mu * lm_unit;
+      h_qp = &h_reg;
+    }
+    du.setZero();
+    result.qp = SolveBoxQp(*h_qp, g, lb, ub, &du);
+    ++result.qp_solves;
+    if (result.qp.status == BoxQpStatus::kNotPositiveDefinite ||
+        result.qp.status == BoxQpStatus::kNonFinite || !du.allFinite()) {
+      continue;  // more regularisation
+    }
+    any_qp_solved = true;
+    // directional derivative of the cost J = sum |r|^2 along du: 2 g^T du
+    const double slope = 2.0 * g.dot(du);
+    if (!(slope < 0.0)) break;  // no descent direction: the guess is stationary
+    for (double alpha = 1.0; alpha >= settings.min_step; alpha *= 0.5) {
+      for (int k = 0; k < n; ++k) {
+        // du respects the box by construction; the min/max only removes rounding at the bounds
+        u_try[k] = (result.u[k] + alpha * du.segment<kNu>(kNu * k))
+                       .cwiseMax(ocp.u_min_radps)
+                       .cwiseMin(ocp.u_max_radps);
+      }
+      const double cost_try = OcpCost(ocp, model, x0, u_try, &x_try);
+      ++result.cost_evaluations;
+      if (std::isfinite(cost_try) && cost_try <= cost + settings.armijo * alpha * slope) {
+        result.u = u_try;
+        result.x = x_try;
+        result.cost = cost_try;
+        result.step = alpha;
+        result.lm = mu;
+        result.status = result.qp.status == BoxQpStatus::kMaxIterations
+                            ? ControlStatus::kMaxIterations
+                            : ControlStatus::kSuccess;
+        return result;
+      }
+    }
   }
-  std::vector<StateVector> x_new;
-  const double cost_new = OcpCost(ocp, model, x0, u_new, &x_new);
-  if (!std::isfinite(cost_new)) {
-    result.status = ControlStatus::kNonFinite;
-    return result;
-  }
-  result.u = u_new;
-  result.x = x_new;
-  result.cost = cost_new;
-  result.status = result.qp.status == BoxQpStatus::kMaxIterations ? ControlStatus::kMaxIterations
-                                                                  : ControlStatus::kSuccess;
+  // no step accepted: keep the guess (already in result.u / x / cost)
+  result.status = any_qp_solved ? ControlStatus::kSuccess : ControlStatus::kQpFailure;
   return result;
 }
 

@@ -49,8 +49,7 @@ Eigen::Matrix<T, kNx, 1> Flow(const Params& p, const Eigen::Matrix4d& allocation
     const T v_r = v_rel.dot(xi);
     const T v_perp_sq = v_rel.squaredNorm() - v_r * v_r;
     const double mu = m * m_L / (m + m_L);
-    const T tension = mu * (v_perp_sq / d - xi.dot(f_W) / m +
-                            HybridModel::kBaumgarteDamping * v_r +
+    const T tension = mu * (v_perp_sq / d - xi.dot(f_W) / m + HybridModel::kBaumgarteDamping * v_r +
                             HybridModel::kBaumgarteStiffness * (d - p.cable_length_m));
     a_L = -tension / m_L * xi + g_W;
     a_Q = (f_W + tension * xi) / m + g_W;
@@ -168,8 +167,8 @@ StateVector HybridModel::ProjectToTaut(const StateVector& x) const {
 double HybridModel::TautTensionN(const StateVector& x, const InputVector& u) const {
   // m_L (a_L + g e3) = -T xi  =>  T = -m_L (a_L + g e3) . xi
   const StateVector x_dot = Derivative(x, u, CableMode::kTaut);
-  const Eigen::Vector3d r = x.segment<3>(StateIndex::kPayloadPos) -
-                            x.segment<3>(StateIndex::kQuadPos);
+  const Eigen::Vector3d r =
+      x.segment<3>(StateIndex::kPayloadPos) - x.segment<3>(StateIndex::kQuadPos);
   const Eigen::Vector3d a_L = x_dot.segment<3>(StateIndex::kPayloadVel);
   return -params_.payload_mass_kg *
          (a_L + Eigen::Vector3d(0, 0, params_.gravity_mps2)).dot(r.normalized());

@@ -58,9 +58,9 @@ TEST_P(HybridModelJacobianTest, ContinuousJacobiansMatchFiniteDifferences) {
   StateMatrix a, a_fd;
   InputMatrix b, b_fd;
   model.DerivativeJacobians(x, u, GetParam(), &x_dot, &a, &b);
-  FiniteDifferences([&](const StateVector& xx, const InputVector& uu) {
-    return model.Derivative(xx, uu, GetParam());
-  }, x, u, &a_fd, &b_fd);
+  FiniteDifferences([&](const StateVector& xx,
+                        const InputVector& uu) { return model.Derivative(xx, uu, GetParam()); },
+                    x, u, &a_fd, &b_fd);
   EXPECT_LT((x_dot - model.Derivative(x, u, GetParam())).norm(), 1e-12);
   // central differences with h = 1e-6 on O(100) second derivatives: truncation ~1e-10,
   // round-off ~1e-16 * |f| / h ~ 1e-8; bound 1e-6 leaves 100x margin
@@ -78,9 +78,9 @@ TEST_P(HybridModelJacobianTest, DiscreteJacobiansMatchFiniteDifferences) {
   StateMatrix a, a_fd;
   InputMatrix b, b_fd;
   model.StepJacobians(x, u, GetParam(), dt_s, &x_next, &a, &b);
-  FiniteDifferences([&](const StateVector& xx, const InputVector& uu) {
-    return model.Step(xx, uu, GetParam(), dt_s);
-  }, x, u, &a_fd, &b_fd);
+  FiniteDifferences([&](const StateVector& xx,
+                        const InputVector& uu) { return model.Step(xx, uu, GetParam(), dt_s); },
+                    x, u, &a_fd, &b_fd);
   EXPECT_LT((x_next - model.Step(x, u, GetParam(), dt_s)).norm(), 1e-12);
   EXPECT_LT((a - a_fd).cwiseAbs().maxCoeff(), 1e-6);
   EXPECT_LT((b - b_fd).cwiseAbs().maxCoeff(), 1e-6);
@@ -99,8 +99,8 @@ TEST(HybridModelTest, HoverIsAnEquilibriumWithTensionMLg) {
   // slack: the payload falls at g, the quadrotor rises (thrust carries both masses)
   const StateVector x_dot = model.Derivative(x, u, CableMode::kSlack);
   EXPECT_NEAR(x_dot(StateIndex::kPayloadVel + 2), -p.gravity_mps2, 1e-12);
-  EXPECT_NEAR(x_dot(StateIndex::kQuadVel + 2),
-              p.HoverThrustN() / p.quad_mass_kg - p.gravity_mps2, 1e-9);
+  EXPECT_NEAR(x_dot(StateIndex::kQuadVel + 2), p.HoverThrustN() / p.quad_mass_kg - p.gravity_mps2,
+              1e-9);
 }
 
 TEST(HybridModelTest, QuaternionStaysUnitAndCableLengthHolds) {
@@ -115,8 +115,8 @@ TEST(HybridModelTest, QuaternionStaysUnitAndCableLengthHolds) {
     for (int i = 0; i < kNu; ++i) u(i) = p.HoverMotorSpeedRadps() * jitter(rng);
     x = model.Step(x, u, CableMode::kTaut, 0.01);
     ASSERT_NEAR(x.segment<4>(StateIndex::kQuat).norm(), 1.0, 1e-12);
-    const double d = (x.segment<3>(StateIndex::kPayloadPos) -
-                      x.segment<3>(StateIndex::kQuadPos)).norm();
+    const double d =
+        (x.segment<3>(StateIndex::kPayloadPos) - x.segment<3>(StateIndex::kQuadPos)).norm();
     max_length_error_m = std::max(max_length_error_m, std::abs(d - p.cable_length_m));
   }
   // Baumgarte terms hold the constraint; measured drift ~1e-6 m, bound 1 mm
@@ -133,9 +133,8 @@ TEST(HybridModelTest, Rk4OneStepErrorAgainstFineIntegration) {
     StateVector x_ref = x;
     for (int k = 0; k < 1000; ++k) x_ref = model.Step(x_ref, u, mode, 1e-4);
     const StateVector x_one = model.Step(x, u, mode, 0.1);
-    const double pos_error_m = std::max(
-        (x_one - x_ref).segment<3>(StateIndex::kPayloadPos).norm(),
-        (x_one - x_ref).segment<3>(StateIndex::kQuadPos).norm());
+    const double pos_error_m = std::max((x_one - x_ref).segment<3>(StateIndex::kPayloadPos).norm(),
+                                        (x_one - x_ref).segment<3>(StateIndex::kQuadPos).norm());
     RecordProperty(std::string("rk4_stage_pos_error_m_") + ToString(mode),
                    std::to_string(pos_error_m));
     // measured 1e-5 (taut) and 1e-6 (slack) m; 1 mm bound is what the MPC needs over a stage
@@ -164,7 +163,9 @@ TEST(HybridModelTest, ProjectToTautIsTheInelasticCollision) {
   EXPECT_LT((m * y.segment<3>(I::kQuadVel) + m_L * y.segment<3>(I::kPayloadVel) - momentum).norm(),
             1e-12);
   EXPECT_LT((m * y.segment<3>(I::kQuadPos) + m_L * y.segment<3>(I::kPayloadPos) -
-             (m * s.p_WQ_W + m_L * s.p_WL_W)).norm(), 1e-12);
+             (m * s.p_WQ_W + m_L * s.p_WL_W))
+                .norm(),
+            1e-12);
   EXPECT_NEAR((y.segment<3>(I::kPayloadVel) - y.segment<3>(I::kQuadVel)).dot(xi), 0.0, 1e-12);
   // a state already on the manifold is a fixed point
   const StateVector h = model.HoverState(Eigen::Vector3d(0, 0, 1));

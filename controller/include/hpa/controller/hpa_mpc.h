@@ -21,6 +21,7 @@ struct MpcSettings {
   std::string solver = "rti";      // rti | nlopt
   OcpWeights weights = OcpWeights::Tuned();
   NloptSettings nlopt;  // stopping rules of the nlopt solver
+  RtiSettings rti;      // globalisation of the rti solver
   // Command taken from the plan: body rates of state x[rate_output_stage] (the paper's second
   // stage) and collective thrust of input u[thrust_output_stage]. The thrust comes from u_0 by
   // default: with 0.1 s stages re-solved every 6.7 ms, flying u_1 never applies the plan's

@@ -2,7 +2,12 @@
 // Real-time iteration (the paper's acados scheme): one Gauss-Newton SQP iteration per call.
 // Single shooting: the guess is simulated from x0 (so the trajectory is dynamically exact),
 // linearised with HybridModel::StepJacobians, condensed onto the 4N rotor speeds and the
-// box QP (rotor bounds) is solved in-house; the full step is taken.
+// box QP (rotor bounds) is solved in-house. The step is globalised (the plain full step
+// diverged at a re-taut from a near-horizontal cable, ClosedLoopTest.RetautFrom...): an Armijo
+// backtracking line search on the OCP cost (single shooting: every trial is simulated exactly,
+// and the box is convex so every trial is feasible), and Levenberg-Marquardt regularisation
+// of the Gauss-Newton Hessian, raised when the QP is not positive definite or no step along
+// its direction decreases the cost. A call never returns a plan costlier than its guess.
 
 #include <vector>
 
@@ -13,6 +18,21 @@
 
 namespace hpa {
 
+/// Globalisation of the RTI step.
+struct RtiSettings {
+  // Levenberg-Marquardt: H + mu * lm_unit * I, lm_unit = the input-cost curvature
+  // r_input / u_hover^2 (so mu = 1 doubles the input regularisation). Tries mu = lm_initial,
+  // then multiplies by lm_growth up to lm_max_tries QP solves.
+  double lm_initial = 0.0;
+  double lm_growth = 100.0;
+  double lm_first_increase = 1.0;  // mu used on the first increase from lm_initial = 0
+  int lm_max_tries = 3;
+  // Armijo backtracking on the cost: accept alpha if J(alpha) <= J(0) + armijo * alpha * dJ,
+  // dJ = 2 g^T du (< 0 for a descent direction); alpha halves down to min_step.
+  double armijo = 1e-4;
+  double min_step = 1.0 / 16.0;
+};
+
 /// Result of one RTI (or of an iterated Gauss-Newton solve).
 struct RtiResult {
   ControlStatus status = ControlStatus::kSuccess;
@@ -21,11 +41,18 @@ struct RtiResult {
   std::vector<StateVector> x;  // states simulated with u from x0  (N + 1)
   double cost = 0.0;           // OCP cost of the new plan
   double cost_guess = 0.0;     // OCP cost of the guess (the linearisation point)
+  double step = 0.0;           // accepted line-search step (0: no descent found, u = guess)
+  double lm = 0.0;             // Levenberg-Marquardt mu of the accepted step
+  int qp_solves = 0;           // QPs solved (1 + LM increases)
+  int cost_evaluations = 0;    // line-search simulations
 };
 
-/// One Gauss-Newton SQP iteration from u_guess (N inputs; clamped into the bounds first).
-/// On QP failure or non-finite numbers: status kQpFailure / kNonFinite and u = the guess.
+/// One Gauss-Newton SQP iteration from u_guess (N inputs; clamped into the bounds first),
+/// globalised per `settings`. Non-finite guess cost: kNonFinite; every QP failing: kQpFailure
+/// (u = the guess in both). No descent after all LM tries: kSuccess with step 0 and u = the
+/// guess (the guess is then the best plan known; the next call relinearises).
 RtiResult RtiIteration(const Ocp& ocp, const HybridModel& model, const StateVector& x0,
-                       const std::vector<InputVector>& u_guess);
+                       const std::vector<InputVector>& u_guess,
+                       const RtiSettings& settings = RtiSettings());
 
 }  // namespace hpa
