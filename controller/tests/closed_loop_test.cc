@@ -82,11 +82,12 @@ TEST(ClosedLoopTest, SlackPayloadDoesNotMakeHpaMpcDive) {
       "slack throw: hpa_mpc min z %.3f m, max dev %.3f m; nonhybrid min z %.3f m, "
       "max dev %.3f m (finite %d)\n",
       min_z_hybrid, dev_hybrid, min_z_nonhybrid, dev_nonhybrid, nonhybrid_finite);
-  // hybrid: never drops more than 15 cm below its set point (measured 0.125 m, from the
-  // re-taut jerk when the payload falls back) and stays within 25 cm of it (measured 0.16 m:
-  // the perception cost pulls it toward the horizontally thrown payload)
+  // hybrid: never drops more than 15 cm below its set point (measured 0.008 m; 0.125 m before
+  // the RTI line search) and stays within 40 cm of it (measured 0.295 m: the slack perception
+  // cost, Q_cam 700, follows the horizontally thrown payload in x-y by design; 0.16 m at the
+  // old Q_cam 20, which did not keep a payload moved by hand in view)
   EXPECT_GT(min_z_hybrid, p_q_ref.z() - 0.15);
-  EXPECT_LT(dev_hybrid, 0.25);
+  EXPECT_LT(dev_hybrid, 0.4);
   // The always-taut baseline is only printed: with the true payload state its outcome is
   // chaotic (it fell to the ground in one build and held 1.42 m after a rounding-level change
   // to the condensing); the paper's crash needs the always-taut estimator, which the lead's

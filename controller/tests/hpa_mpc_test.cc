@@ -44,6 +44,31 @@ TEST(OcpTest, CameraTransformOfHangingPayload) {
   EXPECT_NEAR(p_C2.y(), -0.1, 1e-12);  // camera y = -body y
 }
 
+// L_cam is evaluated with the camera at the stage's reference attitude: no attitude lever
+// (zero quaternion Jacobian), the slack weight applies in slack mode, and the residual is
+// sqrt(pw Q_cam) times the level-camera offset.
+TEST(OcpTest, PerceptionCostHasNoAttitudeLever) {
+  const Params params;
+  const Ocp ocp = BuildOcp(params, *HoverRef(params), 0.0, CableMode::kSlack, 2.0);
+  SystemState s;
+  s.FromVector(HybridModel(params).HoverState(Eigen::Vector3d(0, 0, 1.5)));
+  s.p_WL_W = s.p_WQ_W + Eigen::Vector3d(0.3, 0.1, -0.2);  // held beside, cable slack
+  s.q_WB = Eigen::AngleAxisd(0.3, Eigen::Vector3d(1, 1, 0).normalized());
+  ResidualVector r;
+  ResidualStateJacobian r_x;
+  ResidualInputJacobian r_u;
+  StageResidual(ocp, 1, s.ToVector(), ocp.u_ref[1], &r, &r_x, &r_u);
+  constexpr int kCamRow = kNx + kNu;
+  EXPECT_EQ((r_x.block<2, 4>(kCamRow, StateIndex::kQuat).norm()), 0.0);
+  const double scale = std::sqrt(2.0 * ocp.weights.q_cam_slack_per_m2.x());
+  // level camera: camera x = body x = world x, camera y = -world y (rounding-level bound)
+  EXPECT_NEAR(r(kCamRow), scale * 0.3, 1e-12);
+  EXPECT_NEAR(r(kCamRow + 1), -scale * 0.1, 1e-12);
+  EXPECT_TRUE(CostPayloadInCamera(ocp, 1, s.ToVector())
+                  .head<2>()
+                  .isApprox(Eigen::Vector2d(0.3, -0.1), 1e-12));
+}
+
 TEST(OcpTest, SoftLimitsArePenalisedOnlyBeyondTheirBounds) {
   const Params params;
   const Ocp ocp = BuildOcp(params, *HoverRef(params), 0.0, CableMode::kTaut, 1.0);

@@ -28,10 +28,15 @@ using ResidualInputJacobian = Eigen::Matrix<double, kNr, kNu>;
 
 /// Diagonal weights of the stage cost (the tuned defaults are documented in ocp.cc).
 struct OcpWeights {
-  StateVector q_load;                // L_load: taut mode, on x - x_ref  (19)
-  StateVector q_quad;                // L_quad: slack mode, on x - x_ref; payload entries zero  (19)
-  InputVector r_input;               // on (u - u_ref) / u_hover, dimensionless  (4)
-  Eigen::Vector2d q_cam_per_m2;      // L_cam on the x, y of p_C (m), before perception_weight  (2)
+  StateVector q_load;            // L_load: taut mode, on x - x_ref  (19)
+  StateVector q_quad;            // L_quad: slack mode, on x - x_ref; payload entries zero  (19)
+  InputVector r_input;           // on (u - u_ref) / u_hover, dimensionless  (4)
+  Eigen::Vector2d q_cam_per_m2;  // L_cam in taut mode, on the x, y of p_C (m)  (2)
+  Eigen::Vector2d q_cam_slack_per_m2;  // L_cam in slack mode (both x perception_weight)  (2)
+  // L_cam's camera attitude: true -> the stage's reference attitude (L_cam is then a cost on
+  // positions only; the default, see ocp.cc), false -> the state's attitude (the paper's
+  // literal form, whose attitude lever tips the quadrotor over at high perception weight).
+  bool cam_at_reference_attitude = true;
   double terminal_factor = 1.0;      // terminal state weights = factor * stage state weights
   double tilt_max_rad = 0.0;         // soft limit on the angle between body z and world z
   double tilt_weight = 0.0;          // weight on max(0, (1 - cos tilt) - (1 - cos tilt_max))^2
@@ -72,6 +77,10 @@ InputVector InputReference(const Params& params, const ReferencePoint& point, Ca
 
 /// Camera-frame payload position p_C = (R R_BC)^T (x_L - x_Q - R t_BC) of a state.
 Eigen::Vector3d PayloadInCamera(const Ocp& ocp, const StateVector& x);
+
+/// The p_C that L_cam penalises at stage k: PayloadInCamera, with R the reference attitude of
+/// stage k when weights.cam_at_reference_attitude (the default), else the state's.
+Eigen::Vector3d CostPayloadInCamera(const Ocp& ocp, int k, const StateVector& x);
 
 /// Residual of stage k (k = N: terminal, u ignored and its rows zero) and, if asked, its
 /// Jacobians. Stage cost = r.squaredNorm().
