@@ -31,7 +31,9 @@ void HpaMpc::Reset() {
 Ocp HpaMpc::BuildProblem(const SystemState& state) const {
   const CableMode mode = settings_.hybrid ? state.mode : CableMode::kTaut;
   const double perception = settings_.hybrid ? settings_.perception_weight : 0.0;
-  return BuildOcp(params_, *reference_, state.time_s, mode, perception, settings_.weights);
+  Ocp ocp = BuildOcp(params_, *reference_, state.time_s, mode, perception, settings_.weights);
+  SetCameraDeadzone(state, &ocp);
+  return ocp;
 }
 
 std::vector<InputVector> HpaMpc::WarmStart(double t_s) const {
@@ -84,8 +86,8 @@ ControlOutput HpaMpc::Update(const SystemState& state) {
   const Ocp ocp = BuildProblem(state);
   // the taut flow holds only on the taut manifold: a state just past the guard (the cable
   // snapping taut, or an estimate off the constraint) goes through the jump map first
-  const StateVector x0 = ocp.mode == CableMode::kTaut ? model_.ProjectToTaut(state.ToVector())
-                                                       : state.ToVector();
+  const StateVector x0 =
+      ocp.mode == CableMode::kTaut ? model_.ProjectToTaut(state.ToVector()) : state.ToVector();
   const std::vector<InputVector> guess = WarmStart(state.time_s);
   const bool had_plan = plan_u_.size() == static_cast<size_t>(ocp.horizon_steps);
 

@@ -69,6 +69,39 @@ TEST(OcpTest, PerceptionCostHasNoAttitudeLever) {
                   .isApprox(Eigen::Vector2d(0.3, -0.1), 1e-12));
 }
 
+TEST(OcpTest, SlackCameraCostHasADeadZone) {
+  const Params params;
+  Ocp ocp = BuildOcp(params, *HoverRef(params), 0.0, CableMode::kSlack, 1.0);
+  SystemState s;
+  s.FromVector(HybridModel(params).HoverState(Eigen::Vector3d(0, 0, 1.5)));
+  // payload held 0.3 m below the body origin: depth 0.25 m below the lens
+  s.p_WL_W = s.p_WQ_W + Eigen::Vector3d(0.1, 0.05, -0.3);
+  SetCameraDeadzone(s, &ocp);
+  const double f = params.CameraFocalPx();
+  const Eigen::Vector2d dead = ocp.weights.cam_slack_deadzone_fraction * 0.25 *
+                               Eigen::Vector2d(640.0 / f, 360.0 / f);
+  EXPECT_TRUE(ocp.cam_slack_deadzone_m.isApprox(dead, 1e-12));
+  constexpr int kCamRow = kNx + kNu;
+  ResidualVector r;
+  ResidualStateJacobian r_x;
+  ResidualInputJacobian r_u;
+  // inside the dead zone: no cost, no gradient
+  StageResidual(ocp, 1, s.ToVector(), ocp.u_ref[1], &r, &r_x, &r_u);
+  EXPECT_EQ(r.segment<2>(kCamRow).norm(), 0.0);
+  EXPECT_EQ(r_x.middleRows<2>(kCamRow).norm(), 0.0);
+  // beyond it: the excess, with the sign of the offset (camera y = -world y)
+  s.p_WL_W = s.p_WQ_W + Eigen::Vector3d(0.3, -0.2, -0.3);
+  StageResidual(ocp, 1, s.ToVector(), ocp.u_ref[1], &r, &r_x, &r_u);
+  const double scale = std::sqrt(ocp.weights.q_cam_slack_per_m2.x());
+  EXPECT_NEAR(r(kCamRow), scale * (0.3 - dead.x()), 1e-12);
+  EXPECT_NEAR(r(kCamRow + 1), scale * (0.2 - dead.y()), 1e-12);
+  // a payload thrown above the lens plane cannot be brought into view: L_cam off
+  s.p_WL_W = s.p_WQ_W + Eigen::Vector3d(0.3, -0.2, 0.1);
+  SetCameraDeadzone(s, &ocp);
+  StageResidual(ocp, 1, s.ToVector(), ocp.u_ref[1], &r, &r_x, &r_u);
+  EXPECT_EQ(r.segment<2>(kCamRow).norm(), 0.0);
+}
+
 TEST(OcpTest, SoftLimitsArePenalisedOnlyBeyondTheirBounds) {
   const Params params;
   const Ocp ocp = BuildOcp(params, *HoverRef(params), 0.0, CableMode::kTaut, 1.0);

@@ -37,6 +37,11 @@ struct OcpWeights {
   // positions only; the default, see ocp.cc), false -> the state's attitude (the paper's
   // literal form, whose attitude lever tips the quadrotor over at high perception weight).
   bool cam_at_reference_attitude = true;
+  // Slack-mode L_cam penalises only the part of the payload's image offset beyond this
+  // fraction of the half field of view (per axis, a dead zone): a payload moved out of view is
+  // followed, a thrown one still well inside the image is not chased. 0 = the paper's plain
+  // quadratic.
+  double cam_slack_deadzone_fraction = 0.0;
   double terminal_factor = 1.0;      // terminal state weights = factor * stage state weights
   double tilt_max_rad = 0.0;         // soft limit on the angle between body z and world z
   double tilt_weight = 0.0;          // weight on max(0, (1 - cos tilt) - (1 - cos tilt_max))^2
@@ -61,7 +66,16 @@ struct Ocp {
   std::vector<InputVector> u_ref;                      // stages 0..N-1  (N)
   Eigen::Matrix3d R_BC = Eigen::Matrix3d::Identity();  // camera axes in body
   Eigen::Vector3d t_BC_B_m = Eigen::Vector3d::Zero();  // camera origin in body  (3)
+  Eigen::Vector2d camera_tan_half_fov = Eigen::Vector2d::Ones();  // (W/2)/f, (H/2)/f  (2)
+  // slack L_cam dead zone in metres of camera x, y, fixed for the solve from the payload's
+  // current depth (the predicted free fall would otherwise widen it); infinite = no L_cam
+  Eigen::Vector2d cam_slack_deadzone_m = Eigen::Vector2d::Zero();  // (2)
 };
+
+/// Sets ocp->cam_slack_deadzone_m from the current state: deadzone fraction x tan(half FOV) x
+/// the payload's depth in the camera; a payload at or above the lens plane (thrown up) cannot
+/// be brought into view by moving, so the slack L_cam is switched off (infinite dead zone).
+void SetCameraDeadzone(const SystemState& state, Ocp* ocp);
 
 /// Builds the OCP at time t0_s: references from `reference` at t0 + k dt, mode, weights,
 /// bounds and camera transform from params.
