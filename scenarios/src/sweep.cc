@@ -129,6 +129,7 @@ struct Record {
   bool error = false;
   std::string error_text;
   bool crashed = false;
+  bool expect_failed = false;  // any `expect` bound of the scenario failed (crash included)
   double payload_rmse_norm_m = 0, quad_dev_max_m = 0, solve_median_ms = 0, slack_time_s = 0;
   double payload_in_fov = 1;
   std::string line;  // the raw JSON line
@@ -161,6 +162,7 @@ std::vector<Record> ReadRecords(const std::string& path) {
       } else {
         const YAML::Node m = n["metrics"];
         r.crashed = m["crashed"].as<bool>();
+        r.expect_failed = !m["expect"]["passed"].as<bool>();
         const YAML::Node e = m["payload_rmse_m"];
         r.payload_rmse_norm_m =
             std::sqrt(std::pow(e[0].as<double>(), 2) + std::pow(e[1].as<double>(), 2) +
@@ -246,7 +248,7 @@ void WriteSummary(const std::vector<Record>& records, const std::string& dir) {
   for (const Record& r : records) controllers.insert(r.controller);
 
   struct Cell {
-    int n = 0, crashes = 0, errors = 0;
+    int n = 0, crashes = 0, errors = 0, expect_failures = 0;
     std::vector<double> rmse, dev, solve;
   };
   std::map<std::string, Cell> total;
@@ -260,6 +262,7 @@ void WriteSummary(const std::vector<Record>& records, const std::string& dir) {
       }
       ++cell->n;
       if (r.crashed) ++cell->crashes;
+      if (r.expect_failed) ++cell->expect_failures;
       if (!r.crashed) cell->rmse.push_back(r.payload_rmse_norm_m);
       cell->dev.push_back(r.quad_dev_max_m);
       cell->solve.push_back(r.solve_median_ms);
@@ -278,6 +281,7 @@ void WriteSummary(const std::vector<Record>& records, const std::string& dir) {
        << ", \"errors\": " << t.errors << ", \"crashes\": " << t.crashes
        << ", \"crash_rate\": " << (t.n ? static_cast<double>(t.crashes) / t.n : 0.0)
        << ", \"crash_rate_ci95\": [" << ci.first << ", " << ci.second << "]"
+       << ", \"expect_failures\": " << t.expect_failures
        << ", \"payload_rmse_norm_m\": {\"median\": " << FormatNumber(Quantile(t.rmse, 0.5))
        << ", \"p90\": " << FormatNumber(Quantile(t.rmse, 0.9)) << "}"
        << ", \"quad_deviation_max_m\": {\"median\": " << FormatNumber(Quantile(t.dev, 0.5))
@@ -290,7 +294,8 @@ void WriteSummary(const std::vector<Record>& records, const std::string& dir) {
       js << (b ? ", " : "") << "{\"lo\": " << bins[b].first << ", \"hi\": " << bins[b].second
          << ", \"runs\": " << cell.n << ", \"crashes\": " << cell.crashes
          << ", \"crash_rate\": " << (cell.n ? static_cast<double>(cell.crashes) / cell.n : 0.0)
-         << ", \"ci95\": [" << bci.first << ", " << bci.second << "]}";
+         << ", \"ci95\": [" << bci.first << ", " << bci.second << "]"
+         << ", \"expect_failures\": " << cell.expect_failures << "}";
     }
     js << "]}";
     first_c = false;
@@ -305,20 +310,22 @@ void WriteSummary(const std::vector<Record>& records, const std::string& dir) {
     md << " of `" << records.front().sweep_file << "` (base `" << records.front().base << "`)";
   md << ". Crash rates with 95 % Wilson intervals; RMSE is the norm of the per-axis payload RMSE "
         "over runs that did not crash.\n\n";
-  md << "| controller | runs | errors | crashes | crash rate [95% CI] | payload RMSE median / p90 "
-        "[m] | quad deviation median / p90 [m] | solve median [ms] "
-        "|\n|---|---|---|---|---|---|---|---|\n";
+  md << "| controller | runs | errors | crashes | crash rate [95% CI] | expect failures [95% CI] | "
+        "payload RMSE median / p90 [m] | quad deviation median / p90 [m] | solve median [ms] "
+        "|\n|---|---|---|---|---|---|---|---|---|\n";
   for (const auto& c : controllers) {
     const Cell& t = total[c];
     const auto ci = Wilson(t.crashes, t.n);
     md << "| " << c << " | " << t.n << " | " << t.errors << " | " << t.crashes << " | "
        << Fixed(t.n ? 1.0 * t.crashes / t.n : 0.0, 3) << " [" << Fixed(ci.first, 3) << ", "
-       << Fixed(ci.second, 3) << "] | " << Fixed(Quantile(t.rmse, 0.5)) << " / "
-       << Fixed(Quantile(t.rmse, 0.9)) << " | " << Fixed(Quantile(t.dev, 0.5)) << " / "
+       << Fixed(ci.second, 3) << "] | " << t.expect_failures << "/" << t.n << " ["
+       << Fixed(Wilson(t.expect_failures, t.n).first, 3) << ", "
+       << Fixed(Wilson(t.expect_failures, t.n).second, 3) << "] | " << Fixed(Quantile(t.rmse, 0.5))
+       << " / " << Fixed(Quantile(t.rmse, 0.9)) << " | " << Fixed(Quantile(t.dev, 0.5)) << " / "
        << Fixed(Quantile(t.dev, 0.9)) << " | " << Fixed(Quantile(t.solve, 0.5)) << " |\n";
   }
   if (!main_path.empty()) {
-    md << "\n## Crash rate against `" << main_path << "`\n\n| bin |";
+    md << "\n## Crash rate (and expect-failure count) against `" << main_path << "`\n\n| bin |";
     for (const auto& c : controllers) md << " " << c << " |";
     md << "\n|---|";
     for (size_t i = 0; i < controllers.size(); ++i) md << "---|";
@@ -330,7 +337,7 @@ void WriteSummary(const std::vector<Record>& records, const std::string& dir) {
         const Cell& cell = per_bin[c][b];
         const auto ci = Wilson(cell.crashes, cell.n);
         md << " " << cell.crashes << "/" << cell.n << " [" << Fixed(ci.first, 2) << ", "
-           << Fixed(ci.second, 2) << "] |";
+           << Fixed(ci.second, 2) << "] (expect failed " << cell.expect_failures << ") |";
       }
       md << "\n";
     }
@@ -359,8 +366,9 @@ void WriteSummary(const std::vector<Record>& records, const std::string& dir) {
   // crash rate plot, one line per controller
   if (!main_path.empty()) {
     cv::Mat fig = BlankFigure(1000, 600);
-    PlotPanel p(&fig, cv::Rect(0, 0, 1000, 600), "crash rate (95% Wilson CI)", main_path,
-                "crash rate");
+    PlotPanel p(&fig, cv::Rect(0, 0, 1000, 600),
+                "crash rate (thick, 95% Wilson CI) and expect-failure rate (thin)", main_path,
+                "rate");
     double x0 = bins.front().first, x1 = bins.back().second;
     if (x1 <= x0) x1 = x0 + 1;
     const double pad = 0.05 * (x1 - x0);
@@ -369,7 +377,7 @@ void WriteSummary(const std::vector<Record>& records, const std::string& dir) {
     std::vector<std::pair<std::string, cv::Scalar>> legend;
     int k = 0;
     for (const auto& c : controllers) {
-      std::vector<double> x, y, lo, hi;
+      std::vector<double> x, y, lo, hi, fail;
       for (size_t b = 0; b < bins.size(); ++b) {
         const Cell& cell = per_bin[c][b];
         if (cell.n == 0) continue;
@@ -378,7 +386,9 @@ void WriteSummary(const std::vector<Record>& records, const std::string& dir) {
         y.push_back(1.0 * cell.crashes / cell.n);
         lo.push_back(ci.first);
         hi.push_back(ci.second);
+        fail.push_back(1.0 * cell.expect_failures / cell.n);
       }
+      p.Line(x, fail, SeriesColour(k), 1);
       p.Line(x, y, SeriesColour(k), 2);
       p.ErrorBars(x, y, lo, hi, SeriesColour(k));
       legend.emplace_back(c, SeriesColour(k));
