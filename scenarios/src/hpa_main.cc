@@ -212,6 +212,11 @@ int Run(int argc, char** argv) {
     PrintSummary(result.metrics, out_dir);
     if (!options.video_path.empty()) std::printf("  video %s\n", options.video_path.c_str());
   }
+  if (result.metrics.run_error) {
+    std::fprintf(stderr, "hpa: internal error during the run (results so far are written): %s\n",
+                 result.metrics.run_error->c_str());
+    return kExitInternal;
+  }
   return result.metrics.expect_passed ? kExitOk : kExitExpectFailed;
 }
 

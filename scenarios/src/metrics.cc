@@ -165,6 +165,7 @@ void ComputeMetrics(const MetricsInputs& in, Metrics* m) {
 
 void CheckExpectations(const ExpectSpec& e, Metrics* m) {
   m->expect_failed.clear();
+  if (m->run_error) m->expect_failed.push_back("run aborted: " + *m->run_error);
   auto fail = [&](const std::string& key, double value, const char* op, double bound) {
     std::ostringstream out;
     out << key << ": " << value << " " << op << " " << bound;
@@ -235,6 +236,7 @@ std::string MetricsToJson(const Metrics& m) {
   o << "  \"crashed\": " << (m.crashed ? "true" : "false") << ",\n";
   o << "  \"crash_time_s\": " << (m.crash_time_s ? Num(*m.crash_time_s) : "null") << ",\n";
   o << "  \"crash_reason\": " << (m.crash_reason ? Quote(*m.crash_reason) : "null") << ",\n";
+  o << "  \"run_error\": " << (m.run_error ? Quote(*m.run_error) : "null") << ",\n";
   o << "  \"payload_rmse_m\": " << Vec(m.payload_rmse_m) << ",\n";
   o << "  \"payload_rmse_over\": " << Quote(m.payload_rmse_over) << ",\n";
   o << "  \"quad_rmse_m\": " << Vec(m.quad_rmse_m) << ",\n";

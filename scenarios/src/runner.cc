@@ -133,109 +133,115 @@ RunResult RunScenario(const Scenario& scenario, const Params& params, const RunO
   int last_progress_pct = -1;
 
   long tick = 0;
-  for (; tick <= end_tick; ++tick) {
-    const double t = tick * sim::World::kPhysicsDt_s;
+  try {
+    for (; tick <= end_tick; ++tick) {
+      const double t = tick * sim::World::kPhysicsDt_s;
 
-    // scripted disturbances
-    while (next_event < events.size() && events[next_event].at_s <= t + 1e-9) {
-      ApplyEvent(events[next_event++], &world);
-    }
+      // scripted disturbances
+      while (next_event < events.size() && events[next_event].at_s <= t + 1e-9) {
+        ApplyEvent(events[next_event++], &world);
+      }
 
-    const sim::Truth truth = world.GetTruth();
+      const sim::Truth truth = world.GetTruth();
 
-    // payload camera: capture now, deliver after the latency
-    if (tick == TickOf(next_camera, kCameraRateHz)) {
-      ++next_camera;
-      const Eigen::Vector3d p_CL_C = PayloadInCamera_C(params, truth.state);
-      inputs.payload_in_fov_per_frame.push_back(InsideImage(params, p_CL_C));
-      if (!ground_truth) {
-        PayloadDetection detection;
-        if (render_camera) {
-          const auto r0 = Clock::now();
-          last_onboard_frame = world.RenderPayloadCamera();
-          const auto r1 = Clock::now();
-          detection = detector.Detect(last_onboard_frame, t);
-          inputs.render_ms.push_back(Ms(r0, r1));
-          inputs.detector_ms.push_back(Ms(r1, Clock::now()));
-        } else {
-          detection = analytic_camera.Measure(p_CL_C, t, camera_rng);
+      // payload camera: capture now, deliver after the latency
+      if (tick == TickOf(next_camera, kCameraRateHz)) {
+        ++next_camera;
+        const Eigen::Vector3d p_CL_C = PayloadInCamera_C(params, truth.state);
+        inputs.payload_in_fov_per_frame.push_back(InsideImage(params, p_CL_C));
+        if (!ground_truth) {
+          PayloadDetection detection;
+          if (render_camera) {
+            const auto r0 = Clock::now();
+            last_onboard_frame = world.RenderPayloadCamera();
+            const auto r1 = Clock::now();
+            detection = detector.Detect(last_onboard_frame, t);
+            inputs.render_ms.push_back(Ms(r0, r1));
+            inputs.detector_ms.push_back(Ms(r1, Clock::now()));
+          } else {
+            detection = analytic_camera.Measure(p_CL_C, t, camera_rng);
+          }
+          if (detection.found) ++inputs.detections;
+          in_flight.push_back(detection);
         }
-        if (detection.found) ++inputs.detections;
-        in_flight.push_back(detection);
+      }
+      while (!in_flight.empty() &&
+             in_flight.front().time_s + scenario.estimation.camera_latency_s <= t + 1e-9) {
+        estimator->OnPayloadDetection(in_flight.front());
+        in_flight.pop_front();
+      }
+
+      // what flight code sees
+      SystemState state = ground_truth ? truth.state : estimator->Estimate(t);
+      state.time_s = t;
+
+      // high-level controller
+      if (tick == TickOf(next_control, control_rate_hz)) {
+        ++next_control;
+        control = controller->Update(state);
+        LogRow row;
+        row.time_s = t;
+        row.truth = truth.state;
+        row.estimate = state;
+        row.reference = reference->At(t);
+        row.command = control.command;
+        row.status = control.status;
+        row.solve_time_ms = control.solve_time_ms;
+        row.cost = control.cost;
+        row.cable_tension_N = truth.cable_tension_N;
+        row.gripper_active = world.gripper_active();
+        result.rows.push_back(row);
+      }
+
+      // body-rate loop
+      if (tick % kImuDecimation == 0) {
+        const InputVector w_cmd = rate_controller.Update(control.command, state.w_B,
+                                                         kImuDecimation * sim::World::kPhysicsDt_s);
+        world.SetMotorSpeedCommand(w_cmd);
+        estimator->OnThrustCommand(control.command.thrust_N);
+      }
+
+      // video frame
+      if (video && tick == TickOf(next_video, kVideoRateHz)) {
+        ++next_video;
+        if (last_onboard_frame.empty() || ground_truth || !render_camera) {
+          last_onboard_frame = world.RenderPayloadCamera();
+        }
+        VideoRecorder::Hud hud{t, truth.state.mode, state.mode, control.command.thrust_N,
+                               truth.cable_tension_N};
+        video->AddFrame(world.RenderChaseCamera(VideoRecorder::kWidthPx, VideoRecorder::kHeightPx),
+                        last_onboard_frame, hud);
+      }
+
+      if (tick == end_tick) break;
+      world.Step();
+      while (auto imu = world.TakeImu()) estimator->OnImu(*imu);
+      while (auto vio = world.TakeVio()) estimator->OnVio(*vio);
+
+      const sim::CrashStatus crash = world.Crash();
+      if (crash.crashed) {
+        metrics.crashed = true;
+        metrics.crash_time_s = crash.time_s;
+        metrics.crash_reason = crash.reason;
+        break;
+      }
+      if (show_progress) {
+        const int pct = static_cast<int>(100.0 * tick / end_tick);
+        if (pct != last_progress_pct) {
+          last_progress_pct = pct;
+          const double wall_s = Ms(wall_start, Clock::now()) / 1000.0;
+          std::fprintf(stderr, "\r%s: %3d%%  t = %6.2f / %.2f s  (%.2f sim s per wall s)",
+                       scenario.name.c_str(), pct, t, end_s, t / std::max(wall_s, 1e-9));
+        }
       }
     }
-    while (!in_flight.empty() &&
-           in_flight.front().time_s + scenario.estimation.camera_latency_s <= t + 1e-9) {
-      estimator->OnPayloadDetection(in_flight.front());
-      in_flight.pop_front();
-    }
-
-    // what flight code sees
-    SystemState state = ground_truth ? truth.state : estimator->Estimate(t);
-    state.time_s = t;
-
-    // high-level controller
-    if (tick == TickOf(next_control, control_rate_hz)) {
-      ++next_control;
-      control = controller->Update(state);
-      LogRow row;
-      row.time_s = t;
-      row.truth = truth.state;
-      row.estimate = state;
-      row.reference = reference->At(t);
-      row.command = control.command;
-      row.status = control.status;
-      row.solve_time_ms = control.solve_time_ms;
-      row.cost = control.cost;
-      row.cable_tension_N = truth.cable_tension_N;
-      row.gripper_active = world.gripper_active();
-      result.rows.push_back(row);
-    }
-
-    // body-rate loop
-    if (tick % kImuDecimation == 0) {
-      const InputVector w_cmd = rate_controller.Update(control.command, state.w_B,
-                                                       kImuDecimation * sim::World::kPhysicsDt_s);
-      world.SetMotorSpeedCommand(w_cmd);
-      estimator->OnThrustCommand(control.command.thrust_N);
-    }
-
-    // video frame
-    if (video && tick == TickOf(next_video, kVideoRateHz)) {
-      ++next_video;
-      if (last_onboard_frame.empty() || ground_truth || !render_camera) {
-        last_onboard_frame = world.RenderPayloadCamera();
-      }
-      VideoRecorder::Hud hud{t, truth.state.mode, state.mode, control.command.thrust_N,
-                             truth.cable_tension_N};
-      video->AddFrame(world.RenderChaseCamera(VideoRecorder::kWidthPx, VideoRecorder::kHeightPx),
-                      last_onboard_frame, hud);
-    }
-
-    if (tick == end_tick) break;
-    world.Step();
-    while (auto imu = world.TakeImu()) estimator->OnImu(*imu);
-    while (auto vio = world.TakeVio()) estimator->OnVio(*vio);
-
-    const sim::CrashStatus crash = world.Crash();
-    if (crash.crashed) {
-      metrics.crashed = true;
-      metrics.crash_time_s = crash.time_s;
-      metrics.crash_reason = crash.reason;
-      break;
-    }
-    if (show_progress) {
-      const int pct = static_cast<int>(100.0 * tick / end_tick);
-      if (pct != last_progress_pct) {
-        last_progress_pct = pct;
-        const double wall_s = Ms(wall_start, Clock::now()) / 1000.0;
-        std::fprintf(stderr, "\r%s: %3d%%  t = %6.2f / %.2f s  (%.2f sim s per wall s)",
-                     scenario.name.c_str(), pct, t, end_s, t / std::max(wall_s, 1e-9));
-      }
-    }
+    if (options.at_stop) options.at_stop(world);
+  } catch (const std::exception& e) {
+    // keep what was computed: the metrics of the run so far, with the error named
+    metrics.run_error = std::string(e.what()) +
+                        " (at t = " + std::to_string(tick * sim::World::kPhysicsDt_s) + " s)";
   }
   if (show_progress) std::fprintf(stderr, "\n");
-  if (options.at_stop) options.at_stop(world);
   if (video) video->Finish();
 
   metrics.sim_time_s = std::min(tick, end_tick) * sim::World::kPhysicsDt_s;

@@ -57,9 +57,10 @@ struct Metrics {
   double retaut_peak_body_rate_radps = 0.0;  // highest |w_B| within 0.5 s of a re-taut
   Quantiles mpc_solve_ms;
   int mpc_failures = 0;
-  double closed_loop_cost = 0.0;  // sum of the controller's plan costs
-  Quantiles detector_ms;          // per rendered frame, detection only
-  Quantiles render_ms;            // per rendered frame
+  double closed_loop_cost = 0.0;         // sum of the controller's plan costs
+  Quantiles detector_ms;                 // per rendered frame, detection only
+  Quantiles render_ms;                   // per rendered frame
+  std::optional<std::string> run_error;  // the run stopped on an exception (results kept)
   bool expect_passed = true;
   std::vector<std::string> expect_failed;  // "payload_rmse_max.x: 0.071 > 0.06"
 };
