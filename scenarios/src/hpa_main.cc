@@ -91,20 +91,6 @@ Args Parse(int argc, char** argv, int first, const std::vector<std::string>& val
   return a;
 }
 
-void MakeDirs(const std::string& dir) {
-  std::string partial;
-  for (size_t i = 0; i <= dir.size(); ++i) {
-    if (i == dir.size() || dir[i] == '/') {
-      if (!partial.empty()) mkdir(partial.c_str(), 0755);
-    }
-    if (i < dir.size()) partial += dir[i];
-  }
-  struct stat st;
-  if (stat(dir.c_str(), &st) != 0 || !S_ISDIR(st.st_mode)) {
-    throw InputError(dir, "--out", "cannot create the output directory");
-  }
-}
-
 double ParseNumber(const std::string& flag, const std::string& text) {
   char* end = nullptr;
   const double v = std::strtod(text.c_str(), &end);
@@ -191,7 +177,7 @@ int Run(int argc, char** argv) {
   Scenario scenario = LoadWithSets(a.positional[0], a.sets);
   ApplyOverrides(a, &scenario);
   const std::string out_dir = a.Get("--out", "out/" + scenario.name);
-  MakeDirs(out_dir);
+  MakeOutputDir(out_dir);
 
   RunOptions options;
   options.progress = !a.Has("--quiet");
@@ -242,7 +228,7 @@ int Compare(int argc, char** argv) {
     Scenario s = base;
     ApplyOverrides(one, &s);
     const std::string dir = out_dir + "/" + type;
-    MakeDirs(dir);
+    MakeOutputDir(dir);
     RunOptions options;
     options.progress = !a.Has("--quiet");
     if (a.Has("--video-slack-events")) {

@@ -1,5 +1,7 @@
 #include "hpa/scenarios/metrics.h"
 
+#include <sys/stat.h>
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -267,6 +269,18 @@ std::string MetricsToJson(const Metrics& m) {
   }
   o << "]}\n}\n";
   return o.str();
+}
+
+void MakeOutputDir(const std::string& dir) {
+  std::string partial;
+  for (size_t i = 0; i <= dir.size(); ++i) {
+    if ((i == dir.size() || dir[i] == '/') && !partial.empty()) mkdir(partial.c_str(), 0755);
+    if (i < dir.size()) partial += dir[i];
+  }
+  struct stat st;
+  if (stat(dir.c_str(), &st) != 0 || !S_ISDIR(st.st_mode)) {
+    throw InputError(dir, "--out", "cannot create the output directory");
+  }
 }
 
 void WriteLogCsv(const std::string& path, const std::vector<LogRow>& rows) {

@@ -93,18 +93,6 @@ std::string Dirname(const std::string& path) {
   return slash == std::string::npos ? "." : path.substr(0, slash);
 }
 
-void MakeDir(const std::string& dir) {
-  std::string partial;
-  for (size_t i = 0; i <= dir.size(); ++i) {
-    if ((i == dir.size() || dir[i] == '/') && !partial.empty()) mkdir(partial.c_str(), 0755);
-    if (i < dir.size()) partial += dir[i];
-  }
-  struct stat st;
-  if (stat(dir.c_str(), &st) != 0 || !S_ISDIR(st.st_mode)) {
-    throw InputError(dir, "--out", "cannot create the output directory");
-  }
-}
-
 // Builds the scenario of one run: the base file with the run's values set, validated.
 Scenario BuildScenario(const SweepSpec& spec, const SweepRun& run) {
   YAML::Node root;
@@ -399,8 +387,10 @@ void WriteSummary(const std::vector<Record>& records, const std::string& dir) {
   }
 }
 
-// Runs one sweep run in this (child) process and returns its JSON line.
-std::string RunOne(const SweepSpec& spec, const SweepRun& run, const Params& params) {
+// One JSON line of runs.jsonl: the run's identity and values, then its outcome. `metrics_json`
+// empty means none; `error` empty means the run finished.
+std::string RecordLine(const SweepSpec& spec, const SweepRun& run, const std::string& controller,
+                       const std::string& error, const std::string& metrics_json) {
   std::ostringstream line;
   line << "{\"sweep_id\": " << JsonString(spec.sweep_id) << ", \"sweep\": " << JsonString(spec.file)
        << ", \"base\": " << JsonString(spec.base_path) << ", \"run\": " << run.index
@@ -409,7 +399,24 @@ std::string RunOne(const SweepSpec& spec, const SweepRun& run, const Params& par
     line << (i ? ", " : "") << JsonString(run.values[i].first) << ": "
          << JsonValue(run.values[i].second);
   }
-  line << "}";
+  line << "}, \"controller\": " << JsonString(controller) << ", \"status\": \""
+       << (error.empty() ? "ok" : "error")
+       << "\", \"error\": " << (error.empty() ? "null" : JsonString(error))
+       << ", \"metrics\": " << (metrics_json.empty() ? "null" : metrics_json) << "}";
+  return line.str();
+}
+
+// The controller type of a run (for records of runs whose process died).
+std::string ControllerOf(const SweepSpec& spec, const SweepRun& run) {
+  try {
+    return BuildScenario(spec, run).controller.type;
+  } catch (const std::exception&) {
+    return "?";
+  }
+}
+
+// Runs one sweep run in this (child) process and returns its JSON line.
+std::string RunOne(const SweepSpec& spec, const SweepRun& run, const Params& params) {
   std::string controller = "?";
   try {
     const Scenario scenario = BuildScenario(spec, run);
@@ -417,29 +424,10 @@ std::string RunOne(const SweepSpec& spec, const SweepRun& run, const Params& par
     const RunResult result = RunScenario(scenario, params, RunOptions{});
     std::string metrics = MetricsToJson(result.metrics);
     std::replace(metrics.begin(), metrics.end(), '\n', ' ');
-    line << ", \"controller\": " << JsonString(controller)
-         << ", \"status\": \"ok\", \"error\": null, \"metrics\": " << metrics << "}";
+    return RecordLine(spec, run, controller, result.metrics.run_error.value_or(""), metrics);
   } catch (const std::exception& e) {
-    line << ", \"controller\": " << JsonString(controller)
-         << ", \"status\": \"error\", \"error\": " << JsonString(e.what())
-         << ", \"metrics\": null}";
+    return RecordLine(spec, run, controller, e.what(), "");
   }
-  return line.str();
-}
-
-std::string ErrorLine(const SweepSpec& spec, const SweepRun& run, const std::string& controller,
-                      const std::string& error) {
-  std::ostringstream line;
-  line << "{\"sweep_id\": " << JsonString(spec.sweep_id) << ", \"sweep\": " << JsonString(spec.file)
-       << ", \"base\": " << JsonString(spec.base_path) << ", \"run\": " << run.index
-       << ", \"draw\": " << run.draw << ", \"seed\": " << run.seed << ", \"values\": {";
-  for (size_t i = 0; i < run.values.size(); ++i) {
-    line << (i ? ", " : "") << JsonString(run.values[i].first) << ": "
-         << JsonValue(run.values[i].second);
-  }
-  line << "}, \"controller\": " << JsonString(controller)
-       << ", \"status\": \"error\", \"error\": " << JsonString(error) << ", \"metrics\": null}";
-  return line.str();
 }
 
 }  // namespace
@@ -659,7 +647,7 @@ int SweepMain(int argc, char** argv) {
   runs.erase(std::remove_if(runs.begin(), runs.end(),
                             [&](const SweepRun& r) { return r.index % shard_n != shard_k - 1; }),
              runs.end());
-  MakeDir(out_dir);
+  MakeOutputDir(out_dir);
   const std::string jsonl = out_dir + "/runs.jsonl";
 
   // resume: skip what is recorded; refuse to mix sweeps in one folder
@@ -681,7 +669,7 @@ int SweepMain(int argc, char** argv) {
                             [&](const SweepRun& r) { return done.count(r.index) > 0; }),
              runs.end());
   const std::string tmp_dir = out_dir + "/.running";
-  MakeDir(tmp_dir);
+  MakeOutputDir(tmp_dir);
   FILE* out = std::fopen(jsonl.c_str(), "a");
   if (!out) throw InputError(jsonl, "", "cannot append to the results file");
 
@@ -745,10 +733,10 @@ int SweepMain(int argc, char** argv) {
       if (r == 0 && age_s > spec.time_limit_s) {
         kill(children[c].pid, SIGKILL);
         waitpid(children[c].pid, &status, 0);
-        record(
-            ErrorLine(spec, run, "?",
-                      "killed after the time limit of " + FormatNumber(spec.time_limit_s) + " s"),
-            true, run);
+        record(RecordLine(
+                   spec, run, ControllerOf(spec, run),
+                   "killed after the time limit of " + FormatNumber(spec.time_limit_s) + " s", ""),
+               true, run);
       } else if (r == 0) {
         ++c;
         continue;
@@ -764,7 +752,7 @@ int SweepMain(int argc, char** argv) {
               WIFSIGNALED(status)
                   ? std::string("worker killed by signal ") + strsignal(WTERMSIG(status))
                   : "worker exited with status " + std::to_string(WEXITSTATUS(status));
-          record(ErrorLine(spec, run, "?", why), true, run);
+          record(RecordLine(spec, run, ControllerOf(spec, run), why, ""), true, run);
         }
         std::remove(path.c_str());
       }
@@ -824,7 +812,7 @@ int MergeMain(int argc, char** argv) {
       by_run[r.run] = r;  // a run recorded twice (resume after a torn write) counts once
     }
   }
-  MakeDir(out_dir);
+  MakeOutputDir(out_dir);
   std::vector<Record> records;
   {
     std::ofstream merged(out_dir + "/runs.jsonl.tmp");

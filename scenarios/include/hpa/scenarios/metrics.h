@@ -89,6 +89,9 @@ Quantiles ComputeQuantiles(std::vector<double> values);
 /// Slack intervals [start, end) of the true mode in the log, chatter shorter than 30 ms ignored.
 std::vector<std::pair<double, double>> TrueSlackIntervals(const std::vector<LogRow>& rows);
 
+/// Creates an output directory and its parents; throws InputError (key --out) if it cannot.
+void MakeOutputDir(const std::string& dir);
+
 /// Writes log.csv (one row per control step).
 void WriteLogCsv(const std::string& path, const std::vector<LogRow>& rows);
 
