@@ -283,6 +283,12 @@ int Main(int argc, char** argv) {
     return argc < 2 ? kExitBadInput : kExitOk;
   }
   const std::string command = argv[1];
+  for (int i = 2; i < argc; ++i) {
+    if (!std::strcmp(argv[i], "--help") || !std::strcmp(argv[i], "-h")) {
+      std::fputs(kUsage, stdout);
+      return kExitOk;
+    }
+  }
   try {
     if (command == "run") return Run(argc, argv);
     if (command == "compare") return Compare(argc, argv);

@@ -39,6 +39,7 @@ expect_exit 2 "unknown command" fly "$base"
 printf 'gravity_mps2: 9.81\n' > "$out/params.yaml"
 expect_exit 2 "params.yaml: key 'quadrotor': missing" run "$base" --params "$out/params.yaml" --out "$out/x"
 expect_exit 0 "hpa run SCENARIO.yaml" --help
+expect_exit 0 "hpa sweep SWEEP.yaml" sweep --help
 
 echo "== exit 0 when every bound holds, 1 when one fails (named)"
 expect_exit 0 "wrote" run "$base" --out "$out/ok"
