@@ -112,6 +112,17 @@ TEST(SweepTest, ShardsPartitionTheRuns) {
   }
 }
 
+TEST(SweepTest, EveryShippedSweepLoadsAndExpands) {
+  const std::string dir = std::string(HPA_SOURCE_DIR) + "/scenarios/sweeps/";
+  for (const char* name :
+       {"impulse_crash_rate.yaml", "model_mismatch.yaml", "perception_noise.yaml", "wind.yaml",
+        "throughput.yaml", "throughput_render.yaml"}) {
+    SweepSpec spec;
+    ASSERT_NO_THROW(spec = LoadSweep(dir + name)) << name;
+    EXPECT_GE(ExpandSweep(spec).size(), static_cast<size_t>(spec.runs)) << name;
+  }
+}
+
 TEST(SweepTest, BadPathsFailBeforeAnythingRuns) {
   EXPECT_THROW(Spec("  events.3.impulse.2: {uniform: [0, 1]}\n"), InputError);
   EXPECT_THROW(Spec("  world.gravity: {uniform: [9, 10]}\n"), InputError);
