@@ -105,7 +105,7 @@ void PlotPanel::DrawAxes() {
                 cv::LINE_AA);
   }
   cv::rectangle(*image_, plot_, kBlack, 1);
-  cv::putText(*image_, title_, cv::Point(plot_.x, area_.y + 20), kFont, 0.55, kBlack, 1,
+  cv::putText(*image_, title_, cv::Point(plot_.x + 100, area_.y + 20), kFont, 0.55, kBlack, 1,
               cv::LINE_AA);
   cv::putText(*image_, x_label_,
               cv::Point(plot_.x + plot_.width / 2 - 30, plot_.y + plot_.height + 38), kFont, 0.45,

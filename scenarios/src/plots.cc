@@ -28,6 +28,15 @@ void ShadeSlack(PlotPanel* panel, const std::vector<LogRow>& rows) {
   for (const auto& [a, b] : TrueSlackIntervals(rows)) panel->ShadeX(a, b, kSlackShade);
 }
 
+// Slack shading plus a red mark at each re-taut instant (the end of a slack interval).
+void ShadeSlackMarkRetaut(PlotPanel* panel, const std::vector<LogRow>& rows) {
+  ShadeSlack(panel, rows);
+  const double span_s = rows.back().time_s - rows.front().time_s;
+  for (const auto& [a, b] : TrueSlackIntervals(rows)) {
+    if (b < rows.back().time_s) panel->ShadeX(b, b + 0.004 * span_s, cv::Scalar(0, 0, 220));
+  }
+}
+
 }  // namespace
 
 std::vector<std::string> WriteRunPlots(const RunResult& result, const Params& params,
@@ -95,7 +104,7 @@ std::vector<std::string> WriteRunPlots(const RunResult& result, const Params& pa
     Save(written.back(), fig);
   }
 
-  // quadrotor deviation, vertical velocity and body rates, slack shaded
+  // quadrotor deviation, vertical velocity and body rates, slack shaded, re-taut marked
   {
     cv::Mat fig = BlankFigure(1200, 900);
     const auto dev =
@@ -104,13 +113,13 @@ std::vector<std::string> WriteRunPlots(const RunResult& result, const Params& pa
     PlotPanel p0(&fig, cv::Rect(0, 0, 1200, 300),
                  "quadrotor deviation |p_Q - p_Q,ref|" + title_suffix, "t [s]", "[m]");
     p0.FitRange({t}, {dev});
-    ShadeSlack(&p0, rows);
+    ShadeSlackMarkRetaut(&p0, rows);
     p0.DrawAxes();
     p0.Line(t, dev, SeriesColour(0));
     PlotPanel p1(&fig, cv::Rect(0, 300, 1200, 300), "quadrotor vertical velocity", "t [s]",
                  "v_z [m/s]");
     p1.FitRange({t}, {vz});
-    ShadeSlack(&p1, rows);
+    ShadeSlackMarkRetaut(&p1, rows);
     p1.DrawAxes();
     p1.Line(t, vz, SeriesColour(0));
     PlotPanel p2(&fig, cv::Rect(0, 600, 1200, 300), "body rates", "t [s]", "[rad/s]");
@@ -119,10 +128,13 @@ std::vector<std::string> WriteRunPlots(const RunResult& result, const Params& pa
       rates.push_back(Column(rows, [i](const LogRow& r) { return r.truth.w_B(i); }));
     }
     p2.FitRange({t}, rates);
-    ShadeSlack(&p2, rows);
+    ShadeSlackMarkRetaut(&p2, rows);
     p2.DrawAxes();
     for (int i = 0; i < 3; ++i) p2.Line(t, rates[i], SeriesColour(i));
-    p2.Legend({{"w_x", SeriesColour(0)}, {"w_y", SeriesColour(1)}, {"w_z", SeriesColour(2)}});
+    p2.Legend({{"w_x", SeriesColour(0)},
+               {"w_y", SeriesColour(1)},
+               {"w_z", SeriesColour(2)},
+               {"re-taut", cv::Scalar(0, 0, 220)}});
     written.push_back(dir + "/retaut.png");
     Save(written.back(), fig);
   }
