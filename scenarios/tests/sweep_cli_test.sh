@@ -34,7 +34,7 @@ YAML
 
 echo "== unsharded vs two shards through GNU parallel, merged"
 "$hpa" sweep "$out/tiny.yaml" --out "$out/full" --jobs 2 > "$out/full.log" 2>&1 || fail "unsharded sweep failed: $(cat "$out/full.log")"
-parallel -j2 "$hpa" sweep "$out/tiny.yaml" --out "$out/shard{}" --shard {}/2 ::: 1 2 > "$out/shards.log" 2>&1 \
+parallel --will-cite -j2 "$hpa" sweep "$out/tiny.yaml" --out "$out/shard{}" --shard {}/2 ::: 1 2 > "$out/shards.log" 2>&1 \
   || fail "sharded sweep failed: $(cat "$out/shards.log")"
 "$hpa" merge "$out/shard1" "$out/shard2" --out "$out/merged" > /dev/null || fail "merge failed"
 [ "$(count_runs "$out/full/runs.jsonl")" -eq 10 ] || fail "unsharded sweep has $(count_runs "$out/full/runs.jsonl") runs, expected 10"
