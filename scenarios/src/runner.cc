@@ -142,10 +142,19 @@ RunResult RunScenario(const Scenario& scenario, const Params& params, const RunO
         ApplyEvent(events[next_event++], &world);
       }
 
-      const sim::Truth truth = world.GetTruth();
+      // which loops run at this tick; truth and the flight state only when one needs them
+      const bool camera_due = tick == TickOf(next_camera, kCameraRateHz);
+      const bool control_due = tick == TickOf(next_control, control_rate_hz);
+      const bool rate_due = tick % kImuDecimation == 0;
+      const bool video_due = video && tick == TickOf(next_video, kVideoRateHz);
+      const bool need_state = control_due || rate_due || video_due;
+      sim::Truth truth;
+      if (camera_due || control_due || video_due || (ground_truth && rate_due)) {
+        truth = world.GetTruth();
+      }
 
       // payload camera: capture now, deliver after the latency
-      if (tick == TickOf(next_camera, kCameraRateHz)) {
+      if (camera_due) {
         ++next_camera;
         const Eigen::Vector3d p_CL_C = PayloadInCamera_C(params, truth.state);
         inputs.payload_in_fov_per_frame.push_back(InsideImage(params, p_CL_C));
@@ -172,11 +181,12 @@ RunResult RunScenario(const Scenario& scenario, const Params& params, const RunO
       }
 
       // what flight code sees
-      SystemState state = ground_truth ? truth.state : estimator->Estimate(t);
+      SystemState state;
+      if (need_state) state = ground_truth ? truth.state : estimator->Estimate(t);
       state.time_s = t;
 
       // high-level controller
-      if (tick == TickOf(next_control, control_rate_hz)) {
+      if (control_due) {
         ++next_control;
         control = controller->Update(state);
         LogRow row;
@@ -194,7 +204,7 @@ RunResult RunScenario(const Scenario& scenario, const Params& params, const RunO
       }
 
       // body-rate loop
-      if (tick % kImuDecimation == 0) {
+      if (rate_due) {
         const InputVector w_cmd = rate_controller.Update(control.command, state.w_B,
                                                          kImuDecimation * sim::World::kPhysicsDt_s);
         world.SetMotorSpeedCommand(w_cmd);
@@ -202,7 +212,7 @@ RunResult RunScenario(const Scenario& scenario, const Params& params, const RunO
       }
 
       // video frame
-      if (video && tick == TickOf(next_video, kVideoRateHz)) {
+      if (video_due) {
         ++next_video;
         if (last_onboard_frame.empty() || ground_truth || !render_camera) {
           last_onboard_frame = world.RenderPayloadCamera();
