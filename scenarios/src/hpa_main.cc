@@ -45,7 +45,8 @@ usage:
   hpa render-frame SCENARIO.yaml --at T --out FILE.png [--params FILE]
       Runs the scenario to time T (s) and writes one 1280x720 onboard payload-camera frame.
   hpa sweep SWEEP.yaml --out DIR [--jobs N] [--shard K/N] [--resume]
-      Monte Carlo sweep: one JSON line per run in DIR/runs.jsonl, then a summary.
+      Monte Carlo sweep: one JSON line per run in DIR/runs.jsonl, then a summary. --jobs
+      defaults to the number of cores; --shard K/N (K = 1..N) runs every N-th run.
   hpa merge DIR... --out DIR
       Joins sweep shards and writes DIR/summary.json, DIR/summary.md and plots.
   hpa --help

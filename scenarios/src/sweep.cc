@@ -605,7 +605,7 @@ std::vector<SweepRun> ExpandSweep(const SweepSpec& spec) {
 
 int SweepMain(int argc, char** argv) {
   std::string sweep_file, out_dir;
-  int jobs = 1, shard_k = 1, shard_n = 1;
+  int jobs = std::max(1u, std::thread::hardware_concurrency()), shard_k = 1, shard_n = 1;
   bool resume = false;
   for (int i = 2; i < argc; ++i) {
     const std::string a = argv[i];
