@@ -2,6 +2,7 @@
 
 #include <sys/stat.h>
 
+#include <cerrno>
 #include <cstdio>
 #include <cstring>
 #include <fstream>
@@ -39,10 +40,11 @@ usage:
       TYPE: hpa_mpc | nonhybrid_mpc | geometric. --set changes one dotted key of the
       scenario (e.g. --set events.1.impulse.2=0.5); sweeps print such replay commands.
   hpa compare SCENARIO.yaml --out DIR [--controllers A,B] [--camera render|analytic]
-                        [--video-slack-events] [--quiet]
+                        [--seed N] [--video-slack-events] [--quiet] [--params FILE]
       Runs the scenario once per controller (default hpa_mpc,nonhybrid_mpc) into DIR/<type>/
       and writes DIR/comparison.png; with --video-slack-events, a slack-event video per run.
-  hpa render-frame SCENARIO.yaml --at T --out FILE.png [--params FILE]
+  hpa render-frame SCENARIO.yaml --at T --out FILE.png [--seed N] [--controller TYPE]
+                        [--params FILE]
       Runs the scenario to time T (s) and writes one 1280x720 onboard payload-camera frame.
   hpa sweep SWEEP.yaml --out DIR [--jobs N] [--shard K/N] [--resume]
       Monte Carlo sweep: one JSON line per run in DIR/runs.jsonl, then a summary. --jobs
@@ -124,9 +126,13 @@ Scenario LoadWithSets(const std::string& path, const std::vector<std::string>& s
 // Applies --seed, --controller and --camera to a loaded scenario.
 void ApplyOverrides(const Args& a, Scenario* s) {
   if (a.Has("--seed")) {
-    const double seed = ParseNumber("--seed", a.Get("--seed"));
-    if (seed < 0 || seed != std::floor(seed))
-      throw InputError("", "--seed", "expected an integer >= 0");
+    const std::string text = a.Get("--seed");
+    char* end = nullptr;
+    errno = 0;
+    const unsigned long long seed = std::strtoull(text.c_str(), &end, 10);
+    if (text.empty() || text[0] == '-' || *end != '\0' || errno != 0 || seed > 4294967295ULL) {
+      throw InputError("", "--seed", "expected an integer in [0, 4294967295], got '" + text + "'");
+    }
     s->seed = static_cast<unsigned long>(seed);
   }
   if (a.Has("--controller")) {
@@ -223,6 +229,7 @@ int Compare(int argc, char** argv) {
   }
   std::vector<RunResult> results;
   bool all_passed = true;
+  bool run_error = false;
   for (const std::string& type : types) {
     Args one = a;
     one.flags["--controller"] = type;
@@ -240,6 +247,11 @@ int Compare(int argc, char** argv) {
     WriteText(dir + "/metrics.json", MetricsToJson(results.back().metrics));
     WriteLogCsv(dir + "/log.csv", results.back().rows);
     all_passed = all_passed && results.back().metrics.expect_passed;
+    if (results.back().metrics.run_error) {
+      std::fprintf(stderr, "hpa: internal error during the %s run (its results are written): %s\n",
+                   type.c_str(), results.back().metrics.run_error->c_str());
+      run_error = true;
+    }
     if (!a.Has("--quiet")) {
       PrintSummary(results.back().metrics, dir);
       if (!options.video_path.empty()) std::printf("  video %s\n", options.video_path.c_str());
@@ -248,6 +260,7 @@ int Compare(int argc, char** argv) {
   const std::string png = out_dir + "/comparison.png";
   WriteComparisonPlot(results, params, png);
   if (!a.Has("--quiet")) std::printf("comparison plot %s\n", png.c_str());
+  if (run_error) return kExitInternal;
   return all_passed ? kExitOk : kExitExpectFailed;
 }
 
@@ -268,12 +281,28 @@ int RenderFrame(int argc, char** argv) {
   RunOptions options;
   options.stop_at_s = at_s;
   bool written = false;
+  double frame_time_s = at_s;
   options.at_stop = [&](sim::World& world) {
-    written = cv::imwrite(out, world.RenderPayloadCamera());
+    frame_time_s = world.time_s();
+    const cv::Mat frame = world.RenderPayloadCamera();
+    try {
+      written = cv::imwrite(out, frame);
+    } catch (const cv::Exception&) {
+      written = false;  // e.g. an extension OpenCV cannot encode
+    }
   };
-  RunScenario(scenario, params, options);
-  if (!written) throw InputError(out, "--out", "cannot write the PNG");
-  std::printf("wrote %s (payload camera at t = %.3f s)\n", out.c_str(), at_s);
+  const RunResult result = RunScenario(scenario, params, options);
+  if (result.metrics.run_error) {
+    std::fprintf(stderr, "hpa: internal error during the run: %s\n",
+                 result.metrics.run_error->c_str());
+    return kExitInternal;
+  }
+  if (!written) throw InputError(out, "--out", "cannot write the PNG (path or extension)");
+  if (result.metrics.crashed) {
+    std::printf("note: the vehicle crashed at t = %.3f s (%s); the frame is from then\n",
+                frame_time_s, result.metrics.crash_reason.value_or("").c_str());
+  }
+  std::printf("wrote %s (payload camera at t = %.3f s)\n", out.c_str(), frame_time_s);
   return kExitOk;
 }
 

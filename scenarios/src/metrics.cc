@@ -158,7 +158,10 @@ void ComputeMetrics(const MetricsInputs& in, Metrics* m) {
   m->mpc_failures = 0;
   for (const LogRow& r : rows) {
     solve_ms.push_back(r.solve_time_ms);
-    if (r.status != ControlStatus::kSuccess) ++m->mpc_failures;
+    // a plan stopped at its iteration cap is flown: only real failures count
+    if (r.status != ControlStatus::kSuccess && r.status != ControlStatus::kMaxIterations) {
+      ++m->mpc_failures;
+    }
   }
   m->mpc_solve_ms = ComputeQuantiles(solve_ms);
   m->detector_ms = ComputeQuantiles(in.detector_ms);

@@ -29,12 +29,14 @@ double Ms(Clock::time_point a, Clock::time_point b) {
   return std::chrono::duration<double, std::milli>(b - a).count();
 }
 
-// The initial state: payload at the reference's start, hanging at rest under the quadrotor.
-SystemState InitialState(const Reference& reference, const Params& world_params) {
+// The initial state: payload at the reference's start, hanging at rest under the quadrotor,
+// with the cable length of `params` (the world's for the world, the flight code's for the
+// estimator: a world-only override must not reach flight code through its initial state).
+SystemState InitialState(const Reference& reference, const Params& params) {
   SystemState s;
   const ReferencePoint r = reference.At(0.0);
   s.p_WL_W = r.p_WL_W;
-  s.p_WQ_W = r.p_WL_W + Eigen::Vector3d(0, 0, world_params.cable_length_m);
+  s.p_WQ_W = r.p_WL_W + Eigen::Vector3d(0, 0, params.cable_length_m);
   s.mode = CableMode::kTaut;
   return s;
 }
@@ -93,13 +95,13 @@ RunResult RunScenario(const Scenario& scenario, const Params& params, const RunO
 
   // flight code: reference, controller, rate loop, estimator (flight params only)
   const std::shared_ptr<const Reference> reference = MakeReference(scenario, params);
-  const SystemState initial = InitialState(*reference, WorldParams(scenario, params));
-  world.Reset(initial);
+  world.Reset(InitialState(*reference, WorldParams(scenario, params)));
   std::unique_ptr<Controller> controller = MakeController(scenario.controller, params, reference);
   BodyRateController rate_controller(params);
   EstimatorConfig estimator_config;
   estimator_config.hybrid = scenario.controller.type != "nonhybrid_mpc";
-  std::unique_ptr<Estimator> estimator = MakeEstimator(estimator_config, params, initial);
+  std::unique_ptr<Estimator> estimator =
+      MakeEstimator(estimator_config, params, InitialState(*reference, params));
   const bool ground_truth = scenario.estimation.ground_truth;
   const bool render_camera = scenario.estimation.camera == "render";
   PayloadDetector detector(params);
@@ -208,7 +210,7 @@ RunResult RunScenario(const Scenario& scenario, const Params& params, const RunO
         const InputVector w_cmd = rate_controller.Update(control.command, state.w_B,
                                                          kImuDecimation * sim::World::kPhysicsDt_s);
         world.SetMotorSpeedCommand(w_cmd);
-        estimator->OnThrustCommand(control.command.thrust_N);
+        if (!ground_truth) estimator->OnThrustCommand(control.command.thrust_N);
       }
 
       // video frame
@@ -225,8 +227,13 @@ RunResult RunScenario(const Scenario& scenario, const Params& params, const RunO
 
       if (tick == end_tick) break;
       world.Step();
-      while (auto imu = world.TakeImu()) estimator->OnImu(*imu);
-      while (auto vio = world.TakeVio()) estimator->OnVio(*vio);
+      // sensors to the estimator (with ground truth its output is never read: drain only)
+      while (auto imu = world.TakeImu()) {
+        if (!ground_truth) estimator->OnImu(*imu);
+      }
+      while (auto vio = world.TakeVio()) {
+        if (!ground_truth) estimator->OnVio(*vio);
+      }
 
       const sim::CrashStatus crash = world.Crash();
       if (crash.crashed) {
@@ -255,8 +262,9 @@ RunResult RunScenario(const Scenario& scenario, const Params& params, const RunO
   if (video) video->Finish();
 
   metrics.sim_time_s = std::min(tick, end_tick) * sim::World::kPhysicsDt_s;
-  inputs.rows = result.rows;
+  inputs.rows = std::move(result.rows);
   ComputeMetrics(inputs, &metrics);
+  result.rows = std::move(inputs.rows);
   CheckExpectations(scenario.expect, &metrics);
   metrics.wall_time_s = Ms(wall_start, Clock::now()) / 1000.0;
   return result;

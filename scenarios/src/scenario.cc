@@ -135,7 +135,8 @@ Scenario ParseScenario(const YamlMap& root) {
     const YamlMap e = root.Map("estimation");
     s.estimation.camera = e.Choice("camera", {"render", "analytic"}, "render");
     s.estimation.ground_truth = e.Bool("ground_truth", false);
-    s.estimation.camera_latency_s = e.Number("camera_latency", 0.0, 1.0, 0.03);
+    // the estimator keeps 0.5 s of history to apply late detections at their capture time
+    s.estimation.camera_latency_s = e.Number("camera_latency", 0.0, 0.4, 0.03);
     s.estimation.detector_noise_scale = e.Number("detector_noise_scale", 0.0, 100.0, 1.0);
     e.RejectUnknownKeys();
   }

@@ -733,6 +733,7 @@ int SweepMain(int argc, char** argv) {
       if (r == 0 && age_s > spec.time_limit_s) {
         kill(children[c].pid, SIGKILL);
         waitpid(children[c].pid, &status, 0);
+        std::remove((tmp_dir + "/" + std::to_string(run.index) + ".json").c_str());
         record(RecordLine(
                    spec, run, ControllerOf(spec, run),
                    "killed after the time limit of " + FormatNumber(spec.time_limit_s) + " s", ""),

@@ -34,6 +34,8 @@ expect_exit 2 "type.yaml: key 'events.0.impulse': expected a list of 3 numbers" 
 expect_exit 2 "key '--controller'.*hpa_mpc" run "$base" --controller pid --out "$out/x"
 expect_exit 2 "key '--camera'" run "$base" --camera lidar --out "$out/x"
 expect_exit 2 "key '--frobnicate'.*unknown option" run "$base" --frobnicate
+expect_exit 2 "key '--seed'.*4294967295" run "$base" --seed 1e30 --out "$out/x"
+expect_exit 2 "key 'estimation.camera_latency'.*out of range" run "$base" --set estimation.camera_latency=0.8 --out "$out/x"
 expect_exit 2 "key 'events.4.at'.*not an index" run "$base" --set events.4.at=1 --out "$out/x"
 expect_exit 2 "unknown command" fly "$base"
 printf 'gravity_mps2: 9.81\n' > "$out/params.yaml"
@@ -59,6 +61,13 @@ diff <(strip "$out/det1/metrics.json") <(strip "$out/det2/metrics.json") > /dev/
 cmp -s "$out/det1/log.csv" "$out/det2/log.csv" || true  # solve_ms differs; not compared
 diff <(strip "$out/det1/metrics.json") <(strip "$out/det3/metrics.json") > /dev/null \
   && fail "a different seed gave identical metrics: the noise is not seeded by the scenario"
+
+echo "== a world-only override does not reach flight code through its initial state"
+"$hpa" run "$base" --out "$out/override" --quiet --set world.cable_length=0.42 \
+  --set estimation.ground_truth=false > /dev/null 2>&1
+col=$(head -1 "$out/override/log.csv" | tr ',' '\n' | grep -n '^est_mode$' | cut -d: -f1)
+[ "$(awk -F, -v c="$col" 'NR==2{print $c}' "$out/override/log.csv")" = "1" ] \
+  || fail "the estimator started from the world's (overridden) cable length"
 
 echo "== render-frame writes a 1280x720 PNG"
 expect_exit 0 "wrote" render-frame "$scen/hover.yaml" --at 1.0 --out "$out/frame.png"

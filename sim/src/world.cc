@@ -8,6 +8,7 @@
 #include <string>
 
 #include "hpa/models/input_error.h"
+#include "hpa/models/rotor_model.h"
 #include "hpa/sim/offscreen_renderer.h"
 
 namespace hpa::sim {
@@ -143,23 +144,54 @@ void World::ApplyWorldParams() {
   model_->body_mass[ids_.quad_body] = p.quad_mass_kg;
   for (int i = 0; i < 3; ++i) model_->body_inertia[3 * ids_.quad_body + i] = p.inertia_B_kgm2(i);
 
-  // payload mass; its inertia scales with it (same sphere, different density)
-  const double mass_scale = p.payload_mass_kg / model_->body_mass[ids_.payload_body];
+  // payload: a solid sphere of the params' mass and radius
   model_->body_mass[ids_.payload_body] = p.payload_mass_kg;
-  for (int i = 0; i < 3; ++i) model_->body_inertia[3 * ids_.payload_body + i] *= mass_scale;
+  for (int i = 0; i < 3; ++i) {
+    model_->body_inertia[3 * ids_.payload_body + i] =
+        0.4 * p.payload_mass_kg * p.payload_radius_m * p.payload_radius_m;
+  }
+  const int sphere = mj_name2id(model_, mjOBJ_GEOM, "payload_sphere");
+  if (sphere >= 0) {
+    model_->geom_size[3 * sphere] = p.payload_radius_m;
+    model_->geom_rbound[sphere] = p.payload_radius_m;
+  }
+  const int box = mj_name2id(model_, mjOBJ_GEOM, "quadrotor_box");
+  if (box >= 0) {
+    for (int i = 0; i < 3; ++i) model_->geom_size[3 * box + i] = p.body_half_size_m(i);
+    model_->geom_rbound[box] = p.body_half_size_m.norm();
+  }
 
   // cable length = the tendon's upper limit
   model_->tendon_range[2 * ids_.cable_tendon + 0] = 0.0;
   model_->tendon_range[2 * ids_.cable_tendon + 1] = p.cable_length_m;
 
-  // rotor thrust range from the motor bounds
+  // rotors: thrust range from the motor bounds, sites at the params' arm length, yaw reaction
+  // torque k_m / k_f per newton (the scene file holds the defaults; a --params file may differ)
   for (int i = 0; i < 4; ++i) {
     const int a = ids_.rotor_actuator[i];
+    const int site = model_->actuator_trnid[2 * a];
+    const Eigen::Vector3d r_B = RotorPosition_B(p, i);
+    for (int k = 0; k < 3; ++k) model_->site_pos[3 * site + k] = r_B(k);
+    model_->actuator_gear[6 * a + 5] = RotorSpin(i) * p.k_m_Nm_per_radps2 / p.k_f_N_per_radps2;
     model_->actuator_ctrlrange[2 * a + 0] =
         p.k_f_N_per_radps2 * p.motor_speed_min_radps * p.motor_speed_min_radps;
     model_->actuator_ctrlrange[2 * a + 1] =
         p.k_f_N_per_radps2 * p.motor_speed_max_radps * p.motor_speed_max_radps;
   }
+
+  // payload camera: field of view, image size, and pose in the body. MuJoCo's camera axes are
+  // (x right, y up, looking along -z): R_B,mjcam = R_BC * diag(1, -1, -1) with C OpenCV's.
+  const int cam = ids_.payload_camera;
+  model_->cam_fovy[cam] = p.camera_fovy_deg;
+  for (int k = 0; k < 3; ++k) model_->cam_pos[3 * cam + k] = p.t_BC_B_m(k);
+  const Eigen::Matrix3d R_B_mjcam = p.R_BC * Eigen::Vector3d(1, -1, -1).asDiagonal();
+  const Eigen::Quaterniond q_B_mjcam(R_B_mjcam);
+  model_->cam_quat[4 * cam + 0] = q_B_mjcam.w();
+  model_->cam_quat[4 * cam + 1] = q_B_mjcam.x();
+  model_->cam_quat[4 * cam + 2] = q_B_mjcam.y();
+  model_->cam_quat[4 * cam + 3] = q_B_mjcam.z();
+  model_->vis.global.offwidth = p.camera_width_px;
+  model_->vis.global.offheight = p.camera_height_px;
 
   // derived constants (subtree masses, invweight0 used by the constraint softness)
   mj_setConst(model_, data_);
@@ -283,7 +315,7 @@ void World::Step() {
   // re-taut into a velocity error of either twice or none of the true impulse.
   const double t_k = t0_s_ + (step_ - 1) * kPhysicsDt_s;
   imu_sum_w_B_radps_ += before.w_B;
-  imu_sum_specific_force_B_mps2_ += QuadSpecificForce_B();
+  imu_sum_specific_force_B_mps2_ += QuadSpecificForce_B(before.q_WB);
   if (++imu_sum_count_ == 2) {
     const double interval_start_s = t_k - kPhysicsDt_s;
     imu_queue_.push_back(imu_.Measure(interval_start_s, imu_sum_w_B_radps_ / imu_sum_count_,
@@ -301,9 +333,7 @@ void World::Step() {
   CheckCrash();
 }
 
-Eigen::Vector3d World::QuadSpecificForce_B() const {
-  const mjtNum* q = data_->qpos + ids_.quad_jnt_qpos + 3;
-  const Eigen::Quaterniond q_WB(q[0], q[1], q[2], q[3]);
+Eigen::Vector3d World::QuadSpecificForce_B(const Eigen::Quaterniond& q_WB) const {
   const Eigen::Vector3d a_W(data_->qacc[ids_.quad_jnt_dof], data_->qacc[ids_.quad_jnt_dof + 1],
                             data_->qacc[ids_.quad_jnt_dof + 2]);
   const Eigen::Vector3d g_W(0, 0, world_params_.gravity_mps2);

@@ -11,6 +11,7 @@
 
 #include "hpa/models/input_error.h"
 #include "hpa/models/params.h"
+#include "hpa/models/rotor_model.h"
 
 namespace hpa::sim {
 namespace {
@@ -252,6 +253,37 @@ TEST(WorldTest, OverridesChangeTheWorldOnly) {
   // inertia scaled with the mass: 2/5 m r^2
   const int payload = mj_name2id(world.model(), mjOBJ_BODY, "payload");
   EXPECT_NEAR(world.model()->body_inertia[3 * payload], 0.4 * 0.15 * 0.04 * 0.04, 1e-12);
+}
+
+}  // namespace
+}  // namespace hpa::sim
+
+namespace hpa::sim {
+namespace {
+
+// A params file other than the default must reach the world, not only the flight code: rotor
+// arms, yaw gear, payload radius and the camera all follow WorldConfig::params.
+TEST(WorldParamsTest, NonDefaultParamsReachTheModel) {
+  WorldConfig c;
+  c.params = LoadParams(DefaultParamsPath());
+  c.params.arm_length_m = 0.2;
+  c.params.k_m_Nm_per_radps2 = 3e-8;
+  c.params.payload_radius_m = 0.05;
+  c.params.camera_fovy_deg = 60.0;
+  c.params.t_BC_B_m = Eigen::Vector3d(0.01, 0.0, -0.04);
+  World world(c);
+  const mjModel* m = world.model();
+  const int act = mj_name2id(m, mjOBJ_ACTUATOR, "rotor0");
+  const int site = m->actuator_trnid[2 * act];
+  const Eigen::Vector3d r = RotorPosition_B(c.params, 0);
+  for (int k = 0; k < 3; ++k) EXPECT_DOUBLE_EQ(m->site_pos[3 * site + k], r(k));
+  EXPECT_DOUBLE_EQ(m->actuator_gear[6 * act + 5], RotorSpin(0) * 3e-8 / 1.5e-6);
+  EXPECT_DOUBLE_EQ(m->geom_size[3 * mj_name2id(m, mjOBJ_GEOM, "payload_sphere")], 0.05);
+  const int cam = mj_name2id(m, mjOBJ_CAMERA, "payload_camera");
+  EXPECT_DOUBLE_EQ(m->cam_fovy[cam], 60.0);
+  EXPECT_DOUBLE_EQ(m->cam_pos[3 * cam], 0.01);
+  // the default R_BC is the scene's camera orientation: identity quaternion (looks along -z_B)
+  EXPECT_NEAR(std::abs(m->cam_quat[4 * cam]), 1.0, 1e-12);
 }
 
 }  // namespace

@@ -16,7 +16,7 @@ struct NloptSettings {
   int max_evaluations = 400;  // cost + gradient evaluations
   double ftol_rel = 1e-10;    // relative cost change
   double xtol_rel = 1e-8;     // relative change of the (hover-normalised) rotor speeds
-  double max_time_s = 2.0;    // wall-clock cap per solve
+  double max_time_s = 0.0;    // wall-clock cap per solve; 0 = none (a cap breaks determinism)
 };
 
 /// Result of an NLopt solve.

@@ -56,7 +56,7 @@ struct Metrics {
   double retaut_quad_vz_min_mps = 0.0;       // lowest quad z velocity within 0.5 s of a re-taut
   double retaut_peak_body_rate_radps = 0.0;  // highest |w_B| within 0.5 s of a re-taut
   Quantiles mpc_solve_ms;
-  int mpc_failures = 0;
+  int mpc_failures = 0;  // updates with QP failure, non-finite or fallback (capped plans fly)
   double closed_loop_cost = 0.0;         // sum of the controller's plan costs
   Quantiles detector_ms;                 // per rendered frame, detection only
   Quantiles render_ms;                   // per rendered frame

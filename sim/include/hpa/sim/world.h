@@ -148,14 +148,15 @@ class World {
   void CheckCrash();
   void CheckWarnings();
   void LatchCrash(const std::string& reason);
-  Eigen::Vector3d QuadSpecificForce_B() const;
+  // specific force R^T (a + g e3) from qacc (time t_k) in the attitude q_WB of that same time
+  Eigen::Vector3d QuadSpecificForce_B(const Eigen::Quaterniond& q_WB) const;
 
   WorldConfig config_;
   Params world_params_;
   mjModel* model_ = nullptr;
   mjData* data_ = nullptr;
   Ids ids_{};
-  Eigen::Vector3d imu_sum_w_B_radps_ = Eigen::Vector3d::Zero();             // (3)
+  Eigen::Vector3d imu_sum_w_B_radps_ = Eigen::Vector3d::Zero();              // (3)
   Eigen::Vector3d imu_sum_specific_force_B_mps2_ = Eigen::Vector3d::Zero();  // (3)
   int imu_sum_count_ = 0;  // physics steps summed into the next IMU sample
   double t0_s_ = 0.0;
