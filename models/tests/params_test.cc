@@ -34,6 +34,33 @@ TEST(ParamsTest, DefaultFileLoadsThePaperValues) {
   EXPECT_NEAR(max_thrust_N / p.HoverThrustN(), 2.5, 0.05);
 }
 
+// Unit tests that build `Params{}` rely on the struct's defaults being params.yaml's numbers.
+TEST(ParamsTest, StructDefaultsEqualTheFile) {
+  const Params d;
+  const Params f = LoadParams(DefaultParamsPath());
+  EXPECT_EQ(d.gravity_mps2, f.gravity_mps2);
+  EXPECT_EQ(d.quad_mass_kg, f.quad_mass_kg);
+  EXPECT_EQ(d.inertia_B_kgm2, f.inertia_B_kgm2);
+  EXPECT_EQ(d.arm_length_m, f.arm_length_m);
+  EXPECT_EQ(d.body_half_size_m, f.body_half_size_m);
+  EXPECT_EQ(d.k_f_N_per_radps2, f.k_f_N_per_radps2);
+  EXPECT_EQ(d.k_m_Nm_per_radps2, f.k_m_Nm_per_radps2);
+  EXPECT_EQ(d.motor_time_constant_s, f.motor_time_constant_s);
+  EXPECT_EQ(d.motor_speed_min_radps, f.motor_speed_min_radps);
+  EXPECT_EQ(d.motor_speed_max_radps, f.motor_speed_max_radps);
+  EXPECT_EQ(d.payload_mass_kg, f.payload_mass_kg);
+  EXPECT_EQ(d.payload_radius_m, f.payload_radius_m);
+  EXPECT_EQ(d.cable_length_m, f.cable_length_m);
+  EXPECT_EQ(d.slack_epsilon_m, f.slack_epsilon_m);
+  EXPECT_EQ(d.camera_width_px, f.camera_width_px);
+  EXPECT_EQ(d.camera_height_px, f.camera_height_px);
+  EXPECT_EQ(d.camera_fovy_deg, f.camera_fovy_deg);
+  EXPECT_EQ(d.t_BC_B_m, f.t_BC_B_m);
+  EXPECT_EQ(d.R_BC, f.R_BC);
+  EXPECT_EQ(d.vio_width_px, f.vio_width_px);
+  EXPECT_EQ(d.vio_height_px, f.vio_height_px);
+}
+
 TEST(ParamsTest, UnknownKeyIsNamed) {
   std::string text = ReadDefault();
   text.replace(text.find("payload:"), 8, "payload:\n  colour: red");
