@@ -36,7 +36,9 @@ usage:
                         [--video FILE.mp4] [--video-slack-events] [--plots] [--quiet]
                         [--params FILE] [--set PATH=VALUE]...
       Runs one scenario; writes DIR/metrics.json and DIR/log.csv (one row per control step),
-      plus PNG plots with --plots and an MP4 with --video. DIR defaults to out/<scenario name>.
+      plus PNG plots with --plots and an MP4 with --video (--video-slack-events keeps only
+      the slack events; alone it writes DIR/slack_events.mp4). DIR defaults to
+      out/<scenario name>.
       TYPE: hpa_mpc | nonhybrid_mpc | geometric. --set changes one dotted key of the
       scenario (e.g. --set events.1.impulse.2=0.5); sweeps print such replay commands.
   hpa compare SCENARIO.yaml --out DIR [--controllers A,B] [--camera render|analytic]
