@@ -11,7 +11,7 @@ class HybridEstimator final : public Estimator {
   HybridEstimator(const EstimatorConfig& config, const Params& params, const SystemState& initial)
       : config_(config),
         params_(params),
-        quad_(params, config.quad_filter, QuadInitial(initial)),
+        quad_(params, config.quad_filter, QuadFilterStateFrom(initial)),
         cable_(params, config.cable_ekf, InitialXi(initial, params.cable_length_m),
                InitialXiDot(initial, params.cable_length_m), initial.time_s),
         mode_detector_(params, config.mode_detector, InitialMode(config, params, initial),
@@ -139,15 +139,6 @@ class HybridEstimator final : public Estimator {
   }
 
  private:
-  static QuadFilterState QuadInitial(const SystemState& s) {
-    QuadFilterState q;
-    q.time_s = s.time_s;
-    q.p_WB_W = s.p_WQ_W;
-    q.v_WB_W = s.v_WQ_W;
-    q.q_WB = s.q_WB;
-    q.w_B_radps = s.w_B;
-    return q;
-  }
   static Eigen::Vector3d InitialXi(const SystemState& s, double l_m) {
     const Eigen::Vector3d d = s.p_WL_W - s.p_WQ_W;
     return d.norm() > 1e-6 ? Eigen::Vector3d(d.normalized()) : Eigen::Vector3d(0, 0, -1);

@@ -7,6 +7,16 @@
 
 namespace hpa {
 
+QuadFilterState QuadFilterStateFrom(const SystemState& state) {
+  QuadFilterState q;
+  q.time_s = state.time_s;
+  q.p_WB_W = state.p_WQ_W;
+  q.v_WB_W = state.v_WQ_W;
+  q.q_WB = state.q_WB;
+  q.w_B_radps = state.w_B;
+  return q;
+}
+
 Eigen::Matrix3d Skew(const Eigen::Vector3d& v) {
   Eigen::Matrix3d s;
   s << 0, -v.z(), v.y(), v.z(), 0, -v.x(), -v.y(), v.x(), 0;

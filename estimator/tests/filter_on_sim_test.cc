@@ -62,13 +62,7 @@ SimRunResult FlyAndFilter(uint64_t seed) {
   BodyRateController rate_controller(params);
 
   // filter at the true start, as estimator.cc builds it (the World starts with zero IMU biases)
-  QuadFilterState filter_initial;
-  filter_initial.time_s = initial.time_s;
-  filter_initial.p_WB_W = initial.p_WQ_W;
-  filter_initial.v_WB_W = initial.v_WQ_W;
-  filter_initial.q_WB = initial.q_WB;
-  filter_initial.w_B_radps = initial.w_B;
-  QuadFilter filter(params, QuadFilterConfig{}, filter_initial);
+  QuadFilter filter(params, QuadFilterConfig{}, QuadFilterStateFrom(initial));
 
   SimRunResult result;
   const long end_tick = std::lround(kDuration_s / sim::World::kPhysicsDt_s);

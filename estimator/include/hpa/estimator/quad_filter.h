@@ -10,6 +10,7 @@
 #include "hpa/estimator/filter_status.h"
 #include "hpa/models/params.h"
 #include "hpa/models/sensor_types.h"
+#include "hpa/models/state.h"
 
 namespace hpa {
 
@@ -44,6 +45,9 @@ struct QuadFilterState {
   Eigen::Vector3d accel_bias_B_mps2 = Eigen::Vector3d::Zero();  // accelerometer bias  (3)
   Eigen::Vector3d w_B_radps = Eigen::Vector3d::Zero();          // bias-corrected body rate  (3)
 };
+
+/// Filter state at a known vehicle state (pose, velocity, body rate), biases zero.
+QuadFilterState QuadFilterStateFrom(const SystemState& state);
 
 using Matrix15d = Eigen::Matrix<double, 15, 15>;
 using Vector15d = Eigen::Matrix<double, 15, 1>;
