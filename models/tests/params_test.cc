@@ -6,12 +6,13 @@
 #include <fstream>
 
 #include "hpa/models/input_error.h"
+#include "models/tests/temp_dir.h"
 
 namespace hpa {
 namespace {
 
 std::string WriteTemp(const std::string& text) {
-  const std::string path = testing::TempDir() + "/params_test.yaml";
+  const std::string path = TestTempDir() + "params_test.yaml";
   std::ofstream(path) << text;
   return path;
 }

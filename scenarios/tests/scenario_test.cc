@@ -6,6 +6,7 @@
 #include <fstream>
 
 #include "hpa/models/input_error.h"
+#include "models/tests/temp_dir.h"
 
 namespace hpa {
 namespace {
@@ -13,7 +14,7 @@ namespace {
 const std::string kDir = std::string(HPA_SOURCE_DIR) + "/scenarios";
 
 std::string Write(const std::string& name, const std::string& text) {
-  const std::string path = testing::TempDir() + "/" + name;
+  const std::string path = TestTempDir() + name;
   std::ofstream(path) << text;
   return path;
 }

@@ -7,12 +7,13 @@
 #include <set>
 
 #include "hpa/models/input_error.h"
+#include "models/tests/temp_dir.h"
 
 namespace hpa {
 namespace {
 
 std::string Write(const std::string& name, const std::string& text) {
-  const std::string path = testing::TempDir() + "/" + name;
+  const std::string path = TestTempDir() + name;
   std::ofstream(path) << text;
   return path;
 }

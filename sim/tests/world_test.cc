@@ -12,6 +12,7 @@
 #include "hpa/models/input_error.h"
 #include "hpa/models/params.h"
 #include "hpa/models/rotor_model.h"
+#include "models/tests/temp_dir.h"
 
 namespace hpa::sim {
 namespace {
@@ -38,7 +39,7 @@ TEST(WorldTest, MissingSceneIsAnInputErrorNamingTheFile) {
 }
 
 TEST(WorldTest, MalformedSceneIsAnInputErrorNamingTheFile) {
-  const std::string path = testing::TempDir() + "/bad_scene.xml";
+  const std::string path = TestTempDir() + "bad_scene.xml";
   std::ofstream(path) << "<mujoco><worldbody><body name='quadrotor'><geom type='box'/>";
   WorldConfig c = DefaultConfig();
   c.scene_path = path;
@@ -51,7 +52,7 @@ TEST(WorldTest, MalformedSceneIsAnInputErrorNamingTheFile) {
 }
 
 TEST(WorldTest, SceneWithoutTheCableIsAnInputError) {
-  const std::string path = testing::TempDir() + "/no_cable.xml";
+  const std::string path = TestTempDir() + "no_cable.xml";
   std::ofstream(path) << "<mujoco><option timestep='0.001'/><worldbody>"
                          "<body name='quadrotor'><freejoint name='quadrotor_joint'/>"
                          "<geom type='box' size='.1 .1 .03'/></body></worldbody></mujoco>";
