@@ -15,6 +15,7 @@ packages=(
   libgtest-dev libgmock-dev  # unit and integration tests
   libbenchmark-dev         # mpc_bench and other benchmarks
   parallel                 # shard sweeps across processes/machines (CI runs two shards)
+  slurm-wlm munge          # a single-node Slurm cluster: the job-array sweep test
 )
 
 if [ "$(id -u)" -ne 0 ]; then

@@ -22,3 +22,8 @@ set_tests_properties(cli.contract PROPERTIES LABELS cli TIMEOUT 600)
 add_test(NAME cli.sweep
          COMMAND bash ${SCEN}/tests/sweep_cli_test.sh ${HPA_BIN} ${SCEN} ${SCEN_OUT}/sweep)
 set_tests_properties(cli.sweep PROPERTIES LABELS cli TIMEOUT 900)
+
+# A real single-node Slurm cluster on localhost runs a sweep as a job array (README's recipe)
+add_test(NAME cli.slurm
+         COMMAND bash ${SCEN}/tests/slurm_sweep_test.sh ${HPA_BIN} ${SCEN} ${SCEN_OUT}/slurm)
+set_tests_properties(cli.slurm PROPERTIES LABELS "cli;slurm" TIMEOUT 600 RUN_SERIAL TRUE)
