@@ -28,3 +28,7 @@ echo "== full build"
 echo "== tests"
 cd build
 ctest --output-on-failure -j "$(nproc)" --timeout 900
+
+echo "== sanitizers (ASan + UBSan) and fuzzing"
+cd ..
+./ci/sanitize.sh 60

@@ -22,6 +22,16 @@ YamlMap::YamlMap(YAML::Node node, std::string file, std::string path)
   if (!node_.IsMap()) {
     throw InputError(file_, path_, "expected a map of keys");
   }
+  // every key a plain scalar, each once: yaml-cpp keeps complex keys (`? [a]: 1`) and lets the
+  // first of two equal keys win silently
+  std::set<std::string> seen;
+  for (const auto& kv : node_) {
+    if (!kv.first.IsScalar()) {
+      throw InputError(file_, path_, "a key must be a plain name, not a list or map");
+    }
+    const std::string key = kv.first.Scalar();
+    if (!seen.insert(key).second) throw InputError(file_, KeyPath(key), "duplicate key");
+  }
 }
 
 YamlMap YamlMap::LoadFile(const std::string& file) {
@@ -143,7 +153,7 @@ YAML::Node YamlMap::Node(const std::string& key) const { return Get(key); }
 
 void YamlMap::RejectUnknownKeys() const {
   for (const auto& kv : node_) {
-    const std::string key = kv.first.as<std::string>();
+    const std::string key = kv.first.Scalar();
     if (read_.count(key) == 0) Fail(key, "unknown key");
   }
 }
