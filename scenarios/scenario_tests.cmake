@@ -5,15 +5,20 @@ set(SCEN ${CMAKE_CURRENT_SOURCE_DIR})
 set(SCEN_OUT ${CMAKE_BINARY_DIR}/scenario_out)
 
 foreach(file
-    hover lissajous_T5 lissajous_T4 lissajous_T3_5 hover_gripper_pull line_impulse
+    hover lissajous_T5 lissajous_T4 lissajous_T3_5 lissajous_T5_wind hover_gripper_pull line_impulse
     person_moves_payload person_moves_payload_no_perception
     ci/hover_gripper_pull_nonhybrid ci/line_impulse_nonhybrid ci/lissajous_T5_onboard
     ci/hover_hpa_mpc_truth ci/gripper_pull_truth)
   string(REPLACE "/" "_" name ${file})
   add_test(NAME scenario.${name}
            COMMAND ${HPA_BIN} run ${SCEN}/${file}.yaml --out ${SCEN_OUT}/${name} --quiet)
-  set_tests_properties(scenario.${name} PROPERTIES LABELS scenario TIMEOUT 600)
+  set_tests_properties(scenario.${name} PROPERTIES LABELS scenario TIMEOUT 600
+                       FIXTURES_SETUP scenario_metrics)
 endforeach()
+
+# Change indication: the metrics just written by the scenario tests against scenarios/ci/golden.json
+add_test(NAME cli.golden COMMAND ${HPA_BIN} golden --from ${SCEN_OUT} --quiet)
+set_tests_properties(cli.golden PROPERTIES LABELS cli FIXTURES_REQUIRED scenario_metrics)
 
 # CLI contracts: exit codes, error messages, determinism, render-frame, sweeps
 add_test(NAME cli.contract

@@ -15,6 +15,7 @@
 #include "hpa/models/input_error.h"
 #include "hpa/models/params.h"
 #include "hpa/models/yaml_reader.h"
+#include "hpa/scenarios/golden.h"
 #include "hpa/scenarios/plots.h"
 #include "hpa/scenarios/runner.h"
 #include "hpa/scenarios/sweep.h"
@@ -315,7 +316,7 @@ int Main(int argc, char** argv) {
     return argc < 2 ? kExitBadInput : kExitOk;
   }
   const std::string command = argv[1];
-  for (int i = 2; i < argc; ++i) {
+  for (int i = 2; i < argc && command != "golden"; ++i) {
     if (!std::strcmp(argv[i], "--help") || !std::strcmp(argv[i], "-h")) {
       std::fputs(kUsage, stdout);
       return kExitOk;
@@ -327,6 +328,7 @@ int Main(int argc, char** argv) {
     if (command == "render-frame") return RenderFrame(argc, argv);
     if (command == "sweep") return SweepMain(argc, argv);
     if (command == "merge") return MergeMain(argc, argv);
+    if (command == "golden") return GoldenMain(argc, argv);
     throw InputError("", "", "unknown command '" + command + "' (see hpa --help)");
   } catch (const InputError& e) {
     std::fprintf(stderr, "hpa: error: %s\n", e.what());

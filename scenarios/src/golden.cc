@@ -1,0 +1,241 @@
+#include "hpa/scenarios/golden.h"
+
+#include <CLI/CLI.hpp>
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#include "hpa/models/input_error.h"
+#include "hpa/models/params.h"
+#include "hpa/scenarios/metrics.h"
+#include "hpa/scenarios/runner.h"
+#include "hpa/scenarios/scenario.h"
+
+namespace hpa {
+namespace {
+
+using Json = nlohmann::json;
+namespace fs = std::filesystem;
+
+const std::string kScenariosDir = std::string(HPA_SOURCE_DIR) + "/scenarios";
+
+// Fields that measure the machine, not the behaviour.
+bool IsTimingKey(const std::string& key) {
+  return key == "wall_time_s" || key == "mpc_solve_ms" || key == "render_ms" ||
+         key == "detector_ms" || key == "image_model_ms";
+}
+
+Json StripTiming(Json metrics) {
+  for (auto it = metrics.begin(); it != metrics.end();) {
+    it = IsTimingKey(it.key()) ? metrics.erase(it) : std::next(it);
+  }
+  return metrics;
+}
+
+std::string ReadText(const std::string& path, const std::string& what) {
+  std::ifstream in(path);
+  if (!in) throw InputError(path, "", "cannot read " + what);
+  std::stringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+Json ParseJson(const std::string& text, const std::string& file) {
+  try {
+    return Json::parse(text);
+  } catch (const Json::exception& e) {
+    throw InputError(file, "", std::string("invalid JSON: ") + e.what());
+  }
+}
+
+// Tolerance of a dotted key: the entry for the key without list indices, else the default.
+std::pair<double, double> ToleranceOf(const Json& tolerances, const std::string& path) {
+  std::string key;
+  std::stringstream parts(path);
+  for (std::string part; std::getline(parts, part, '.');) {
+    if (!part.empty() && std::all_of(part.begin(), part.end(), ::isdigit)) continue;
+    key += (key.empty() ? "" : ".") + part;
+  }
+  const Json& entry = tolerances.contains("keys") && tolerances["keys"].contains(key)
+                          ? tolerances["keys"][key]
+                          : tolerances["default"];
+  return {entry.value("rel", 0.0), entry.value("abs", 0.0)};
+}
+
+std::string Text(const Json& v) {
+  std::ostringstream out;
+  if (v.is_number_float()) {
+    out.precision(9);
+    out << v.get<double>();
+  } else {
+    out << v.dump();
+  }
+  return out.str();
+}
+
+void Compare(const Json& now, const Json& golden, const std::string& path, const Json& tolerances,
+             GoldenDiff* diff) {
+  if (now.is_object() && golden.is_object()) {
+    for (const auto& [key, value] : golden.items()) {
+      const std::string sub = path.empty() ? key : path + "." + key;
+      if (!now.contains(key)) {
+        diff->changes.push_back(sub + ": missing (golden " + Text(value) + ")");
+      } else {
+        Compare(now[key], value, sub, tolerances, diff);
+      }
+    }
+    for (const auto& [key, value] : now.items()) {
+      if (!golden.contains(key)) diff->new_keys.push_back(path.empty() ? key : path + "." + key);
+    }
+    return;
+  }
+  if (now.is_array() && golden.is_array() && now.size() == golden.size()) {
+    for (size_t i = 0; i < now.size(); ++i) {
+      Compare(now[i], golden[i], path + "." + std::to_string(i), tolerances, diff);
+    }
+    return;
+  }
+  if (now.is_number_float() || golden.is_number_float()) {
+    if (now.is_number() && golden.is_number()) {
+      const double a = now.get<double>(), b = golden.get<double>();
+      const auto [rel, abs] = ToleranceOf(tolerances, path);
+      const double tolerance = abs + rel * std::max(std::fabs(a), std::fabs(b));
+      if (std::fabs(a - b) > tolerance) {
+        std::ostringstream line;
+        line.precision(3);
+        line << path << ": " << Text(golden) << " -> " << Text(now) << " (tolerance " << tolerance
+             << ")";
+        diff->changes.push_back(line.str());
+      }
+      return;
+    }
+  }
+  if (now != golden) diff->changes.push_back(path + ": " + Text(golden) + " -> " + Text(now));
+}
+
+// The current metrics of one golden scenario: read from `from_dir` or run here.
+Json CurrentMetrics(const std::string& name, const GoldenOptions& options, const Params& params) {
+  if (!options.from_dir.empty()) {
+    std::string flat = name;
+    std::replace(flat.begin(), flat.end(), '/', '_');
+    const std::string path = options.from_dir + "/" + flat + "/metrics.json";
+    return ParseJson(ReadText(path, "the metrics of " + name), path);
+  }
+  const Scenario scenario = LoadScenario(kScenariosDir + "/" + name + ".yaml");
+  const RunResult result = RunScenario(scenario, params, RunOptions{});
+  return Json::parse(MetricsToJson(result.metrics));
+}
+
+}  // namespace
+
+std::vector<std::string> GoldenScenarioNames() {
+  std::vector<std::string> names;
+  for (const std::string sub : {"", "ci/"}) {
+    for (const auto& entry : fs::directory_iterator(kScenariosDir + "/" + sub)) {
+      if (entry.path().extension() == ".yaml") names.push_back(sub + entry.path().stem().string());
+    }
+  }
+  std::sort(names.begin(), names.end());
+  return names;
+}
+
+GoldenDiff CompareWithGolden(const std::string& metrics_json, const std::string& golden_json,
+                             const std::string& tolerances_json) {
+  GoldenDiff diff;
+  Compare(StripTiming(Json::parse(metrics_json)), StripTiming(Json::parse(golden_json)), "",
+          Json::parse(tolerances_json), &diff);
+  return diff;
+}
+
+int RunGolden(const GoldenOptions& options) {
+  const std::string path =
+      options.golden_path.empty() ? kScenariosDir + "/ci/golden.json" : options.golden_path;
+  Json golden = ParseJson(ReadText(path, "the golden file"), path);
+  if (!golden.contains("tolerances") || !golden["tolerances"].contains("default")) {
+    throw InputError(path, "tolerances.default", "missing: {\"rel\": ..., \"abs\": ...}");
+  }
+  if (options.update && options.reason.empty()) {
+    throw InputError("--reason", "", "an update needs a one-line reason");
+  }
+  const Params params = LoadParams(std::string(HPA_SOURCE_DIR) + "/models/params.yaml");
+  const std::vector<std::string> names = GoldenScenarioNames();
+
+  int changed = 0;
+  Json updated = Json::object();
+  for (const std::string& name : names) {
+    if (!options.quiet) std::cerr << "golden: " << name << " ..." << std::flush;
+    const Json now = StripTiming(CurrentMetrics(name, options, params));
+    updated[name] = now;
+    if (!golden["scenarios"].contains(name)) {
+      if (!options.quiet) std::cerr << " not in the golden file\n";
+      if (!options.update) ++changed;
+      continue;
+    }
+    GoldenDiff diff;
+    Compare(now, golden["scenarios"][name], "", golden["tolerances"], &diff);
+    if (!options.quiet) std::cerr << (diff.changes.empty() ? " unchanged\n" : " CHANGED\n");
+    for (const std::string& c : diff.changes) std::cout << name << ": " << c << "\n";
+    if (!diff.new_keys.empty() && !options.update) {
+      std::cout << name << ": new keys (not in the golden copy): ";
+      for (const std::string& k : diff.new_keys) std::cout << k << " ";
+      std::cout << "\n";
+    }
+    if (!diff.changes.empty()) ++changed;
+  }
+  for (const auto& [name, value] : golden["scenarios"].items()) {
+    if (!updated.contains(name)) {
+      std::cout << name << ": in the golden file but no longer shipped\n";
+      if (!options.update) ++changed;
+    }
+  }
+
+  if (options.update) {
+    golden["scenarios"] = updated;
+    golden["reason"] = options.reason;
+    std::ofstream out(path);
+    out << golden.dump(1) << "\n";
+    if (!out.flush()) throw std::runtime_error("cannot write " + path);
+    std::cout << "golden: wrote " << names.size() << " scenarios to " << path
+              << " (commit it with the reason: " << options.reason << ")\n";
+    return 0;
+  }
+  if (changed > 0) {
+    std::cout << "golden: " << changed << " of " << names.size()
+              << " scenarios changed beyond tolerance; if deliberate, run `hpa golden --update "
+                 "--reason \"...\"` and commit the file\n";
+    return 1;
+  }
+  std::cout << "golden: all " << names.size() << " scenarios within tolerance of " << path << "\n";
+  return 0;
+}
+
+int GoldenMain(int argc, char** argv) {
+  GoldenOptions options;
+  CLI::App app{
+      "Compares the metrics of every shipped scenario (scenarios/*.yaml, scenarios/ci/*.yaml; "
+      "own seed and controller) with the committed golden file; exit 1 lists every change "
+      "beyond its tolerance. --update rewrites the file (commit it with the reason).",
+      "hpa golden"};
+  app.add_option("--golden", options.golden_path, "golden file")
+      ->default_str("scenarios/ci/golden.json");
+  app.add_option("--from", options.from_dir,
+                 "read DIR/<name>/metrics.json (e.g. ctest's build/scenario_out) instead of "
+                 "running the scenarios");
+  app.add_flag("--update", options.update, "rewrite the golden file from the current metrics");
+  app.add_option("--reason", options.reason, "one line: why the behaviour changed (--update)");
+  app.add_flag("--quiet", options.quiet, "no progress lines");
+  try {
+    app.parse(argc - 1, argv + 1);
+  } catch (const CLI::CallForHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::ParseError& e) {
+    throw InputError("hpa golden", "", e.what());
+  }
+  return RunGolden(options);
+}
+
+}  // namespace hpa

@@ -1,0 +1,76 @@
+// Golden-file comparison: what counts as a change.
+
+#include "hpa/scenarios/golden.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <fstream>
+#include <nlohmann/json.hpp>
+
+namespace hpa {
+namespace {
+
+const char* kTolerances = R"({"default": {"rel": 1e-3, "abs": 1e-9},
+                              "keys": {"mode_accuracy": {"abs": 0.01}}})";
+
+TEST(GoldenTest, ValuesWithinToleranceAreUnchanged) {
+  const GoldenDiff d =
+      CompareWithGolden(R"({"payload_rmse_m": [0.10005, 0.2], "crashed": false})",
+                        R"({"payload_rmse_m": [0.1, 0.2], "crashed": false})", kTolerances);
+  EXPECT_TRUE(d.changes.empty());
+}
+
+TEST(GoldenTest, ChangeBeyondToleranceIsReportedWithItsPath) {
+  const GoldenDiff d = CompareWithGolden(R"({"payload_rmse_m": [0.1002, 0.2]})",
+                                         R"({"payload_rmse_m": [0.1, 0.2]})", kTolerances);
+  ASSERT_EQ(d.changes.size(), 1u);
+  EXPECT_NE(d.changes[0].find("payload_rmse_m.0"), std::string::npos) << d.changes[0];
+}
+
+TEST(GoldenTest, PerKeyToleranceAppliesToThatKeyOnly) {
+  EXPECT_TRUE(
+      CompareWithGolden(R"({"mode_accuracy": 0.975})", R"({"mode_accuracy": 0.98})", kTolerances)
+          .changes.empty());
+  EXPECT_EQ(
+      CompareWithGolden(R"({"slack_time_s": 0.975})", R"({"slack_time_s": 0.98})", kTolerances)
+          .changes.size(),
+      1u);
+}
+
+TEST(GoldenTest, IntegersStringsBooleansAndNullsCompareExactly) {
+  EXPECT_EQ(CompareWithGolden(R"({"mpc_failures": 1})", R"({"mpc_failures": 0})", kTolerances)
+                .changes.size(),
+            1u);
+  EXPECT_EQ(CompareWithGolden(R"({"crashed": true})", R"({"crashed": false})", kTolerances)
+                .changes.size(),
+            1u);
+  EXPECT_EQ(
+      CompareWithGolden(R"({"crash_reason": "tilt"})", R"({"crash_reason": null})", kTolerances)
+          .changes.size(),
+      1u);
+}
+
+TEST(GoldenTest, TimingIgnoredMissingKeyChangedNewKeyListed) {
+  const GoldenDiff d = CompareWithGolden(
+      R"({"wall_time_s": 9, "mpc_solve_ms": {"median": 3}, "added": 1})",
+      R"({"wall_time_s": 1, "mpc_solve_ms": {"median": 1}, "gone": 2})", kTolerances);
+  ASSERT_EQ(d.changes.size(), 1u);
+  EXPECT_NE(d.changes[0].find("gone"), std::string::npos);
+  ASSERT_EQ(d.new_keys.size(), 1u);
+  EXPECT_EQ(d.new_keys[0], "added");
+}
+
+TEST(GoldenTest, EveryShippedScenarioIsInTheCommittedGoldenFile) {
+  std::ifstream in(std::string(HPA_SOURCE_DIR) + "/scenarios/ci/golden.json");
+  const nlohmann::json golden = nlohmann::json::parse(in);
+  const auto names = GoldenScenarioNames();
+  EXPECT_NE(std::find(names.begin(), names.end(), "ci/gripper_pull_truth"), names.end());
+  for (const std::string& name : names) {
+    EXPECT_TRUE(golden["scenarios"].contains(name)) << name << ": run hpa golden --update";
+  }
+  EXPECT_EQ(golden["scenarios"].size(), names.size());
+}
+
+}  // namespace
+}  // namespace hpa
