@@ -32,3 +32,8 @@ set_tests_properties(cli.sweep PROPERTIES LABELS cli TIMEOUT 900)
 add_test(NAME cli.slurm
          COMMAND bash ${SCEN}/tests/slurm_sweep_test.sh ${HPA_BIN} ${SCEN} ${SCEN_OUT}/slurm)
 set_tests_properties(cli.slurm PROPERTIES LABELS "cli;slurm" TIMEOUT 600 RUN_SERIAL TRUE)
+
+# Paired sweep comparison: finds a deliberate regression, finds nothing between identical runs
+add_test(NAME cli.sweep_diff
+         COMMAND bash ${SCEN}/tests/sweep_diff_cli_test.sh ${HPA_BIN} ${SCEN} ${SCEN_OUT}/sweep_diff)
+set_tests_properties(cli.sweep_diff PROPERTIES LABELS cli TIMEOUT 600)

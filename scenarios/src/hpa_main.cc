@@ -19,6 +19,7 @@
 #include "hpa/scenarios/plots.h"
 #include "hpa/scenarios/runner.h"
 #include "hpa/scenarios/sweep.h"
+#include "hpa/scenarios/sweep_diff.h"
 #include "hpa/sim/world.h"
 
 namespace hpa {
@@ -316,7 +317,7 @@ int Main(int argc, char** argv) {
     return argc < 2 ? kExitBadInput : kExitOk;
   }
   const std::string command = argv[1];
-  for (int i = 2; i < argc && command != "golden"; ++i) {
+  for (int i = 2; i < argc && command != "golden" && command != "sweep-diff"; ++i) {
     if (!std::strcmp(argv[i], "--help") || !std::strcmp(argv[i], "-h")) {
       std::fputs(kUsage, stdout);
       return kExitOk;
@@ -329,6 +330,7 @@ int Main(int argc, char** argv) {
     if (command == "sweep") return SweepMain(argc, argv);
     if (command == "merge") return MergeMain(argc, argv);
     if (command == "golden") return GoldenMain(argc, argv);
+    if (command == "sweep-diff") return SweepDiffMain(argc, argv);
     throw InputError("", "", "unknown command '" + command + "' (see hpa --help)");
   } catch (const InputError& e) {
     std::fprintf(stderr, "hpa: error: %s\n", e.what());

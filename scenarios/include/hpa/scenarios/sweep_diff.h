@@ -1,0 +1,55 @@
+#pragma once
+// `hpa sweep-diff A B`: a paired comparison of two sweep outputs whose runs pair up (same draws
+// and seeds: the same sweep on two builds, or two sweeps that differ in one setting). Per metric:
+// the paired difference B - A with a 95 % bootstrap interval, a p-value (Wilcoxon signed-rank
+// for continuous metrics, exact McNemar for crash and expect-failure rates) and a verdict.
+
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace hpa {
+
+/// Two-sided exact McNemar p-value from the discordant pair counts (A only, B only).
+double McNemarPValue(int a_only, int b_only);
+
+/// Two-sided Wilcoxon signed-rank p-value of paired differences (zeros dropped; exact for up
+/// to 25 non-zero differences, normal approximation with tie correction above).
+double SignedRankPValue(const std::vector<double>& differences);
+
+/// 95 % percentile-bootstrap interval of the mean of `differences` (deterministic: fixed seed).
+std::pair<double, double> BootstrapMeanCi(const std::vector<double>& differences,
+                                          int resamples = 4000);
+
+/// One metric's comparison.
+struct MetricDiff {
+  std::string name;
+  bool higher_is_better = false;
+  int pairs = 0;                         // pairs in which both runs have the metric
+  double a = 0.0, b = 0.0;               // means over those pairs
+  double difference = 0.0;               // mean of b - a
+  std::pair<double, double> ci95{0, 0};  // of the difference
+  double p_value = 1.0;
+  std::string verdict = "same";  // better | worse | same (B relative to A, at 95 %)
+};
+
+/// What `hpa sweep-diff` compares.
+struct SweepDiffOptions {
+  std::string a_dir, b_dir, out_dir;
+  std::string a_where, b_where;  // optional KEY=VALUE filters on the runs' varied values
+};
+
+/// The comparison of two loaded sweep outputs.
+struct SweepDiff {
+  int runs_paired = 0;
+  std::vector<std::string> differs;  // what differs between A and B ("controller.type: x vs y")
+  std::vector<MetricDiff> metrics;
+};
+
+/// Pairs the runs of A and B and compares them; throws InputError if they do not pair.
+SweepDiff CompareSweeps(const SweepDiffOptions& options);
+
+/// `hpa sweep-diff` entry point (argv[1] is "sweep-diff"); writes diff.json, diff.md, diff.png.
+int SweepDiffMain(int argc, char** argv);
+
+}  // namespace hpa

@@ -1,0 +1,444 @@
+#include "hpa/scenarios/sweep_diff.h"
+
+#include <CLI/CLI.hpp>
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <functional>
+#include <iostream>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <numeric>
+#include <opencv2/imgcodecs.hpp>
+#include <optional>
+#include <random>
+#include <set>
+#include <sstream>
+
+#include "hpa/models/input_error.h"
+#include "hpa/scenarios/metrics.h"
+#include "hpa/scenarios/plot_canvas.h"
+
+namespace hpa {
+namespace {
+
+using Json = nlohmann::json;
+
+// One runs.jsonl record reduced to what the comparison needs.
+struct Run {
+  int draw = 0;
+  unsigned long seed = 0;
+  std::map<std::string, std::string> values;  // varied key -> value as JSON text
+  bool ok = false;                            // finished without a run error
+  Json metrics;                               // null if none
+  std::string sweep;
+};
+
+// A metric read from one run; nullopt where the run does not define it.
+struct MetricDef {
+  std::string name;
+  bool higher_is_better;
+  bool binary;  // a rate: 0/1 per run, compared with McNemar
+  std::function<std::optional<double>(const Run&)> read;
+};
+
+std::optional<double> Number(const Json& j) {
+  if (j.is_number()) return j.get<double>();
+  return std::nullopt;
+}
+
+bool Crashed(const Run& r) {
+  return !r.ok || r.metrics.is_null() || r.metrics.value("crashed", false);
+}
+
+// Continuous metrics are read only from runs that finished without a crash.
+std::function<std::optional<double>(const Run&)> Field(
+    std::function<std::optional<double>(const Json&)> read) {
+  return [read](const Run& r) -> std::optional<double> {
+    if (Crashed(r)) return std::nullopt;
+    return read(r.metrics);
+  };
+}
+
+const std::vector<MetricDef>& MetricDefs() {
+  static const std::vector<MetricDef> defs = {
+      {"crash_rate", false, true,
+       [](const Run& r) -> std::optional<double> { return Crashed(r) ? 1.0 : 0.0; }},
+      {"expect_failure_rate", false, true,
+       [](const Run& r) -> std::optional<double> {
+         if (!r.ok || r.metrics.is_null()) return 1.0;
+         return r.metrics["expect"].value("passed", true) ? 0.0 : 1.0;
+       }},
+      {"payload_rmse_norm_m", false, false, Field([](const Json& m) -> std::optional<double> {
+         const Json& v = m["payload_rmse_m"];
+         if (!v.is_array() || v.size() != 3 || !v[0].is_number()) return std::nullopt;
+         return std::hypot(v[0].get<double>(), v[1].get<double>(), v[2].get<double>());
+       })},
+      {"quad_position_deviation_max_m", false, false,
+       Field([](const Json& m) { return Number(m["quad_position_deviation_max_m"]); })},
+      {"payload_in_fov_fraction", true, false,
+       Field([](const Json& m) { return Number(m["payload_in_fov_fraction"]); })},
+      {"mode_accuracy", true, false,
+       Field([](const Json& m) { return Number(m["mode_accuracy"]); })},
+      {"retaut_quad_vz_min_mps", true, false,
+       Field([](const Json& m) { return Number(m["retaut"]["quad_vz_min_mps"]); })},
+      {"retaut_peak_body_rate_radps", false, false,
+       Field([](const Json& m) { return Number(m["retaut"]["peak_body_rate_radps"]); })},
+      {"mpc_solve_median_ms", false, false,
+       Field([](const Json& m) { return Number(m["mpc_solve_ms"]["median"]); })},
+  };
+  return defs;
+}
+
+std::vector<Run> ReadRuns(const std::string& dir, const std::string& where) {
+  const std::string path = dir + "/runs.jsonl";
+  std::ifstream in(path);
+  if (!in) throw InputError(path, "", "cannot read (not a sweep output folder?)");
+  std::string filter_key, filter_value;
+  if (!where.empty()) {
+    const size_t eq = where.find('=');
+    if (eq == std::string::npos || eq == 0) {
+      throw InputError("--a-where/--b-where", "", "expected KEY=VALUE, got '" + where + "'");
+    }
+    filter_key = where.substr(0, eq);
+    filter_value = where.substr(eq + 1);
+  }
+  std::vector<Run> runs;
+  std::string line;
+  for (int number = 1; std::getline(in, line); ++number) {
+    if (line.empty()) continue;
+    Json j;
+    try {
+      j = Json::parse(line);
+    } catch (const Json::exception& e) {
+      throw InputError(path, "line " + std::to_string(number), e.what());
+    }
+    Run r;
+    r.draw = j.value("draw", 0);
+    r.seed = j.value("seed", 0ul);
+    r.sweep = j.value("sweep", "");
+    for (const auto& [key, value] : j["values"].items()) {
+      r.values[key] = value.is_string() ? value.get<std::string>() : value.dump();
+    }
+    r.ok = j.value("status", "") == "ok";
+    r.metrics = j.contains("metrics") ? j["metrics"] : Json();
+    if (!filter_key.empty()) {
+      const auto it = r.values.find(filter_key);
+      if (it == r.values.end() || it->second != filter_value) continue;
+    }
+    runs.push_back(std::move(r));
+  }
+  if (runs.empty()) throw InputError(path, where, "no runs (after the filter)");
+  return runs;
+}
+
+// Keys whose set of values differs between A and B: the setting being compared.
+std::set<std::string> DifferingKeys(const std::vector<Run>& a, const std::vector<Run>& b) {
+  std::map<std::string, std::set<std::string>> va, vb;
+  for (const Run& r : a) {
+    for (const auto& [k, v] : r.values) va[k].insert(v);
+  }
+  for (const Run& r : b) {
+    for (const auto& [k, v] : r.values) vb[k].insert(v);
+  }
+  std::set<std::string> keys;
+  for (const auto& [k, v] : va) {
+    if (!vb.count(k) || vb[k] != v) keys.insert(k);
+  }
+  for (const auto& [k, v] : vb) {
+    if (!va.count(k)) keys.insert(k);
+  }
+  return keys;
+}
+
+std::string PairKey(const Run& r, const std::set<std::string>& ignore) {
+  std::ostringstream key;
+  key << r.draw << "/" << r.seed;
+  for (const auto& [k, v] : r.values) {
+    if (!ignore.count(k)) key << "|" << k << "=" << v;
+  }
+  return key.str();
+}
+
+std::string Fixed(double v, int digits = 4) {
+  std::ostringstream out;
+  out.precision(digits);
+  out << v;
+  return out.str();
+}
+
+Json NumberOrNull(double v) { return std::isfinite(v) ? Json(v) : Json(); }
+
+void WriteOutputs(const SweepDiff& diff, const SweepDiffOptions& options) {
+  MakeOutputDir(options.out_dir);
+  Json j;
+  j["a"] = options.a_dir;
+  j["b"] = options.b_dir;
+  j["runs_paired"] = diff.runs_paired;
+  j["differs"] = diff.differs;
+  j["metrics"] = Json::object();
+  for (const MetricDiff& m : diff.metrics) {
+    j["metrics"][m.name] = {{"pairs", m.pairs},
+                            {"a", NumberOrNull(m.a)},
+                            {"b", NumberOrNull(m.b)},
+                            {"difference", NumberOrNull(m.difference)},
+                            {"ci95", {NumberOrNull(m.ci95.first), NumberOrNull(m.ci95.second)}},
+                            {"p_value", NumberOrNull(m.p_value)},
+                            {"higher_is_better", m.higher_is_better},
+                            {"verdict", m.verdict}};
+  }
+  std::ofstream json(options.out_dir + "/diff.json");
+  json << j.dump(1) << "\n";
+
+  std::ofstream md(options.out_dir + "/diff.md");
+  md << "# sweep-diff: B = `" << options.b_dir << "` against A = `" << options.a_dir << "`\n\n"
+     << diff.runs_paired << " paired runs. What differs: "
+     << (diff.differs.empty() ? std::string("nothing in the varied values (same sweep)") : "")
+     << "\n";
+  for (const std::string& d : diff.differs) md << "- " << d << "\n";
+  md << "\nDifference = B - A over the pairs where both runs define the metric (continuous "
+        "metrics: runs that did not crash). 95 % interval: paired bootstrap of the mean. "
+        "p: Wilcoxon signed-rank (continuous) or exact McNemar (rates). Verdict at p < 0.05.\n\n"
+     << "| metric | pairs | A | B | B - A | 95 % CI | p | verdict |\n"
+     << "|---|---|---|---|---|---|---|---|\n";
+  for (const MetricDiff& m : diff.metrics) {
+    md << "| " << m.name << (m.higher_is_better ? " (higher is better)" : "") << " | " << m.pairs
+       << " | " << Fixed(m.a) << " | " << Fixed(m.b) << " | " << Fixed(m.difference) << " | ["
+       << Fixed(m.ci95.first) << ", " << Fixed(m.ci95.second) << "] | " << Fixed(m.p_value, 3)
+       << " | **" << m.verdict << "** |\n";
+  }
+
+  // one small panel per metric: the difference with its interval against zero
+  const int cols = 3, w = 420, h = 260;
+  const int rows = (static_cast<int>(diff.metrics.size()) + cols - 1) / cols;
+  cv::Mat fig = BlankFigure(cols * w, rows * h);
+  for (size_t i = 0; i < diff.metrics.size(); ++i) {
+    const MetricDiff& m = diff.metrics[i];
+    const cv::Scalar colour = m.verdict == "better"  ? cv::Scalar(60, 160, 40)
+                              : m.verdict == "worse" ? cv::Scalar(40, 40, 210)
+                                                     : cv::Scalar(120, 120, 120);
+    PlotPanel p(&fig,
+                cv::Rect(static_cast<int>(i % cols) * w, static_cast<int>(i / cols) * h, w, h),
+                m.name, "B - A: " + m.verdict + " (p = " + Fixed(m.p_value, 2) + ")", "");
+    const double lo = std::min({m.ci95.first, m.difference, 0.0});
+    const double hi = std::max({m.ci95.second, m.difference, 0.0});
+    const double pad = hi > lo ? 0.15 * (hi - lo) : 0.01;
+    p.SetRange(-1.0, 1.0, lo - pad, hi + pad);
+    p.DrawAxes();
+    p.Line({-1.0, 1.0}, {0.0, 0.0}, cv::Scalar(0, 0, 0), true);
+    p.ErrorBars({0.0}, {m.difference}, {m.ci95.first}, {m.ci95.second}, colour);
+  }
+  cv::imwrite(options.out_dir + "/diff.png", fig);
+}
+
+}  // namespace
+
+double McNemarPValue(int a_only, int b_only) {
+  const int n = a_only + b_only;
+  if (n == 0) return 1.0;
+  const int k = std::min(a_only, b_only);
+  double tail = 0.0;  // P(X <= k), X ~ Binomial(n, 1/2), summed in logs
+  for (int i = 0; i <= k; ++i) {
+    tail += std::exp(std::lgamma(n + 1.0) - std::lgamma(i + 1.0) - std::lgamma(n - i + 1.0) -
+                     n * std::log(2.0));
+  }
+  return std::min(1.0, 2.0 * tail);
+}
+
+double SignedRankPValue(const std::vector<double>& differences) {
+  std::vector<double> d;
+  for (double x : differences) {
+    if (x != 0.0 && std::isfinite(x)) d.push_back(x);
+  }
+  const int n = static_cast<int>(d.size());
+  if (n == 0) return 1.0;
+  // mid-ranks of |d| (ties share their average rank)
+  std::vector<int> order(n);
+  std::iota(order.begin(), order.end(), 0);
+  std::sort(order.begin(), order.end(),
+            [&](int i, int j) { return std::fabs(d[i]) < std::fabs(d[j]); });
+  std::vector<double> rank(n);
+  double tie_term = 0.0;
+  for (int i = 0; i < n;) {
+    int j = i;
+    while (j + 1 < n && std::fabs(d[order[j + 1]]) == std::fabs(d[order[i]])) ++j;
+    const double mid = 0.5 * (i + j) + 1.0;
+    for (int k = i; k <= j; ++k) rank[order[k]] = mid;
+    const double t = j - i + 1;
+    tie_term += t * t * t - t;
+    i = j + 1;
+  }
+  double w_plus = 0.0;
+  for (int i = 0; i < n; ++i) {
+    if (d[i] > 0) w_plus += rank[i];
+  }
+  const double total = n * (n + 1) / 2.0;
+  if (n <= 25) {
+    // exact null distribution of W+ over doubled (integer) ranks: every sign equally likely
+    const int max_sum = static_cast<int>(std::lround(2 * total));
+    std::vector<double> count(max_sum + 1, 0.0);
+    count[0] = 1.0;
+    for (int i = 0; i < n; ++i) {
+      const int r2 = static_cast<int>(std::lround(2 * rank[i]));
+      for (int s = max_sum; s >= r2; --s) count[s] += count[s - r2];
+    }
+    const double all = std::pow(2.0, n);
+    const int observed = static_cast<int>(std::lround(2 * w_plus));
+    const int mirrored = max_sum - observed;
+    const int low = std::min(observed, mirrored), high = std::max(observed, mirrored);
+    double tails = 0.0;
+    for (int s = 0; s <= max_sum; ++s) {
+      if (s <= low || s >= high) tails += count[s];
+    }
+    return std::min(1.0, tails / all);
+  }
+  const double mean = total / 2.0;
+  const double var = n * (n + 1.0) * (2.0 * n + 1.0) / 24.0 - tie_term / 48.0;
+  const double z = (std::fabs(w_plus - mean) - 0.5) / std::sqrt(var);
+  return std::min(1.0, std::erfc(std::max(0.0, z) / std::sqrt(2.0)));
+}
+
+std::pair<double, double> BootstrapMeanCi(const std::vector<double>& differences, int resamples) {
+  const size_t n = differences.size();
+  if (n == 0) return {0.0, 0.0};
+  std::mt19937_64 rng(20261122);
+  std::uniform_int_distribution<size_t> pick(0, n - 1);
+  std::vector<double> means(resamples);
+  for (int r = 0; r < resamples; ++r) {
+    double sum = 0.0;
+    for (size_t i = 0; i < n; ++i) sum += differences[pick(rng)];
+    means[r] = sum / n;
+  }
+  std::sort(means.begin(), means.end());
+  const auto at = [&](double q) {
+    return means[std::min<size_t>(means.size() - 1, static_cast<size_t>(q * (resamples - 1)))];
+  };
+  return {at(0.025), at(0.975)};
+}
+
+SweepDiff CompareSweeps(const SweepDiffOptions& options) {
+  const std::vector<Run> a = ReadRuns(options.a_dir, options.a_where);
+  const std::vector<Run> b = ReadRuns(options.b_dir, options.b_where);
+  const std::set<std::string> differing = DifferingKeys(a, b);
+
+  // pair by draw, seed and every varied value except the compared setting
+  std::map<std::string, const Run*> b_by_key;
+  for (const Run& r : b) {
+    if (!b_by_key.emplace(PairKey(r, differing), &r).second) {
+      throw InputError(options.b_dir + "/runs.jsonl", "",
+                       "two runs with the same draw, seed and values: a repeated or mixed "
+                       "sweep (merge refuses those; use --a-where/--b-where to pick a grid cell)");
+    }
+  }
+  std::vector<std::pair<const Run*, const Run*>> pairs;
+  for (const Run& r : a) {
+    const auto it = b_by_key.find(PairKey(r, differing));
+    if (it == b_by_key.end()) {
+      throw InputError(options.a_dir + "/runs.jsonl", "",
+                       "run with draw " + std::to_string(r.draw) + ", seed " +
+                           std::to_string(r.seed) +
+                           " has no partner in B: the sweeps do not pair (same run count, "
+                           "seeds and drawn values needed)");
+    }
+    pairs.emplace_back(&r, it->second);
+    b_by_key.erase(it);
+  }
+  if (!b_by_key.empty()) {
+    throw InputError(options.b_dir + "/runs.jsonl", "",
+                     std::to_string(b_by_key.size()) + " runs have no partner in A");
+  }
+
+  SweepDiff diff;
+  diff.runs_paired = static_cast<int>(pairs.size());
+  for (const std::string& key : differing) {
+    std::set<std::string> va, vb;
+    for (const auto& [ra, rb] : pairs) {
+      if (ra->values.count(key)) va.insert(ra->values.at(key));
+      if (rb->values.count(key)) vb.insert(rb->values.at(key));
+    }
+    std::string line = key + ": ";
+    for (const std::string& v : va) line += v + " ";
+    line += "(A) vs ";
+    for (const std::string& v : vb) line += v + " ";
+    diff.differs.push_back(line + "(B)");
+  }
+  if (!a.empty() && !b.empty() && a.front().sweep != b.front().sweep) {
+    diff.differs.push_back("sweep file: " + a.front().sweep + " (A) vs " + b.front().sweep +
+                           " (B)");
+  }
+
+  for (const MetricDef& def : MetricDefs()) {
+    MetricDiff m;
+    m.name = def.name;
+    m.higher_is_better = def.higher_is_better;
+    std::vector<double> d;
+    double sum_a = 0.0, sum_b = 0.0;
+    int a_only = 0, b_only = 0;
+    for (const auto& [ra, rb] : pairs) {
+      const auto x = def.read(*ra), y = def.read(*rb);
+      if (!x || !y || !std::isfinite(*x) || !std::isfinite(*y)) continue;
+      d.push_back(*y - *x);
+      sum_a += *x;
+      sum_b += *y;
+      if (*x > *y) ++a_only;
+      if (*y > *x) ++b_only;
+    }
+    m.pairs = static_cast<int>(d.size());
+    if (m.pairs == 0) {
+      m.a = m.b = m.difference = std::nan("");
+      m.ci95 = {std::nan(""), std::nan("")};
+      m.p_value = std::nan("");
+      m.verdict = "same";
+      diff.metrics.push_back(m);
+      continue;
+    }
+    m.a = sum_a / m.pairs;
+    m.b = sum_b / m.pairs;
+    m.difference = m.b - m.a;
+    m.ci95 = BootstrapMeanCi(d);
+    m.p_value = def.binary ? McNemarPValue(a_only, b_only) : SignedRankPValue(d);
+    if (m.p_value < 0.05 && m.difference != 0.0) {
+      m.verdict = (m.difference > 0) == m.higher_is_better ? "better" : "worse";
+    }
+    diff.metrics.push_back(m);
+  }
+  return diff;
+}
+
+int SweepDiffMain(int argc, char** argv) {
+  SweepDiffOptions options;
+  CLI::App app{
+      "Paired comparison of two sweep outputs (B against A): per metric the mean difference "
+      "B - A, its 95 % bootstrap interval, a p-value (Wilcoxon signed-rank; exact McNemar for "
+      "crash and expect-failure rates) and a verdict better / worse / same at 95 %. Writes "
+      "DIR/diff.json, DIR/diff.md and DIR/diff.png. Runs pair by draw, seed and drawn values; "
+      "the setting that differs is named.",
+      "hpa sweep-diff"};
+  app.add_option("A", options.a_dir, "sweep output folder (runs.jsonl), the reference")->required();
+  app.add_option("B", options.b_dir, "sweep output folder compared against A")->required();
+  app.add_option("--out", options.out_dir, "output folder")->required();
+  app.add_option("--a-where", options.a_where,
+                 "KEY=VALUE: only A's runs with this varied value (e.g. controller.type=hpa_mpc)");
+  app.add_option("--b-where", options.b_where, "KEY=VALUE: only B's runs with this value");
+  try {
+    app.parse(argc - 1, argv + 1);
+  } catch (const CLI::CallForHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::ParseError& e) {
+    throw InputError("hpa sweep-diff", "", e.what());
+  }
+  const SweepDiff diff = CompareSweeps(options);
+  WriteOutputs(diff, options);
+  std::cout << diff.runs_paired << " paired runs";
+  for (const std::string& d : diff.differs) std::cout << "; " << d;
+  std::cout << "\n";
+  for (const MetricDiff& m : diff.metrics) {
+    std::printf("  %-30s %-6s B - A = %+.4g  [%+.4g, %+.4g]  p = %.3g  (%d pairs)\n",
+                m.name.c_str(), m.verdict.c_str(), m.difference, m.ci95.first, m.ci95.second,
+                m.p_value, m.pairs);
+  }
+  std::cout << "wrote " << options.out_dir << "/diff.md, diff.json, diff.png\n";
+  return 0;
+}
+
+}  // namespace hpa
