@@ -15,6 +15,10 @@ std::string Range(double min, double max) {
   return out.str();
 }
 
+// A quoted scalar ('5', "true") is a string: yaml-cpp would still convert it to a number or a
+// bool. Plain scalars carry the non-specific tag "?", quoted ones "!" (nodes built in code: "").
+bool Quoted(const YAML::Node& n) { return n.IsScalar() && n.Tag() == "!"; }
+
 }  // namespace
 
 YamlMap::YamlMap(YAML::Node node, std::string file, std::string path)
@@ -68,10 +72,11 @@ double YamlMap::Number(const std::string& key, double min, double max) const {
   YAML::Node n = Get(key);
   double v = 0.0;
   try {
-    if (!n.IsScalar()) throw YAML::Exception(YAML::Mark(), "");
+    if (!n.IsScalar() || Quoted(n)) throw YAML::Exception(YAML::Mark(), "");
     v = n.as<double>();
   } catch (const YAML::Exception&) {
-    Fail(key, "expected a number in " + Range(min, max));
+    Fail(key, "expected a number in " + Range(min, max) +
+                  (Quoted(n) ? ", got a quoted string (remove the quotes)" : ""));
   }
   if (!std::isfinite(v) || v < min || v > max) {
     std::ostringstream out;
@@ -99,9 +104,11 @@ bool YamlMap::Bool(const std::string& key, bool fallback) const {
   if (!Has(key)) return fallback;
   YAML::Node n = Get(key);
   try {
+    if (Quoted(n)) throw YAML::Exception(YAML::Mark(), "");
     return n.as<bool>();
   } catch (const YAML::Exception&) {
-    Fail(key, "expected true or false");
+    Fail(key, std::string("expected true or false") +
+                  (Quoted(n) ? ", got a quoted string (remove the quotes)" : ""));
   }
 }
 
@@ -134,6 +141,7 @@ Eigen::VectorXd YamlMap::Vector(const std::string& key, int size, double min, do
   Eigen::VectorXd v(size);
   for (int i = 0; i < size; ++i) {
     try {
+      if (Quoted(n[i])) throw YAML::Exception(YAML::Mark(), "");
       v(i) = n[i].as<double>();
     } catch (const YAML::Exception&) {
       Fail(key, expect.str());

@@ -42,5 +42,17 @@ TEST(YamlMapTest, NonFiniteNumbersAreRefused) {
   }
 }
 
+TEST(YamlMapTest, QuotedNumbersAndBooleansAreStringsNotValues) {
+  const YamlMap map(YAML::Load("seed: \"5\"\nflag: 'true'\nv: [1, '2', 3]\nok: 5\n"), "f.yaml", "");
+  EXPECT_THROW(map.Number("seed", 0, 10), InputError);
+  EXPECT_THROW(map.Bool("flag", false), InputError);
+  EXPECT_THROW(map.Vector("v", 3, 0, 10), InputError);
+  EXPECT_EQ(map.Number("ok", 0, 10), 5.0);
+  // values set in code (--set, sweeps) carry no quoting
+  YAML::Node node = YAML::Load("seed: 1\n");
+  node["seed"] = std::string("7");
+  EXPECT_EQ(YamlMap(node, "f.yaml", "").Number("seed", 0, 10), 7.0);
+}
+
 }  // namespace
 }  // namespace hpa

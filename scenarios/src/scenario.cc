@@ -1,12 +1,29 @@
 #include "hpa/scenarios/scenario.h"
 
+#include <cctype>
+
 #include "hpa/models/input_error.h"
 #include "hpa/models/yaml_reader.h"
 
 namespace hpa {
 namespace {
 
-constexpr double kBig = 1e3;  // generous bound on positions (m), forces (N), impulses (N s)
+constexpr double kBig = 1e3;
+
+// The run keeps its log in memory (one row per control step): an hour of flight, several
+// battery lifetimes, stays in the hundreds of megabytes.
+constexpr double kMaxScenarioDuration_s = 3600.0;
+
+// A scenario name becomes out/<name>: no separators, no leading dot, nothing a shell mangles.
+bool IsSafeName(const std::string& name) {
+  if (name.empty() || name.size() > 64 || name[0] == '.') return false;
+  for (char c : name) {
+    if (!std::isalnum(static_cast<unsigned char>(c)) && c != '_' && c != '-' && c != '.') {
+      return false;
+    }
+  }
+  return true;
+}  // generous bound on positions (m), forces (N), impulses (N s)
 
 Eigen::Vector3d Vec3(const YamlMap& map, const std::string& key, double min, double max) {
   return map.Vector(key, 3, min, max);
@@ -115,7 +132,12 @@ Scenario ParseScenario(const YamlMap& root) {
   Scenario s;
   s.file = root.file();
   s.name = root.String("name");
-  s.duration_s = root.Number("duration", 1e-3, 1e5);
+  if (!IsSafeName(s.name)) {
+    root.Fail("name", "'" + s.name +
+                          "' is not a safe folder name: 1 to 64 of A-Z a-z 0-9 _ - ., "
+                          "not starting with '.' (it names the default output folder)");
+  }
+  s.duration_s = root.Number("duration", 1e-3, kMaxScenarioDuration_s);
   s.seed = static_cast<unsigned long>(root.Integer("seed", 0, 4294967295L, 1));
 
   if (root.Has("world")) {

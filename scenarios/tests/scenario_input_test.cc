@@ -1,0 +1,52 @@
+// Scenario files written by a careless or hostile hand are refused with the key named.
+
+#include <gtest/gtest.h>
+
+#include <fstream>
+
+#include "hpa/models/input_error.h"
+#include "hpa/scenarios/scenario.h"
+#include "models/tests/temp_dir.h"
+
+namespace hpa {
+namespace {
+
+// The InputError message of loading `text` as a scenario, or "" if it loads.
+std::string LoadError(const std::string& text) {
+  const std::string path = TestTempDir() + "scenario.yaml";
+  std::ofstream(path) << text;
+  try {
+    LoadScenario(path);
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(ScenarioInputTest, NameMustBeASafeFolderName) {
+  for (const char* name : {"../../x", "a/b", ".hidden", "", "with space", "semi;colon"}) {
+    const std::string error = LoadError(std::string("name: '") + name + "'\nduration: 1\n");
+    EXPECT_NE(error.find("'name'"), std::string::npos) << name << ": " << error;
+  }
+  EXPECT_EQ(LoadError("name: hover_T5-a.1\nduration: 1\n"), "");
+}
+
+TEST(ScenarioInputTest, DurationIsCappedAtAnHour) {
+  EXPECT_NE(LoadError("name: x\nduration: 3600.5\n").find("'duration'"), std::string::npos);
+  EXPECT_EQ(LoadError("name: x\nduration: 3600\n"), "");
+}
+
+TEST(ScenarioInputTest, QuotedNumbersAndBooleansAreRefused) {
+  EXPECT_NE(LoadError("name: x\nduration: 1\nseed: \"5\"\n").find("quoted"), std::string::npos);
+  EXPECT_NE(
+      LoadError("name: x\nduration: 1\nestimation: {ground_truth: \"true\"}\n").find("quoted"),
+      std::string::npos);
+}
+
+TEST(ScenarioInputTest, DuplicateAndComplexKeysAreRefused) {
+  EXPECT_NE(LoadError("name: x\nduration: 1\nduration: 2\n").find("duplicate"), std::string::npos);
+  EXPECT_NE(LoadError("name: x\nduration: 1\n? [a]\n: 1\n").find("plain name"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace hpa
