@@ -14,9 +14,10 @@ int EstimatorHealth::ForcedAccepts() const {
 std::vector<std::pair<std::string, double>> EstimatorHealth::Fields() const {
   std::vector<std::pair<std::string, double>> fields = {{"rejected_updates", RejectedUpdates()},
                                                         {"resets", ForcedAccepts()}};
-  for (const auto& [prefix, counts] : {std::pair<std::string, const FilterCounts*>{"quad_", &quad_filter},
-                                       {"cable_", &cable_ekf},
-                                       {"tracker_", &payload_tracker}}) {
+  for (const auto& [prefix, counts] :
+       {std::pair<std::string, const FilterCounts*>{"quad_", &quad_filter},
+        {"cable_", &cable_ekf},
+        {"tracker_", &payload_tracker}}) {
     for (auto& field : counts->Fields(prefix)) fields.push_back(std::move(field));
   }
   fields.insert(fields.end(), {{"detections_lost", detections_lost},

@@ -65,8 +65,8 @@ std::unique_ptr<Estimator> MakeEstimator(const std::string& name, const Estimato
                                          const Params& params, const SystemState& initial) {
   const EstimatorRegistration* registration = FindEstimator(name);
   if (registration == nullptr) {
-    throw std::invalid_argument("estimator: unknown variant '" + name + "' (known: " +
-                                JoinedNames() + ")");
+    throw std::invalid_argument("estimator: unknown variant '" + name +
+                                "' (known: " + JoinedNames() + ")");
   }
   return registration->make(config, params, initial);
 }

@@ -21,8 +21,8 @@ enum class GainProduct { kHP, kHPTransposed };
 template <int N>
 struct GatedUpdateResult {
   FilterStatus status = FilterStatus::kOk;  // kOk, kRejected, kNonFinite (S non-finite/singular)
-  double nis = 0.0;                          // r^T S^-1 r (0 when S could not be factored)
-  bool forced = false;                       // fused although nis exceeded the gate
+  double nis = 0.0;                         // r^T S^-1 r (0 when S could not be factored)
+  bool forced = false;                      // fused although nis exceeded the gate
   Eigen::Matrix<double, N, 1> dx = Eigen::Matrix<double, N, 1>::Zero();  // K r, zero unless kOk
 };
 
@@ -31,13 +31,10 @@ struct GatedUpdateResult {
 /// the correction returned in dx; otherwise nothing but the gate's run counter and `counts`
 /// change.
 template <int N, int M>
-GatedUpdateResult<N> GatedKalmanUpdate(const Eigen::Matrix<double, M, 1>& r,
-                                       const Eigen::Matrix<double, M, N>& H,
-                                       const Eigen::Matrix<double, M, M>& R,
-                                       const InnovationGate& gate, GainProduct gain_product,
-                                       int* consecutive_rejections,
-                                       Eigen::Matrix<double, N, N>* covariance,
-                                       FilterCounts* counts) {
+GatedUpdateResult<N> GatedKalmanUpdate(
+    const Eigen::Matrix<double, M, 1>& r, const Eigen::Matrix<double, M, N>& H,
+    const Eigen::Matrix<double, M, M>& R, const InnovationGate& gate, GainProduct gain_product,
+    int* consecutive_rejections, Eigen::Matrix<double, N, N>* covariance, FilterCounts* counts) {
   using MatrixNN = Eigen::Matrix<double, N, N>;
   using MatrixNM = Eigen::Matrix<double, N, M>;
   using MatrixMM = Eigen::Matrix<double, M, M>;

@@ -52,9 +52,9 @@ FilterStatus PayloadTracker::Update(double time_s, const Eigen::Vector3d& p_WL_W
   const Eigen::Vector3d r = p_WL_W - x_.head<3>();
   Eigen::Matrix<double, 3, 6> H = Eigen::Matrix<double, 3, 6>::Zero();
   H.leftCols<3>().setIdentity();
-  const GatedUpdateResult<6> update = GatedKalmanUpdate<6, 3>(
-      r, H, cov_W_m2, config_.gate, GainProduct::kHP, &consecutive_rejections_, &covariance_,
-      &counts_);
+  const GatedUpdateResult<6> update =
+      GatedKalmanUpdate<6, 3>(r, H, cov_W_m2, config_.gate, GainProduct::kHP,
+                              &consecutive_rejections_, &covariance_, &counts_);
   if (update.status != FilterStatus::kOk) return update.status;
   x_ += update.dx;
   return FilterStatus::kOk;

@@ -122,7 +122,8 @@ TEST(CableEkfTest, WildDetectionIsRejectedUntilTheRunForcesAnAccept) {
   const Eigen::Matrix3d R = Eigen::Matrix3d::Identity();
   const Eigen::Matrix3d cov_B = Eigen::Matrix3d::Identity() * 1e-5;
   double t = 0.0;
-  for (int k = 0; k < 50; ++k) ASSERT_EQ(ekf.Predict(t += 0.002, p.HoverThrustN(), R), FilterStatus::kOk);
+  for (int k = 0; k < 50; ++k)
+    ASSERT_EQ(ekf.Predict(t += 0.002, p.HoverThrustN(), R), FilterStatus::kOk);
   // a detection where the filter expects the payload passes
   EXPECT_EQ(ekf.Update(t, Eigen::Vector3d(0, 0, -0.5), R, cov_B), FilterStatus::kOk);
   EXPECT_LT(ekf.counts().last_nis, config.gate.nis_threshold);

@@ -86,8 +86,9 @@ TEST(EstimatorRegistryTest, RegistersAToyVariant) {
   // a name is registered once; a registration needs a name and a factory
   EXPECT_THROW(RegisterEstimator({"toy_hold", "again", FindEstimator("toy_hold")->make}),
                std::invalid_argument);
-  EXPECT_THROW(RegisterEstimator({"hybrid", "shadowing a built-in", FindEstimator("toy_hold")->make}),
-               std::invalid_argument);
+  EXPECT_THROW(
+      RegisterEstimator({"hybrid", "shadowing a built-in", FindEstimator("toy_hold")->make}),
+      std::invalid_argument);
   EXPECT_THROW(RegisterEstimator({"", "no name", FindEstimator("toy_hold")->make}),
                std::invalid_argument);
   EXPECT_THROW(RegisterEstimator({"toy_none", "no factory", nullptr}), std::invalid_argument);

@@ -28,7 +28,7 @@ struct RunStats {
   double slack_latency_s = -1.0;      // true slack start -> estimated slack
   int false_slack_steps = 0;          // estimated slack while truly taut (before the kick)
   bool ever_slack = false;
-  EstimatorHealth health;             // at the end of the run
+  EstimatorHealth health;  // at the end of the run
 };
 
 RunStats Simulate(const std::string& variant, double kick_up_mps, uint64_t seed) {

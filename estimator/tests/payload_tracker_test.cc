@@ -51,8 +51,7 @@ TEST(PayloadTrackerTest, RejectedDetectionKeepsThePredictionAndItsCovariance) {
             FilterStatus::kRejected);
   EXPECT_EQ(tracker.time_s(), dt_s);
   const Eigen::Vector3d g_W(0, 0, -params.gravity_mps2);
-  EXPECT_LT((tracker.state().head<3>() - (p0 + v0 * dt_s + 0.5 * g_W * dt_s * dt_s)).norm(),
-            1e-12);
+  EXPECT_LT((tracker.state().head<3>() - (p0 + v0 * dt_s + 0.5 * g_W * dt_s * dt_s)).norm(), 1e-12);
   EXPECT_LT((tracker.state().tail<3>() - (v0 + g_W * dt_s)).norm(), 1e-12);
   const double q = std::pow(config.accel_noise_mps2_per_sqrts, 2);
   const Matrix6d& P = tracker.covariance();

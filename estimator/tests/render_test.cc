@@ -125,9 +125,9 @@ TEST_F(RenderedDetectorTest, ErrorStatisticsByRegion) {
                         d.found ? "found" : "lost");
           const std::string name = TestTempDir() + file;
           cv::imwrite(name, frame);
-          std::printf("%s: true %.0f %.0f %.0f det %.0f %.0f %.0f mm, %s\n", name.c_str(), 1e3 * true_C.x(),
-                      1e3 * true_C.y(), 1e3 * true_C.z(), 1e3 * d.p_CL_C.x(), 1e3 * d.p_CL_C.y(),
-                      1e3 * d.p_CL_C.z(), d.reason.c_str());
+          std::printf("%s: true %.0f %.0f %.0f det %.0f %.0f %.0f mm, %s\n", name.c_str(),
+                      1e3 * true_C.x(), 1e3 * true_C.y(), 1e3 * true_C.z(), 1e3 * d.p_CL_C.x(),
+                      1e3 * d.p_CL_C.y(), 1e3 * d.p_CL_C.z(), d.reason.c_str());
         }
         if (!d.found) {
           if (visible >= 1.0) ++lost_visible;

@@ -33,9 +33,9 @@ struct EstimatorConfig {
   double slack_entry_max_detection_gap_s = 0.1;   // farther: the older one predates the event
   double slack_entry_velocity_std_mps = 0.5;      // taut-model velocity's std, per axis
   // re-taut: the cable EKF restarts on the measured direction with this std, per axis
-  double retaut_xi_std = 0.03;            // unit-vector components
-  double retaut_xi_dot_std_per_s = 1.0;   // cable direction rate
-  double max_extrapolation_s = 0.05;      // Estimate() ahead of the last IMU sample, at most
+  double retaut_xi_std = 0.03;           // unit-vector components
+  double retaut_xi_dot_std_per_s = 1.0;  // cable direction rate
+  double max_extrapolation_s = 0.05;     // Estimate() ahead of the last IMU sample, at most
 };
 
 /// Full onboard estimator: quadrotor filter (IMU + VIO), cable EKF, mode detector.

@@ -13,16 +13,16 @@ namespace hpa {
 
 /// Running counts of the estimator's filters since start, plus its current mode state.
 struct EstimatorHealth {
-  FilterCounts quad_filter;                // IMU predictions and VIO updates
-  FilterCounts cable_ekf;                  // cable predictions and detection updates while taut
-  FilterCounts payload_tracker;            // detection updates while slack
-  int detections_lost = 0;                 // camera frames in which the payload was not found
-  int detections_non_finite = 0;           // detections refused for a NaN/Inf time or position
-  int thrust_commands_non_finite = 0;      // thrust commands refused (the last one is kept)
-  int slack_entries = 0;                   // taut-to-slack switches (payload tracker restarted)
-  int retaut_restarts = 0;                 // slack-to-taut switches (cable EKF restarted)
-  bool slack = false;                      // current estimated mode
-  double filtered_cable_length_m = 0.0;    // the mode detector's low-passed cable length
+  FilterCounts quad_filter;              // IMU predictions and VIO updates
+  FilterCounts cable_ekf;                // cable predictions and detection updates while taut
+  FilterCounts payload_tracker;          // detection updates while slack
+  int detections_lost = 0;               // camera frames in which the payload was not found
+  int detections_non_finite = 0;         // detections refused for a NaN/Inf time or position
+  int thrust_commands_non_finite = 0;    // thrust commands refused (the last one is kept)
+  int slack_entries = 0;                 // taut-to-slack switches (payload tracker restarted)
+  int retaut_restarts = 0;               // slack-to-taut switches (cable EKF restarted)
+  bool slack = false;                    // current estimated mode
+  double filtered_cable_length_m = 0.0;  // the mode detector's low-passed cable length
 
   /// Gate rejections summed over the three filters.
   int RejectedUpdates() const;

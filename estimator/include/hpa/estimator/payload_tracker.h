@@ -5,7 +5,6 @@
 #include <Eigen/Core>
 #include <limits>
 
-
 #include "hpa/estimator/filter_status.h"
 #include "hpa/models/params.h"
 
@@ -26,7 +25,8 @@ class PayloadTracker {
  public:
   PayloadTracker(const Params& params, const PayloadTrackerConfig& config);
 
-  /// Restarts at time_s (the gate's run of rejections too) from position, velocity and their 6x6 covariance.
+  /// Restarts at time_s (the gate's run of rejections too) from position, velocity and their 6x6
+  /// covariance.
   void Reset(double time_s, const Eigen::Vector3d& p_WL_W, const Eigen::Vector3d& v_WL_W,
              const Matrix6d& covariance);
 

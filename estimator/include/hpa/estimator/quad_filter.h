@@ -25,12 +25,12 @@ struct QuadFilterConfig {
   double vio_position_std_m = 0.01;                // VIO position noise, per axis
   double vio_attitude_std_rad = 0.01;              // VIO attitude noise, per axis
   double vio_velocity_std_mps = 0.02;              // VIO velocity noise, per axis
-  double initial_position_std_m = 0.02;       // initial covariance, per axis
-  double initial_velocity_std_mps = 0.05;     // initial covariance, per axis
-  double initial_attitude_std_rad = 0.02;     // initial covariance, per axis
-  double initial_gyro_bias_std_radps = 0.01;  // initial covariance, per axis
-  double initial_accel_bias_std_mps2 = 0.1;   // initial covariance, per axis
-  double history_s = 0.5;  // how late a VIO sample may arrive
+  double initial_position_std_m = 0.02;            // initial covariance, per axis
+  double initial_velocity_std_mps = 0.05;          // initial covariance, per axis
+  double initial_attitude_std_rad = 0.02;          // initial covariance, per axis
+  double initial_gyro_bias_std_radps = 0.01;       // initial covariance, per axis
+  double initial_accel_bias_std_mps2 = 0.1;        // initial covariance, per axis
+  double history_s = 0.5;                          // how late a VIO sample may arrive
   // VIO gate: NIS over 50 rejects (9 dof: the 99.9999% quantile is 45); the fourth rejection in a
   // row is accepted anyway (the filter, not VIO, is then off)
   InnovationGate vio_gate = {50.0, 3};
@@ -96,7 +96,7 @@ class QuadFilter {
   QuadFilterState state_;
   Matrix15d covariance_;
   std::optional<ImuSample> last_imu_;
-  std::deque<Entry> history_;  // one entry per IMU sample, oldest first
+  std::deque<Entry> history_;       // one entry per IMU sample, oldest first
   int consecutive_rejections_ = 0;  // VIO gate rejections in a row
   FilterCounts counts_;
 };
