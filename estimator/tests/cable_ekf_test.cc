@@ -141,7 +141,7 @@ TEST(CableEkfTest, WildDetectionIsRejectedUntilTheRunForcesAnAccept) {
   EXPECT_EQ(ekf.Update(t, wild_B, R, cov_B), FilterStatus::kOk);
   EXPECT_EQ(ekf.counts().forced_accepts, 1);
   EXPECT_EQ(ekf.counts().accepted_updates, 2);
-  EXPECT_GT(ekf.xi_W().x(), 0.3);  // pulled toward +x
+  EXPECT_GT(ekf.xi_W().x(), 0.5);  // pulled toward +x: measured 0.96, bound half of it
   EXPECT_NEAR(ekf.xi_W().norm(), 1.0, 1e-12);
 }
 

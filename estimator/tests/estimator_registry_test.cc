@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <stdexcept>
+#include <string>
 
 namespace hpa {
 namespace {
@@ -71,26 +72,26 @@ TEST(EstimatorRegistryTest, UnknownVariantNamesTheKnownOnes) {
 }
 
 TEST(EstimatorRegistryTest, RegistersAToyVariant) {
+  // a fresh name per run, so --gtest_repeat does not meet its own earlier registration
+  static int run = 0;
+  const std::string name = "toy_hold_" + std::to_string(run++);
   const size_t before = Estimators().size();
-  RegisterEstimator({"toy_hold", "holds the initial state",
+  RegisterEstimator({name, "holds the initial state",
                      [](const EstimatorConfig&, const Params&, const SystemState& initial) {
                        return std::make_unique<HoldEstimator>(initial);
                      }});
   ASSERT_EQ(Estimators().size(), before + 1);
-  EXPECT_EQ(EstimatorNames().back(), "toy_hold");
-  const auto estimator = MakeEstimator("toy_hold", EstimatorConfig{}, Params{}, Hanging());
+  EXPECT_EQ(EstimatorNames().back(), name);
+  const auto estimator = MakeEstimator(name, EstimatorConfig{}, Params{}, Hanging());
   const SystemState est = estimator->Estimate(3.0);
   EXPECT_EQ(est.time_s, 3.0);
   EXPECT_EQ(est.p_WL_W, Hanging().p_WL_W);
 
   // a name is registered once; a registration needs a name and a factory
-  EXPECT_THROW(RegisterEstimator({"toy_hold", "again", FindEstimator("toy_hold")->make}),
-               std::invalid_argument);
-  EXPECT_THROW(
-      RegisterEstimator({"hybrid", "shadowing a built-in", FindEstimator("toy_hold")->make}),
-      std::invalid_argument);
-  EXPECT_THROW(RegisterEstimator({"", "no name", FindEstimator("toy_hold")->make}),
-               std::invalid_argument);
+  const EstimatorFactory make = FindEstimator(name)->make;
+  EXPECT_THROW(RegisterEstimator({name, "again", make}), std::invalid_argument);
+  EXPECT_THROW(RegisterEstimator({"hybrid", "shadowing a built-in", make}), std::invalid_argument);
+  EXPECT_THROW(RegisterEstimator({"", "no name", make}), std::invalid_argument);
   EXPECT_THROW(RegisterEstimator({"toy_none", "no factory", nullptr}), std::invalid_argument);
   EXPECT_EQ(Estimators().size(), before + 1);
 }

@@ -129,7 +129,8 @@ TEST(PayloadTrackerTest, GateRejectsAWildDetectionThenForcesAnAccept) {
   EXPECT_LT(std::abs(tracker.state().x()), 1e-3);  // rejected detections moved nothing
   EXPECT_EQ(tracker.Update(0.133, Eigen::Vector3d(0.5, 0, free_fall_z(0.133)), cov_W),
             FilterStatus::kOk);
-  EXPECT_GT(tracker.state().x(), 0.25);  // the forced accept pulls it toward the detections
+  // the forced accept pulls it toward the detections: measured 0.497 m of 0.5 m, bound half way
+  EXPECT_GT(tracker.state().x(), 0.25);
   const FilterCounts& counts = tracker.counts();
   EXPECT_EQ(counts.accepted_updates, 2);
   EXPECT_EQ(counts.rejected_updates, 2);

@@ -219,7 +219,8 @@ TEST(QuadFilterTest, WildVioIsRejectedUntilTheRunForcesAnAccept) {
   EXPECT_EQ(filter.UpdateVio(vio), FilterStatus::kOk);
   EXPECT_EQ(filter.counts().forced_accepts, 1);
   EXPECT_EQ(filter.counts().accepted_updates, 2);
-  EXPECT_GT(filter.state().p_WB_W.x(), 0.3);  // pulled toward the jump
+  // pulled toward the jump: measured 0.46 m (P and R comparable), bound 0.3 m
+  EXPECT_GT(filter.state().p_WB_W.x(), 0.3);
 }
 
 TEST(QuadFilterTest, HoverAtRestStaysPut) {
