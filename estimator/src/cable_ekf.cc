@@ -5,6 +5,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "gated_update.h"
+
 namespace hpa {
 namespace {
 
@@ -25,6 +27,11 @@ CableEkf::CableEkf(const Params& params, const CableEkfConfig& config, const Eig
   covariance.diagonal() << Eigen::Vector3d::Constant(std::pow(config.initial_xi_std, 2)),
       Eigen::Vector3d::Constant(std::pow(config.initial_xi_dot_std_per_s, 2));
   Reset(time_s, xi_W, xi_dot_W, covariance);
+}
+
+FilterStatus CableEkf::Refused(FilterStatus status) {
+  counts_.CountRefused(status);
+  return status;
 }
 
 void CableEkf::Reset(double time_s, const Eigen::Vector3d& xi_W, const Eigen::Vector3d& xi_dot_W,
@@ -80,9 +87,9 @@ void CableEkf::Propagate(double dt_s, double thrust_N, const Eigen::Matrix3d& R_
 
 FilterStatus CableEkf::Predict(double time_s, double thrust_N, const Eigen::Matrix3d& R_WB) {
   if (!std::isfinite(time_s) || !std::isfinite(thrust_N) || !R_WB.allFinite()) {
-    return FilterStatus::kNonFinite;
+    return Refused(FilterStatus::kNonFinite);
   }
-  if (time_s < time_s_) return FilterStatus::kOutOfOrder;
+  if (time_s < time_s_) return Refused(FilterStatus::kOutOfOrder);
   Propagate(time_s - time_s_, thrust_N, R_WB, &x_, &covariance_);
   time_s_ = time_s;
   history_.push_back({time_s_, x_, covariance_, thrust_N, R_WB});
@@ -96,12 +103,12 @@ FilterStatus CableEkf::Update(double capture_time_s, const Eigen::Vector3d& p_BL
                               const Eigen::Matrix3d& R_WB, const Eigen::Matrix3d& cov_B_m2) {
   if (!std::isfinite(capture_time_s) || !p_BL_B.allFinite() || !R_WB.allFinite() ||
       !cov_B_m2.allFinite()) {
-    return FilterStatus::kNonFinite;
+    return Refused(FilterStatus::kNonFinite);
   }
   // latest kept entry at or before the capture time
   auto it = std::upper_bound(history_.begin(), history_.end(), capture_time_s,
                              [](double t, const Entry& e) { return t < e.time_s; });
-  if (it == history_.begin()) return FilterStatus::kTooOld;
+  if (it == history_.begin()) return Refused(FilterStatus::kTooOld);
   const size_t k = static_cast<size_t>(std::distance(history_.begin(), it)) - 1;
   CableVector x = history_[k].x;
   CableMatrix covariance = history_[k].covariance;
@@ -111,22 +118,12 @@ FilterStatus CableEkf::Update(double capture_time_s, const Eigen::Vector3d& p_BL
   const Eigen::Vector3d r = p_BL_B - R_WB.transpose() * l_m * x.head<3>();
   Eigen::Matrix<double, 3, 6> H = Eigen::Matrix<double, 3, 6>::Zero();
   H.block<3, 3>(0, 0) = R_WB.transpose() * l_m;
-  const Eigen::Matrix3d S = H * covariance * H.transpose() + cov_B_m2;
-  const Eigen::LDLT<Eigen::Matrix3d> S_ldlt(S);
-  if (S_ldlt.info() != Eigen::Success) return FilterStatus::kNonFinite;
-  // gate outliers, but accept after max_consecutive_rejections (the filter, not the camera, is
-  // then wrong: e.g. after an unmodelled jerk of the cable)
-  if (r.dot(S_ldlt.solve(r)) > config_.gate_chi2 &&
-      consecutive_rejections_ < config_.max_consecutive_rejections) {
-    ++consecutive_rejections_;
-    return FilterStatus::kRejected;
-  }
-  consecutive_rejections_ = 0;
-  const Eigen::Matrix<double, 6, 3> K = S_ldlt.solve(H * covariance).transpose();
-  x += K * r;
+  const GatedUpdateResult<6> update =
+      GatedKalmanUpdate<6, 3>(r, H, cov_B_m2, config_.gate, GainProduct::kHP,
+                              &consecutive_rejections_, &covariance, &counts_);
+  if (update.status != FilterStatus::kOk) return update.status;
+  x += update.dx;
   ProjectToConstraint(&x);
-  const CableMatrix I_KH = CableMatrix::Identity() - K * H;
-  covariance = I_KH * covariance * I_KH.transpose() + K * cov_B_m2 * K.transpose();
   history_[k].x = x;
   history_[k].covariance = covariance;
 

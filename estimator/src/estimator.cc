@@ -1,26 +1,33 @@
 #include "hpa/estimator/estimator.h"
 
+#include <algorithm>
 #include <cmath>
+
+#include "estimator_variants.h"
 
 namespace hpa {
 namespace {
 
-// Quadrotor filter + cable EKF + (hybrid) mode detector and free-fall payload tracker.
-class HybridEstimator final : public Estimator {
+// Quadrotor filter + cable EKF, and when hybrid the mode detector and the free-fall payload
+// tracker; not hybrid, the payload is always at x_Q + l xi (always taut).
+class CableEstimator final : public Estimator {
  public:
-  HybridEstimator(const EstimatorConfig& config, const Params& params, const SystemState& initial)
-      : config_(config),
+  CableEstimator(bool hybrid, const EstimatorConfig& config, const Params& params,
+                 const SystemState& initial)
+      : hybrid_(hybrid),
+        config_(config),
         params_(params),
         quad_(params, config.quad_filter, QuadFilterStateFrom(initial)),
         cable_(params, config.cable_ekf, InitialXi(initial, params.cable_length_m),
                InitialXiDot(initial, params.cable_length_m), initial.time_s),
-        mode_detector_(params, config.mode_detector, InitialMode(config, params, initial),
+        mode_detector_(params, config.mode_detector, InitialMode(hybrid, params, initial),
                        (initial.p_WL_W - initial.p_WQ_W).norm()),
         tracker_(params, config.payload_tracker),
         thrust_N_(params.HoverThrustN()),
-        mode_(InitialMode(config, params, initial)) {
+        mode_(InitialMode(hybrid, params, initial)) {
     Matrix6d tracker_cov = Matrix6d::Zero();
-    tracker_cov.diagonal() << Eigen::Vector3d::Constant(1e-4), Eigen::Vector3d::Constant(0.01);
+    tracker_cov.diagonal() << Eigen::Vector3d::Constant(config.initial_payload_position_var_m2),
+        Eigen::Vector3d::Constant(config.initial_payload_velocity_var_m2ps2);
     tracker_.Reset(initial.time_s, initial.p_WL_W, initial.v_WL_W, tracker_cov);
   }
 
@@ -35,12 +42,21 @@ class HybridEstimator final : public Estimator {
   void OnVio(const VioSample& vio) override { quad_.UpdateVio(vio); }
 
   void OnThrustCommand(double thrust_N) override {
-    if (std::isfinite(thrust_N)) thrust_N_ = thrust_N;
+    if (std::isfinite(thrust_N)) {
+      thrust_N_ = thrust_N;
+    } else {
+      ++thrust_commands_non_finite_;
+    }
   }
 
   void OnPayloadDetection(const PayloadDetection& detection) override {
     payload_visible_ = detection.found;
-    if (!detection.found || !detection.p_CL_C.allFinite() || !std::isfinite(detection.time_s)) {
+    if (!detection.found) {
+      ++detections_lost_;
+      return;
+    }
+    if (!detection.p_CL_C.allFinite() || !std::isfinite(detection.time_s)) {
+      ++detections_non_finite_;
       payload_visible_ = false;
       return;
     }
@@ -56,7 +72,7 @@ class HybridEstimator final : public Estimator {
     const Eigen::Vector3d p_WL_W = quad_then.p_WB_W + R_WB * p_BL_B;
 
     // always-taut variant: the EKF takes the raw measurement whatever its length
-    if (!config_.hybrid) {
+    if (!hybrid_) {
       cable_.Update(detection.time_s, p_BL_B, R_WB, cov_B);
       return;
     }
@@ -78,15 +94,17 @@ class HybridEstimator final : public Estimator {
         Matrix6d cov = Matrix6d::Zero();
         cov.block<3, 3>(0, 0) = cov_W;
         Eigen::Vector3d v_WL_W = quad_then.v_WB_W + params_.cable_length_m * cable_.xi_dot_W();
-        double velocity_std_mps = 0.5;
+        double velocity_std_mps = config_.slack_entry_velocity_std_mps;
         const double gap_s = detection.time_s - last_time_s;
-        if (had_last && gap_s > 1e-3 && gap_s < 0.1) {
+        if (had_last && gap_s > config_.slack_entry_min_detection_gap_s &&
+            gap_s < config_.slack_entry_max_detection_gap_s) {
           v_WL_W = (p_WL_W - last_p_WL_W) / gap_s -
                    Eigen::Vector3d(0, 0, 0.5 * params_.gravity_mps2 * gap_s);
           velocity_std_mps = std::sqrt(2.0 * cov_W.trace() / 3.0) / gap_s;
         }
         cov.block<3, 3>(3, 3).diagonal().setConstant(std::pow(velocity_std_mps, 2));
         tracker_.Reset(detection.time_s, p_WL_W, v_WL_W, cov);
+        ++slack_entries_;
       } else {
         tracker_.Update(detection.time_s, p_WL_W, cov_W);
       }
@@ -100,9 +118,10 @@ class HybridEstimator final : public Estimator {
       const Eigen::Vector3d xi = (R_WB * p_BL_B).normalized();
       const Eigen::Vector3d xi_dot = (v_L - quad_.state().v_WB_W) / params_.cable_length_m;
       CableMatrix cov = CableMatrix::Zero();
-      cov.diagonal() << Eigen::Vector3d::Constant(std::pow(0.03, 2)),
-          Eigen::Vector3d::Constant(std::pow(1.0, 2));
+      cov.diagonal() << Eigen::Vector3d::Constant(std::pow(config_.retaut_xi_std, 2)),
+          Eigen::Vector3d::Constant(std::pow(config_.retaut_xi_dot_std_per_s, 2));
       cable_.Reset(quad_.state().time_s, xi, xi_dot, cov);
+      ++retaut_restarts_;
       return;
     }
     cable_.Update(detection.time_s, p_BL_B, R_WB, cov_B);
@@ -113,12 +132,12 @@ class HybridEstimator final : public Estimator {
     SystemState out;
     out.time_s = time_s;
     // short extrapolation if the caller asks slightly ahead of the last IMU sample
-    const double ahead_s = std::clamp(time_s - quad.time_s, 0.0, 0.05);
+    const double ahead_s = std::clamp(time_s - quad.time_s, 0.0, config_.max_extrapolation_s);
     out.p_WQ_W = quad.p_WB_W + quad.v_WB_W * ahead_s;
     out.v_WQ_W = quad.v_WB_W;
     out.q_WB = quad.q_WB;
     out.w_B = quad.w_B_radps;
-    out.mode = config_.hybrid ? mode_ : CableMode::kTaut;
+    out.mode = hybrid_ ? mode_ : CableMode::kTaut;
     out.payload_visible = payload_visible_;
     if (out.mode == CableMode::kTaut) {
       out.p_WL_W = out.p_WQ_W + params_.cable_length_m * cable_.xi_W();
@@ -138,6 +157,21 @@ class HybridEstimator final : public Estimator {
     return out;
   }
 
+  EstimatorHealth Health() const override {
+    EstimatorHealth health;
+    health.quad_filter = quad_.counts();
+    health.cable_ekf = cable_.counts();
+    health.payload_tracker = tracker_.counts();
+    health.detections_lost = detections_lost_;
+    health.detections_non_finite = detections_non_finite_;
+    health.thrust_commands_non_finite = thrust_commands_non_finite_;
+    health.slack_entries = slack_entries_;
+    health.retaut_restarts = retaut_restarts_;
+    health.slack = hybrid_ && mode_ == CableMode::kSlack;
+    health.filtered_cable_length_m = mode_detector_.filtered_length_m();
+    return health;
+  }
+
  private:
   static Eigen::Vector3d InitialXi(const SystemState& s, double l_m) {
     const Eigen::Vector3d d = s.p_WL_W - s.p_WQ_W;
@@ -148,13 +182,13 @@ class HybridEstimator final : public Estimator {
     const Eigen::Vector3d rel = (s.v_WL_W - s.v_WQ_W) / l_m;
     return rel - xi.dot(rel) * xi;
   }
-  static CableMode InitialMode(const EstimatorConfig& config, const Params& p,
-                               const SystemState& s) {
-    if (!config.hybrid) return CableMode::kTaut;
+  static CableMode InitialMode(bool hybrid, const Params& p, const SystemState& s) {
+    if (!hybrid) return CableMode::kTaut;
     return (s.p_WL_W - s.p_WQ_W).norm() < p.cable_length_m - p.slack_epsilon_m ? CableMode::kSlack
                                                                                : CableMode::kTaut;
   }
 
+  bool hybrid_;  // mode detector and payload tracker in use
   EstimatorConfig config_;
   Params params_;
   QuadFilter quad_;
@@ -167,13 +201,24 @@ class HybridEstimator final : public Estimator {
   bool has_last_detection_ = false;  // for the slack-entry velocity
   Eigen::Vector3d last_p_WL_W_ = Eigen::Vector3d::Zero();  // previous detection, world  (3)
   double last_detection_time_s_ = 0.0;                     // its capture time
+  int detections_lost_ = 0;                                // health counters (EstimatorHealth)
+  int detections_non_finite_ = 0;
+  int thrust_commands_non_finite_ = 0;
+  int slack_entries_ = 0;
+  int retaut_restarts_ = 0;
 };
 
 }  // namespace
 
-std::unique_ptr<Estimator> MakeEstimator(const EstimatorConfig& config, const Params& params,
-                                         const SystemState& initial) {
-  return std::make_unique<HybridEstimator>(config, params, initial);
+std::unique_ptr<Estimator> MakeHybridEstimator(const EstimatorConfig& config, const Params& params,
+                                               const SystemState& initial) {
+  return std::make_unique<CableEstimator>(true, config, params, initial);
+}
+
+std::unique_ptr<Estimator> MakeAlwaysTautEstimator(const EstimatorConfig& config,
+                                                   const Params& params,
+                                                   const SystemState& initial) {
+  return std::make_unique<CableEstimator>(false, config, params, initial);
 }
 
 }  // namespace hpa

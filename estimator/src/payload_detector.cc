@@ -115,7 +115,7 @@ PayloadDetection PayloadDetector::Detect(const cv::Mat& bgr, double time_s) cons
   cv::Mat occluder;
   cv::inRange(hsv, cv::Scalar(0, 0, 0), cv::Scalar(180, 255, config_.occluder_value_max), occluder);
   const cv::Rect image_rect(0, 0, width, height);
-  const int grow_px = 3;
+  const int grow_px = config_.occluder_grow_px;
   const cv::Rect blob_rect = cv::boundingRect(contour);
   const cv::Rect near_blob(blob_rect.x - grow_px, blob_rect.y - grow_px,
                            blob_rect.width + 2 * grow_px, blob_rect.height + 2 * grow_px);
@@ -132,7 +132,8 @@ PayloadDetection PayloadDetector::Detect(const cv::Mat& bgr, double time_s) cons
       outline.emplace_back(p);
     }
   }
-  if (outline.size() < 0.25 * contour.size() || outline.size() < 16) {
+  if (outline.size() < config_.min_fit_share * contour.size() ||
+      outline.size() < static_cast<size_t>(config_.min_fit_points)) {
     return NotFound(time_s, "partly out of view");
   }
   const cv::RotatedRect fit = cv::fitEllipseDirect(outline);
@@ -140,8 +141,8 @@ PayloadDetection PayloadDetector::Detect(const cv::Mat& bgr, double time_s) cons
       0.5 * std::max(fit.size.width, fit.size.height) + config_.edge_bias_px;
   const double semi_minor_px =
       0.5 * std::min(fit.size.width, fit.size.height) + config_.edge_bias_px;
-  if (!std::isfinite(semi_major_px) || !std::isfinite(semi_minor_px) || semi_minor_px < 2.0 ||
-      semi_major_px > 2.0 * std::max(width, height)) {
+  if (!std::isfinite(semi_major_px) || !std::isfinite(semi_minor_px) ||
+      semi_minor_px < config_.min_semi_minor_px || semi_major_px > 2.0 * std::max(width, height)) {
     return NotFound(time_s, "poor ellipse fit");
   }
   // OpenCV puts pixel centres on integers; continuous coordinates put them at +0.5
@@ -158,18 +159,18 @@ PayloadDetection PayloadDetector::Detect(const cv::Mat& bgr, double time_s) cons
   cv::dilate(occluder(roi), occluded_roi, cv::Mat::ones(2 * grow_px + 1, 2 * grow_px + 1, CV_8U));
 
   // enough of the fitted outline must be seen: inside the image and not behind an occluder
-  constexpr int kOutlineSamples = 72;
+  const int outline_samples = config_.outline_samples;
   const Eigen::Vector2d minor_axis(-major_axis.y(), major_axis.x());
   int seen = 0;
-  for (int i = 0; i < kOutlineSamples; ++i) {
-    const double phi = 2.0 * M_PI * i / kOutlineSamples;
+  for (int i = 0; i < outline_samples; ++i) {
+    const double phi = 2.0 * M_PI * i / outline_samples;
     const Eigen::Vector2d q = centre_px + semi_major_px * std::cos(phi) * major_axis +
                               semi_minor_px * std::sin(phi) * minor_axis;
     if (q.x() < 1.0 || q.y() < 1.0 || q.x() > width - 1.0 || q.y() > height - 1.0) continue;
     const cv::Point pixel(static_cast<int>(q.x()), static_cast<int>(q.y()));
     if (!roi.contains(pixel) || occluded_roi.at<uint8_t>(pixel - roi.tl()) == 0) ++seen;
   }
-  if (seen < config_.min_visible_outline * kOutlineSamples) {
+  if (seen < config_.min_visible_outline * outline_samples) {
     return NotFound(time_s, "partly out of view");
   }
 
@@ -194,8 +195,9 @@ PayloadDetection PayloadDetector::Detect(const cv::Mat& bgr, double time_s) cons
   // major axis of a sphere's image lies on the line through the principal point
   const Eigen::Vector2d principal_px(0.5 * width, 0.5 * height);
   const Eigen::Vector2d radial = centre_px - principal_px;
-  const Eigen::Vector2d axis =
-      radial.norm() > 2.0 ? Eigen::Vector2d(radial.normalized()) : major_axis;
+  const Eigen::Vector2d axis = radial.norm() > config_.min_radial_offset_px
+                                   ? Eigen::Vector2d(radial.normalized())
+                                   : major_axis;
   const Eigen::Vector3d p_CL_C =
       SphereCentreFromMajorAxis(params_, centre_px + semi_major_px * axis,
                                 centre_px - semi_major_px * axis, params_.payload_radius_m);

@@ -3,6 +3,8 @@
 #include <Eigen/Cholesky>
 #include <cmath>
 
+#include "gated_update.h"
+
 namespace hpa {
 
 PayloadTracker::PayloadTracker(const Params& params, const PayloadTrackerConfig& config)
@@ -13,6 +15,7 @@ void PayloadTracker::Reset(double time_s, const Eigen::Vector3d& p_WL_W,
   time_s_ = time_s;
   x_ << p_WL_W, v_WL_W;
   covariance_ = covariance;
+  consecutive_rejections_ = 0;
 }
 
 void PayloadTracker::PredictTo(double time_s, Eigen::Vector3d* p_WL_W,
@@ -26,6 +29,7 @@ void PayloadTracker::PredictTo(double time_s, Eigen::Vector3d* p_WL_W,
 FilterStatus PayloadTracker::Update(double time_s, const Eigen::Vector3d& p_WL_W,
                                     const Eigen::Matrix3d& cov_W_m2) {
   if (!std::isfinite(time_s) || !p_WL_W.allFinite() || !cov_W_m2.allFinite()) {
+    counts_.CountRefused(FilterStatus::kNonFinite);
     return FilterStatus::kNonFinite;
   }
   // free-fall prediction with white-acceleration process noise
@@ -44,16 +48,15 @@ FilterStatus PayloadTracker::Update(double time_s, const Eigen::Vector3d& p_WL_W
   covariance_ = F * covariance_ * F.transpose() + Q;
   time_s_ = std::max(time_s_, time_s);
 
-  // position measurement
-  const Eigen::Matrix3d S = covariance_.block<3, 3>(0, 0) + cov_W_m2;
-  const Eigen::LDLT<Eigen::Matrix3d> S_ldlt(S);
-  if (S_ldlt.info() != Eigen::Success) return FilterStatus::kNonFinite;
-  const Eigen::Matrix<double, 6, 3> K = S_ldlt.solve(covariance_.topRows<3>()).transpose();
-  x_ += K * (p_WL_W - x_.head<3>());
+  // position measurement, H = [I 0]
+  const Eigen::Vector3d r = p_WL_W - x_.head<3>();
   Eigen::Matrix<double, 3, 6> H = Eigen::Matrix<double, 3, 6>::Zero();
   H.leftCols<3>().setIdentity();
-  const Matrix6d I_KH = Matrix6d::Identity() - K * H;
-  covariance_ = I_KH * covariance_ * I_KH.transpose() + K * cov_W_m2 * K.transpose();
+  const GatedUpdateResult<6> update =
+      GatedKalmanUpdate<6, 3>(r, H, cov_W_m2, config_.gate, GainProduct::kHP,
+                              &consecutive_rejections_, &covariance_, &counts_);
+  if (update.status != FilterStatus::kOk) return update.status;
+  x_ += update.dx;
   return FilterStatus::kOk;
 }
 

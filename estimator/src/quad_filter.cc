@@ -5,7 +5,16 @@
 #include <algorithm>
 #include <cmath>
 
+#include "gated_update.h"
+#include "so3.h"
+
 namespace hpa {
+namespace {
+
+// A VIO quaternion shorter than this carries no attitude (a zero-initialised message).
+constexpr double kMinQuaternionNorm = 1e-6;
+
+}  // namespace
 
 QuadFilterState QuadFilterStateFrom(const SystemState& state) {
   QuadFilterState q;
@@ -17,21 +26,9 @@ QuadFilterState QuadFilterStateFrom(const SystemState& state) {
   return q;
 }
 
-Eigen::Matrix3d Skew(const Eigen::Vector3d& v) {
-  Eigen::Matrix3d s;
-  s << 0, -v.z(), v.y(), v.z(), 0, -v.x(), -v.y(), v.x(), 0;
-  return s;
-}
-
-Eigen::Matrix3d ExpSo3(const Eigen::Vector3d& theta) {
-  const double angle_rad = theta.norm();
-  if (angle_rad < 1e-9) return Eigen::Matrix3d::Identity() + Skew(theta);
-  return Eigen::AngleAxisd(angle_rad, theta / angle_rad).toRotationMatrix();
-}
-
-Eigen::Vector3d LogSo3(const Eigen::Matrix3d& R) {
-  const Eigen::AngleAxisd aa(R);
-  return aa.angle() * aa.axis();
+FilterStatus QuadFilter::Refused(FilterStatus status) {
+  counts_.CountRefused(status);
+  return status;
 }
 
 QuadFilter::QuadFilter(const Params& params, const QuadFilterConfig& config,
@@ -88,9 +85,9 @@ void QuadFilter::Propagate(const ImuSample& previous, const ImuSample& imu, Quad
 FilterStatus QuadFilter::Predict(const ImuSample& imu) {
   if (!std::isfinite(imu.time_s) || !imu.gyro_B_radps.allFinite() ||
       !imu.accel_B_mps2.allFinite()) {
-    return FilterStatus::kNonFinite;
+    return Refused(FilterStatus::kNonFinite);
   }
-  if (imu.time_s <= state_.time_s && last_imu_) return FilterStatus::kOutOfOrder;
+  if (imu.time_s <= state_.time_s && last_imu_) return Refused(FilterStatus::kOutOfOrder);
   Propagate(last_imu_ ? *last_imu_ : imu, imu, &state_, &covariance_);
   if (!last_imu_) state_.w_B_radps = imu.gyro_B_radps - state_.gyro_bias_B_radps;
   last_imu_ = imu;
@@ -117,23 +114,13 @@ FilterStatus QuadFilter::Correct(const VioSample& vio, QuadFilterState* state,
       Eigen::Vector3d::Constant(std::pow(config_.vio_attitude_std_rad, 2)),
       Eigen::Vector3d::Constant(std::pow(config_.vio_velocity_std_mps, 2));
   const Eigen::Matrix<double, 9, 9> Rn = noise_var.asDiagonal();
-  const Eigen::Matrix<double, 9, 9> S = H * *covariance * H.transpose() + Rn;
-  const Eigen::LDLT<Eigen::Matrix<double, 9, 9>> S_ldlt(S);
-  if (S_ldlt.info() != Eigen::Success) return FilterStatus::kNonFinite;
-  // gate outliers, but a run of rejections means the filter (not VIO) is off: accept then
-  if (r.dot(S_ldlt.solve(r)) > config_.vio_gate_chi2 &&
-      consecutive_rejections_ < config_.max_consecutive_rejections) {
-    ++consecutive_rejections_;
-    return FilterStatus::kRejected;
-  }
-  consecutive_rejections_ = 0;
-  const Eigen::Matrix<double, 15, 9> K =
-      S_ldlt.solve(H * covariance->transpose()).transpose();  // P H^T S^-1 (P symmetric)
-  const Vector15d dx = K * r;
+  const GatedUpdateResult<15> update =
+      GatedKalmanUpdate<15, 9>(r, H, Rn, config_.vio_gate, GainProduct::kHPTransposed,
+                               &consecutive_rejections_, covariance, &counts_);
+  if (update.status != FilterStatus::kOk) return update.status;
+  const Vector15d& dx = update.dx;
 
-  // Joseph form, then inject the error and reset it to zero
-  const Matrix15d I_KH = Matrix15d::Identity() - K * H;
-  *covariance = I_KH * *covariance * I_KH.transpose() + K * Rn * K.transpose();
+  // inject the error into the nominal state and reset it to zero
   state->p_WB_W += dx.segment<3>(0);
   state->v_WB_W += dx.segment<3>(3);
   state->q_WB =
@@ -148,8 +135,8 @@ FilterStatus QuadFilter::Correct(const VioSample& vio, QuadFilterState* state,
 
 FilterStatus QuadFilter::UpdateVio(const VioSample& vio) {
   if (!std::isfinite(vio.time_s) || !vio.p_WB_W.allFinite() || !vio.v_WB_W.allFinite() ||
-      !vio.q_WB.coeffs().allFinite() || vio.q_WB.norm() < 1e-6) {
-    return FilterStatus::kNonFinite;
+      !vio.q_WB.coeffs().allFinite() || vio.q_WB.norm() < kMinQuaternionNorm) {
+    return Refused(FilterStatus::kNonFinite);
   }
   // newer than the latest IMU sample (or no history): correct the current state
   if (history_.empty() || vio.time_s >= state_.time_s) {
@@ -163,7 +150,7 @@ FilterStatus QuadFilter::UpdateVio(const VioSample& vio) {
   // latest kept entry at or before the capture time
   auto it = std::upper_bound(history_.begin(), history_.end(), vio.time_s,
                              [](double t, const Entry& e) { return t < e.state.time_s; });
-  if (it == history_.begin()) return FilterStatus::kTooOld;
+  if (it == history_.begin()) return Refused(FilterStatus::kTooOld);
   size_t k = static_cast<size_t>(std::distance(history_.begin(), it)) - 1;
   QuadFilterState state = history_[k].state;
   Matrix15d covariance = history_[k].covariance;

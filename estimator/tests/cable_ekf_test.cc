@@ -114,6 +114,37 @@ TEST(CableEkfTest, HangingPayloadUnderHoverThrustStaysPut) {
   EXPECT_LT((ekf.xi_W() - Eigen::Vector3d(0, 0, -1)).norm(), 1e-12);
 }
 
+TEST(CableEkfTest, WildDetectionIsRejectedUntilTheRunForcesAnAccept) {
+  // hanging payload; detections put it 0.5 m to the side (90 deg off): far outside the gate
+  const Params p;
+  const CableEkfConfig config;
+  CableEkf ekf(p, config, Eigen::Vector3d(0, 0, -1), Eigen::Vector3d::Zero(), 0.0);
+  const Eigen::Matrix3d R = Eigen::Matrix3d::Identity();
+  const Eigen::Matrix3d cov_B = Eigen::Matrix3d::Identity() * 1e-5;
+  double t = 0.0;
+  for (int k = 0; k < 50; ++k)
+    ASSERT_EQ(ekf.Predict(t += 0.002, p.HoverThrustN(), R), FilterStatus::kOk);
+  // a detection where the filter expects the payload passes
+  EXPECT_EQ(ekf.Update(t, Eigen::Vector3d(0, 0, -0.5), R, cov_B), FilterStatus::kOk);
+  EXPECT_LT(ekf.counts().last_nis, config.gate.nis_threshold);
+  const Eigen::Vector3d wild_B(0.5, 0, 0);
+  for (int k = 1; k <= config.gate.max_consecutive_rejections; ++k) {
+    ASSERT_EQ(ekf.Predict(t += 0.002, p.HoverThrustN(), R), FilterStatus::kOk);
+    EXPECT_EQ(ekf.Update(t, wild_B, R, cov_B), FilterStatus::kRejected) << "detection " << k;
+    EXPECT_GT(ekf.counts().last_nis, config.gate.nis_threshold);
+    EXPECT_LT((ekf.xi_W() - Eigen::Vector3d(0, 0, -1)).norm(), 1e-9);  // rejected: untouched
+  }
+  EXPECT_EQ(ekf.counts().rejected_updates, config.gate.max_consecutive_rejections);
+  EXPECT_EQ(ekf.counts().forced_accepts, 0);
+  // the next one in the run is fused: the filter is then assumed wrong, not the camera
+  ASSERT_EQ(ekf.Predict(t += 0.002, p.HoverThrustN(), R), FilterStatus::kOk);
+  EXPECT_EQ(ekf.Update(t, wild_B, R, cov_B), FilterStatus::kOk);
+  EXPECT_EQ(ekf.counts().forced_accepts, 1);
+  EXPECT_EQ(ekf.counts().accepted_updates, 2);
+  EXPECT_GT(ekf.xi_W().x(), 0.5);  // pulled toward +x: measured 0.96, bound half of it
+  EXPECT_NEAR(ekf.xi_W().norm(), 1.0, 1e-12);
+}
+
 TEST(CableEkfTest, NonFiniteAndStaleInputsAreIgnored) {
   const Params p;
   CableEkf ekf(p, CableEkfConfig{}, Eigen::Vector3d(0, 0, -1), Eigen::Vector3d::Zero(), 1.0);
@@ -123,7 +154,15 @@ TEST(CableEkfTest, NonFiniteAndStaleInputsAreIgnored) {
   EXPECT_EQ(ekf.Update(0.2, Eigen::Vector3d(0, 0, 0.5), Eigen::Matrix3d::Identity(),
                        Eigen::Matrix3d::Identity() * 1e-5),
             FilterStatus::kTooOld);
+  EXPECT_EQ(ekf.Update(1.0, Eigen::Vector3d(0, INFINITY, 0.5), Eigen::Matrix3d::Identity(),
+                       Eigen::Matrix3d::Identity() * 1e-5),
+            FilterStatus::kNonFinite);
   EXPECT_TRUE(ekf.xi_W().allFinite());
+  EXPECT_EQ(ekf.xi_W(), Eigen::Vector3d(0, 0, -1));
+  EXPECT_EQ(ekf.counts().non_finite, 2);
+  EXPECT_EQ(ekf.counts().out_of_order, 1);
+  EXPECT_EQ(ekf.counts().too_old, 1);
+  EXPECT_EQ(ekf.counts().accepted_updates, 0);
 }
 
 }  // namespace

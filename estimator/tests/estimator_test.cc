@@ -2,11 +2,14 @@
 
 #include <gtest/gtest.h>
 
+#include <cctype>
 #include <cstdlib>
 #include <deque>
+#include <map>
 #include <random>
 
 #include "hpa/estimator/analytic_camera.h"
+#include "hpa/estimator/estimator_registry.h"
 #include "hpa/models/camera_model.h"
 #include "hpa/models/hybrid_model.h"
 #include "hpa/models/rotor_model.h"
@@ -25,9 +28,10 @@ struct RunStats {
   double slack_latency_s = -1.0;      // true slack start -> estimated slack
   int false_slack_steps = 0;          // estimated slack while truly taut (before the kick)
   bool ever_slack = false;
+  EstimatorHealth health;  // at the end of the run
 };
 
-RunStats Simulate(bool hybrid, double kick_up_mps, uint64_t seed) {
+RunStats Simulate(const std::string& variant, double kick_up_mps, uint64_t seed) {
   const Params p;
   const HybridModel model(p);
   std::mt19937_64 rng(seed);
@@ -43,9 +47,7 @@ RunStats Simulate(bool hybrid, double kick_up_mps, uint64_t seed) {
   const InputVector u = InputVector::Constant(p.HoverMotorSpeedRadps());
   const double thrust_N = WrenchFromRotorSpeeds(p, u)(0);
 
-  EstimatorConfig config;
-  config.hybrid = hybrid;
-  std::unique_ptr<Estimator> estimator = MakeEstimator(config, p, truth);
+  std::unique_ptr<Estimator> estimator = MakeEstimator(variant, EstimatorConfig{}, p, truth);
   estimator->OnThrustCommand(thrust_N);
   const AnalyticCamera camera(p);
 
@@ -142,20 +144,28 @@ RunStats Simulate(bool hybrid, double kick_up_mps, uint64_t seed) {
   }
   stats.taut_payload_rmse_m = std::sqrt(taut_se / std::max(1, taut_n));
   stats.slack_payload_rmse_m = std::sqrt(slack_se / std::max(1, slack_n));
+  stats.health = estimator->Health();
   return stats;
 }
 
 TEST(EstimatorTest, HybridHoverIsTautAndAccurate) {
-  const RunStats s = Simulate(true, 0.0, 1);
+  const RunStats s = Simulate("hybrid", 0.0, 1);
   std::printf("hybrid hover: payload RMSE %.1f mm\n", 1e3 * s.taut_payload_rmse_m);
   EXPECT_FALSE(s.ever_slack);
   // 10 mm VIO noise per axis dominates; measured 3.5 mm (seed 1), bound 10 mm
   EXPECT_LT(s.taut_payload_rmse_m, 0.01);
+  // 2.5 s of 30 Hz VIO and camera frames, all in the gates: 73 VIO captures, the last one
+  // still in flight at the end
+  EXPECT_EQ(s.health.RejectedUpdates(), 0);
+  EXPECT_EQ(s.health.quad_filter.accepted_updates, 72);
+  EXPECT_GT(s.health.cable_ekf.accepted_updates, 70);
+  EXPECT_EQ(s.health.payload_tracker.accepted_updates, 0);
+  EXPECT_EQ(s.health.slack_entries, 0);
 }
 
 TEST(EstimatorTest, HybridDetectsSlackAndFollowsTheFreeFlyingPayload) {
   // 2.5 m/s upward kick: the payload flies ~0.3 m up and falls back, re-taut after ~0.5 s
-  const RunStats s = Simulate(true, 2.5, 2);
+  const RunStats s = Simulate("hybrid", 2.5, 2);
   std::printf(
       "hybrid kick: slack detected %.0f ms after the truth (camera latency 33 ms "
       "included), payload RMSE taut %.1f mm, slack %.1f mm\n",
@@ -170,14 +180,21 @@ TEST(EstimatorTest, HybridDetectsSlackAndFollowsTheFreeFlyingPayload) {
   // the taut model would be off by up to 280 mm here. After re-taut: measured 4.9 mm
   EXPECT_LT(s.slack_payload_rmse_m, 0.02);
   EXPECT_LT(s.taut_payload_rmse_m, 0.02);
+  // one slack phase: entered once, tracked on the detections, cable EKF restarted at re-taut
+  EXPECT_EQ(s.health.slack_entries, 1);
+  EXPECT_EQ(s.health.retaut_restarts, 1);
+  EXPECT_GT(s.health.payload_tracker.accepted_updates, 5);
+  EXPECT_FALSE(s.health.slack);
 }
 
 TEST(EstimatorTest, AlwaysTautVariantKeepsThePayloadOnTheCable) {
-  const RunStats s = Simulate(false, 2.5, 2);
+  const RunStats s = Simulate("always_taut", 2.5, 2);
   std::printf("always-taut kick: max | |x_L - x_Q| - l | = %.2e m\n", s.max_length_error_m);
   EXPECT_FALSE(s.ever_slack);
   // x_L = x_Q + l xi with |xi| = 1 (renormalised each step): rounding only
   EXPECT_LT(s.max_length_error_m, 1e-9);
+  EXPECT_EQ(s.health.slack_entries, 0);
+  EXPECT_EQ(s.health.payload_tracker.accepted_updates, 0);
 }
 
 TEST(EstimatorTest, NonFiniteInputsDoNotCorruptTheEstimate) {
@@ -185,7 +202,7 @@ TEST(EstimatorTest, NonFiniteInputsDoNotCorruptTheEstimate) {
   SystemState initial;
   initial.p_WQ_W = Eigen::Vector3d(0, 0, 1);
   initial.p_WL_W = Eigen::Vector3d(0, 0, 0.5);
-  auto estimator = MakeEstimator(EstimatorConfig{}, p, initial);
+  auto estimator = MakeEstimator("hybrid", EstimatorConfig{}, p, initial);
   ImuSample imu;
   imu.time_s = 0.002;
   imu.accel_B_mps2 = Eigen::Vector3d(0, 0, std::nan(""));
@@ -204,6 +221,46 @@ TEST(EstimatorTest, NonFiniteInputsDoNotCorruptTheEstimate) {
   EXPECT_TRUE(est.AllFinite());
   EXPECT_FALSE(est.payload_visible);
   EXPECT_LT((est.p_WL_W - initial.p_WL_W).norm(), 1e-9);
+  // every refusal is counted
+  const EstimatorHealth health = estimator->Health();
+  EXPECT_EQ(health.quad_filter.non_finite, 2);  // the IMU sample and the VIO sample
+  EXPECT_EQ(health.thrust_commands_non_finite, 1);
+  EXPECT_EQ(health.detections_non_finite, 1);
+  EXPECT_EQ(health.detections_lost, 0);
+  det.found = false;
+  estimator->OnPayloadDetection(det);
+  EXPECT_EQ(estimator->Health().detections_lost, 1);
+}
+
+TEST(EstimatorTest, HealthFieldsListEveryCountOnceByName) {
+  EstimatorHealth health;
+  health.quad_filter.rejected_updates = 2;
+  health.cable_ekf.rejected_updates = 3;
+  health.cable_ekf.forced_accepts = 1;
+  health.payload_tracker.accepted_updates = 7;
+  health.detections_lost = 4;
+  health.slack = true;
+  health.filtered_cable_length_m = 0.42;
+  const auto fields = EstimatorHealth{}.Fields();
+  const auto filled = health.Fields();
+  ASSERT_EQ(fields.size(), filled.size());
+  std::map<std::string, double> by_name;
+  for (const auto& [name, value] : filled) {
+    EXPECT_TRUE(by_name.emplace(name, value).second) << "duplicate field " << name;
+    EXPECT_FALSE(name.empty());
+    for (const char c : name) EXPECT_TRUE(std::islower(c) || std::isdigit(c) || c == '_') << name;
+  }
+  // totals first, then each filter's counts, then the estimator's own
+  EXPECT_EQ(filled[0].first, "rejected_updates");
+  EXPECT_EQ(filled[0].second, 5);
+  EXPECT_EQ(filled[1].first, "resets");
+  EXPECT_EQ(filled[1].second, 1);
+  EXPECT_EQ(by_name.at("quad_rejected_updates"), 2);
+  EXPECT_EQ(by_name.at("cable_forced_accepts"), 1);
+  EXPECT_EQ(by_name.at("tracker_accepted_updates"), 7);
+  EXPECT_EQ(by_name.at("detections_lost"), 4);
+  EXPECT_EQ(by_name.at("slack"), 1.0);
+  EXPECT_EQ(by_name.at("filtered_cable_length_m"), 0.42);
 }
 
 }  // namespace

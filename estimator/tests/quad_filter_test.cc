@@ -6,6 +6,8 @@
 #include <deque>
 #include <random>
 
+#include "estimator/src/so3.h"
+
 namespace hpa {
 namespace {
 
@@ -171,7 +173,54 @@ TEST(QuadFilterTest, NonFiniteAndStaleInputsAreRejected) {
   vio.time_s = 0.002;
   vio.p_WB_W.x() = INFINITY;
   EXPECT_EQ(filter.UpdateVio(vio), FilterStatus::kNonFinite);
+  vio.p_WB_W.x() = 0.0;
+  vio.q_WB.coeffs().setZero();  // no attitude
+  EXPECT_EQ(filter.UpdateVio(vio), FilterStatus::kNonFinite);
   EXPECT_TRUE(filter.state().p_WB_W.allFinite());
+  EXPECT_EQ(filter.state().time_s, 0.002);
+  EXPECT_EQ(filter.counts().non_finite, 3);
+  EXPECT_EQ(filter.counts().out_of_order, 1);
+  EXPECT_EQ(filter.counts().too_old, 1);
+  EXPECT_EQ(filter.counts().accepted_updates, 0);
+}
+
+TEST(QuadFilterTest, WildVioIsRejectedUntilTheRunForcesAnAccept) {
+  // at rest; VIO then reports the vehicle 1 m to the side (a relocalisation jump)
+  const Params params;
+  const QuadFilterConfig config;
+  QuadFilterState initial;
+  initial.p_WB_W = Eigen::Vector3d(0, 0, 1);
+  QuadFilter filter(params, config, initial);
+  ImuSample imu;
+  imu.accel_B_mps2 = Eigen::Vector3d(0, 0, params.gravity_mps2);
+  int k = 0;
+  auto step = [&]() {
+    imu.time_s = ++k / 500.0;
+    ASSERT_EQ(filter.Predict(imu), FilterStatus::kOk);
+  };
+  VioSample vio;
+  vio.p_WB_W = initial.p_WB_W;
+  for (int i = 0; i < 17; ++i) step();
+  vio.time_s = imu.time_s;
+  EXPECT_EQ(filter.UpdateVio(vio), FilterStatus::kOk);
+  EXPECT_LT(filter.counts().last_nis, config.vio_gate.nis_threshold);
+  vio.p_WB_W.x() += 1.0;
+  for (int n = 1; n <= config.vio_gate.max_consecutive_rejections; ++n) {
+    for (int i = 0; i < 17; ++i) step();
+    vio.time_s = imu.time_s;
+    EXPECT_EQ(filter.UpdateVio(vio), FilterStatus::kRejected) << "sample " << n;
+    EXPECT_GT(filter.counts().last_nis, config.vio_gate.nis_threshold);
+    EXPECT_LT(std::abs(filter.state().p_WB_W.x()), 1e-9);  // rejected: untouched
+  }
+  EXPECT_EQ(filter.counts().rejected_updates, config.vio_gate.max_consecutive_rejections);
+  // the next one in the run is fused (the filter, not VIO, is assumed off), also when late
+  for (int i = 0; i < 17; ++i) step();
+  vio.time_s = imu.time_s - 0.01;
+  EXPECT_EQ(filter.UpdateVio(vio), FilterStatus::kOk);
+  EXPECT_EQ(filter.counts().forced_accepts, 1);
+  EXPECT_EQ(filter.counts().accepted_updates, 2);
+  // pulled toward the jump: measured 0.46 m (P and R comparable), bound 0.3 m
+  EXPECT_GT(filter.state().p_WB_W.x(), 0.3);
 }
 
 TEST(QuadFilterTest, HoverAtRestStaysPut) {

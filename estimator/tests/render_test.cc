@@ -19,6 +19,7 @@
 #include "hpa/models/camera_model.h"
 #include "hpa/models/params.h"
 #include "hpa/sim/world.h"
+#include "models/tests/temp_dir.h"
 
 namespace hpa {
 namespace {
@@ -119,13 +120,14 @@ TEST_F(RenderedDetectorTest, ErrorStatisticsByRegion) {
           continue;
         }
         if (std::getenv("EST_DUMP") && frames < 200) {
-          char name[128];
-          std::snprintf(name, sizeof(name), "/tmp/est_frame_%03d_%s.png", frames,
+          char file[64];
+          std::snprintf(file, sizeof(file), "est_frame_%03d_%s.png", frames,
                         d.found ? "found" : "lost");
+          const std::string name = TestTempDir() + file;
           cv::imwrite(name, frame);
-          std::printf("%s: true %.0f %.0f %.0f det %.0f %.0f %.0f mm, %s\n", name, 1e3 * true_C.x(),
-                      1e3 * true_C.y(), 1e3 * true_C.z(), 1e3 * d.p_CL_C.x(), 1e3 * d.p_CL_C.y(),
-                      1e3 * d.p_CL_C.z(), d.reason.c_str());
+          std::printf("%s: true %.0f %.0f %.0f det %.0f %.0f %.0f mm, %s\n", name.c_str(),
+                      1e3 * true_C.x(), 1e3 * true_C.y(), 1e3 * true_C.z(), 1e3 * d.p_CL_C.x(),
+                      1e3 * d.p_CL_C.y(), 1e3 * d.p_CL_C.z(), d.reason.c_str());
         }
         if (!d.found) {
           if (visible >= 1.0) ++lost_visible;

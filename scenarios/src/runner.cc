@@ -11,6 +11,7 @@
 #include "hpa/controller/body_rate_controller.h"
 #include "hpa/estimator/analytic_camera.h"
 #include "hpa/estimator/estimator.h"
+#include "hpa/estimator/estimator_registry.h"
 #include "hpa/estimator/payload_detector.h"
 #include "hpa/models/camera_model.h"
 #include "hpa/scenarios/video_recorder.h"
@@ -99,9 +100,9 @@ RunResult RunScenario(const Scenario& scenario, const Params& params, const RunO
   std::unique_ptr<Controller> controller = MakeController(scenario.controller, params, reference);
   BodyRateController rate_controller(params);
   EstimatorConfig estimator_config;
-  estimator_config.hybrid = scenario.controller.type != "nonhybrid_mpc";
   std::unique_ptr<Estimator> estimator =
-      MakeEstimator(estimator_config, params, InitialState(*reference, params));
+      MakeEstimator(scenario.controller.type != "nonhybrid_mpc" ? "hybrid" : "always_taut",
+                    estimator_config, params, InitialState(*reference, params));
   const bool ground_truth = scenario.estimation.ground_truth;
   const bool render_camera = scenario.estimation.camera == "render";
   PayloadDetector detector(params);

@@ -18,8 +18,9 @@ struct CableEkfConfig {
   double initial_xi_std = 0.3;            // per axis, unit-vector components
   double initial_xi_dot_std_per_s = 1.0;  // per axis
   double history_s = 0.5;                 // how late a detection may arrive
-  double gate_chi2 = 30.0;                // innovation gate (3 dof; 99.99% ~ 21)
-  int max_consecutive_rejections = 3;     // then the next measurement is accepted anyway
+  // detection gate: NIS over 30 rejects (3 dof: the 99.99% quantile is 21); the fourth
+  // rejection in a row is accepted anyway (e.g. after an unmodelled jerk of the cable)
+  InnovationGate gate = {30.0, 3};
 };
 
 /// Cable state: unit vector from the quadrotor to the payload and its rate (world frame).
@@ -51,6 +52,8 @@ class CableEkf {
   Eigen::Vector3d xi_dot_W() const { return x_.tail<3>(); }
   const CableMatrix& covariance() const { return covariance_; }
   double time_s() const { return time_s_; }
+  /// Counts of refused predictions and of accepted, rejected and forced updates.
+  const FilterCounts& counts() const { return counts_; }
 
   /// Continuous-time derivative of [xi, xi_dot] (the paper's process model).
   static CableVector Derivative(const CableVector& x, const Eigen::Vector3d& force_W_N,
@@ -64,6 +67,8 @@ class CableEkf {
     double thrust_N;  // input that brought the filter to this entry
     Eigen::Matrix3d R_WB;
   };
+  // Counts a refused step and returns its status.
+  FilterStatus Refused(FilterStatus status);
   void Propagate(double dt_s, double thrust_N, const Eigen::Matrix3d& R_WB, CableVector* x,
                  CableMatrix* covariance) const;
 
@@ -72,8 +77,9 @@ class CableEkf {
   double time_s_;
   CableVector x_;
   CableMatrix covariance_;
-  std::deque<Entry> history_;  // one entry per prediction, oldest first
-  int consecutive_rejections_ = 0;
+  std::deque<Entry> history_;       // one entry per prediction, oldest first
+  int consecutive_rejections_ = 0;  // gate rejections in a row
+  FilterCounts counts_;
 };
 
 }  // namespace hpa

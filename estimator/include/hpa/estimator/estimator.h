@@ -6,6 +6,7 @@
 
 #include "hpa/estimator/analytic_camera.h"
 #include "hpa/estimator/cable_ekf.h"
+#include "hpa/estimator/estimator_health.h"
 #include "hpa/estimator/mode_detector.h"
 #include "hpa/estimator/payload_tracker.h"
 #include "hpa/estimator/quad_filter.h"
@@ -15,16 +16,26 @@
 
 namespace hpa {
 
-/// Settings of the estimator from the scenario's `estimation:` block.
+/// Settings of the estimator; the defaults are the tuned values.
 struct EstimatorConfig {
-  bool hybrid = true;  // true: mode detector (hpa_mpc); false: always taut (nonhybrid_mpc)
-  // Added by the estimator issue (defaults are the tuned values; scenarios need not set them):
   QuadFilterConfig quad_filter;            // IMU + VIO error-state EKF
   CableEkfConfig cable_ekf;                // (xi, xi_dot) EKF
   ModeDetectorConfig mode_detector;        // low-pass cable length vs l - epsilon
   PayloadTrackerConfig payload_tracker;    // free-fall payload filter used while slack
   CameraNoiseModel detection_noise;        // detector noise -> measurement covariances
   double detection_noise_floor_m = 0.002;  // added per axis (attitude and sync errors)
+  // payload tracker covariance at start, per axis (variances: the tuned values are exact there)
+  double initial_payload_position_var_m2 = 1e-4;
+  double initial_payload_velocity_var_m2ps2 = 1e-2;
+  // slack entry: the payload velocity comes from the last two detections (free fall between
+  // them) when they are between these gaps apart, else from the taut model with this std
+  double slack_entry_min_detection_gap_s = 1e-3;  // closer: the difference is noise
+  double slack_entry_max_detection_gap_s = 0.1;   // farther: the older one predates the event
+  double slack_entry_velocity_std_mps = 0.5;      // taut-model velocity's std, per axis
+  // re-taut: the cable EKF restarts on the measured direction with this std, per axis
+  double retaut_xi_std = 0.03;           // unit-vector components
+  double retaut_xi_dot_std_per_s = 1.0;  // cable direction rate
+  double max_extrapolation_s = 0.05;     // Estimate() ahead of the last IMU sample, at most
 };
 
 /// Full onboard estimator: quadrotor filter (IMU + VIO), cable EKF, mode detector.
@@ -41,10 +52,8 @@ class Estimator {
   virtual void OnThrustCommand(double thrust_N) = 0;
   /// Current estimate at time_s (mode included).
   virtual SystemState Estimate(double time_s) const = 0;
+  /// Counts of what the filters did with their inputs since start, and the mode state.
+  virtual EstimatorHealth Health() const = 0;
 };
-
-/// Builds the estimator; `initial` is the state it starts from (the vehicle at rest on start).
-std::unique_ptr<Estimator> MakeEstimator(const EstimatorConfig& config, const Params& params,
-                                         const SystemState& initial);
 
 }  // namespace hpa

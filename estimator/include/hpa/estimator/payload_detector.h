@@ -20,6 +20,12 @@ struct PayloadDetectorConfig {
   double min_iou = 0.90;              // blob vs fitted ellipse (clipped to the image)
   double min_visible_outline = 0.60;  // share of the fitted outline inside the image
   int occluder_value_max = 50;        // darker pixels occlude (the cable; floor is >= 75)
+  int occluder_grow_px = 3;           // outline points this close to an occluder are not fitted
+  double min_fit_share = 0.25;        // share of the blob's outline left to fit, at least
+  int min_fit_points = 16;            // outline points left to fit, at least
+  double min_semi_minor_px = 2.0;     // smaller fitted ellipse: a poor fit
+  int outline_samples = 72;           // samples of the fitted outline for min_visible_outline
+  double min_radial_offset_px = 2.0;  // closer to the principal point: major axis from the fit
   double edge_bias_px = 0.5;          // contour runs through edge pixel centres: add to axes
 };
 

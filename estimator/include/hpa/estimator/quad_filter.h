@@ -25,14 +25,15 @@ struct QuadFilterConfig {
   double vio_position_std_m = 0.01;                // VIO position noise, per axis
   double vio_attitude_std_rad = 0.01;              // VIO attitude noise, per axis
   double vio_velocity_std_mps = 0.02;              // VIO velocity noise, per axis
-  double initial_position_std_m = 0.02;
-  double initial_velocity_std_mps = 0.05;
-  double initial_attitude_std_rad = 0.02;
-  double initial_gyro_bias_std_radps = 0.01;
-  double initial_accel_bias_std_mps2 = 0.1;
-  double history_s = 0.5;              // how late a VIO sample may arrive
-  int max_consecutive_rejections = 3;  // then the next VIO sample is accepted anyway
-  double vio_gate_chi2 = 50.0;         // innovation gate (9 dof; 99.9999% ~ 45)
+  double initial_position_std_m = 0.02;            // initial covariance, per axis
+  double initial_velocity_std_mps = 0.05;          // initial covariance, per axis
+  double initial_attitude_std_rad = 0.02;          // initial covariance, per axis
+  double initial_gyro_bias_std_radps = 0.01;       // initial covariance, per axis
+  double initial_accel_bias_std_mps2 = 0.1;        // initial covariance, per axis
+  double history_s = 0.5;                          // how late a VIO sample may arrive
+  // VIO gate: NIS over 50 rejects (9 dof: the 99.9999% quantile is 45); the fourth rejection in a
+  // row is accepted anyway (the filter, not VIO, is then off)
+  InnovationGate vio_gate = {50.0, 3};
 };
 
 /// Nominal state of the quadrotor filter.
@@ -68,6 +69,8 @@ class QuadFilter {
   /// Current (latest IMU time) state and its 15x15 error covariance.
   const QuadFilterState& state() const { return state_; }
   const Matrix15d& covariance() const { return covariance_; }
+  /// Counts of refused IMU samples and of accepted, rejected and forced VIO updates.
+  const FilterCounts& counts() const { return counts_; }
 
   /// State at a past time from the history (nearest kept sample at or before time_s), or the
   /// current state if time_s is newer; nullopt if older than the history.
@@ -84,6 +87,8 @@ class QuadFilter {
   };
   void Propagate(const ImuSample& previous, const ImuSample& imu, QuadFilterState* state,
                  Matrix15d* covariance) const;
+  // Counts a refused step and returns its status.
+  FilterStatus Refused(FilterStatus status);
   FilterStatus Correct(const VioSample& vio, QuadFilterState* state, Matrix15d* covariance);
 
   Params params_;
@@ -91,15 +96,9 @@ class QuadFilter {
   QuadFilterState state_;
   Matrix15d covariance_;
   std::optional<ImuSample> last_imu_;
-  std::deque<Entry> history_;  // one entry per IMU sample, oldest first
-  int consecutive_rejections_ = 0;
+  std::deque<Entry> history_;       // one entry per IMU sample, oldest first
+  int consecutive_rejections_ = 0;  // VIO gate rejections in a row
+  FilterCounts counts_;
 };
-
-/// SO(3) exponential of a rotation vector (rad).
-Eigen::Matrix3d ExpSo3(const Eigen::Vector3d& theta);
-/// SO(3) logarithm: rotation vector (rad) of R.
-Eigen::Vector3d LogSo3(const Eigen::Matrix3d& R);
-/// Skew-symmetric matrix of v: Skew(v) w = v x w.
-Eigen::Matrix3d Skew(const Eigen::Vector3d& v);
 
 }  // namespace hpa

@@ -1,0 +1,36 @@
+#pragma once
+// Health of the onboard estimator, published rather than discarded: what each filter did with
+// its inputs (accepted, gated, forced, refused) and the mode detector's state, so a bad flight
+// can be explained from its log.
+
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "hpa/estimator/filter_status.h"
+
+namespace hpa {
+
+/// Running counts of the estimator's filters since start, plus its current mode state.
+struct EstimatorHealth {
+  FilterCounts quad_filter;              // IMU predictions and VIO updates
+  FilterCounts cable_ekf;                // cable predictions and detection updates while taut
+  FilterCounts payload_tracker;          // detection updates while slack
+  int detections_lost = 0;               // camera frames in which the payload was not found
+  int detections_non_finite = 0;         // detections refused for a NaN/Inf time or position
+  int thrust_commands_non_finite = 0;    // thrust commands refused (the last one is kept)
+  int slack_entries = 0;                 // taut-to-slack switches (payload tracker restarted)
+  int retaut_restarts = 0;               // slack-to-taut switches (cable EKF restarted)
+  bool slack = false;                    // current estimated mode
+  double filtered_cable_length_m = 0.0;  // the mode detector's low-passed cable length
+
+  /// Gate rejections summed over the three filters.
+  int RejectedUpdates() const;
+  /// Forced accepts (updates fused over the gate after a run of rejections) over the filters.
+  int ForcedAccepts() const;
+  /// Every field as (name, value) in a fixed order: the totals rejected_updates and resets
+  /// (forced accepts), each filter's counts prefixed quad_, cable_ and tracker_, then the rest.
+  std::vector<std::pair<std::string, double>> Fields() const;
+};
+
+}  // namespace hpa

@@ -1,0 +1,33 @@
+#include "hpa/estimator/estimator_health.h"
+
+namespace hpa {
+
+int EstimatorHealth::RejectedUpdates() const {
+  return quad_filter.rejected_updates + cable_ekf.rejected_updates +
+         payload_tracker.rejected_updates;
+}
+
+int EstimatorHealth::ForcedAccepts() const {
+  return quad_filter.forced_accepts + cable_ekf.forced_accepts + payload_tracker.forced_accepts;
+}
+
+std::vector<std::pair<std::string, double>> EstimatorHealth::Fields() const {
+  std::vector<std::pair<std::string, double>> fields = {{"rejected_updates", RejectedUpdates()},
+                                                        {"resets", ForcedAccepts()}};
+  for (const auto& [prefix, counts] :
+       {std::pair<std::string, const FilterCounts*>{"quad_", &quad_filter},
+        {"cable_", &cable_ekf},
+        {"tracker_", &payload_tracker}}) {
+    for (auto& field : counts->Fields(prefix)) fields.push_back(std::move(field));
+  }
+  fields.insert(fields.end(), {{"detections_lost", detections_lost},
+                               {"detections_non_finite", detections_non_finite},
+                               {"thrust_commands_non_finite", thrust_commands_non_finite},
+                               {"slack_entries", slack_entries},
+                               {"retaut_restarts", retaut_restarts},
+                               {"slack", slack ? 1.0 : 0.0},
+                               {"filtered_cable_length_m", filtered_cable_length_m}});
+  return fields;
+}
+
+}  // namespace hpa
