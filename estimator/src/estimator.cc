@@ -8,13 +8,20 @@
 namespace hpa {
 namespace {
 
+// Where an always-taut estimator puts the payload.
+enum class TautPayload {
+  kMeasured,   // the detections' position and low-passed finite-difference velocity
+  kProjected,  // on the cable sphere: x_Q + l xi from the cable EKF
+};
+
 // Quadrotor filter + cable EKF, and when hybrid the mode detector and the free-fall payload
-// tracker; not hybrid, the payload is always at x_Q + l xi (always taut).
+// tracker; not hybrid, the mode is always taut and the payload is as measured or projected.
 class CableEstimator final : public Estimator {
  public:
-  CableEstimator(bool hybrid, const EstimatorConfig& config, const Params& params,
-                 const SystemState& initial)
+  CableEstimator(bool hybrid, TautPayload taut_payload, const EstimatorConfig& config,
+                 const Params& params, const SystemState& initial)
       : hybrid_(hybrid),
+        taut_payload_(taut_payload),
         config_(config),
         params_(params),
         quad_(params, config.quad_filter, QuadFilterStateFrom(initial)),
@@ -71,9 +78,10 @@ class CableEstimator final : public Estimator {
     const Eigen::Matrix3d R_WB = quad_then.q_WB.toRotationMatrix();
     const Eigen::Vector3d p_WL_W = quad_then.p_WB_W + R_WB * p_BL_B;
 
-    // always-taut variant: the EKF takes the raw measurement whatever its length
+    // always-taut variants: the EKF takes the raw measurement whatever its length
     if (!hybrid_) {
       cable_.Update(detection.time_s, p_BL_B, R_WB, cov_B);
+      if (taut_payload_ == TautPayload::kMeasured) UpdateMeasuredPayload(detection.time_s, p_WL_W);
       return;
     }
 
@@ -139,7 +147,14 @@ class CableEstimator final : public Estimator {
     out.w_B = quad.w_B_radps;
     out.mode = hybrid_ ? mode_ : CableMode::kTaut;
     out.payload_visible = payload_visible_;
-    if (out.mode == CableMode::kTaut) {
+    const double measured_age_s = time_s - measured_time_s_;
+    if (!hybrid_ && taut_payload_ == TautPayload::kMeasured && has_measured_ &&
+        measured_age_s <= config_.measured_payload_max_age_s) {
+      // as measured (a payload lifted along the cable is an error the controller sees),
+      // carried from the capture time to now at the measured velocity
+      out.p_WL_W = measured_p_WL_W_ + measured_v_WL_W_ * std::max(0.0, measured_age_s);
+      out.v_WL_W = measured_v_WL_W_;
+    } else if (out.mode == CableMode::kTaut) {
       out.p_WL_W = out.p_WQ_W + params_.cable_length_m * cable_.xi_W();
       out.v_WL_W = out.v_WQ_W + params_.cable_length_m * cable_.xi_dot_W();
     } else {
@@ -173,6 +188,22 @@ class CableEstimator final : public Estimator {
   }
 
  private:
+  // The measured payload: the newest detection in world and a low-passed finite difference of
+  // consecutive detections (a first-order filter with time constant tau, alpha = dt/(tau + dt)).
+  void UpdateMeasuredPayload(double time_s, const Eigen::Vector3d& p_WL_W) {
+    const double gap_s = time_s - measured_time_s_;
+    if (has_measured_ && gap_s > 0.0 && gap_s <= config_.measured_velocity_max_gap_s) {
+      const Eigen::Vector3d v_raw_WL_W = (p_WL_W - measured_p_WL_W_) / gap_s;
+      const double alpha = gap_s / (config_.measured_velocity_time_constant_s + gap_s);
+      measured_v_WL_W_ += alpha * (v_raw_WL_W - measured_v_WL_W_);
+    }
+    if (!has_measured_ || gap_s > 0.0) {
+      measured_p_WL_W_ = p_WL_W;
+      measured_time_s_ = time_s;
+      has_measured_ = true;
+    }
+  }
+
   static Eigen::Vector3d InitialXi(const SystemState& s, double l_m) {
     const Eigen::Vector3d d = s.p_WL_W - s.p_WQ_W;
     return d.norm() > 1e-6 ? Eigen::Vector3d(d.normalized()) : Eigen::Vector3d(0, 0, -1);
@@ -188,7 +219,12 @@ class CableEstimator final : public Estimator {
                                                                                : CableMode::kTaut;
   }
 
-  bool hybrid_;  // mode detector and payload tracker in use
+  bool hybrid_;               // mode detector and payload tracker in use
+  TautPayload taut_payload_;  // where the always-taut variants put the payload
+  bool has_measured_ = false;
+  Eigen::Vector3d measured_p_WL_W_ = Eigen::Vector3d::Zero();  // newest detection, world  (3)
+  Eigen::Vector3d measured_v_WL_W_ = Eigen::Vector3d::Zero();  // low-passed, world  (3)
+  double measured_time_s_ = 0.0;                               // capture time of the newest
   EstimatorConfig config_;
   Params params_;
   QuadFilter quad_;
@@ -212,13 +248,19 @@ class CableEstimator final : public Estimator {
 
 std::unique_ptr<Estimator> MakeHybridEstimator(const EstimatorConfig& config, const Params& params,
                                                const SystemState& initial) {
-  return std::make_unique<CableEstimator>(true, config, params, initial);
+  return std::make_unique<CableEstimator>(true, TautPayload::kProjected, config, params, initial);
 }
 
 std::unique_ptr<Estimator> MakeAlwaysTautEstimator(const EstimatorConfig& config,
                                                    const Params& params,
                                                    const SystemState& initial) {
-  return std::make_unique<CableEstimator>(false, config, params, initial);
+  return std::make_unique<CableEstimator>(false, TautPayload::kMeasured, config, params, initial);
+}
+
+std::unique_ptr<Estimator> MakeAlwaysTautProjectedEstimator(const EstimatorConfig& config,
+                                                            const Params& params,
+                                                            const SystemState& initial) {
+  return std::make_unique<CableEstimator>(false, TautPayload::kProjected, config, params, initial);
 }
 
 }  // namespace hpa

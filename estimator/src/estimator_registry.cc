@@ -13,8 +13,12 @@ std::vector<EstimatorRegistration> BuiltInEstimators() {
   return {
       {"hybrid", "IMU+VIO filter, cable EKF, slack/taut mode detector, free-fall payload tracker",
        MakeHybridEstimator},
-      {"always_taut", "IMU+VIO filter and cable EKF; mode always taut, payload at x_Q + l xi",
+      {"always_taut",
+       "the paper's baseline: mode always taut, payload position and velocity as measured",
        MakeAlwaysTautEstimator},
+      {"always_taut_projected",
+       "mode always taut, payload projected on the cable sphere at x_Q + l xi (cable EKF)",
+       MakeAlwaysTautProjectedEstimator},
   };
 }
 

@@ -11,9 +11,14 @@ namespace hpa {
 /// Quadrotor filter, cable EKF, mode detector and free-fall payload tracker (flies hpa_mpc).
 std::unique_ptr<Estimator> MakeHybridEstimator(const EstimatorConfig& config, const Params& params,
                                                const SystemState& initial);
-/// Quadrotor filter and cable EKF only: mode always taut, payload at x_Q + l xi.
+/// The paper's baseline estimator: mode always taut, payload as measured by the camera
+/// (position of the newest detection, low-passed finite-difference velocity).
 std::unique_ptr<Estimator> MakeAlwaysTautEstimator(const EstimatorConfig& config,
                                                    const Params& params,
                                                    const SystemState& initial);
+/// Mode always taut, payload projected on the cable sphere at x_Q + l xi (cable EKF).
+std::unique_ptr<Estimator> MakeAlwaysTautProjectedEstimator(const EstimatorConfig& config,
+                                                            const Params& params,
+                                                            const SystemState& initial);
 
 }  // namespace hpa

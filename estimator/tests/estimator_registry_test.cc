@@ -41,6 +41,7 @@ TEST(EstimatorRegistryTest, ListsTheBuiltInVariants) {
   ASSERT_GE(names.size(), 2u);
   EXPECT_EQ(names[0], "hybrid");
   EXPECT_EQ(names[1], "always_taut");
+  EXPECT_EQ(names[2], "always_taut_projected");
   for (const EstimatorRegistration& registration : Estimators()) {
     EXPECT_FALSE(registration.description.empty()) << registration.name;
     EXPECT_EQ(FindEstimator(registration.name), &registration);

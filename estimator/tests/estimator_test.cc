@@ -22,11 +22,12 @@ namespace {
 // cable reaches l again. Sensors: IMU 500 Hz, VIO 30 Hz (20 ms late), analytic camera 30 Hz
 // (one frame late), all noisy from one seeded generator.
 struct RunStats {
-  double taut_payload_rmse_m = 0.0;   // payload error while truly taut (after 0.5 s)
-  double slack_payload_rmse_m = 0.0;  // payload error while truly slack (after detection)
-  double max_length_error_m = 0.0;    // | |p_L - p_Q| estimated - l | while estimated taut
-  double slack_latency_s = -1.0;      // true slack start -> estimated slack
-  int false_slack_steps = 0;          // estimated slack while truly taut (before the kick)
+  double taut_payload_rmse_m = 0.0;       // payload error while truly taut (after 0.5 s)
+  double slack_payload_rmse_m = 0.0;      // payload error while truly slack (after detection)
+  double max_length_error_m = 0.0;        // | |p_L - p_Q| estimated - l | while estimated taut
+  double any_slack_payload_rmse_m = 0.0;  // payload error while truly slack, any estimated mode
+  double slack_latency_s = -1.0;          // true slack start -> estimated slack
+  int false_slack_steps = 0;              // estimated slack while truly taut (before the kick)
   bool ever_slack = false;
   EstimatorHealth health;  // at the end of the run
 };
@@ -58,8 +59,8 @@ RunStats Simulate(const std::string& variant, double kick_up_mps, uint64_t seed)
   std::deque<VioSample> vio_queue;
   std::deque<PayloadDetection> camera_queue;
   RunStats stats;
-  double taut_se = 0, slack_se = 0;
-  int taut_n = 0, slack_n = 0;
+  double taut_se = 0, slack_se = 0, any_slack_se = 0;
+  int taut_n = 0, slack_n = 0, any_slack_n = 0;
   for (int k = 1; k <= 1250; ++k) {  // 2.5 s
     const double t = k * kDt;
     // truth step, kick and re-taut
@@ -141,9 +142,14 @@ RunStats Simulate(const std::string& variant, double kick_up_mps, uint64_t seed)
       slack_se += e2;
       ++slack_n;
     }
+    if (truly_slack) {
+      any_slack_se += e2;
+      ++any_slack_n;
+    }
   }
   stats.taut_payload_rmse_m = std::sqrt(taut_se / std::max(1, taut_n));
   stats.slack_payload_rmse_m = std::sqrt(slack_se / std::max(1, slack_n));
+  stats.any_slack_payload_rmse_m = std::sqrt(any_slack_se / std::max(1, any_slack_n));
   stats.health = estimator->Health();
   return stats;
 }
@@ -187,14 +193,35 @@ TEST(EstimatorTest, HybridDetectsSlackAndFollowsTheFreeFlyingPayload) {
   EXPECT_FALSE(s.health.slack);
 }
 
-TEST(EstimatorTest, AlwaysTautVariantKeepsThePayloadOnTheCable) {
-  const RunStats s = Simulate("always_taut", 2.5, 2);
+TEST(EstimatorTest, AlwaysTautProjectedVariantKeepsThePayloadOnTheCable) {
+  const RunStats s = Simulate("always_taut_projected", 2.5, 2);
   std::printf("always-taut kick: max | |x_L - x_Q| - l | = %.2e m\n", s.max_length_error_m);
   EXPECT_FALSE(s.ever_slack);
   // x_L = x_Q + l xi with |xi| = 1 (renormalised each step): rounding only
   EXPECT_LT(s.max_length_error_m, 1e-9);
   EXPECT_EQ(s.health.slack_entries, 0);
   EXPECT_EQ(s.health.payload_tracker.accepted_updates, 0);
+}
+
+TEST(EstimatorTest, AlwaysTautVariantPassesTheMeasuredPayload) {
+  // the paper's baseline: mode always taut, but a payload kicked up along the cable is seen
+  // where the camera sees it, not projected back onto the sphere |x_L - x_Q| = l
+  const RunStats measured = Simulate("always_taut", 2.5, 2);
+  const RunStats projected = Simulate("always_taut_projected", 2.5, 2);
+  std::printf(
+      "always-taut kick: payload RMSE while slack %.1f mm measured, %.1f mm projected; "
+      "max | |x_L - x_Q| - l | %.3f m\n",
+      1e3 * measured.any_slack_payload_rmse_m, 1e3 * projected.any_slack_payload_rmse_m,
+      measured.max_length_error_m);
+  EXPECT_FALSE(measured.ever_slack);
+  EXPECT_EQ(measured.health.slack_entries, 0);
+  // the kicked payload is seen off the sphere: measured 0.324 m (the kick's 0.3 m rise), bound
+  // 2/3 of it
+  EXPECT_GT(measured.max_length_error_m, 0.2);
+  // while truly slack it follows the detections: measured 53.9 mm (camera latency and the
+  // low-pass lag), bound 1.5x; projected on the cable it is off by 212 mm, bound 2/3 of that
+  EXPECT_LT(measured.any_slack_payload_rmse_m, 0.081);
+  EXPECT_GT(projected.any_slack_payload_rmse_m, 0.14);
 }
 
 TEST(EstimatorTest, NonFiniteInputsDoNotCorruptTheEstimate) {

@@ -36,6 +36,10 @@ struct EstimatorConfig {
   double retaut_xi_std = 0.03;           // unit-vector components
   double retaut_xi_dot_std_per_s = 1.0;  // cable direction rate
   double max_extrapolation_s = 0.05;     // Estimate() ahead of the last IMU sample, at most
+  // always_taut (the paper's baseline): the payload state as measured, not projected on the cable
+  double measured_velocity_time_constant_s = 0.1;  // low-pass on the detections' finite difference
+  double measured_velocity_max_gap_s = 0.1;  // longer gaps between detections: no new difference
+  double measured_payload_max_age_s = 0.2;   // older detection: fall back to x_Q + l xi
 };
 
 /// Full onboard estimator: quadrotor filter (IMU + VIO), cable EKF, mode detector.
