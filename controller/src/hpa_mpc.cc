@@ -85,9 +85,12 @@ ControlOutput HpaMpc::Update(const SystemState& state) {
 
   const Ocp ocp = BuildProblem(state);
   // the taut flow holds only on the taut manifold: a state just past the guard (the cable
-  // snapping taut, or an estimate off the constraint) goes through the jump map first
-  const StateVector x0 =
-      ocp.mode == CableMode::kTaut ? model_.ProjectToTaut(state.ToVector()) : state.ToVector();
+  // snapping taut, or an estimate off the constraint) goes through the jump map first. The
+  // non-hybrid baseline starts the taut model from the state as measured, as the paper's does:
+  // a payload lifted along the cable stays an error it acts on
+  const StateVector x0 = ocp.mode == CableMode::kTaut && settings_.hybrid
+                             ? model_.ProjectToTaut(state.ToVector())
+                             : state.ToVector();
   const std::vector<InputVector> guess = WarmStart(state.time_s);
   const bool had_plan = plan_u_.size() == static_cast<size_t>(ocp.horizon_steps);
 
