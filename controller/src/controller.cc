@@ -1,12 +1,21 @@
 #include "hpa/controller/controller.h"
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 
-#include "hpa/controller/geometric_controller.h"
-#include "hpa/controller/hpa_mpc.h"
+#include "hpa/controller/controller_registry.h"
 
 namespace hpa {
+namespace {
+
+std::string Joined(const std::vector<std::string>& names) {
+  std::string joined;
+  for (const std::string& name : names) joined += (joined.empty() ? "" : ", ") + name;
+  return joined;
+}
+
+}  // namespace
 
 const char* ToString(ControlStatus status) {
   switch (status) {
@@ -30,22 +39,17 @@ std::unique_ptr<Controller> MakeController(const ControllerConfig& config, const
   if (!std::isfinite(config.perception_weight) || config.perception_weight < 0.0) {
     throw std::invalid_argument("controller.perception_weight: expected a finite value >= 0");
   }
-  if (config.solver != "rti" && config.solver != "nlopt") {
-    throw std::invalid_argument("controller.solver: expected rti or nlopt, got '" + config.solver +
-                                "'");
+  const std::vector<std::string> solvers = OcpSolverNames();
+  if (std::find(solvers.begin(), solvers.end(), config.solver) == solvers.end()) {
+    throw std::invalid_argument("controller.solver: expected one of " + Joined(solvers) +
+                                ", got '" + config.solver + "'");
   }
-  if (config.type == "geometric") {
-    return std::make_unique<GeometricController>(params, std::move(reference));
+  const ControllerRegistration* registration = FindController(config.type);
+  if (registration == nullptr) {
+    throw std::invalid_argument("controller.type: expected one of " + Joined(ControllerNames()) +
+                                ", got '" + config.type + "'");
   }
-  if (config.type == "hpa_mpc" || config.type == "nonhybrid_mpc") {
-    MpcSettings settings;
-    settings.hybrid = (config.type == "hpa_mpc");
-    settings.perception_weight = config.perception_weight;
-    settings.solver = config.solver;
-    return std::make_unique<HpaMpc>(params, std::move(reference), settings);
-  }
-  throw std::invalid_argument(
-      "controller.type: expected hpa_mpc, nonhybrid_mpc or geometric, got '" + config.type + "'");
+  return registration->make(config, params, std::move(reference));
 }
 
 }  // namespace hpa

@@ -5,6 +5,8 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "controller_factories.h"
+
 namespace hpa {
 
 GeometricController::GeometricController(const Params& params,
@@ -65,6 +67,12 @@ ControlOutput GeometricController::Update(const SystemState& state) {
   out.solve_time_ms =
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
   return out;
+}
+
+std::unique_ptr<Controller> MakeGeometricController(const ControllerConfig& config,
+                                                    const Params& params,
+                                                    std::shared_ptr<const Reference> reference) {
+  return std::make_unique<GeometricController>(params, std::move(reference));
 }
 
 }  // namespace hpa

@@ -4,6 +4,8 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "controller_factories.h"
+
 namespace hpa {
 
 HpaMpc::HpaMpc(const Params& params, std::shared_ptr<const Reference> reference,
@@ -133,6 +135,26 @@ ControlOutput HpaMpc::Update(const SystemState& state) {
   out.cost = cost;
   out.command = CommandFromPlan();
   return finish();
+}
+
+std::unique_ptr<Controller> MakeHpaMpcController(const ControllerConfig& config,
+                                                 const Params& params,
+                                                 std::shared_ptr<const Reference> reference) {
+  MpcSettings settings;
+  settings.hybrid = true;
+  settings.perception_weight = config.perception_weight;
+  settings.solver = config.solver;
+  return std::make_unique<HpaMpc>(params, std::move(reference), settings);
+}
+
+std::unique_ptr<Controller> MakeNonhybridMpcController(const ControllerConfig& config,
+                                                       const Params& params,
+                                                       std::shared_ptr<const Reference> reference) {
+  MpcSettings settings;
+  settings.hybrid = false;
+  settings.perception_weight = config.perception_weight;
+  settings.solver = config.solver;
+  return std::make_unique<HpaMpc>(params, std::move(reference), settings);
 }
 
 }  // namespace hpa

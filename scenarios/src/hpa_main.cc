@@ -12,6 +12,8 @@
 #include <string>
 #include <vector>
 
+#include "hpa/controller/controller_registry.h"
+#include "hpa/estimator/estimator_registry.h"
 #include "hpa/models/input_error.h"
 #include "hpa/models/params.h"
 #include "hpa/models/yaml_reader.h"
@@ -41,7 +43,7 @@ usage:
       plus PNG plots with --plots and an MP4 with --video (--video-slack-events keeps only
       the slack events; alone it writes DIR/slack_events.mp4). DIR defaults to
       out/<scenario name>.
-      TYPE: hpa_mpc | nonhybrid_mpc | geometric. --set changes one dotted key of the
+      TYPE: a registered controller (listed below). --set changes one dotted key of the
       scenario (e.g. --set events.1.impulse.2=0.5); sweeps print such replay commands.
   hpa compare SCENARIO.yaml --out DIR [--controllers A,B] [--camera render|analytic]
                         [--seed N] [--video-slack-events] [--quiet] [--params FILE]
@@ -55,11 +57,33 @@ usage:
       defaults to the number of cores; --shard K/N (K = 1..N) runs every N-th run.
   hpa merge DIR... --out DIR
       Joins sweep shards and writes DIR/summary.json, DIR/summary.md and plots.
+  hpa sweep-diff A B --out DIR [--a-where KEY=VALUE] [--b-where KEY=VALUE]
+      Paired comparison of two sweep outputs: per metric B - A, 95 % interval, p-value and a
+      verdict (better / worse / same); writes DIR/diff.md, diff.json, diff.png.
+  hpa golden [--update --reason TEXT] [--from DIR] [--golden FILE]
+      Compares every shipped scenario's metrics with scenarios/ci/golden.json (exit 1 on a
+      change beyond tolerance); --update rewrites it.
   hpa --help
 
 exit codes: 0 ok and every `expect` bound holds; 1 an expectation failed (or an unexpected
 crash); 2 bad input (file, key, value; the message names them); 3 internal error.
 )";
+
+// The usage text plus the registered controllers and estimator variants (from their registries).
+std::string Usage() {
+  std::string text = kUsage;
+  text += "\ncontrollers (controller.type, --controller):\n";
+  for (const ControllerRegistration& c : Controllers()) {
+    text += "  " + c.name + std::string(16 - std::min<size_t>(15, c.name.size()), ' ') +
+            c.description + " (estimator: " + c.estimator + ")\n";
+  }
+  text += "estimators (estimation.estimator; default: the controller's):\n";
+  for (const EstimatorRegistration& e : Estimators()) {
+    text += "  " + e.name + std::string(24 - std::min<size_t>(23, e.name.size()), ' ') +
+            e.description + "\n";
+  }
+  return text;
+}
 
 // Command-line arguments: positionals and --flags (with or without a value).
 struct Args {
@@ -141,9 +165,7 @@ void ApplyOverrides(const Args& a, Scenario* s) {
   }
   if (a.Has("--controller")) {
     const std::string c = a.Get("--controller");
-    if (c != "hpa_mpc" && c != "nonhybrid_mpc" && c != "geometric") {
-      throw InputError("", "--controller", "expected hpa_mpc | nonhybrid_mpc | geometric");
-    }
+    CheckControllerType(c, "", "--controller");
     s->controller.type = c;
   }
   if (a.Has("--camera")) {
@@ -231,6 +253,9 @@ int Compare(int argc, char** argv) {
   for (size_t p = 0; (p = list.find(',')) != std::string::npos; list.erase(0, p + 1)) {
     if (p > 0) types.push_back(list.substr(0, p));
   }
+  // every name checked before the first run
+  if (types.empty()) throw InputError("", "--controllers", "expected a list such as A,B");
+  for (const std::string& type : types) CheckControllerType(type, "", "--controllers");
   std::vector<RunResult> results;
   bool all_passed = true;
   bool run_error = false;
@@ -313,13 +338,13 @@ int RenderFrame(int argc, char** argv) {
 int Main(int argc, char** argv) {
   if (argc < 2 || !std::strcmp(argv[1], "--help") || !std::strcmp(argv[1], "-h") ||
       !std::strcmp(argv[1], "help")) {
-    std::fputs(kUsage, argc < 2 ? stderr : stdout);
+    std::fputs(Usage().c_str(), argc < 2 ? stderr : stdout);
     return argc < 2 ? kExitBadInput : kExitOk;
   }
   const std::string command = argv[1];
   for (int i = 2; i < argc && command != "golden" && command != "sweep-diff"; ++i) {
     if (!std::strcmp(argv[i], "--help") || !std::strcmp(argv[i], "-h")) {
-      std::fputs(kUsage, stdout);
+      std::fputs(Usage().c_str(), stdout);
       return kExitOk;
     }
   }

@@ -101,8 +101,8 @@ RunResult RunScenario(const Scenario& scenario, const Params& params, const RunO
   BodyRateController rate_controller(params);
   EstimatorConfig estimator_config;
   std::unique_ptr<Estimator> estimator =
-      MakeEstimator(scenario.controller.type != "nonhybrid_mpc" ? "hybrid" : "always_taut",
-                    estimator_config, params, InitialState(*reference, params));
+      MakeEstimator(EstimatorOf(scenario), estimator_config, params,
+                    InitialState(*reference, params));
   const bool ground_truth = scenario.estimation.ground_truth;
   const bool render_camera = scenario.estimation.camera == "render";
   PayloadDetector detector(params);

@@ -2,6 +2,8 @@
 
 #include <cctype>
 
+#include "hpa/controller/controller_registry.h"
+#include "hpa/estimator/estimator_registry.h"
 #include "hpa/models/input_error.h"
 #include "hpa/models/yaml_reader.h"
 
@@ -148,9 +150,9 @@ Scenario ParseScenario(const YamlMap& root) {
   }
   if (root.Has("controller")) {
     const YamlMap c = root.Map("controller");
-    s.controller.type = c.Choice("type", {"hpa_mpc", "nonhybrid_mpc", "geometric"}, "hpa_mpc");
+    s.controller.type = c.Choice("type", ControllerNames(), "hpa_mpc");
     s.controller.perception_weight = c.Number("perception_weight", 0.0, 1e3, 1.0);
-    s.controller.solver = c.Choice("solver", {"rti", "nlopt"}, "rti");
+    s.controller.solver = c.Choice("solver", OcpSolverNames(), "rti");
     c.RejectUnknownKeys();
   }
   if (root.Has("estimation")) {
@@ -160,6 +162,7 @@ Scenario ParseScenario(const YamlMap& root) {
     // the estimator keeps 0.5 s of history to apply late detections at their capture time
     s.estimation.camera_latency_s = e.Number("camera_latency", 0.0, 0.4, 0.03);
     s.estimation.detector_noise_scale = e.Number("detector_noise_scale", 0.0, 100.0, 1.0);
+    if (e.Has("estimator")) s.estimation.estimator = e.Choice("estimator", EstimatorNames(), "");
     e.RejectUnknownKeys();
   }
   if (root.Has("reference")) s.reference = ParseReference(root.Map("reference"));
@@ -178,6 +181,20 @@ Scenario ParseScenario(const YamlMap& root) {
   if (root.Has("expect")) s.expect = ParseExpect(root.Map("expect"));
   root.RejectUnknownKeys();
   return s;
+}
+
+std::string EstimatorOf(const Scenario& scenario) {
+  if (scenario.estimation.estimator) return *scenario.estimation.estimator;
+  const ControllerRegistration* controller = FindController(scenario.controller.type);
+  return controller != nullptr ? controller->estimator : "hybrid";
+}
+
+void CheckControllerType(const std::string& type, const std::string& file,
+                         const std::string& key) {
+  if (FindController(type) != nullptr) return;
+  std::string names;
+  for (const std::string& name : ControllerNames()) names += (names.empty() ? "" : " | ") + name;
+  throw InputError(file, key, "unknown controller '" + type + "', expected one of: " + names);
 }
 
 Scenario LoadScenario(const std::string& path) { return ParseScenario(YamlMap::LoadFile(path)); }

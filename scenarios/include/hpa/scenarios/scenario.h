@@ -59,6 +59,8 @@ struct EstimationSpec {
   bool ground_truth = false;          // true: flight code sees the true state
   double camera_latency_s = 0.03;     // capture to detection delivery
   double detector_noise_scale = 1.0;  // analytic camera only: scale on the measured noise
+  // estimator variant (estimator_registry.h); unset: the one the controller is registered with
+  std::optional<std::string> estimator;
 };
 
 /// A whole scenario file.
@@ -75,6 +77,14 @@ struct Scenario {
   std::vector<EventSpec> events;
   ExpectSpec expect;
 };
+
+/// The estimator variant a scenario flies with: estimation.estimator, else the default of the
+/// controller's registration.
+std::string EstimatorOf(const Scenario& scenario);
+
+/// Checks a controller type against the registry; throws InputError (file, key) listing the
+/// registered names.
+void CheckControllerType(const std::string& type, const std::string& file, const std::string& key);
 
 /// Loads and validates a scenario file; throws InputError (file, key path, expectation).
 Scenario LoadScenario(const std::string& path);

@@ -1,0 +1,40 @@
+#pragma once
+// The one list of high-level controllers (MJPC's LoadPlanners habit): the scenario validator,
+// `hpa --help`, the runner and sweeps read it; a new controller is its own files plus one line
+// in controller_registry.cc (or a RegisterController call from a test or plugin).
+
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "hpa/controller/controller.h"
+
+namespace hpa {
+
+/// Builds a controller from its typed config, the flight params and the payload reference.
+using ControllerFactory = std::function<std::unique_ptr<Controller>(
+    const ControllerConfig&, const Params&, std::shared_ptr<const Reference>)>;
+
+/// One registered controller.
+struct ControllerRegistration {
+  std::string name;         // as written in scenarios (controller.type)
+  std::string description;  // one line for --help
+  std::string estimator;    // estimator variant it flies with unless the scenario says otherwise
+  ControllerFactory make;   // builds it
+};
+
+/// Every registered controller, in registration order (built-ins first).
+const std::vector<ControllerRegistration>& Controllers();
+/// The registration named `name`, or nullptr.
+const ControllerRegistration* FindController(const std::string& name);
+/// Names of all registered controllers, in order.
+std::vector<std::string> ControllerNames();
+/// Adds a controller at run time (tests, plugins); throws std::invalid_argument on an empty or
+/// duplicate name or a missing factory.
+void RegisterController(ControllerRegistration registration);
+
+/// Names of the optimal-control solvers an MPC controller accepts (controller.solver).
+std::vector<std::string> OcpSolverNames();
+
+}  // namespace hpa
