@@ -17,6 +17,7 @@
 #include "hpa/models/input_error.h"
 #include "hpa/models/params.h"
 #include "hpa/models/yaml_reader.h"
+#include "hpa/scenarios/cli.h"
 #include "hpa/scenarios/golden.h"
 #include "hpa/scenarios/plots.h"
 #include "hpa/scenarios/runner.h"
@@ -335,7 +336,9 @@ int RenderFrame(int argc, char** argv) {
   return kExitOk;
 }
 
-int Main(int argc, char** argv) {
+}  // namespace
+
+int HpaMain(int argc, char** argv) {
   if (argc < 2 || !std::strcmp(argv[1], "--help") || !std::strcmp(argv[1], "-h") ||
       !std::strcmp(argv[1], "help")) {
     std::fputs(Usage().c_str(), argc < 2 ? stderr : stdout);
@@ -366,7 +369,4 @@ int Main(int argc, char** argv) {
   }
 }
 
-}  // namespace
 }  // namespace hpa
-
-int main(int argc, char** argv) { return hpa::Main(argc, argv); }

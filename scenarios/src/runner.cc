@@ -100,9 +100,8 @@ RunResult RunScenario(const Scenario& scenario, const Params& params, const RunO
   std::unique_ptr<Controller> controller = MakeController(scenario.controller, params, reference);
   BodyRateController rate_controller(params);
   EstimatorConfig estimator_config;
-  std::unique_ptr<Estimator> estimator =
-      MakeEstimator(EstimatorOf(scenario), estimator_config, params,
-                    InitialState(*reference, params));
+  std::unique_ptr<Estimator> estimator = MakeEstimator(EstimatorOf(scenario), estimator_config,
+                                                       params, InitialState(*reference, params));
   const bool ground_truth = scenario.estimation.ground_truth;
   const bool render_camera = scenario.estimation.camera == "render";
   PayloadDetector detector(params);

@@ -189,8 +189,7 @@ std::string EstimatorOf(const Scenario& scenario) {
   return controller != nullptr ? controller->estimator : "hybrid";
 }
 
-void CheckControllerType(const std::string& type, const std::string& file,
-                         const std::string& key) {
+void CheckControllerType(const std::string& type, const std::string& file, const std::string& key) {
   if (FindController(type) != nullptr) return;
   std::string names;
   for (const std::string& name : ControllerNames()) names += (names.empty() ? "" : " | ") + name;

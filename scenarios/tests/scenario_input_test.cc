@@ -48,5 +48,17 @@ TEST(ScenarioInputTest, DuplicateAndComplexKeysAreRefused) {
   EXPECT_NE(LoadError("name: x\nduration: 1\n? [a]\n: 1\n").find("plain name"), std::string::npos);
 }
 
+TEST(ScenarioInputTest, EstimatorVariantComesFromTheRegistryOrTheController) {
+  const std::string path = TestTempDir() + "e.yaml";
+  std::ofstream(path) << "name: x\nduration: 1\ncontroller: {type: nonhybrid_mpc}\n";
+  EXPECT_EQ(EstimatorOf(LoadScenario(path)), "always_taut");
+  std::ofstream(path) << "name: x\nduration: 1\ncontroller: {type: nonhybrid_mpc}\n"
+                         "estimation: {estimator: always_taut_projected}\n";
+  EXPECT_EQ(EstimatorOf(LoadScenario(path)), "always_taut_projected");
+  const std::string error = LoadError("name: x\nduration: 1\nestimation: {estimator: ukf}\n");
+  EXPECT_NE(error.find("estimation.estimator"), std::string::npos) << error;
+  EXPECT_NE(error.find("always_taut_projected"), std::string::npos) << error;
+}
+
 }  // namespace
 }  // namespace hpa
