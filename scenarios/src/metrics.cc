@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <fstream>
 #include <iomanip>
+#include <nlohmann/json.hpp>
 #include <sstream>
 
 #include "hpa/models/input_error.h"
@@ -17,31 +18,6 @@ namespace {
 constexpr double kMinSlackInterval_s = 0.03;  // shorter true-mode flips are tendon chatter
 constexpr double kRetautWindow_s = 0.5;       // window after a re-taut for vz and body rates
 constexpr double kDetectionWindow_s = 0.5;    // a slack onset not flagged within this is missed
-
-std::string Num(double v) {
-  if (!std::isfinite(v)) return "null";
-  std::ostringstream out;
-  out << std::setprecision(9) << v;
-  return out.str();
-}
-
-std::string Vec(const Eigen::Vector3d& v) {
-  return "[" + Num(v.x()) + ", " + Num(v.y()) + ", " + Num(v.z()) + "]";
-}
-
-std::string Quote(const std::string& s) {
-  std::string out = "\"";
-  for (char c : s) {
-    if (c == '"' || c == '\\') out += '\\';
-    out += c;
-  }
-  return out + "\"";
-}
-
-std::string QuantilesJson(const Quantiles& q) {
-  return "{\"median\": " + Num(q.median) + ", \"p99\": " + Num(q.p99) + ", \"max\": " + Num(q.max) +
-         "}";
-}
 
 }  // namespace
 
@@ -230,48 +206,63 @@ void CheckExpectations(const ExpectSpec& e, Metrics* m) {
 }
 
 std::string MetricsToJson(const Metrics& m) {
-  std::ostringstream o;
-  o << "{\n";
-  o << "  \"scenario\": " << Quote(m.scenario) << ",\n";
-  o << "  \"controller\": " << Quote(m.controller) << ",\n";
-  o << "  \"camera\": " << Quote(m.camera) << ",\n";
-  o << "  \"seed\": " << m.seed << ",\n";
-  o << "  \"sim_time_s\": " << Num(m.sim_time_s) << ",\n";
-  o << "  \"wall_time_s\": " << Num(m.wall_time_s) << ",\n";
-  o << "  \"crashed\": " << (m.crashed ? "true" : "false") << ",\n";
-  o << "  \"crash_time_s\": " << (m.crash_time_s ? Num(*m.crash_time_s) : "null") << ",\n";
-  o << "  \"crash_reason\": " << (m.crash_reason ? Quote(*m.crash_reason) : "null") << ",\n";
-  o << "  \"run_error\": " << (m.run_error ? Quote(*m.run_error) : "null") << ",\n";
-  o << "  \"payload_rmse_m\": " << Vec(m.payload_rmse_m) << ",\n";
-  o << "  \"payload_rmse_over\": " << Quote(m.payload_rmse_over) << ",\n";
-  o << "  \"quad_rmse_m\": " << Vec(m.quad_rmse_m) << ",\n";
-  o << "  \"quad_position_deviation_max_m\": " << Num(m.quad_position_deviation_max_m) << ",\n";
-  o << "  \"payload_max_speed_mps\": " << Num(m.payload_max_speed_mps) << ",\n";
-  o << "  \"slack_time_s\": " << Num(m.slack_time_s) << ",\n";
-  o << "  \"slack_events\": " << m.slack_events << ",\n";
-  o << "  \"mode_accuracy\": " << Num(m.mode_accuracy) << ",\n";
-  o << "  \"slack_detection_latency_s\": {\"mean\": "
-    << (m.slack_detection_latency_mean_s ? Num(*m.slack_detection_latency_mean_s) : "null")
-    << ", \"max\": "
-    << (m.slack_detection_latency_max_s ? Num(*m.slack_detection_latency_max_s) : "null")
-    << ", \"missed\": " << m.slack_events_missed << "},\n";
-  o << "  \"payload_in_fov_fraction\": " << Num(m.payload_in_fov_fraction) << ",\n";
-  o << "  \"camera_frames\": " << m.camera_frames << ",\n";
-  o << "  \"detections\": " << m.detections << ",\n";
-  o << "  \"retaut\": {\"count\": " << m.retaut_count
-    << ", \"quad_vz_min_mps\": " << Num(m.retaut_quad_vz_min_mps)
-    << ", \"peak_body_rate_radps\": " << Num(m.retaut_peak_body_rate_radps) << "},\n";
-  o << "  \"mpc_solve_ms\": " << QuantilesJson(m.mpc_solve_ms) << ",\n";
-  o << "  \"mpc_failures\": " << m.mpc_failures << ",\n";
-  o << "  \"closed_loop_cost\": " << Num(m.closed_loop_cost) << ",\n";
-  o << "  \"render_ms\": " << QuantilesJson(m.render_ms) << ",\n";
-  o << "  \"detector_ms\": " << QuantilesJson(m.detector_ms) << ",\n";
-  o << "  \"expect\": {\"passed\": " << (m.expect_passed ? "true" : "false") << ", \"failed\": [";
-  for (size_t i = 0; i < m.expect_failed.size(); ++i) {
-    o << (i ? ", " : "") << Quote(m.expect_failed[i]);
+  using Json = nlohmann::ordered_json;
+  // non-finite numbers and unset optionals are null
+  const auto num = [](double v) { return std::isfinite(v) ? Json(v) : Json(); };
+  const auto opt_num = [&](const std::optional<double>& v) { return v ? num(*v) : Json(); };
+  const auto opt_str = [](const std::optional<std::string>& v) { return v ? Json(*v) : Json(); };
+  const auto vec = [&](const Eigen::Vector3d& v) {
+    return Json::array({num(v.x()), num(v.y()), num(v.z())});
+  };
+  const auto quantiles = [&](const Quantiles& q) {
+    return Json{{"median", num(q.median)}, {"p99", num(q.p99)}, {"max", num(q.max)}};
+  };
+  Json o;
+  o["scenario"] = m.scenario;
+  o["controller"] = m.controller;
+  o["camera"] = m.camera;
+  o["seed"] = m.seed;
+  o["sim_time_s"] = num(m.sim_time_s);
+  o["wall_time_s"] = num(m.wall_time_s);
+  o["crashed"] = m.crashed;
+  o["crash_time_s"] = opt_num(m.crash_time_s);
+  o["crash_reason"] = opt_str(m.crash_reason);
+  o["run_error"] = opt_str(m.run_error);
+  o["payload_rmse_m"] = vec(m.payload_rmse_m);
+  o["payload_rmse_over"] = m.payload_rmse_over;
+  o["quad_rmse_m"] = vec(m.quad_rmse_m);
+  o["quad_position_deviation_max_m"] = num(m.quad_position_deviation_max_m);
+  o["payload_max_speed_mps"] = num(m.payload_max_speed_mps);
+  o["slack_time_s"] = num(m.slack_time_s);
+  o["slack_events"] = m.slack_events;
+  o["mode_accuracy"] = num(m.mode_accuracy);
+  o["slack_detection_latency_s"] = {{"mean", opt_num(m.slack_detection_latency_mean_s)},
+                                    {"max", opt_num(m.slack_detection_latency_max_s)},
+                                    {"missed", m.slack_events_missed}};
+  o["payload_in_fov_fraction"] = num(m.payload_in_fov_fraction);
+  o["camera_frames"] = m.camera_frames;
+  o["detections"] = m.detections;
+  o["retaut"] = {{"count", m.retaut_count},
+                 {"quad_vz_min_mps", num(m.retaut_quad_vz_min_mps)},
+                 {"peak_body_rate_radps", num(m.retaut_peak_body_rate_radps)}};
+  o["mpc_solve_ms"] = quantiles(m.mpc_solve_ms);
+  o["mpc_failures"] = m.mpc_failures;
+  o["closed_loop_cost"] = num(m.closed_loop_cost);
+  o["render_ms"] = quantiles(m.render_ms);
+  o["detector_ms"] = quantiles(m.detector_ms);
+  if (!m.estimator.empty()) {
+    // the variant, then its health counts (integers as integers) and filter states
+    Json estimator = {{"variant", m.estimator}};
+    for (const auto& [name, value] : m.estimator_health) {
+      estimator[name] =
+          std::isfinite(value) && value == std::floor(value) && std::fabs(value) < 1e15
+              ? Json(static_cast<long long>(value))
+              : num(value);
+    }
+    o["estimator"] = estimator;
   }
-  o << "]}\n}\n";
-  return o.str();
+  o["expect"] = {{"passed", m.expect_passed}, {"failed", m.expect_failed}};
+  return o.dump(2) + "\n";
 }
 
 void MakeOutputDir(const std::string& dir) {
@@ -301,7 +292,8 @@ void WriteLogCsv(const std::string& path, const std::vector<LogRow>& rows) {
   header_state("true_");
   header_state("est_");
   out << ",ref_pL_x,ref_pL_y,ref_pL_z,ref_pQ_x,ref_pQ_y,ref_pQ_z"
-      << ",cmd_w_x,cmd_w_y,cmd_w_z,cmd_thrust_N,status,solve_ms,cost,tension_N,gripper\n";
+      << ",cmd_w_x,cmd_w_y,cmd_w_z,cmd_thrust_N,status,solve_ms,cost,tension_N,gripper"
+      << ",est_rejected_updates,est_resets\n";
   out << std::setprecision(7);
   for (const LogRow& r : rows) {
     out << r.time_s;
@@ -316,7 +308,8 @@ void WriteLogCsv(const std::string& path, const std::vector<LogRow>& rows) {
     out << "," << r.command.w_B_radps.x() << "," << r.command.w_B_radps.y() << ","
         << r.command.w_B_radps.z() << "," << r.command.thrust_N << "," << ToString(r.status) << ","
         << r.solve_time_ms << "," << r.cost << "," << r.cable_tension_N << ","
-        << (r.gripper_active ? 1 : 0) << "\n";
+        << (r.gripper_active ? 1 : 0) << "," << r.estimator_rejected_updates << ","
+        << r.estimator_resets << "\n";
   }
 }
 

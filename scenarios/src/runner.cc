@@ -202,6 +202,11 @@ RunResult RunScenario(const Scenario& scenario, const Params& params, const RunO
         row.cost = control.cost;
         row.cable_tension_N = truth.cable_tension_N;
         row.gripper_active = world.gripper_active();
+        if (!ground_truth) {
+          const EstimatorHealth health = estimator->Health();
+          row.estimator_rejected_updates = health.RejectedUpdates();
+          row.estimator_resets = health.ForcedAccepts();
+        }
         result.rows.push_back(row);
       }
 
@@ -261,6 +266,10 @@ RunResult RunScenario(const Scenario& scenario, const Params& params, const RunO
   if (show_progress) std::fprintf(stderr, "\n");
   if (video) video->Finish();
 
+  if (!ground_truth) {
+    metrics.estimator = EstimatorOf(scenario);
+    metrics.estimator_health = estimator->Health().Fields();
+  }
   metrics.sim_time_s = std::min(tick, end_tick) * sim::World::kPhysicsDt_s;
   inputs.rows = std::move(result.rows);
   ComputeMetrics(inputs, &metrics);

@@ -58,12 +58,14 @@ echo "== a replay command from summary.md reproduces its run exactly"
 replay=$(grep -m1 -o 'hpa run [^`]*' "$out/full/summary.md" | sed "s|^hpa |$hpa |")
 run_index=$(grep -m1 -o '^- run [0-9]*' "$out/full/summary.md" | grep -o '[0-9]*$')
 $replay --out "$out/replay" --quiet > /dev/null 2>&1
-line=$(grep "\"run\": $run_index," "$out/full/runs.jsonl")
-for key in payload_rmse_m quad_position_deviation_max_m slack_time_s; do
-  a=$(echo "$line" | grep -o "\"$key\": [^,]*" | head -1)
-  b=$(tr -d '\n' < "$out/replay/metrics.json" | grep -o "\"$key\": [^,]*" | head -1)
-  [ "$a" = "$b" ] || fail "replay of run $run_index differs in $key: '$a' vs '$b'"
-done
+python3 - "$out/full/runs.jsonl" "$run_index" "$out/replay/metrics.json" <<'PY' || fail "replay of run $run_index differs from its sweep record"
+import json, sys
+records = [json.loads(l) for l in open(sys.argv[1]) if l.strip()]
+record = next(r for r in records if r["run"] == int(sys.argv[2]))
+replay = json.load(open(sys.argv[3]))
+for key in ["payload_rmse_m", "quad_position_deviation_max_m", "slack_time_s"]:
+    assert record["metrics"][key] == replay[key], (key, record["metrics"][key], replay[key])
+PY
 
 echo "== resume after killing the sweep: nothing lost, nothing repeated"
 cat > "$out/slow.yaml" <<'YAML'

@@ -24,6 +24,8 @@ struct LogRow {
   double cost = 0.0;
   double cable_tension_N = 0.0;  // true tension (MuJoCo tendon-limit force)
   bool gripper_active = false;
+  int estimator_rejected_updates = 0;  // gated-out measurements so far (0 with ground truth)
+  int estimator_resets = 0;            // forced accepts after runs of rejections so far
 };
 
 /// Summary statistics of a sample: median, 99th percentile, max.
@@ -61,6 +63,9 @@ struct Metrics {
   Quantiles detector_ms;                 // per rendered frame, detection only
   Quantiles render_ms;                   // per rendered frame
   std::optional<std::string> run_error;  // the run stopped on an exception (results kept)
+  // estimator variant flown ("" with ground truth) and its published health counts at the end
+  std::string estimator;
+  std::vector<std::pair<std::string, double>> estimator_health;
   bool expect_passed = true;
   std::vector<std::string> expect_failed;  // "payload_rmse_max.x: 0.071 > 0.06"
 };
