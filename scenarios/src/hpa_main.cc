@@ -18,6 +18,7 @@
 #include "hpa/models/params.h"
 #include "hpa/models/yaml_reader.h"
 #include "hpa/scenarios/cli.h"
+#include "hpa/scenarios/expect_keys.h"
 #include "hpa/scenarios/golden.h"
 #include "hpa/scenarios/plots.h"
 #include "hpa/scenarios/runner.h"
@@ -82,6 +83,11 @@ std::string Usage() {
   for (const EstimatorRegistration& e : Estimators()) {
     text += "  " + e.name + std::string(24 - std::min<size_t>(23, e.name.size()), ' ') +
             e.description + "\n";
+  }
+  text += "expect keys (scenario `expect:` block):\n";
+  for (const ExpectKey& k : ExpectKeys()) {
+    text += "  " + k.key + std::string(30 - std::min<size_t>(29, k.key.size()), ' ') +
+            k.comparison + " [" + k.unit + "]: " + k.description + "\n";
   }
   return text;
 }

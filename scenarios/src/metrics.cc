@@ -11,6 +11,7 @@
 #include <sstream>
 
 #include "hpa/models/input_error.h"
+#include "hpa/scenarios/expect_keys.h"
 
 namespace hpa {
 namespace {
@@ -147,60 +148,12 @@ void ComputeMetrics(const MetricsInputs& in, Metrics* m) {
 void CheckExpectations(const ExpectSpec& e, Metrics* m) {
   m->expect_failed.clear();
   if (m->run_error) m->expect_failed.push_back("run aborted: " + *m->run_error);
-  auto fail = [&](const std::string& key, double value, const char* op, double bound) {
-    std::ostringstream out;
-    out << key << ": " << value << " " << op << " " << bound;
-    m->expect_failed.push_back(out.str());
-  };
-  if (e.crashed && *e.crashed != m->crashed) {
-    m->expect_failed.push_back(std::string("crashed: ") + (m->crashed ? "true" : "false") +
-                               (m->crashed ? " (" + m->crash_reason.value_or("") + ")" : "") +
-                               ", expected " + (*e.crashed ? "true" : "false"));
-  }
-  static const char* kAxes[3] = {"x", "y", "z"};
-  for (int i = 0; i < 3; ++i) {
-    if (e.payload_rmse_max_m && m->payload_rmse_m(i) > (*e.payload_rmse_max_m)(i)) {
-      fail(std::string("payload_rmse_max.") + kAxes[i], m->payload_rmse_m(i), ">",
-           (*e.payload_rmse_max_m)(i));
+  for (const ExpectKey& k : ExpectKeys()) {
+    const auto bound = e.bounds.find(k.key);
+    if (bound == e.bounds.end()) continue;
+    for (std::string& failure : k.check(*m, bound->second)) {
+      m->expect_failed.push_back(std::move(failure));
     }
-    if (e.quad_rmse_max_m && m->quad_rmse_m(i) > (*e.quad_rmse_max_m)(i)) {
-      fail(std::string("quad_rmse_max.") + kAxes[i], m->quad_rmse_m(i), ">",
-           (*e.quad_rmse_max_m)(i));
-    }
-  }
-  if (e.quad_position_deviation_max_m &&
-      m->quad_position_deviation_max_m > *e.quad_position_deviation_max_m) {
-    fail("quad_position_deviation_max", m->quad_position_deviation_max_m, ">",
-         *e.quad_position_deviation_max_m);
-  }
-  if (e.quad_position_deviation_min_m &&
-      m->quad_position_deviation_max_m < *e.quad_position_deviation_min_m) {
-    fail("quad_position_deviation_min", m->quad_position_deviation_max_m, "<",
-         *e.quad_position_deviation_min_m);
-  }
-  if (e.payload_in_fov_max && m->payload_in_fov_fraction > *e.payload_in_fov_max) {
-    fail("payload_in_fov_max", m->payload_in_fov_fraction, ">", *e.payload_in_fov_max);
-  }
-  if (e.payload_in_fov_min && m->payload_in_fov_fraction < *e.payload_in_fov_min) {
-    fail("payload_in_fov_min", m->payload_in_fov_fraction, "<", *e.payload_in_fov_min);
-  }
-  if (e.mode_accuracy_min && m->mode_accuracy < *e.mode_accuracy_min) {
-    fail("mode_accuracy_min", m->mode_accuracy, "<", *e.mode_accuracy_min);
-  }
-  if (e.slack_detection_latency_max_s) {
-    if (m->slack_events_missed > 0) {
-      fail("slack_detection_latency_max (missed slack events)", m->slack_events_missed, ">", 0);
-    } else if (m->slack_detection_latency_max_s &&
-               *m->slack_detection_latency_max_s > *e.slack_detection_latency_max_s) {
-      fail("slack_detection_latency_max", *m->slack_detection_latency_max_s, ">",
-           *e.slack_detection_latency_max_s);
-    }
-  }
-  if (e.mpc_failures_max && m->mpc_failures > *e.mpc_failures_max) {
-    fail("mpc_failures_max", m->mpc_failures, ">", *e.mpc_failures_max);
-  }
-  if (e.retaut_quad_vz_min_mps && m->retaut_quad_vz_min_mps < *e.retaut_quad_vz_min_mps) {
-    fail("retaut_quad_vz_min", m->retaut_quad_vz_min_mps, "<", *e.retaut_quad_vz_min_mps);
   }
   m->expect_passed = m->expect_failed.empty();
 }

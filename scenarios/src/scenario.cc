@@ -6,6 +6,7 @@
 #include "hpa/estimator/estimator_registry.h"
 #include "hpa/models/input_error.h"
 #include "hpa/models/yaml_reader.h"
+#include "hpa/scenarios/expect_keys.h"
 
 namespace hpa {
 namespace {
@@ -60,26 +61,19 @@ EventSpec ParseEvent(const YamlMap& e) {
 
 ExpectSpec ParseExpect(const YamlMap& e) {
   ExpectSpec x;
-  if (e.Has("crashed")) x.crashed = e.Bool("crashed", false);
-  if (e.Has("payload_rmse_max")) x.payload_rmse_max_m = Vec3(e, "payload_rmse_max", 0, kBig);
-  if (e.Has("quad_rmse_max")) x.quad_rmse_max_m = Vec3(e, "quad_rmse_max", 0, kBig);
-  if (e.Has("quad_position_deviation_max")) {
-    x.quad_position_deviation_max_m = e.Number("quad_position_deviation_max", 0, kBig);
-  }
-  if (e.Has("quad_position_deviation_min")) {
-    x.quad_position_deviation_min_m = e.Number("quad_position_deviation_min", 0, kBig);
-  }
-  if (e.Has("payload_in_fov_min")) x.payload_in_fov_min = e.Number("payload_in_fov_min", 0, 1);
-  if (e.Has("payload_in_fov_max")) x.payload_in_fov_max = e.Number("payload_in_fov_max", 0, 1);
-  if (e.Has("mode_accuracy_min")) x.mode_accuracy_min = e.Number("mode_accuracy_min", 0, 1);
-  if (e.Has("slack_detection_latency_max")) {
-    x.slack_detection_latency_max_s = e.Number("slack_detection_latency_max", 0, kBig);
-  }
-  if (e.Has("mpc_failures_max")) {
-    x.mpc_failures_max = static_cast<int>(e.Integer("mpc_failures_max", 0, 1000000000));
-  }
-  if (e.Has("retaut_quad_vz_min")) {
-    x.retaut_quad_vz_min_mps = e.Number("retaut_quad_vz_min", -kBig, kBig);
+  for (const ExpectKey& k : ExpectKeys()) {
+    if (!e.Has(k.key)) continue;
+    std::vector<double>& bound = x.bounds[k.key];
+    if (k.size == 0) {
+      bound = {e.Bool(k.key, false) ? 1.0 : 0.0};
+    } else if (k.size == 1) {
+      bound = {k.integer ? static_cast<double>(
+                               e.Integer(k.key, static_cast<long>(k.min), static_cast<long>(k.max)))
+                         : e.Number(k.key, k.min, k.max)};
+    } else {
+      const Eigen::VectorXd v = e.Vector(k.key, k.size, k.min, k.max);
+      bound.assign(v.data(), v.data() + v.size());
+    }
   }
   e.RejectUnknownKeys();
   return x;

@@ -1,0 +1,120 @@
+// Every expect key, pass and fail, from the one table; the README lists exactly these keys.
+
+#include "hpa/scenarios/expect_keys.h"
+
+#include <gtest/gtest.h>
+
+#include <fstream>
+#include <functional>
+#include <map>
+#include <sstream>
+
+#include "hpa/scenarios/metrics.h"
+#include "hpa/scenarios/scenario.h"
+
+namespace hpa {
+namespace {
+
+// One key's case: a bound, a change of the metrics that meets it and one that breaks it.
+struct Case {
+  std::vector<double> bound;
+  std::function<void(Metrics*)> pass, fail;
+};
+
+const std::map<std::string, Case>& Cases() {
+  static const std::map<std::string, Case> cases = {
+      {"crashed",
+       {{0.0},
+        [](Metrics* m) { m->crashed = false; },
+        [](Metrics* m) {
+          m->crashed = true;
+          m->crash_reason = "tilt > 90 deg";
+        }}},
+      {"payload_rmse_max",
+       {{0.1, 0.1, 0.1},
+        [](Metrics* m) { m->payload_rmse_m = Eigen::Vector3d(0.09, 0, 0.1); },
+        [](Metrics* m) { m->payload_rmse_m = Eigen::Vector3d(0, 0, 0.11); }}},
+      {"quad_rmse_max",
+       {{0.1, 0.1, 0.1},
+        [](Metrics* m) { m->quad_rmse_m = Eigen::Vector3d(0.1, 0.1, 0.1); },
+        [](Metrics* m) { m->quad_rmse_m = Eigen::Vector3d(0, 0.2, 0); }}},
+      {"quad_position_deviation_max",
+       {{0.15},
+        [](Metrics* m) { m->quad_position_deviation_max_m = 0.14; },
+        [](Metrics* m) { m->quad_position_deviation_max_m = 0.16; }}},
+      {"quad_position_deviation_min",
+       {{0.1},
+        [](Metrics* m) { m->quad_position_deviation_max_m = 0.2; },
+        [](Metrics* m) { m->quad_position_deviation_max_m = 0.05; }}},
+      {"payload_in_fov_max",
+       {{0.8},
+        [](Metrics* m) { m->payload_in_fov_fraction = 0.7; },
+        [](Metrics* m) { m->payload_in_fov_fraction = 0.9; }}},
+      {"payload_in_fov_min",
+       {{0.99},
+        [](Metrics* m) { m->payload_in_fov_fraction = 1.0; },
+        [](Metrics* m) { m->payload_in_fov_fraction = 0.95; }}},
+      {"mode_accuracy_min",
+       {{0.9},
+        [](Metrics* m) { m->mode_accuracy = 0.95; },
+        [](Metrics* m) { m->mode_accuracy = 0.85; }}},
+      {"slack_detection_latency_max",
+       {{0.1},
+        [](Metrics* m) { m->slack_detection_latency_max_s = 0.06; },
+        [](Metrics* m) { m->slack_events_missed = 1; }}},
+      {"mpc_failures_max",
+       {{0.0}, [](Metrics* m) { m->mpc_failures = 0; }, [](Metrics* m) { m->mpc_failures = 2; }}},
+      {"retaut_quad_vz_min",
+       {{-0.5},
+        [](Metrics* m) { m->retaut_quad_vz_min_mps = -0.3; },
+        [](Metrics* m) { m->retaut_quad_vz_min_mps = -0.7; }}},
+  };
+  return cases;
+}
+
+TEST(ExpectKeysTest, EveryKeyPassesAndFailsOnItsMetric) {
+  for (const ExpectKey& k : ExpectKeys()) {
+    const auto c = Cases().find(k.key);
+    ASSERT_NE(c, Cases().end()) << "expect key '" << k.key << "' has no test case here";
+    ExpectSpec spec;
+    spec.bounds[k.key] = c->second.bound;
+    Metrics passing, failing;
+    c->second.pass(&passing);
+    c->second.fail(&failing);
+    CheckExpectations(spec, &passing);
+    CheckExpectations(spec, &failing);
+    EXPECT_TRUE(passing.expect_passed) << k.key;
+    ASSERT_FALSE(failing.expect_passed) << k.key;
+    EXPECT_EQ(failing.expect_failed[0].rfind(k.key, 0), 0u) << failing.expect_failed[0];
+  }
+  EXPECT_EQ(Cases().size(), ExpectKeys().size()) << "a case for a key that is not in the table";
+}
+
+TEST(ExpectKeysTest, EveryKeyParsesFromYamlWithinItsRange) {
+  for (const ExpectKey& k : ExpectKeys()) {
+    EXPECT_FALSE(k.description.empty()) << k.key;
+    EXPECT_FALSE(k.unit.empty()) << k.key;
+    EXPECT_NE(FindExpectKey(k.key), nullptr);
+  }
+  EXPECT_EQ(FindExpectKey("payload_rmse_maximum"), nullptr);
+}
+
+TEST(ExpectKeysTest, ReadmeListsExactlyTheTablesKeys) {
+  std::ifstream in(std::string(HPA_SOURCE_DIR) + "/README.md");
+  std::stringstream text;
+  text << in.rdbuf();
+  const std::string readme = text.str();
+  const size_t start = readme.find("### Expect keys");
+  ASSERT_NE(start, std::string::npos) << "README.md has no '### Expect keys' section";
+  const std::string section = readme.substr(start, readme.find("\n#", start + 4) - start);
+  int rows = 0;
+  for (size_t p = 0; (p = section.find("\n| `", p)) != std::string::npos; ++p) ++rows;
+  EXPECT_EQ(rows, static_cast<int>(ExpectKeys().size()));
+  for (const ExpectKey& k : ExpectKeys()) {
+    EXPECT_NE(section.find("| `" + k.key + "` |"), std::string::npos)
+        << k.key << " is missing from the README's expect-key table";
+  }
+}
+
+}  // namespace
+}  // namespace hpa
