@@ -47,27 +47,6 @@ long TickOf(long k, double rate_hz) {
   return static_cast<long>(std::llround(k * 1000.0 / rate_hz));
 }
 
-void ApplyEvent(const EventSpec& e, sim::World* world) {
-  switch (e.type) {
-    case EventSpec::Type::kGripperGrab:
-      world->GripperGrab();
-      break;
-    case EventSpec::Type::kGripperMove:
-      world->GripperMove(e.to_W_m, e.duration_s);
-      break;
-    case EventSpec::Type::kGripperRelease:
-      world->GripperRelease();
-      break;
-    case EventSpec::Type::kImpulse:
-      world->ApplyImpulse(e.on_payload ? sim::Body::kPayload : sim::Body::kQuadrotor,
-                          e.impulse_W_Ns, e.duration_s);
-      break;
-    case EventSpec::Type::kWind:
-      world->SetWind(e.force_W_N, e.duration_s);
-      break;
-  }
-}
-
 }  // namespace
 
 Params WorldParams(const Scenario& scenario, const Params& params) {

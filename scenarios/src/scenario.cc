@@ -32,33 +32,6 @@ Eigen::Vector3d Vec3(const YamlMap& map, const std::string& key, double min, dou
   return map.Vector(key, 3, min, max);
 }
 
-EventSpec ParseEvent(const YamlMap& e) {
-  EventSpec ev;
-  ev.at_s = e.Number("at", 0.0, 1e5);
-  const std::string type =
-      e.Choice("type", {"gripper_grab", "gripper_move", "gripper_release", "impulse", "wind"}, "");
-  if (type == "gripper_grab") {
-    ev.type = EventSpec::Type::kGripperGrab;
-  } else if (type == "gripper_move") {
-    ev.type = EventSpec::Type::kGripperMove;
-    ev.to_W_m = Vec3(e, "to", -kBig, kBig);
-    ev.duration_s = e.Number("duration", 0.0, 1e4);
-  } else if (type == "gripper_release") {
-    ev.type = EventSpec::Type::kGripperRelease;
-  } else if (type == "impulse") {
-    ev.type = EventSpec::Type::kImpulse;
-    ev.on_payload = e.Choice("body", {"payload", "quadrotor"}, "payload") == "payload";
-    ev.impulse_W_Ns = Vec3(e, "impulse", -kBig, kBig);
-    ev.duration_s = e.Number("duration", 1e-3, 1.0, 0.01);
-  } else {
-    ev.type = EventSpec::Type::kWind;
-    ev.force_W_N = Vec3(e, "force", -kBig, kBig);
-    ev.duration_s = e.Number("duration", 0.0, 1e5);
-  }
-  e.RejectUnknownKeys();
-  return ev;
-}
-
 ExpectSpec ParseExpect(const YamlMap& e) {
   ExpectSpec x;
   for (const ExpectKey& k : ExpectKeys()) {
@@ -107,22 +80,6 @@ ReferenceSpec ParseReference(const YamlMap& r) {
 }
 
 }  // namespace
-
-const char* ToString(EventSpec::Type type) {
-  switch (type) {
-    case EventSpec::Type::kGripperGrab:
-      return "gripper_grab";
-    case EventSpec::Type::kGripperMove:
-      return "gripper_move";
-    case EventSpec::Type::kGripperRelease:
-      return "gripper_release";
-    case EventSpec::Type::kImpulse:
-      return "impulse";
-    case EventSpec::Type::kWind:
-      return "wind";
-  }
-  return "?";
-}
 
 Scenario ParseScenario(const YamlMap& root) {
   Scenario s;

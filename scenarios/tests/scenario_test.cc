@@ -55,8 +55,9 @@ TEST(ScenarioTest, ParsesTheDesignExample) {
   EXPECT_EQ(s.name, "hover_gripper_pull");
   EXPECT_EQ(s.controller.type, "hpa_mpc");
   ASSERT_EQ(s.events.size(), 4u);
-  EXPECT_EQ(s.events[1].type, EventSpec::Type::kGripperMove);
-  EXPECT_DOUBLE_EQ(s.events[1].to_W_m.z(), 0.95);
+  EXPECT_EQ(s.events[1].type, "gripper_move");
+  ASSERT_TRUE(std::holds_alternative<GripperMoveEvent>(s.events[1].action));
+  EXPECT_DOUBLE_EQ(std::get<GripperMoveEvent>(s.events[1].action).to_W_m.z(), 0.95);
   EXPECT_TRUE(s.expect.Has("crashed"));
 }
 

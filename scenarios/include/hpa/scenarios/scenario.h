@@ -10,23 +10,9 @@
 
 #include "hpa/controller/controller.h"
 #include "hpa/controller/reference.h"
+#include "hpa/scenarios/events.h"
 
 namespace hpa {
-
-/// One scripted disturbance.
-struct EventSpec {
-  enum class Type { kGripperGrab, kGripperMove, kGripperRelease, kImpulse, kWind };
-  Type type = Type::kImpulse;
-  double at_s = 0.0;                                       // when it starts, simulated time
-  double duration_s = 0.0;                                 // gripper_move, wind, impulse spread
-  Eigen::Vector3d to_W_m = Eigen::Vector3d::Zero();        // gripper_move target  (3)
-  Eigen::Vector3d impulse_W_Ns = Eigen::Vector3d::Zero();  // impulse  (3)
-  Eigen::Vector3d force_W_N = Eigen::Vector3d::Zero();     // wind on the quadrotor  (3)
-  bool on_payload = true;                                  // impulse body: payload or quadrotor
-};
-
-/// Name of an event type as written in YAML.
-const char* ToString(EventSpec::Type type);
 
 /// Regression bounds (keys of expect_keys.h); `hpa run` exits 1 if any fails. Unset bounds are
 /// not checked.
