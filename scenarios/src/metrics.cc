@@ -22,18 +22,22 @@ constexpr double kDetectionWindow_s = 0.5;    // a slack onset not flagged withi
 
 }  // namespace
 
+double Quantile(std::vector<double> values, double q) {
+  if (values.empty() || !(q >= 0.0 && q <= 1.0)) return std::nan("");
+  std::sort(values.begin(), values.end());
+  // linear between the closest ranks (Hyndman and Fan type 7, numpy's default)
+  const double rank = q * (values.size() - 1);
+  const size_t below = static_cast<size_t>(std::floor(rank));
+  const size_t above = std::min(values.size() - 1, below + 1);
+  return values[below] + (rank - below) * (values[above] - values[below]);
+}
+
 Quantiles ComputeQuantiles(std::vector<double> values) {
   Quantiles q;
   if (values.empty()) return q;
-  std::sort(values.begin(), values.end());
-  auto at = [&](double f) {
-    const size_t i = static_cast<size_t>(std::ceil(f * values.size())) - 1;
-    return values[std::min(values.size() - 1, std::max<size_t>(0, i))];
-  };
-  const size_t n = values.size();
-  q.median = n % 2 == 1 ? values[n / 2] : 0.5 * (values[n / 2 - 1] + values[n / 2]);
-  q.p99 = at(0.99);
-  q.max = values.back();
+  q.median = Quantile(values, 0.5);
+  q.p99 = Quantile(values, 0.99);
+  q.max = Quantile(values, 1.0);
   return q;
 }
 

@@ -181,13 +181,6 @@ std::pair<double, double> Wilson(int k, int n) {
   return {std::max(0.0, centre - half), std::min(1.0, centre + half)};
 }
 
-double Quantile(std::vector<double> v, double q) {
-  if (v.empty()) return NAN;
-  std::sort(v.begin(), v.end());
-  const size_t i = static_cast<size_t>(std::ceil(q * v.size())) - 1;
-  return v[std::min(v.size() - 1, i)];
-}
-
 std::string Fixed(double v, int decimals = 3) {
   if (!std::isfinite(v)) return "-";
   std::ostringstream out;

@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+
 namespace hpa {
 namespace {
 
@@ -61,6 +63,18 @@ TEST(MetricsTest, ExpectBoundsFailWithTheKeyNamed) {
   e.bounds["payload_rmse_max"] = {0.2, 0.2, 0.2};
   CheckExpectations(e, &m);
   EXPECT_TRUE(m.expect_passed);
+}
+
+TEST(MetricsTest, QuantileIsLinearBetweenClosestRanks) {
+  // R's quantile(type = 7) / numpy's default
+  EXPECT_DOUBLE_EQ(Quantile({5, 1, 3, 2, 4}, 0.5), 3.0);
+  EXPECT_DOUBLE_EQ(Quantile({5, 1, 3, 2, 4}, 0.99), 4.96);
+  EXPECT_DOUBLE_EQ(Quantile({1, 2, 3, 4}, 0.5), 2.5);
+  EXPECT_DOUBLE_EQ(Quantile({1, 2, 3, 4}, 0.25), 1.75);
+  EXPECT_DOUBLE_EQ(Quantile({1, 2, 3, 4}, 0.0), 1.0);
+  EXPECT_DOUBLE_EQ(Quantile({7}, 0.9), 7.0);
+  EXPECT_TRUE(std::isnan(Quantile({}, 0.5)));
+  EXPECT_TRUE(std::isnan(Quantile({1, 2}, 1.5)));
 }
 
 TEST(MetricsTest, QuantilesAndJson) {

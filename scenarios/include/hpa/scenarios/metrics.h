@@ -88,7 +88,11 @@ void CheckExpectations(const ExpectSpec& expect, Metrics* metrics);
 /// fields that differ between identical runs).
 std::string MetricsToJson(const Metrics& metrics);
 
-/// Quantiles of a sample (empty sample -> zeros).
+/// The q-quantile (q in [0, 1]) of a sample, linear between the closest ranks (Hyndman and Fan
+/// type 7); NaN for an empty sample or q outside [0, 1]. The one quantile of metrics and sweeps.
+double Quantile(std::vector<double> values, double q);
+
+/// Median, 99th percentile and max of a sample by Quantile (empty sample -> zeros).
 Quantiles ComputeQuantiles(std::vector<double> values);
 
 /// Slack intervals [start, end) of the true mode in the log, chatter shorter than 30 ms ignored.
