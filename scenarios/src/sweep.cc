@@ -14,6 +14,7 @@
 #include <functional>
 #include <iomanip>
 #include <map>
+#include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <random>
 #include <set>
@@ -29,6 +30,16 @@
 
 namespace hpa {
 namespace {
+
+using Json = nlohmann::ordered_json;
+
+// Writes a file whole and checks it reached the disk (a full disk is an error, not silence).
+void WriteFileChecked(const std::string& path, const std::string& text) {
+  std::ofstream out(path, std::ios::trunc);
+  out << text;
+  out.flush();
+  if (!out) throw std::runtime_error("cannot write " + path + ": " + std::strerror(errno));
+}
 
 using Clock = std::chrono::steady_clock;
 
@@ -72,21 +83,6 @@ bool IsNumber(const std::string& s, double* v = nullptr) {
   if (v) *v = d;
   return true;
 }
-
-std::string JsonString(const std::string& s) {
-  std::string out = "\"";
-  for (char c : s) {
-    if (c == '"' || c == '\\') out += '\\';
-    if (c == '\n') {
-      out += "\\n";
-      continue;
-    }
-    out += c;
-  }
-  return out + "\"";
-}
-
-std::string JsonValue(const std::string& s) { return IsNumber(s) ? s : JsonString(s); }
 
 std::string Dirname(const std::string& path) {
   const size_t slash = path.rfind('/');
@@ -134,33 +130,36 @@ std::vector<Record> ReadRecords(const std::string& path) {
     Record r;
     r.line = line;
     try {
-      const YAML::Node n = YAML::Load(line);
-      r.run = n["run"].as<int>();
-      r.seed = n["seed"].as<unsigned long>();
-      r.sweep_id = n["sweep_id"].as<std::string>();
-      r.sweep_file = n["sweep"].as<std::string>();
-      r.base = n["base"].as<std::string>();
-      for (const auto& kv : n["values"]) {
-        r.values.emplace_back(kv.first.as<std::string>(), kv.second.as<std::string>());
+      const Json n = Json::parse(line);
+      r.run = n.at("run").get<int>();
+      r.seed = n.at("seed").get<unsigned long>();
+      r.sweep_id = n.at("sweep_id").get<std::string>();
+      r.sweep_file = n.at("sweep").get<std::string>();
+      r.base = n.at("base").get<std::string>();
+      for (const auto& [key, value] : n.at("values").items()) {
+        r.values.emplace_back(key, value.is_string() ? value.get<std::string>() : value.dump());
       }
-      r.controller = n["controller"].as<std::string>();
-      r.error = n["status"].as<std::string>() != "ok";
+      r.controller = n.at("controller").get<std::string>();
+      r.error = n.at("status").get<std::string>() != "ok";
       if (r.error) {
-        r.error_text = n["error"].as<std::string>();
+        r.error_text = n.at("error").is_string() ? n.at("error").get<std::string>() : "";
       } else {
-        const YAML::Node m = n["metrics"];
-        r.crashed = m["crashed"].as<bool>();
-        r.expect_failed = !m["expect"]["passed"].as<bool>();
-        const YAML::Node e = m["payload_rmse_m"];
+        const Json& m = n.at("metrics");
+        const auto number = [](const Json& v) {
+          return v.is_number() ? v.get<double>() : std::nan("");
+        };
+        r.crashed = m.at("crashed").get<bool>();
+        r.expect_failed = !m.at("expect").at("passed").get<bool>();
+        const Json& e = m.at("payload_rmse_m");
         r.payload_rmse_norm_m =
-            std::sqrt(std::pow(e[0].as<double>(), 2) + std::pow(e[1].as<double>(), 2) +
-                      std::pow(e[2].as<double>(), 2));
-        r.quad_dev_max_m = m["quad_position_deviation_max_m"].as<double>();
-        r.solve_median_ms = m["mpc_solve_ms"]["median"].as<double>();
-        r.slack_time_s = m["slack_time_s"].as<double>();
-        r.payload_in_fov = m["payload_in_fov_fraction"].as<double>();
+            std::sqrt(std::pow(number(e.at(0)), 2) + std::pow(number(e.at(1)), 2) +
+                      std::pow(number(e.at(2)), 2));
+        r.quad_dev_max_m = number(m.at("quad_position_deviation_max_m"));
+        r.solve_median_ms = number(m.at("mpc_solve_ms").at("median"));
+        r.slack_time_s = number(m.at("slack_time_s"));
+        r.payload_in_fov = number(m.at("payload_in_fov_fraction"));
       }
-    } catch (const YAML::Exception& e) {
+    } catch (const Json::exception& e) {
       // a torn last line (the sweep was killed mid-write) is skipped; it will be re-run
       std::fprintf(stderr, "hpa: warning: %s:%d: unreadable line skipped (%s)\n", path.c_str(),
                    line_no, e.what());
@@ -250,39 +249,44 @@ void WriteSummary(const std::vector<Record>& records, const std::string& dir) {
     }
   }
 
-  // summary.json
-  std::ostringstream js;
-  js << "{\n  \"runs\": " << records.size() << ",\n  \"main_varied\": " << JsonString(main_path)
-     << ",\n  \"controllers\": {";
-  bool first_c = true;
+  // summary.json (non-finite values, e.g. quantiles of no run, are null)
+  const auto num = [](double v) { return std::isfinite(v) ? Json(v) : Json(); };
+  Json summary;
+  summary["runs"] = records.size();
+  summary["main_varied"] = main_path;
+  summary["controllers"] = Json::object();
   for (const auto& c : controllers) {
     const Cell& t = total[c];
     const auto ci = Wilson(t.crashes, t.n);
-    js << (first_c ? "\n" : ",\n") << "    " << JsonString(c) << ": {\"runs\": " << t.n
-       << ", \"errors\": " << t.errors << ", \"crashes\": " << t.crashes
-       << ", \"crash_rate\": " << (t.n ? static_cast<double>(t.crashes) / t.n : 0.0)
-       << ", \"crash_rate_ci95\": [" << ci.first << ", " << ci.second << "]"
-       << ", \"expect_failures\": " << t.expect_failures
-       << ", \"payload_rmse_norm_m\": {\"median\": " << FormatNumber(Quantile(t.rmse, 0.5))
-       << ", \"p90\": " << FormatNumber(Quantile(t.rmse, 0.9)) << "}"
-       << ", \"quad_deviation_max_m\": {\"median\": " << FormatNumber(Quantile(t.dev, 0.5))
-       << ", \"p90\": " << FormatNumber(Quantile(t.dev, 0.9)) << "}"
-       << ", \"mpc_solve_median_ms\": {\"median\": " << FormatNumber(Quantile(t.solve, 0.5))
-       << ", \"p99\": " << FormatNumber(Quantile(t.solve, 0.99)) << "}, \"bins\": [";
+    Json entry = {
+        {"runs", t.n},
+        {"errors", t.errors},
+        {"crashes", t.crashes},
+        {"crash_rate", t.n ? num(static_cast<double>(t.crashes) / t.n) : Json()},
+        {"crash_rate_ci95", {num(ci.first), num(ci.second)}},
+        {"expect_failures", t.expect_failures},
+        {"payload_rmse_norm_m",
+         {{"median", num(Quantile(t.rmse, 0.5))}, {"p90", num(Quantile(t.rmse, 0.9))}}},
+        {"quad_deviation_max_m",
+         {{"median", num(Quantile(t.dev, 0.5))}, {"p90", num(Quantile(t.dev, 0.9))}}},
+        {"mpc_solve_median_ms",
+         {{"median", num(Quantile(t.solve, 0.5))}, {"p99", num(Quantile(t.solve, 0.99))}}},
+        {"bins", Json::array()}};
     for (size_t b = 0; b < bins.size(); ++b) {
       const Cell& cell = per_bin[c][b];
       const auto bci = Wilson(cell.crashes, cell.n);
-      js << (b ? ", " : "") << "{\"lo\": " << bins[b].first << ", \"hi\": " << bins[b].second
-         << ", \"runs\": " << cell.n << ", \"crashes\": " << cell.crashes
-         << ", \"crash_rate\": " << (cell.n ? static_cast<double>(cell.crashes) / cell.n : 0.0)
-         << ", \"ci95\": [" << bci.first << ", " << bci.second << "]"
-         << ", \"expect_failures\": " << cell.expect_failures << "}";
+      entry["bins"].push_back(
+          {{"lo", num(bins[b].first)},
+           {"hi", num(bins[b].second)},
+           {"runs", cell.n},
+           {"crashes", cell.crashes},
+           {"crash_rate", cell.n ? num(static_cast<double>(cell.crashes) / cell.n) : Json()},
+           {"ci95", {num(bci.first), num(bci.second)}},
+           {"expect_failures", cell.expect_failures}});
     }
-    js << "]}";
-    first_c = false;
+    summary["controllers"][c] = entry;
   }
-  js << "\n  }\n}\n";
-  std::ofstream(dir + "/summary.json") << js.str();
+  WriteFileChecked(dir + "/summary.json", summary.dump(2) + "\n");
 
   // summary.md
   std::ostringstream md;
@@ -384,19 +388,24 @@ void WriteSummary(const std::vector<Record>& records, const std::string& dir) {
 // empty means none; `error` empty means the run finished.
 std::string RecordLine(const SweepSpec& spec, const SweepRun& run, const std::string& controller,
                        const std::string& error, const std::string& metrics_json) {
-  std::ostringstream line;
-  line << "{\"sweep_id\": " << JsonString(spec.sweep_id) << ", \"sweep\": " << JsonString(spec.file)
-       << ", \"base\": " << JsonString(spec.base_path) << ", \"run\": " << run.index
-       << ", \"draw\": " << run.draw << ", \"seed\": " << run.seed << ", \"values\": {";
-  for (size_t i = 0; i < run.values.size(); ++i) {
-    line << (i ? ", " : "") << JsonString(run.values[i].first) << ": "
-         << JsonValue(run.values[i].second);
+  Json line;
+  line["sweep_id"] = spec.sweep_id;
+  line["sweep"] = spec.file;
+  line["base"] = spec.base_path;
+  line["run"] = run.index;
+  line["draw"] = run.draw;
+  line["seed"] = run.seed;
+  line["values"] = Json::object();
+  for (const auto& [path, value] : run.values) {
+    double number = 0.0;
+    line["values"][path] = IsNumber(value, &number) ? Json(number) : Json(value);
   }
-  line << "}, \"controller\": " << JsonString(controller) << ", \"status\": \""
-       << (error.empty() ? "ok" : "error")
-       << "\", \"error\": " << (error.empty() ? "null" : JsonString(error))
-       << ", \"metrics\": " << (metrics_json.empty() ? "null" : metrics_json) << "}";
-  return line.str();
+  line["controller"] = controller;
+  line["status"] = error.empty() ? "ok" : "error";
+  line["error"] = error.empty() ? Json() : Json(error);
+  line["metrics"] = metrics_json.empty() ? Json() : Json::parse(metrics_json);
+  // one line, invalid UTF-8 in names or messages replaced rather than thrown on
+  return line.dump(-1, ' ', false, Json::error_handler_t::replace);
 }
 
 // The controller type of a run (for records of runs whose process died).
@@ -415,8 +424,7 @@ std::string RunOne(const SweepSpec& spec, const SweepRun& run, const Params& par
     const Scenario scenario = BuildScenario(spec, run);
     controller = scenario.controller.type;
     const RunResult result = RunScenario(scenario, params, RunOptions{});
-    std::string metrics = MetricsToJson(result.metrics);
-    std::replace(metrics.begin(), metrics.end(), '\n', ' ');
+    const std::string metrics = MetricsToJson(result.metrics);
     return RecordLine(spec, run, controller, result.metrics.run_error.value_or(""), metrics);
   } catch (const std::exception& e) {
     return RecordLine(spec, run, controller, e.what(), "");

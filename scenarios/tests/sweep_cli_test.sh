@@ -8,9 +8,20 @@ hpa=$1; scen=$2; out=$3
 rm -rf "$out"; mkdir -p "$out"
 failures=0
 fail() { echo "FAIL: $*"; failures=$((failures + 1)); }
-strip() { sed -E 's/"wall_time_s": [^,]*,//; s/"(mpc_solve|render|detector)_ms": \{[^}]*\},//' "$@" | sort; }
-count_runs() { grep -c '"run": ' "$1" 2>/dev/null || echo 0; }
-unique_runs() { grep -o '"run": [0-9]*' "$1" | sort -u | wc -l; }
+# runs.jsonl records without the fields that time the machine, one sorted line each
+strip() {
+  python3 -c 'import json, sys
+for line in open(sys.argv[1]):
+    if not line.strip(): continue
+    r = json.loads(line)
+    for k in ["wall_time_s", "mpc_solve_ms", "render_ms", "detector_ms", "image_model_ms"]:
+        (r.get("metrics") or {}).pop(k, None)
+    print(json.dumps(r, sort_keys=True))' "$1" | sort
+}
+count_runs() { [ -f "$1" ] && grep -c . "$1" || echo 0; }
+unique_runs() {
+  python3 -c 'import json, sys; print(len({json.loads(l)["run"] for l in open(sys.argv[1]) if l.strip()}))' "$1"
+}
 
 # a fast base: geometric controller on ground truth, a vertical impulse on the payload
 cat > "$out/base.yaml" <<'YAML'
@@ -45,6 +56,21 @@ for f in summary.md summary.json crash_rate.png; do
   [ -s "$out/merged/$f" ] || fail "merge did not write $f"
 done
 grep -q -- "--seed" "$out/merged/summary.md" || fail "summary.md lacks replay commands"
+
+echo "== every JSON file written parses with a strict parser (no NaN, one record per line)"
+python3 - "$out/full/runs.jsonl" "$out/merged/summary.json" "$out/full/summary.json" <<'PY' || fail "a JSON file is not strict JSON"
+import json, sys
+def strict(text):
+    def refuse(c): raise ValueError("non-standard constant " + c)
+    return json.loads(text, parse_constant=refuse)
+for path in sys.argv[1:]:
+    if path.endswith(".jsonl"):
+        for n, line in enumerate(open(path), 1):
+            assert line.endswith("\n"), f"{path}:{n} unterminated"
+            strict(line)
+    else:
+        strict(open(path).read())
+PY
 
 echo "== merge refuses mixed sweeps; re-running into a used folder needs --resume"
 sed 's/seed: 3/seed: 4/' "$out/tiny.yaml" > "$out/other.yaml"
