@@ -1,6 +1,9 @@
 #include "hpa/scenarios/sweep.h"
 
+#include <fcntl.h>
 #include <signal.h>
+#include <sys/file.h>
+#include <sys/prctl.h>
 #include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -32,6 +35,44 @@ namespace hpa {
 namespace {
 
 using Json = nlohmann::ordered_json;
+
+// Takes an exclusive lock on an output folder for the life of this process: two sweeps writing
+// one runs.jsonl would record every run twice. A second sweep is refused, naming the holder.
+void LockOutputDir(const std::string& dir) {
+  const std::string path = dir + "/.lock";
+  const int fd = open(path.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+  if (fd < 0) throw InputError(path, "--out", std::string("cannot open: ") + std::strerror(errno));
+  if (flock(fd, LOCK_EX | LOCK_NB) != 0) {
+    char holder[32] = {0};
+    const ssize_t n = pread(fd, holder, sizeof(holder) - 1, 0);
+    close(fd);
+    throw InputError(dir, "--out",
+                     "another hpa sweep (pid " + std::string(n > 0 ? holder : "?") +
+                         ") is writing to this folder; wait for it or use another --out");
+  }
+  const std::string pid = std::to_string(getpid());
+  if (ftruncate(fd, 0) != 0 || pwrite(fd, pid.c_str(), pid.size(), 0) < 0) {
+    throw InputError(path, "--out", std::string("cannot write: ") + std::strerror(errno));
+  }
+  // kept open (and locked) until the process exits
+}
+
+// A sweep killed mid-write leaves an unterminated last line; appending after it would glue the
+// next record onto it. Cut it off (its run has no record and runs again) and say so.
+void DropTornLastLine(const std::string& jsonl) {
+  std::ifstream in(jsonl, std::ios::binary);
+  if (!in) return;
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  if (text.empty() || text.back() == '\n') return;
+  const size_t keep = text.rfind('\n') == std::string::npos ? 0 : text.rfind('\n') + 1;
+  if (truncate(jsonl.c_str(), static_cast<off_t>(keep)) != 0) {
+    throw InputError(jsonl, "", std::string("cannot repair: ") + std::strerror(errno));
+  }
+  std::fprintf(stderr,
+               "hpa: %s ended in an unterminated line (a sweep killed mid-write): dropped %zu "
+               "bytes; that run will be run again\n",
+               jsonl.c_str(), text.size() - keep);
+}
 
 // Writes a file whole and checks it reached the disk (a full disk is an error, not silence).
 void WriteFileChecked(const std::string& path, const std::string& text) {
@@ -650,6 +691,8 @@ int SweepMain(int argc, char** argv) {
              runs.end());
   MakeOutputDir(out_dir);
   const std::string jsonl = out_dir + "/runs.jsonl";
+  LockOutputDir(out_dir);
+  DropTornLastLine(jsonl);
 
   // resume: skip what is recorded; refuse to mix sweeps in one folder
   std::set<int> done;
@@ -684,6 +727,7 @@ int SweepMain(int argc, char** argv) {
     Clock::time_point start;
   };
   std::vector<Child> children;
+  const pid_t parent_pid = getpid();
   size_t next = 0, finished = 0;
   int failures = 0;
   const auto start = Clock::now();
@@ -715,6 +759,9 @@ int SweepMain(int argc, char** argv) {
       const pid_t pid = fork();
       if (pid < 0) throw std::runtime_error("fork failed");
       if (pid == 0) {
+        // a worker dies with the sweep (kill -9 of the parent included)
+        prctl(PR_SET_PDEATHSIG, SIGKILL);
+        if (getppid() != parent_pid) _exit(1);
         std::fclose(out);
         const std::string line = RunOne(spec, run, params);
         const std::string path = tmp_dir + "/" + std::to_string(run.index) + ".json";

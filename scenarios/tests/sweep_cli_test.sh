@@ -135,5 +135,46 @@ printf 'base: base.yaml\nruns: 1\ntime_limit: 1\nvary:\n  duration: {list: [600.
 "$hpa" sweep "$out/hang.yaml" --out "$out/hang" > /dev/null 2>&1
 grep -q 'killed after the time limit' "$out/hang/runs.jsonl" || fail "time limit not enforced"
 
+echo "== a second sweep on the same folder is refused while the first runs, naming it"
+# runs of 60 simulated seconds (a few wall seconds each): still running when checked
+sed 's/duration: {list: \[6.0\]}/duration: {list: [60.0]}/' "$out/slow.yaml" > "$out/long.yaml"
+"$hpa" sweep "$out/long.yaml" --out "$out/locked" --jobs 1 > /dev/null 2>&1 &
+pid=$!
+workers=""
+for _ in $(seq 1 200); do
+  workers=$(pgrep -P "$pid" | tr '\n' ' ')
+  [ -n "$workers" ] && break
+  sleep 0.05
+done
+"$hpa" sweep "$out/long.yaml" --out "$out/locked" --jobs 1 --resume > "$out/locked2.log" 2>&1
+[ $? -eq 2 ] || fail "a second sweep on a busy folder did not exit 2"
+grep -q "another hpa sweep (pid $pid)" "$out/locked2.log" \
+  || fail "the refusal does not name the holder: $(cat "$out/locked2.log")"
+
+echo "== kill -9 of a sweep takes its workers with it"
+workers=""
+for _ in $(seq 1 200); do
+  workers=$(pgrep -P "$pid" | tr '\n' ' ')
+  [ -n "$workers" ] && break
+  sleep 0.01
+done
+[ -n "$workers" ] || fail "no worker seen to check"
+kill -9 "$pid"; wait "$pid" 2> /dev/null
+sleep 0.5
+# a dead worker may linger as a zombie until init reaps it: only a running one is a failure
+for w in $workers; do
+  state=$(ps -o stat= -p "$w" 2> /dev/null | tr -d ' ')
+  [ -n "$state" ] && [ "${state#Z}" = "$state" ] && fail "worker $w outlived its killed sweep ($state)"
+done
+
+echo "== a torn last line (killed mid-write) is dropped on --resume and its run redone"
+mkdir -p "$out/torn"
+head -n 9 "$out/full/runs.jsonl" > "$out/torn/runs.jsonl"
+tail -n 1 "$out/full/runs.jsonl" | head -c 120 >> "$out/torn/runs.jsonl"
+"$hpa" sweep "$out/tiny.yaml" --out "$out/torn" --resume > "$out/torn.log" 2>&1 || fail "resume after a torn line failed"
+grep -q "unterminated" "$out/torn.log" || fail "the repair was not reported"
+[ "$(unique_runs "$out/torn/runs.jsonl")" -eq 10 ] && [ "$(count_runs "$out/torn/runs.jsonl")" -eq 10 ] \
+  || fail "after the repair: $(count_runs "$out/torn/runs.jsonl") lines, expected 10 distinct runs"
+
 if [ $failures -ne 0 ]; then echo "$failures failure(s)"; exit 1; fi
 echo "all sweep checks passed"
