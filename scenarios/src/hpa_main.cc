@@ -184,10 +184,13 @@ void ApplyOverrides(const Args& a, Scenario* s) {
   }
 }
 
+// Writes a whole file; a write that does not reach the file (a full disk) is an error.
 void WriteText(const std::string& path, const std::string& text) {
   std::ofstream out(path);
   if (!out) throw InputError(path, "", "cannot write file");
   out << text;
+  out.flush();
+  if (!out) throw std::runtime_error("cannot write " + path + " (disk full?)");
 }
 
 void PrintSummary(const Metrics& m, const std::string& out_dir) {
@@ -242,6 +245,15 @@ int Run(int argc, char** argv) {
     std::fprintf(stderr, "hpa: internal error during the run (results so far are written): %s\n",
                  result.metrics.run_error->c_str());
     return kExitInternal;
+  }
+  if (result.metrics.crashed && !scenario.expect.Has("crashed")) {
+    // no expect block says a crash is fine: an unexpected crash fails the run
+    std::fprintf(stderr,
+                 "hpa: the vehicle crashed (%s at t = %.3f s) and the scenario does not "
+                 "expect a crash\n",
+                 result.metrics.crash_reason.value_or("").c_str(),
+                 result.metrics.crash_time_s.value_or(0.0));
+    return kExitExpectFailed;
   }
   return result.metrics.expect_passed ? kExitOk : kExitExpectFailed;
 }
@@ -306,6 +318,11 @@ int RenderFrame(int argc, char** argv) {
     throw InputError("", "", "hpa render-frame takes one SCENARIO.yaml");
   if (!a.Has("--at")) throw InputError("", "--at", "hpa render-frame needs --at T (seconds)");
   if (!a.Has("--out")) throw InputError("", "--out", "hpa render-frame needs --out FILE.png");
+  const std::string out_name = a.Get("--out");
+  if (out_name.size() < 5 || out_name.compare(out_name.size() - 4, 4, ".png") != 0) {
+    throw InputError("", "--out",
+                     "the frame is written as PNG: give a FILE.png, got '" + out_name + "'");
+  }
   const Params params = LoadParams(a.Get("--params", DefaultParamsPath()));
   Scenario scenario = LoadScenario(a.positional[0]);
   ApplyOverrides(a, &scenario);

@@ -268,6 +268,8 @@ void WriteLogCsv(const std::string& path, const std::vector<LogRow>& rows) {
         << (r.gripper_active ? 1 : 0) << "," << r.estimator_rejected_updates << ","
         << r.estimator_resets << "\n";
   }
+  out.flush();
+  if (!out) throw std::runtime_error("cannot write " + path + " (disk full?)");
 }
 
 }  // namespace hpa

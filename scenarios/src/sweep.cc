@@ -540,6 +540,11 @@ SweepSpec LoadSweep(const std::string& path) {
     for (const auto& kv : node) {
       VarySpec v;
       v.path = kv.first.as<std::string>();
+      if (v.path == "seed") {
+        vary.Fail("seed",
+                  "the seed cannot be varied: each run's seed is drawn from the sweep's "
+                  "`seed`");
+      }
       const YamlMap d = vary.Map(v.path);
       const std::vector<std::string> kinds = {"uniform", "normal", "grid", "list"};
       int found = 0;
@@ -665,8 +670,9 @@ int SweepMain(int argc, char** argv) {
       jobs = static_cast<int>(j);
     } else if (a == "--shard") {
       const std::string s = value(a);
-      if (std::sscanf(s.c_str(), "%d/%d", &shard_k, &shard_n) != 2 || shard_n < 1 || shard_k < 1 ||
-          shard_k > shard_n) {
+      char rest = 0;
+      if (std::sscanf(s.c_str(), "%d/%d%c", &shard_k, &shard_n, &rest) != 2 || shard_n < 1 ||
+          shard_k < 1 || shard_k > shard_n) {
         throw InputError("", "--shard", "expected K/N with 1 <= K <= N, got '" + s + "'");
       }
     } else if (a == "--resume") {
@@ -732,8 +738,9 @@ int SweepMain(int argc, char** argv) {
   int failures = 0;
   const auto start = Clock::now();
   auto record = [&](const std::string& line, bool failed, const SweepRun& run) {
-    std::fprintf(out, "%s\n", line.c_str());
-    std::fflush(out);
+    if (std::fprintf(out, "%s\n", line.c_str()) < 0 || std::fflush(out) != 0) {
+      throw std::runtime_error("cannot append to " + jsonl + ": " + std::strerror(errno));
+    }
     fsync(fileno(out));
     ++finished;
     failures += failed ? 1 : 0;
@@ -851,6 +858,9 @@ int MergeMain(int argc, char** argv) {
     const std::string path = d + "/runs.jsonl";
     struct stat st;
     if (stat(path.c_str(), &st) != 0) throw InputError(path, "", "no runs.jsonl in this folder");
+    if (!S_ISREG(st.st_mode) || access(path.c_str(), R_OK) != 0) {
+      throw InputError(path, "", "not a readable file");
+    }
     for (Record& r : ReadRecords(path)) {
       if (sweep_id.empty()) sweep_id = r.sweep_id;
       if (r.sweep_id != sweep_id) {

@@ -94,5 +94,30 @@ for f in tracking.png xy_path.png retaut.png run.mp4; do
   [ -s "$out/plots/$f" ] || fail "missing $out/plots/$f"
 done
 
+echo "== hostile and careless input"
+# an unexpected crash (no expect block) exits 1
+cat > "$out/crash.yaml" <<'YAML'
+name: crash_no_expect
+duration: 2.0
+controller: {type: geometric}
+estimation: {ground_truth: true, camera: analytic}
+events:
+  - {at: 0.1, type: impulse, body: quadrotor, impulse: [0, 0, -30]}
+YAML
+expect_exit 1 "crashed .* does not expect a crash" run "$out/crash.yaml" --out "$out/crash" --quiet
+# a full disk is an error, never exit 0
+mkdir -p "$out/full_disk" && ln -sf /dev/full "$out/full_disk/metrics.json"
+expect_exit 3 "cannot write" run "$out/crash.yaml" --set duration=0.2 --out "$out/full_disk" --quiet
+expect_exit 2 "render-frame|PNG" render-frame "$scen/hover.yaml" --at 0.1 --out "$out/frame.jpg"
+printf 'base: %s/hover.yaml\nruns: 2\nvary:\n  seed: {uniform: [1, 9]}\n' "$scen" > "$out/seed_sweep.yaml"
+expect_exit 2 "seed cannot be varied" sweep "$out/seed_sweep.yaml" --out "$out/seed_sweep"
+printf 'base: %s/hover.yaml\nruns: 2\nvary:\n  duration: {uniform: [1, 2]}\n' "$scen" > "$out/ok_sweep.yaml"
+expect_exit 2 "shard" sweep "$out/ok_sweep.yaml" --out "$out/junk_shard" --shard 1/2junk
+mkdir -p "$out/bad_shard/runs.jsonl"
+expect_exit 2 "not a readable file" merge "$out/bad_shard" --out "$out/bad_merge"
+expect_exit 2 "controllers" compare "$scen/hover.yaml" --out "$out/cmp" --controllers ,,
+expect_exit 2 "unknown controller 'pid'" compare "$scen/hover.yaml" --out "$out/cmp2" --controllers geometric,pid
+[ -e "$out/cmp2/geometric" ] && fail "compare ran geometric before refusing pid"
+
 if [ $failures -ne 0 ]; then echo "$failures failure(s)"; exit 1; fi
 echo "all CLI contract checks passed"
