@@ -3,6 +3,7 @@
 #include <sys/stat.h>
 
 #include <cerrno>
+#include <csignal>
 #include <cstdio>
 #include <cstring>
 #include <fstream>
@@ -362,6 +363,9 @@ int RenderFrame(int argc, char** argv) {
 }  // namespace
 
 int HpaMain(int argc, char** argv) {
+  // SIGTERM / SIGINT: a run stops at its next tick and writes its metrics and log so far
+  std::signal(SIGTERM, RequestStop);
+  std::signal(SIGINT, RequestStop);
   if (argc < 2 || !std::strcmp(argv[1], "--help") || !std::strcmp(argv[1], "-h") ||
       !std::strcmp(argv[1], "help")) {
     std::fputs(Usage().c_str(), argc < 2 ? stderr : stdout);

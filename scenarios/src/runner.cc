@@ -4,6 +4,7 @@
 
 #include <chrono>
 #include <cmath>
+#include <csignal>
 #include <cstdio>
 #include <deque>
 #include <random>
@@ -48,6 +49,12 @@ long TickOf(long k, double rate_hz) {
 }
 
 }  // namespace
+
+namespace {
+volatile std::sig_atomic_t g_stop_signal = 0;  // set from a signal handler
+}  // namespace
+
+void RequestStop(int signal_number) { g_stop_signal = signal_number; }
 
 Params WorldParams(const Scenario& scenario, const Params& params) {
   Params p = params;
@@ -117,6 +124,9 @@ RunResult RunScenario(const Scenario& scenario, const Params& params, const RunO
   try {
     for (; tick <= end_tick; ++tick) {
       const double t = tick * sim::World::kPhysicsDt_s;
+      if (g_stop_signal != 0) {
+        throw std::runtime_error("stopped by signal " + std::to_string(g_stop_signal));
+      }
 
       // scripted disturbances
       while (next_event < events.size() && events[next_event].at_s <= t + 1e-9) {

@@ -119,5 +119,16 @@ expect_exit 2 "controllers" compare "$scen/hover.yaml" --out "$out/cmp" --contro
 expect_exit 2 "unknown controller 'pid'" compare "$scen/hover.yaml" --out "$out/cmp2" --controllers geometric,pid
 [ -e "$out/cmp2/geometric" ] && fail "compare ran geometric before refusing pid"
 
+# SIGTERM mid-run: the metrics and log so far are written, and the run says it was stopped
+"$hpa" run "$scen/hover.yaml" --set duration=3000 --out "$out/sigterm" --quiet > /dev/null 2>&1 &
+pid=$!
+sleep 1
+kill -TERM "$pid"
+wait "$pid"; status=$?
+[ "$status" -eq 3 ] || fail "SIGTERM: exit $status, expected 3"
+python3 -c 'import json, sys; m = json.load(open(sys.argv[1])); assert "signal 15" in m["run_error"] and 0 < m["sim_time_s"] < 3000, m' \
+  "$out/sigterm/metrics.json" || fail "SIGTERM: no partial metrics.json naming the signal"
+[ -s "$out/sigterm/log.csv" ] || fail "SIGTERM: no partial log.csv"
+
 if [ $failures -ne 0 ]; then echo "$failures failure(s)"; exit 1; fi
 echo "all CLI contract checks passed"

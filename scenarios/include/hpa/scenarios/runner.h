@@ -31,6 +31,10 @@ struct RunResult {
   std::vector<LogRow> rows;
 };
 
+/// Async-signal-safe: the running scenario stops at its next physics tick and returns what it
+/// has computed, with run_error naming the signal (SIGTERM / SIGINT handlers call this).
+void RequestStop(int signal_number);
+
 /// Runs a scenario to its end (or to a crash, or stop_at_s) and computes its metrics and the
 /// expect check. Throws InputError for bad input found while setting up (MJCF, params).
 RunResult RunScenario(const Scenario& scenario, const Params& params, const RunOptions& options);
