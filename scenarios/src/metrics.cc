@@ -59,6 +59,7 @@ std::vector<std::pair<double, double>> TrueSlackIntervals(const std::vector<LogR
 
 void ComputeMetrics(const MetricsInputs& in, Metrics* m) {
   const auto& rows = in.rows;
+  m->control_steps = static_cast<int>(rows.size());
   const auto slack = TrueSlackIntervals(rows);
   m->slack_events = static_cast<int>(slack.size());
   auto in_slack = [&](double t) {
@@ -185,18 +186,22 @@ std::string MetricsToJson(const Metrics& m) {
   o["crash_time_s"] = opt_num(m.crash_time_s);
   o["crash_reason"] = opt_str(m.crash_reason);
   o["run_error"] = opt_str(m.run_error);
-  o["payload_rmse_m"] = vec(m.payload_rmse_m);
+  // a run that ended before its first control step (or camera frame) measured nothing: null,
+  // not a perfect-looking zero
+  const bool controlled = m.control_steps > 0;
+  const auto measured = [&](const Json& v) { return controlled ? v : Json(); };
+  o["payload_rmse_m"] = measured(vec(m.payload_rmse_m));
   o["payload_rmse_over"] = m.payload_rmse_over;
-  o["quad_rmse_m"] = vec(m.quad_rmse_m);
-  o["quad_position_deviation_max_m"] = num(m.quad_position_deviation_max_m);
-  o["payload_max_speed_mps"] = num(m.payload_max_speed_mps);
+  o["quad_rmse_m"] = measured(vec(m.quad_rmse_m));
+  o["quad_position_deviation_max_m"] = measured(num(m.quad_position_deviation_max_m));
+  o["payload_max_speed_mps"] = measured(num(m.payload_max_speed_mps));
   o["slack_time_s"] = num(m.slack_time_s);
   o["slack_events"] = m.slack_events;
-  o["mode_accuracy"] = num(m.mode_accuracy);
+  o["mode_accuracy"] = measured(num(m.mode_accuracy));
   o["slack_detection_latency_s"] = {{"mean", opt_num(m.slack_detection_latency_mean_s)},
                                     {"max", opt_num(m.slack_detection_latency_max_s)},
                                     {"missed", m.slack_events_missed}};
-  o["payload_in_fov_fraction"] = num(m.payload_in_fov_fraction);
+  o["payload_in_fov_fraction"] = m.camera_frames > 0 ? num(m.payload_in_fov_fraction) : Json();
   o["camera_frames"] = m.camera_frames;
   o["detections"] = m.detections;
   o["retaut"] = {{"count", m.retaut_count},

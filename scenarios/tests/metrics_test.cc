@@ -77,6 +77,17 @@ TEST(MetricsTest, QuantileIsLinearBetweenClosestRanks) {
   EXPECT_TRUE(std::isnan(Quantile({1, 2}, 1.5)));
 }
 
+TEST(MetricsTest, ARunWithNoControlStepHasNullTrackingMetrics) {
+  Metrics m;
+  ComputeMetrics(MetricsInputs{}, &m);
+  const std::string json = MetricsToJson(m);
+  for (const char* key :
+       {"\"payload_rmse_m\": null", "\"mode_accuracy\": null", "\"payload_in_fov_fraction\": null",
+        "\"quad_position_deviation_max_m\": null"}) {
+    EXPECT_NE(json.find(key), std::string::npos) << key << " in " << json;
+  }
+}
+
 TEST(MetricsTest, QuantilesAndJson) {
   const Quantiles q = ComputeQuantiles({5, 1, 3, 2, 4});
   EXPECT_DOUBLE_EQ(q.median, 3);

@@ -38,6 +38,7 @@ struct Metrics {
   std::string scenario, controller, camera;
   unsigned long seed = 0;
   double sim_time_s = 0.0, wall_time_s = 0.0;
+  int control_steps = 0;  // log rows; 0: tracking metrics are written as null
   bool crashed = false;
   std::optional<double> crash_time_s;
   std::optional<std::string> crash_reason;
