@@ -12,10 +12,13 @@ packages=(
                            # payload detector, PNG frames and plots, MP4 video
   libnlopt-cxx-dev         # fully converged NMPC solve (checks the RTI solver)
   libyaml-cpp-dev          # params.yaml, scenario and sweep files
+  nlohmann-json3-dev       # every JSON file written and read (metrics, runs.jsonl, summaries)
+  libcli11-dev             # command-line parsing of hpa golden and hpa sweep-diff
   libgtest-dev libgmock-dev  # unit and integration tests
   libbenchmark-dev         # mpc_bench and other benchmarks
   parallel                 # shard sweeps across processes/machines (CI runs two shards)
   slurm-wlm munge          # a single-node Slurm cluster: the job-array sweep test
+  clang-14 libclang-rt-14-dev  # ASan + UBSan build and libFuzzer (ci/sanitize.sh)
 )
 
 if [ "$(id -u)" -ne 0 ]; then
