@@ -1,6 +1,7 @@
 #include "hpa/models/yaml_reader.h"
 
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <sstream>
 
@@ -38,15 +39,26 @@ YamlMap::YamlMap(YAML::Node node, std::string file, std::string path)
   }
 }
 
-YamlMap YamlMap::LoadFile(const std::string& file) {
+YAML::Node LoadYamlFile(const std::string& file) {
+  std::error_code ec;
+  const auto status = std::filesystem::status(file, ec);
+  if (ec || !std::filesystem::exists(status)) throw InputError(file, "", "cannot open file");
+  if (!std::filesystem::is_regular_file(status)) {
+    throw InputError(file, "", "not a regular file (a directory?): expected a YAML file");
+  }
   std::ifstream in(file);
   if (!in) throw InputError(file, "", "cannot open file");
-  YAML::Node root;
   try {
-    root = YAML::Load(in);
+    return YAML::Load(in);
   } catch (const YAML::Exception& e) {
     throw InputError(file, "", std::string("malformed YAML: ") + e.what());
+  } catch (const std::ios_base::failure& e) {
+    throw InputError(file, "", std::string("cannot read file: ") + e.what());
   }
+}
+
+YamlMap YamlMap::LoadFile(const std::string& file) {
+  const YAML::Node root = LoadYamlFile(file);
   if (!root.IsMap()) throw InputError(file, "", "expected a YAML map at the top level");
   return YamlMap(root, file, "");
 }

@@ -1,6 +1,5 @@
 #include "hpa/scenarios/golden.h"
 
-#include <CLI/CLI.hpp>
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
@@ -14,6 +13,7 @@
 #include "hpa/scenarios/metrics.h"
 #include "hpa/scenarios/runner.h"
 #include "hpa/scenarios/scenario.h"
+#include "scenarios/src/cli_parse.h"
 
 namespace hpa {
 namespace {
@@ -228,13 +228,7 @@ int GoldenMain(int argc, char** argv) {
   app.add_flag("--update", options.update, "rewrite the golden file from the current metrics");
   app.add_option("--reason", options.reason, "one line: why the behaviour changed (--update)");
   app.add_flag("--quiet", options.quiet, "no progress lines");
-  try {
-    app.parse(argc - 1, argv + 1);
-  } catch (const CLI::CallForHelp& e) {
-    return app.exit(e);
-  } catch (const CLI::ParseError& e) {
-    throw InputError("hpa golden", "", e.what());
-  }
+  if (const auto code = ParseCommandLine(app, argc, argv)) return *code;
   return RunGolden(options);
 }
 

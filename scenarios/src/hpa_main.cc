@@ -3,6 +3,7 @@
 #include <sys/stat.h>
 
 #include <cerrno>
+#include <cmath>
 #include <csignal>
 #include <cstdio>
 #include <cstring>
@@ -10,6 +11,7 @@
 #include <iostream>
 #include <map>
 #include <opencv2/imgcodecs.hpp>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -26,6 +28,7 @@
 #include "hpa/scenarios/sweep.h"
 #include "hpa/scenarios/sweep_diff.h"
 #include "hpa/sim/world.h"
+#include "scenarios/src/cli_parse.h"
 
 namespace hpa {
 namespace {
@@ -50,14 +53,16 @@ usage:
       scenario (e.g. --set events.1.impulse.2=0.5); sweeps print such replay commands.
   hpa compare SCENARIO.yaml --out DIR [--controllers A,B] [--camera render|analytic]
                         [--seed N] [--video-slack-events] [--quiet] [--params FILE]
+                        [--set PATH=VALUE]...
       Runs the scenario once per controller (default hpa_mpc,nonhybrid_mpc) into DIR/<type>/
       and writes DIR/comparison.png; with --video-slack-events, a slack-event video per run.
   hpa render-frame SCENARIO.yaml --at T --out FILE.png [--seed N] [--controller TYPE]
-                        [--params FILE]
+                        [--params FILE] [--set PATH=VALUE]...
       Runs the scenario to time T (s) and writes one 1280x720 onboard payload-camera frame.
-  hpa sweep SWEEP.yaml --out DIR [--jobs N] [--shard K/N] [--resume]
+  hpa sweep SWEEP.yaml --out DIR [--jobs N] [--shard K/N] [--resume [--retry-errors]]
       Monte Carlo sweep: one JSON line per run in DIR/runs.jsonl, then a summary. --jobs
-      defaults to the number of cores; --shard K/N (K = 1..N) runs every N-th run.
+      defaults to the number of cores; --shard K/N (K = 1..N) runs every N-th run; --resume
+      skips recorded runs, --retry-errors runs the recorded errors (killed, timed out) again.
   hpa merge DIR... --out DIR
       Joins sweep shards and writes DIR/summary.json, DIR/summary.md and plots.
   hpa sweep-diff A B --out DIR [--a-where KEY=VALUE] [--b-where KEY=VALUE]
@@ -66,7 +71,7 @@ usage:
   hpa golden [--update --reason TEXT] [--from DIR] [--golden FILE]
       Compares every shipped scenario's metrics with scenarios/ci/golden.json (exit 1 on a
       change beyond tolerance); --update rewrites it.
-  hpa --help
+  hpa --help                 this text; hpa COMMAND --help: the command's options
 
 exit codes: 0 ok and every `expect` bound holds; 1 an expectation failed (or an unexpected
 crash); 2 bad input (file, key, value; the message names them); 3 internal error.
@@ -93,96 +98,45 @@ std::string Usage() {
   return text;
 }
 
-// Command-line arguments: positionals and --flags (with or without a value).
-struct Args {
-  std::vector<std::string> positional;
-  std::vector<std::string> sets;  // --set PATH=VALUE, repeatable
-  std::map<std::string, std::string> flags;
-
-  bool Has(const std::string& f) const { return flags.count(f) > 0; }
-  std::string Get(const std::string& f, const std::string& fallback = "") const {
-    auto it = flags.find(f);
-    return it == flags.end() ? fallback : it->second;
-  }
+// Options every scenario command shares (run, compare, render-frame).
+struct ScenarioOptions {
+  std::string scenario_file;
+  std::string params_file;
+  std::vector<std::string> sets;  // --set PATH=VALUE, in order
+  std::optional<unsigned long> seed;
+  std::string camera;  // "" keeps the scenario's
+  bool quiet = false;
 };
 
-Args Parse(int argc, char** argv, int first, const std::vector<std::string>& valued,
-           const std::vector<std::string>& switches) {
-  Args a;
-  for (int i = first; i < argc; ++i) {
-    const std::string s = argv[i];
-    if (s.rfind("--", 0) != 0) {
-      a.positional.push_back(s);
-      continue;
-    }
-    if (s == "--set" && std::find(valued.begin(), valued.end(), s) != valued.end()) {
-      if (i + 1 >= argc) throw InputError("", s, "expects PATH=VALUE");
-      a.sets.push_back(argv[++i]);
-    } else if (std::find(switches.begin(), switches.end(), s) != switches.end()) {
-      a.flags[s] = "1";
-    } else if (std::find(valued.begin(), valued.end(), s) != valued.end()) {
-      if (i + 1 >= argc) throw InputError("", s, "expects a value");
-      a.flags[s] = argv[++i];
-    } else {
-      throw InputError("", s, "unknown option (see hpa --help)");
-    }
+// Adds the shared options to a command's parser.
+void AddScenarioOptions(CLI::App& app, ScenarioOptions* o, bool with_camera, bool with_quiet) {
+  app.add_option("SCENARIO.yaml", o->scenario_file, "the scenario file")->required();
+  app.add_option("--params", o->params_file, "parameter file (default models/params.yaml)");
+  app.add_option("--set", o->sets,
+                 "PATH=VALUE: changes one dotted key of the scenario (repeatable), e.g. "
+                 "--set events.1.impulse.2=0.5")
+      ->allow_extra_args(false);  // one PATH=VALUE per --set: a later positional is not a set
+  app.add_option("--seed", o->seed, "scenario seed")->check(CLI::Range(0UL, 4294967295UL));
+  if (with_camera) {
+    app.add_option("--camera", o->camera, "payload camera")
+        ->check(CLI::IsMember({"render", "analytic"}));
   }
-  return a;
+  if (with_quiet) app.add_flag("--quiet", o->quiet, "no progress or summary lines");
 }
 
-double ParseNumber(const std::string& flag, const std::string& text) {
-  char* end = nullptr;
-  const double v = std::strtod(text.c_str(), &end);
-  if (text.empty() || *end != '\0' || !std::isfinite(v)) {
-    throw InputError("", flag, "expected a number, got '" + text + "'");
-  }
-  return v;
+// Loads the scenario with --set applied, then --seed and --camera.
+Scenario LoadScenarioOf(const ScenarioOptions& o) {
+  std::vector<ScenarioSet> sets;
+  for (const std::string& text : o.sets) sets.push_back(ParseSetArgument(text));
+  Scenario s = LoadScenario(o.scenario_file, sets, "--set");
+  if (o.seed) s.seed = *o.seed;
+  if (!o.camera.empty()) s.estimation.camera = o.camera;
+  return s;
 }
 
-// Loads a scenario with --set PATH=VALUE applied (the form summary.md's replay commands use).
-Scenario LoadWithSets(const std::string& path, const std::vector<std::string>& sets) {
-  if (sets.empty()) return LoadScenario(path);
-  YAML::Node root;
-  try {
-    root = YAML::LoadFile(path);
-  } catch (const YAML::BadFile&) {
-    throw InputError(path, "", "cannot open file");
-  } catch (const YAML::Exception& e) {
-    throw InputError(path, "", std::string("malformed YAML: ") + e.what());
-  }
-  for (const std::string& set : sets) {
-    const size_t eq = set.find('=');
-    if (eq == std::string::npos || eq == 0)
-      throw InputError("", "--set", "expected PATH=VALUE, got '" + set + "'");
-    SetDottedPath(root, set.substr(0, eq), set.substr(eq + 1), "--set");
-  }
-  return ParseScenario(YamlMap(root, path, ""));
-}
-
-// Applies --seed, --controller and --camera to a loaded scenario.
-void ApplyOverrides(const Args& a, Scenario* s) {
-  if (a.Has("--seed")) {
-    const std::string text = a.Get("--seed");
-    char* end = nullptr;
-    errno = 0;
-    const unsigned long long seed = std::strtoull(text.c_str(), &end, 10);
-    if (text.empty() || text[0] == '-' || *end != '\0' || errno != 0 || seed > 4294967295ULL) {
-      throw InputError("", "--seed", "expected an integer in [0, 4294967295], got '" + text + "'");
-    }
-    s->seed = static_cast<unsigned long>(seed);
-  }
-  if (a.Has("--controller")) {
-    const std::string c = a.Get("--controller");
-    CheckControllerType(c, "", "--controller");
-    s->controller.type = c;
-  }
-  if (a.Has("--camera")) {
-    const std::string c = a.Get("--camera");
-    if (c != "render" && c != "analytic") {
-      throw InputError("", "--camera", "expected render | analytic");
-    }
-    s->estimation.camera = c;
-  }
+// The parameters: --params or models/params.yaml.
+Params LoadParamsOf(const ScenarioOptions& o) {
+  return LoadParams(o.params_file.empty() ? DefaultParamsPath() : o.params_file);
 }
 
 // Writes a whole file; a write that does not reach the file (a full disk) is an error.
@@ -192,6 +146,19 @@ void WriteText(const std::string& path, const std::string& text) {
   out << text;
   out.flush();
   if (!out) throw std::runtime_error("cannot write " + path + " (disk full?)");
+}
+
+// Says where the video went; a slack-events video of a run without slack is not written, and
+// that is said even with --quiet (a missing file would otherwise look like a failure).
+void ReportVideo(const RunOptions& options, bool quiet) {
+  if (options.video_path.empty()) return;
+  struct stat st;
+  if (stat(options.video_path.c_str(), &st) != 0) {
+    std::printf("  no slack event in this run: no video written (%s)\n",
+                options.video_path.c_str());
+  } else if (!quiet) {
+    std::printf("  video %s\n", options.video_path.c_str());
+  }
 }
 
 void PrintSummary(const Metrics& m, const std::string& out_dir) {
@@ -212,36 +179,44 @@ void PrintSummary(const Metrics& m, const std::string& out_dir) {
 }
 
 int Run(int argc, char** argv) {
-  const Args a =
-      Parse(argc, argv, 2,
-            {"--out", "--seed", "--controller", "--camera", "--video", "--params", "--set"},
-            {"--video-slack-events", "--quiet", "--plots"});
-  if (a.positional.size() != 1) throw InputError("", "", "hpa run takes one SCENARIO.yaml");
-  const Params params = LoadParams(a.Get("--params", DefaultParamsPath()));
-  Scenario scenario = LoadWithSets(a.positional[0], a.sets);
-  ApplyOverrides(a, &scenario);
-  const std::string out_dir = a.Get("--out", "out/" + scenario.name);
+  ScenarioOptions o;
+  std::string out_dir, controller, video;
+  bool slack_events = false, plots = false;
+  CLI::App app{"Runs one scenario; writes DIR/metrics.json and DIR/log.csv.", "hpa run"};
+  AddScenarioOptions(app, &o, true, true);
+  app.add_option("--out", out_dir, "output folder (default out/<scenario name>)");
+  app.add_option("--controller", controller, "a registered controller (see hpa --help)");
+  app.add_option("--video", video, "MP4 of the chase camera with the onboard inset");
+  app.add_flag("--video-slack-events", slack_events,
+               "keep only a window around each slack event (alone: DIR/slack_events.mp4)");
+  app.add_flag("--plots", plots, "write PNG plots of the run into DIR");
+  if (const auto code = ParseCommandLine(app, argc, argv)) return *code;
+  const Params params = LoadParamsOf(o);
+  Scenario scenario = LoadScenarioOf(o);
+  if (!controller.empty()) {
+    CheckControllerType(controller, "", "--controller");
+    scenario.controller.type = controller;
+  }
+  if (out_dir.empty()) out_dir = "out/" + scenario.name;
   MakeOutputDir(out_dir);
 
   RunOptions options;
-  options.progress = !a.Has("--quiet");
-  options.video_path = a.Get("--video");
-  options.video_slack_events_only = a.Has("--video-slack-events");
+  options.progress = !o.quiet;
+  options.video_path = video;
+  options.video_slack_events_only = slack_events;
   if (options.video_slack_events_only && options.video_path.empty()) {
     options.video_path = out_dir + "/slack_events.mp4";
   }
   const RunResult result = RunScenario(scenario, params, options);
   WriteText(out_dir + "/metrics.json", MetricsToJson(result.metrics));
   WriteLogCsv(out_dir + "/log.csv", result.rows);
-  if (a.Has("--plots")) {
+  if (plots) {
     for (const std::string& png : WriteRunPlots(result, params, out_dir)) {
-      if (!a.Has("--quiet")) std::printf("  plot %s\n", png.c_str());
+      if (!o.quiet) std::printf("  plot %s\n", png.c_str());
     }
   }
-  if (!a.Has("--quiet")) {
-    PrintSummary(result.metrics, out_dir);
-    if (!options.video_path.empty()) std::printf("  video %s\n", options.video_path.c_str());
-  }
+  if (!o.quiet) PrintSummary(result.metrics, out_dir);
+  ReportVideo(options, o.quiet);
   if (result.metrics.run_error) {
     std::fprintf(stderr, "hpa: internal error during the run (results so far are written): %s\n",
                  result.metrics.run_error->c_str());
@@ -260,16 +235,23 @@ int Run(int argc, char** argv) {
 }
 
 int Compare(int argc, char** argv) {
-  const Args a = Parse(argc, argv, 2, {"--out", "--controllers", "--camera", "--params", "--seed"},
-                       {"--video-slack-events", "--quiet"});
-  if (a.positional.size() != 1) throw InputError("", "", "hpa compare takes one SCENARIO.yaml");
-  if (!a.Has("--out")) throw InputError("", "--out", "hpa compare needs --out DIR");
-  const Params params = LoadParams(a.Get("--params", DefaultParamsPath()));
-  Scenario base = LoadScenario(a.positional[0]);
-  ApplyOverrides(a, &base);
-  const std::string out_dir = a.Get("--out");
+  ScenarioOptions o;
+  std::string out_dir, list = "hpa_mpc,nonhybrid_mpc";
+  bool slack_events = false;
+  CLI::App app{
+      "Runs the scenario once per controller into DIR/<type>/ and writes "
+      "DIR/comparison.png.",
+      "hpa compare"};
+  AddScenarioOptions(app, &o, true, true);
+  app.add_option("--out", out_dir, "output folder")->required();
+  app.add_option("--controllers", list, "comma-separated controller types")
+      ->default_str("hpa_mpc,nonhybrid_mpc");
+  app.add_flag("--video-slack-events", slack_events, "a slack-event video per run");
+  if (const auto code = ParseCommandLine(app, argc, argv)) return *code;
+  const Params params = LoadParamsOf(o);
+  const Scenario base = LoadScenarioOf(o);
   std::vector<std::string> types;
-  std::string list = a.Get("--controllers", "hpa_mpc,nonhybrid_mpc") + ",";
+  list += ",";
   for (size_t p = 0; (p = list.find(',')) != std::string::npos; list.erase(0, p + 1)) {
     if (p > 0) types.push_back(list.substr(0, p));
   }
@@ -280,15 +262,13 @@ int Compare(int argc, char** argv) {
   bool all_passed = true;
   bool run_error = false;
   for (const std::string& type : types) {
-    Args one = a;
-    one.flags["--controller"] = type;
     Scenario s = base;
-    ApplyOverrides(one, &s);
+    s.controller.type = type;
     const std::string dir = out_dir + "/" + type;
     MakeOutputDir(dir);
     RunOptions options;
-    options.progress = !a.Has("--quiet");
-    if (a.Has("--video-slack-events")) {
+    options.progress = !o.quiet;
+    if (slack_events) {
       options.video_path = dir + "/slack_events.mp4";
       options.video_slack_events_only = true;
     }
@@ -301,37 +281,40 @@ int Compare(int argc, char** argv) {
                    type.c_str(), results.back().metrics.run_error->c_str());
       run_error = true;
     }
-    if (!a.Has("--quiet")) {
-      PrintSummary(results.back().metrics, dir);
-      if (!options.video_path.empty()) std::printf("  video %s\n", options.video_path.c_str());
-    }
+    if (!o.quiet) PrintSummary(results.back().metrics, dir);
+    ReportVideo(options, o.quiet);
   }
   const std::string png = out_dir + "/comparison.png";
   WriteComparisonPlot(results, params, png);
-  if (!a.Has("--quiet")) std::printf("comparison plot %s\n", png.c_str());
+  if (!o.quiet) std::printf("comparison plot %s\n", png.c_str());
   if (run_error) return kExitInternal;
   return all_passed ? kExitOk : kExitExpectFailed;
 }
 
 int RenderFrame(int argc, char** argv) {
-  const Args a = Parse(argc, argv, 2, {"--at", "--out", "--params", "--seed", "--controller"}, {});
-  if (a.positional.size() != 1)
-    throw InputError("", "", "hpa render-frame takes one SCENARIO.yaml");
-  if (!a.Has("--at")) throw InputError("", "--at", "hpa render-frame needs --at T (seconds)");
-  if (!a.Has("--out")) throw InputError("", "--out", "hpa render-frame needs --out FILE.png");
-  const std::string out_name = a.Get("--out");
-  if (out_name.size() < 5 || out_name.compare(out_name.size() - 4, 4, ".png") != 0) {
+  ScenarioOptions o;
+  std::string out, controller;
+  double at_s = 0.0;
+  CLI::App app{"Runs the scenario to time T and writes one onboard payload-camera frame (PNG).",
+               "hpa render-frame"};
+  AddScenarioOptions(app, &o, false, false);
+  app.add_option("--at", at_s, "time T [s] in [0, duration]")->required();
+  app.add_option("--out", out, "FILE.png")->required();
+  app.add_option("--controller", controller, "a registered controller (see hpa --help)");
+  if (const auto code = ParseCommandLine(app, argc, argv)) return *code;
+  if (out.size() < 5 || out.compare(out.size() - 4, 4, ".png") != 0) {
     throw InputError("", "--out",
-                     "the frame is written as PNG: give a FILE.png, got '" + out_name + "'");
+                     "the frame is written as PNG: give a FILE.png, got '" + out + "'");
   }
-  const Params params = LoadParams(a.Get("--params", DefaultParamsPath()));
-  Scenario scenario = LoadScenario(a.positional[0]);
-  ApplyOverrides(a, &scenario);
-  const double at_s = ParseNumber("--at", a.Get("--at"));
-  if (at_s < 0 || at_s > scenario.duration_s) {
+  const Params params = LoadParamsOf(o);
+  Scenario scenario = LoadScenarioOf(o);
+  if (!controller.empty()) {
+    CheckControllerType(controller, "", "--controller");
+    scenario.controller.type = controller;
+  }
+  if (!std::isfinite(at_s) || at_s < 0 || at_s > scenario.duration_s) {
     throw InputError("", "--at", "expected a time in [0, duration] of the scenario");
   }
-  const std::string out = a.Get("--out");
   RunOptions options;
   options.stop_at_s = at_s;
   bool written = false;
@@ -372,12 +355,6 @@ int HpaMain(int argc, char** argv) {
     return argc < 2 ? kExitBadInput : kExitOk;
   }
   const std::string command = argv[1];
-  for (int i = 2; i < argc && command != "golden" && command != "sweep-diff"; ++i) {
-    if (!std::strcmp(argv[i], "--help") || !std::strcmp(argv[i], "-h")) {
-      std::fputs(Usage().c_str(), stdout);
-      return kExitOk;
-    }
-  }
   try {
     if (command == "run") return Run(argc, argv);
     if (command == "compare") return Compare(argc, argv);

@@ -1,6 +1,9 @@
 #include "hpa/scenarios/scenario.h"
 
 #include <cctype>
+#include <cmath>
+#include <cstdlib>
+#include <sstream>
 
 #include "hpa/controller/controller_registry.h"
 #include "hpa/estimator/estimator_registry.h"
@@ -79,6 +82,77 @@ ReferenceSpec ParseReference(const YamlMap& r) {
   return ref;
 }
 
+bool IsNumber(const std::string& s, double* v = nullptr) {
+  char* end = nullptr;
+  const double d = std::strtod(s.c_str(), &end);
+  if (s.empty() || *end != '\0' || !std::isfinite(d)) return false;
+  if (v) *v = d;
+  return true;
+}
+
+// The YAML text of a set value ("0.5", "[0, 0, 1]", "hpa_mpc") as a node; malformed YAML is bad
+// input naming where the value came from and its key.
+YAML::Node ParseValue(const std::string& value, const std::string& path, const std::string& file) {
+  try {
+    return YAML::Load(value);
+  } catch (const YAML::Exception& e) {
+    throw InputError(file, path, "malformed value '" + value + "': " + e.msg);
+  }
+}
+
+// Sets a dotted path in a YAML tree to a value; throws InputError if the path does not exist
+// (maps may gain a missing last key; list indices must exist).
+void SetDottedPath(YAML::Node root, const std::string& path, const std::string& value,
+                   const std::string& file) {
+  std::vector<std::string> parts;
+  std::stringstream ss(path);
+  for (std::string p; std::getline(ss, p, '.');) parts.push_back(p);
+  if (parts.empty()) throw InputError(file, path, "empty key path");
+  // walk with node handles; yaml-cpp nodes are references into the tree
+  std::vector<YAML::Node> chain{root};
+  std::string walked;
+  for (size_t i = 0; i + 1 < parts.size(); ++i) {
+    YAML::Node cur = chain.back();
+    walked += (walked.empty() ? "" : ".") + parts[i];
+    YAML::Node next;
+    if (cur.IsSequence()) {
+      double idx;
+      if (!IsNumber(parts[i], &idx) || idx < 0 || idx >= cur.size() || idx != std::floor(idx)) {
+        throw InputError(file, path,
+                         "'" + walked + "' is not an index of the list (size " +
+                             std::to_string(cur.size()) + ")");
+      }
+      next = cur[static_cast<size_t>(idx)];
+    } else if (cur.IsMap()) {
+      if (!cur[parts[i]]) {
+        if (IsNumber(parts[i + 1])) {
+          throw InputError(file, path,
+                           "'" + walked + "' is not in the base scenario, so '" + parts[i + 1] +
+                               "' is not an index of a list");
+        }
+        cur[parts[i]] = YAML::Node(YAML::NodeType::Map);
+      }
+      next = cur[parts[i]];
+    } else {
+      throw InputError(file, path, "'" + walked + "' is not a map or a list in the base scenario");
+    }
+    chain.push_back(next);
+  }
+  YAML::Node parent = chain.back();
+  const std::string& last = parts.back();
+  if (parent.IsSequence()) {
+    double idx;
+    if (!IsNumber(last, &idx) || idx < 0 || idx >= parent.size()) {
+      throw InputError(file, path, "'" + last + "' is not an index of the list");
+    }
+    parent[static_cast<size_t>(idx)] = ParseValue(value, path, file);
+  } else if (parent.IsMap() || parent.IsNull()) {
+    parent[last] = ParseValue(value, path, file);
+  } else {
+    throw InputError(file, path, "parent of the last key is a scalar in the base scenario");
+  }
+}
+
 }  // namespace
 
 Scenario ParseScenario(const YamlMap& root) {
@@ -147,7 +221,22 @@ void CheckControllerType(const std::string& type, const std::string& file, const
   throw InputError(file, key, "unknown controller '" + type + "', expected one of: " + names);
 }
 
-Scenario LoadScenario(const std::string& path) { return ParseScenario(YamlMap::LoadFile(path)); }
+Scenario LoadScenario(const std::string& path, const std::vector<ScenarioSet>& sets,
+                      const std::string& origin) {
+  if (sets.empty()) return ParseScenario(YamlMap::LoadFile(path));
+  YAML::Node root = LoadYamlFile(path);
+  if (!root.IsMap()) throw InputError(path, "", "expected a YAML map at the top level");
+  for (const ScenarioSet& set : sets) SetDottedPath(root, set.first, set.second, origin);
+  return ParseScenario(YamlMap(root, path, ""));
+}
+
+ScenarioSet ParseSetArgument(const std::string& text) {
+  const size_t eq = text.find('=');
+  if (eq == std::string::npos || eq == 0) {
+    throw InputError("", "--set", "expected PATH=VALUE, got '" + text + "'");
+  }
+  return {text.substr(0, eq), text.substr(eq + 1)};
+}
 
 std::shared_ptr<Reference> MakeReference(const Scenario& scenario, const Params& params) {
   const ReferenceSpec& r = scenario.reference;

@@ -1,6 +1,5 @@
 #include "hpa/scenarios/sweep_diff.h"
 
-#include <CLI/CLI.hpp>
 #include <algorithm>
 #include <cmath>
 #include <fstream>
@@ -18,6 +17,7 @@
 #include "hpa/models/input_error.h"
 #include "hpa/scenarios/metrics.h"
 #include "hpa/scenarios/plot_canvas.h"
+#include "scenarios/src/cli_parse.h"
 
 namespace hpa {
 namespace {
@@ -420,13 +420,7 @@ int SweepDiffMain(int argc, char** argv) {
   app.add_option("--a-where", options.a_where,
                  "KEY=VALUE: only A's runs with this varied value (e.g. controller.type=hpa_mpc)");
   app.add_option("--b-where", options.b_where, "KEY=VALUE: only B's runs with this value");
-  try {
-    app.parse(argc - 1, argv + 1);
-  } catch (const CLI::CallForHelp& e) {
-    return app.exit(e);
-  } catch (const CLI::ParseError& e) {
-    throw InputError("hpa sweep-diff", "", e.what());
-  }
+  if (const auto code = ParseCommandLine(app, argc, argv)) return *code;
   const SweepDiff diff = CompareSweeps(options);
   WriteOutputs(diff, options);
   std::cout << diff.runs_paired << " paired runs";

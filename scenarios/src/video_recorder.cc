@@ -72,6 +72,8 @@ void VideoRecorder::AddFrame(const cv::Mat& chase_bgr, const cv::Mat& onboard_bg
 
 int VideoRecorder::Finish() {
   writer_.release();
+  // a slack-events video of a run without slack would be an empty file: write nothing
+  if (slack_events_only_ && frames_written_ == 0) std::remove(path_.c_str());
   return frames_written_;
 }
 

@@ -32,16 +32,16 @@ expect_exit 2 "range.yaml: key 'world.payload_mass'.*out of range" run "$out/ran
 printf 'name: t\nduration: 1.0\nevents:\n  - {at: 0.5, type: impulse, impulse: up}\n' > "$out/type.yaml"
 expect_exit 2 "type.yaml: key 'events.0.impulse': expected a list of 3 numbers" run "$out/type.yaml" --out "$out/x"
 expect_exit 2 "key '--controller'.*hpa_mpc" run "$base" --controller pid --out "$out/x"
-expect_exit 2 "key '--camera'" run "$base" --camera lidar --out "$out/x"
-expect_exit 2 "key '--frobnicate'.*unknown option" run "$base" --frobnicate
-expect_exit 2 "key '--seed'.*4294967295" run "$base" --seed 1e30 --out "$out/x"
+expect_exit 2 "hpa run: --camera: lidar not in" run "$base" --camera lidar --out "$out/x"
+expect_exit 2 "hpa run: .*not expected: --frobnicate" run "$base" --frobnicate
+expect_exit 2 "hpa run: --seed: .*4294967295" run "$base" --seed 1e30 --out "$out/x"
 expect_exit 2 "key 'estimation.camera_latency'.*out of range" run "$base" --set estimation.camera_latency=0.8 --out "$out/x"
 expect_exit 2 "key 'events.4.at'.*not an index" run "$base" --set events.4.at=1 --out "$out/x"
 expect_exit 2 "unknown command" fly "$base"
 printf 'gravity_mps2: 9.81\n' > "$out/params.yaml"
 expect_exit 2 "params.yaml: key 'quadrotor': missing" run "$base" --params "$out/params.yaml" --out "$out/x"
 expect_exit 0 "hpa run SCENARIO.yaml" --help
-expect_exit 0 "hpa sweep SWEEP.yaml" sweep --help
+expect_exit 0 "hpa sweep \\[OPTIONS\\] SWEEP.yaml" sweep --help
 
 echo "== exit 0 when every bound holds, 1 when one fails (named)"
 expect_exit 0 "wrote" run "$base" --out "$out/ok"
@@ -118,6 +118,39 @@ expect_exit 2 "not a readable file" merge "$out/bad_shard" --out "$out/bad_merge
 expect_exit 2 "controllers" compare "$scen/hover.yaml" --out "$out/cmp" --controllers ,,
 expect_exit 2 "unknown controller 'pid'" compare "$scen/hover.yaml" --out "$out/cmp2" --controllers geometric,pid
 [ -e "$out/cmp2/geometric" ] && fail "compare ran geometric before refusing pid"
+# a directory given as a file, malformed values, complex keys: bad input naming file and key
+expect_exit 2 "not a regular file" run "$out" --out "$out/x"
+expect_exit 2 "not a regular file" run "$base" --params "$out" --out "$out/x"
+expect_exit 2 "not a regular file" sweep "$out" --out "$out/dir_sweep"
+expect_exit 2 "--set: key 'duration': malformed value" run "$base" --set 'duration=[1' --out "$out/x"
+expect_exit 2 "base.yaml: key 'duration': expected a number" run "$base" --set 'duration={a: 1}' --out "$out/x"
+printf '? [a, b]\n: 1\nname: t\nduration: 1.0\n' > "$out/complex_key.yaml"
+expect_exit 2 "complex_key.yaml.*plain name" run "$out/complex_key.yaml" --out "$out/x"
+printf 'base: %s\nruns: 2\nvary:\n  duration: {list: [1, [2]]}\n' "$base" > "$out/list_sweep.yaml"
+expect_exit 2 "list_sweep.yaml: key 'vary.duration.list': expected a list of scalars" \
+  sweep "$out/list_sweep.yaml" --out "$out/list_sweep"
+# every draw is validated before the first run, not only the first: a quarter of these
+# durations are past the 3600 s limit
+printf 'base: %s\nruns: 20\nvary:\n  duration: {uniform: [1, 4800]}\n' "$base" > "$out/draw_sweep.yaml"
+expect_exit 2 "draw_sweep.yaml: key 'vary': run [0-9]+ \\(duration=[0-9.e+]+\\) is not a valid scenario" \
+  sweep "$out/draw_sweep.yaml" --out "$out/draw_sweep"
+[ -e "$out/draw_sweep/runs.jsonl" ] && fail "an invalid sweep started running"
+# --retry-errors runs the recorded errors again (e.g. a run killed from outside)
+printf 'base: %s\nruns: 2\nvary:\n  duration: {uniform: [0.3, 0.5]}\n' "$base" > "$out/retry_sweep.yaml"
+"$hpa" sweep "$out/retry_sweep.yaml" --out "$out/retry" --jobs 1 > /dev/null 2>&1 || fail "retry sweep"
+python3 - "$out/retry/runs.jsonl" <<'PY'
+import json, sys
+lines = [json.loads(l) for l in open(sys.argv[1])]
+lines[0].update(status="error", error="worker killed by signal Killed", metrics=None)
+open(sys.argv[1], "w").write("".join(json.dumps(l) + "\n" for l in lines))
+PY
+expect_exit 2 "retry-errors.*only with --resume" sweep "$out/retry_sweep.yaml" --out "$out/retry" --retry-errors
+expect_exit 0 "1 error record dropped" sweep "$out/retry_sweep.yaml" --out "$out/retry" --resume --retry-errors
+python3 -c 'import json, sys; r = [json.loads(l) for l in open(sys.argv[1])]; assert sorted(x["run"] for x in r) == [0, 1] and all(x["status"] == "ok" for x in r), r' \
+  "$out/retry/runs.jsonl" || fail "--retry-errors: runs.jsonl does not hold both runs, ok, once each"
+# a slack-events video of a run without slack: nothing written, and said
+expect_exit 0 "no slack event in this run: no video written" run "$base" --video-slack-events --out "$out/novideo" --quiet
+[ -e "$out/novideo/slack_events.mp4" ] && fail "an empty slack-events video was written"
 
 # SIGTERM mid-run: the metrics and log so far are written, and the run says it was stopped
 "$hpa" run "$scen/hover.yaml" --set duration=3000 --out "$out/sigterm" --quiet > /dev/null 2>&1 &

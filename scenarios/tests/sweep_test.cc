@@ -2,12 +2,14 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <fstream>
 #include <map>
 #include <set>
 
 #include "hpa/models/input_error.h"
 #include "models/tests/temp_dir.h"
+#include "scenarios/src/sweep/sweep_internal.h"
 
 namespace hpa {
 namespace {
@@ -101,16 +103,62 @@ TEST(SweepTest, SeedsAreStable) {
 
 TEST(SweepTest, ShardsPartitionTheRuns) {
   const auto runs = ExpandSweep(Spec("  controller.type: {grid: [hpa_mpc, nonhybrid_mpc]}\n", 13));
-  for (int n : {1, 2, 3, 7}) {
+  for (int n : {1, 2, 3, 7, 40}) {
     std::map<int, int> seen;
     for (int k = 1; k <= n; ++k) {
-      for (const auto& r : runs) {
-        if (r.index % n == k - 1) seen[r.index]++;
-      }
+      for (const auto& r : SelectShard(runs, k, n)) seen[r.index]++;
     }
-    EXPECT_EQ(seen.size(), runs.size());
+    EXPECT_EQ(seen.size(), runs.size()) << n << " shards";
     for (const auto& [index, count] : seen) EXPECT_EQ(count, 1) << index;
   }
+  // shard sizes differ by at most one run (a job array's tasks take about as long)
+  EXPECT_EQ(SelectShard(runs, 1, 3).size(), 9u);
+  EXPECT_EQ(SelectShard(runs, 3, 3).size(), 8u);
+}
+
+TEST(SweepTest, EveryDrawIsValidatedNotOnlyTheFirst) {
+  // payload_mass must be > 0: with 30 draws from [-1, 1] some are negative whatever the first
+  try {
+    Spec("  world.payload_mass: {uniform: [-1.0, 1.0]}\n", 30);
+    ADD_FAILURE() << "a sweep with invalid draws was accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("is not a valid scenario"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("world.payload_mass="), std::string::npos) << e.what();
+  }
+  EXPECT_NO_THROW(Spec("  world.payload_mass: {uniform: [0.1, 1.0]}\n", 30));
+}
+
+TEST(SweepTest, WilsonIntervalMatchesReferenceValues) {
+  // reference values from the closed form (Wilson 1927, z = 1.96), e.g. statsmodels'
+  // proportion_confint(k, n, method="wilson"): 0/10 -> [0, 0.2775], 1/6 -> [0.0301, 0.5635],
+  // 5/10 -> [0.2366, 0.7634], 20/20 -> [0.8389, 1]
+  const auto near = [](std::pair<double, double> got, double lo, double hi) {
+    EXPECT_NEAR(got.first, lo, 5e-4);
+    EXPECT_NEAR(got.second, hi, 5e-4);
+  };
+  near(sweep::Wilson(0, 10), 0.0, 0.2775);
+  near(sweep::Wilson(1, 6), 0.0301, 0.5635);
+  near(sweep::Wilson(5, 10), 0.2366, 0.7634);
+  near(sweep::Wilson(20, 20), 0.8389, 1.0);
+  near(sweep::Wilson(0, 0), 0.0, 1.0);  // no run: no information
+}
+
+TEST(SweepTest, BinsAreDistinctValuesOrSixEqualBins) {
+  const auto few = sweep::MakeBins({0.3, 0.1, 0.3, 0.2});
+  ASSERT_EQ(few.size(), 3u);
+  EXPECT_EQ(few[0], std::make_pair(0.1, 0.1));
+  EXPECT_EQ(sweep::BinOf(few, 0.2), 1);
+  std::vector<double> many;
+  for (int i = 0; i <= 12; ++i) many.push_back(1.0 + 0.5 * i);  // 1 .. 7
+  const auto six = sweep::MakeBins(many);
+  ASSERT_EQ(six.size(), 6u);
+  EXPECT_DOUBLE_EQ(six.front().first, 1.0);
+  EXPECT_DOUBLE_EQ(six.back().second, 7.0);
+  EXPECT_EQ(sweep::BinOf(six, 1.0), 0);
+  EXPECT_EQ(sweep::BinOf(six, 2.0), 0);  // a shared edge goes to the lower bin
+  EXPECT_EQ(sweep::BinOf(six, 2.01), 1);
+  EXPECT_EQ(sweep::BinOf(six, 7.0), 5);
+  EXPECT_EQ(sweep::BinOf(six, 99.0), 5);
 }
 
 TEST(SweepTest, EveryShippedSweepLoadsAndExpands) {

@@ -6,6 +6,7 @@
 #include <map>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "hpa/controller/controller.h"
@@ -66,8 +67,18 @@ std::string EstimatorOf(const Scenario& scenario);
 /// registered names.
 void CheckControllerType(const std::string& type, const std::string& file, const std::string& key);
 
-/// Loads and validates a scenario file; throws InputError (file, key path, expectation).
-Scenario LoadScenario(const std::string& path);
+/// One change to a scenario file before it is validated: a dotted key path (e.g.
+/// events.1.impulse.2) and the value's YAML text (e.g. 0.5, [0, 0, 1], hpa_mpc).
+using ScenarioSet = std::pair<std::string, std::string>;
+
+/// Loads and validates a scenario file with `sets` applied in order (the `--set` of the CLI and
+/// a sweep run's drawn values); throws InputError naming the file, or `origin` and the key for a
+/// bad set.
+Scenario LoadScenario(const std::string& path, const std::vector<ScenarioSet>& sets = {},
+                      const std::string& origin = "--set");
+
+/// Splits a `--set PATH=VALUE` argument; throws InputError if it has no PATH= part.
+ScenarioSet ParseSetArgument(const std::string& text);
 
 /// Validates an already parsed YAML node as a scenario (used by sweeps after applying `vary`).
 Scenario ParseScenario(const class YamlMap& root);

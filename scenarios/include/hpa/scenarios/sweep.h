@@ -2,8 +2,6 @@
 // Monte Carlo sweeps (DESIGN.md section 7): expansion of `vary` into runs, parallel worker
 // processes with crash isolation, JSON-lines results, shards, resume, merge and summaries.
 
-#include <yaml-cpp/yaml.h>
-
 #include <string>
 #include <vector>
 
@@ -36,16 +34,16 @@ struct SweepRun {
   std::vector<std::pair<std::string, std::string>> values;  // path -> YAML scalar text
 };
 
-/// Loads and validates a sweep file (paths are checked against the base scenario).
+/// Loads and validates a sweep file: every expanded run must be a valid scenario (each drawn
+/// value within its key's range), else InputError naming the run and its values.
 SweepSpec LoadSweep(const std::string& path);
 
 /// Expands the sweep into its runs (deterministic in the sweep seed).
 std::vector<SweepRun> ExpandSweep(const SweepSpec& spec);
 
-/// Sets a dotted path in a YAML tree to a scalar; throws InputError if the path does not exist
-/// (maps may gain a missing last key; list indices must exist).
-void SetDottedPath(YAML::Node root, const std::string& path, const std::string& value,
-                   const std::string& file);
+/// The runs of shard K of N (K = 1..N): every N-th run, starting at index K - 1; the N shards
+/// partition the runs.
+std::vector<SweepRun> SelectShard(const std::vector<SweepRun>& runs, int shard_k, int shard_n);
 
 /// `hpa sweep` entry point; returns the exit code.
 int SweepMain(int argc, char** argv);

@@ -32,7 +32,8 @@ class VideoRecorder {
   /// Adds one frame (chase view kWidthPx x kHeightPx, onboard frame any size, BGR).
   void AddFrame(const cv::Mat& chase_bgr, const cv::Mat& onboard_bgr, const Hud& hud);
 
-  /// Flushes and closes; returns the number of frames written.
+  /// Flushes and closes; returns the number of frames written (a slack-events video with no
+  /// frame is removed rather than left empty).
   int Finish();
 
  private:

@@ -12,6 +12,10 @@
 
 namespace hpa {
 
+/// Parses a YAML file; throws InputError naming the file if it is missing, not a regular file
+/// (a directory) or malformed.
+YAML::Node LoadYamlFile(const std::string& file);
+
 /// A view of one YAML map in one file, at a dotted key path; throws InputError on bad input.
 class YamlMap {
  public:

@@ -1,0 +1,26 @@
+#pragma once
+// One argument parser for every `hpa` command (CLI11): help and parse errors are handled alike.
+
+#include <CLI/CLI.hpp>
+#include <optional>
+#include <string>
+
+#include "hpa/models/input_error.h"
+
+namespace hpa {
+
+/// Parses argv[2..] (argv[1] is the command) into `app`. Returns the exit code to return at
+/// once for --help (0), nothing when the command should run; a parse error (an unknown option,
+/// a missing or malformed value) throws InputError naming the command, so it exits 2.
+inline std::optional<int> ParseCommandLine(CLI::App& app, int argc, char** argv) {
+  try {
+    app.parse(argc - 1, argv + 1);
+  } catch (const CLI::CallForHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::ParseError& e) {
+    throw InputError(app.get_name(), "", e.what());
+  }
+  return std::nullopt;
+}
+
+}  // namespace hpa

@@ -1,0 +1,183 @@
+// `hpa sweep` and `hpa merge`: argument parsing, resume and shards, progress, the summary.
+
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <cstring>
+#include <fstream>
+#include <map>
+#include <set>
+#include <thread>
+
+#include "hpa/models/input_error.h"
+#include "hpa/models/params.h"
+#include "hpa/scenarios/runner.h"
+#include "scenarios/src/cli_parse.h"
+#include "scenarios/src/sweep/sweep_internal.h"
+
+namespace hpa {
+
+using sweep::Record;
+
+int SweepMain(int argc, char** argv) {
+  std::string sweep_file, out_dir, shard = "1/1";
+  int jobs = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  bool resume = false, retry_errors = false;
+  CLI::App app{
+      "Runs a Monte Carlo sweep: one JSON line per run in DIR/runs.jsonl, then DIR/summary.md, "
+      "summary.json and crash_rate.png.",
+      "hpa sweep"};
+  app.add_option("SWEEP.yaml", sweep_file, "the sweep file")->required();
+  app.add_option("--out", out_dir, "output folder (locked while the sweep runs)")->required();
+  app.add_option("--jobs", jobs, "worker processes (default: the number of cores)")
+      ->check(CLI::Range(1, 256));
+  app.add_option("--shard", shard, "K/N: run every N-th run, starting at run K-1 (K = 1..N)");
+  app.add_flag("--resume", resume, "continue a sweep in DIR, skipping the runs it recorded");
+  app.add_flag("--retry-errors", retry_errors,
+               "with --resume: run again the runs recorded as errors (killed, timed out)");
+  if (const auto code = ParseCommandLine(app, argc, argv)) return *code;
+  int shard_k = 1, shard_n = 1;
+  char rest = 0;
+  if (std::sscanf(shard.c_str(), "%d/%d%c", &shard_k, &shard_n, &rest) != 2 || shard_n < 1 ||
+      shard_k < 1 || shard_k > shard_n) {
+    throw InputError("", "--shard", "expected K/N with 1 <= K <= N, got '" + shard + "'");
+  }
+  if (retry_errors && !resume) {
+    throw InputError("", "--retry-errors", "only with --resume (it re-runs recorded errors)");
+  }
+
+  const SweepSpec spec = LoadSweep(sweep_file);
+  const Params params = LoadParams(DefaultParamsPath());
+  const std::vector<SweepRun> all_runs = ExpandSweep(spec);
+  std::vector<SweepRun> runs = SelectShard(all_runs, shard_k, shard_n);
+  MakeOutputDir(out_dir);
+  const std::string jsonl = out_dir + "/runs.jsonl";
+  sweep::LockOutputDir(out_dir);
+  sweep::DropTornLastLine(jsonl);
+  if (retry_errors) {
+    const int dropped = sweep::DropErrorRecords(jsonl);
+    std::printf("--retry-errors: %d error record%s dropped from %s; those runs run again\n",
+                dropped, dropped == 1 ? "" : "s", jsonl.c_str());
+  }
+
+  // resume: skip what is recorded; refuse to mix sweeps in one folder
+  std::set<int> done;
+  for (const Record& r : sweep::ReadRecords(jsonl)) {
+    if (r.sweep_id != spec.sweep_id) {
+      throw InputError(
+          jsonl, "",
+          "holds runs of a different sweep (sweep_id " + r.sweep_id + "); use another --out");
+    }
+    done.insert(r.run);
+  }
+  if (!done.empty() && !resume) {
+    throw InputError(jsonl, "",
+                     "already holds " + std::to_string(done.size()) +
+                         " runs; pass --resume to continue or use another --out");
+  }
+  runs.erase(std::remove_if(runs.begin(), runs.end(),
+                            [&](const SweepRun& r) { return done.count(r.index) > 0; }),
+             runs.end());
+  const std::string tmp_dir = out_dir + "/.running";
+  MakeOutputDir(tmp_dir);
+  FILE* out = std::fopen(jsonl.c_str(), "a");
+  if (!out) throw InputError(jsonl, "", "cannot append to the results file");
+
+  std::printf("sweep %s: %zu runs in all, shard %d/%d: %zu to run (%zu already done), %d jobs\n",
+              spec.file.c_str(), all_runs.size(), shard_k, shard_n, runs.size(), done.size(), jobs);
+  std::fflush(stdout);
+  const bool tty = isatty(STDOUT_FILENO);
+  size_t finished = 0;
+  int failures = 0;
+  using Clock = std::chrono::steady_clock;
+  const auto start = Clock::now();
+  auto record = [&](const std::string& line, bool failed, const SweepRun& run) {
+    if (std::fprintf(out, "%s\n", line.c_str()) < 0 || std::fflush(out) != 0) {
+      throw std::runtime_error("cannot append to " + jsonl + ": " + std::strerror(errno));
+    }
+    fsync(fileno(out));
+    ++finished;
+    failures += failed ? 1 : 0;
+    const double elapsed = std::chrono::duration<double>(Clock::now() - start).count();
+    const double eta = elapsed / finished * (runs.size() - finished);
+    if (tty) {
+      const int width = 30,
+                filled = static_cast<int>(width * finished / std::max<size_t>(1, runs.size()));
+      std::printf("\r[%s%s] %zu/%zu  failures %d  ETA %.0f s   ", std::string(filled, '#').c_str(),
+                  std::string(width - filled, '.').c_str(), finished, runs.size(), failures, eta);
+    } else {
+      std::printf("run %d done (%zu/%zu, failures %d, ETA %.0f s)\n", run.index, finished,
+                  runs.size(), failures, eta);
+    }
+    std::fflush(stdout);
+  };
+  sweep::RunPool(spec, runs, params, jobs, tmp_dir, record);
+  std::fclose(out);
+  rmdir(tmp_dir.c_str());
+  if (tty) std::printf("\n");
+  const double wall_s = std::chrono::duration<double>(Clock::now() - start).count();
+  std::printf(
+      "sweep done: %zu runs, %d failures in %.1f s wall (%.1f runs per minute); "
+      "results in %s\n",
+      finished, failures, wall_s, finished * 60.0 / std::max(wall_s, 1e-9), jsonl.c_str());
+  if (shard_n == 1) {
+    sweep::WriteSummary(sweep::ReadRecords(jsonl), out_dir);
+    std::printf("summary: %s/summary.md, %s/summary.json, %s/crash_rate.png\n", out_dir.c_str(),
+                out_dir.c_str(), out_dir.c_str());
+  } else {
+    std::printf("shard %d/%d done; join the shards with: hpa merge DIR... --out DIR\n", shard_k,
+                shard_n);
+  }
+  return 0;
+}
+
+int MergeMain(int argc, char** argv) {
+  std::vector<std::string> dirs;
+  std::string out_dir;
+  CLI::App app{"Joins sweep shards (or resumed parts) into one runs.jsonl and its summary.",
+               "hpa merge"};
+  app.add_option("DIR", dirs, "sweep output folders, each with a runs.jsonl")->required();
+  app.add_option("--out", out_dir, "output folder")->required();
+  if (const auto code = ParseCommandLine(app, argc, argv)) return *code;
+  std::map<int, Record> by_run;
+  std::string sweep_id;
+  for (const std::string& d : dirs) {
+    const std::string path = d + "/runs.jsonl";
+    struct stat st;
+    if (stat(path.c_str(), &st) != 0) throw InputError(path, "", "no runs.jsonl in this folder");
+    if (!S_ISREG(st.st_mode) || access(path.c_str(), R_OK) != 0) {
+      throw InputError(path, "", "not a readable file");
+    }
+    for (Record& r : sweep::ReadRecords(path)) {
+      if (sweep_id.empty()) sweep_id = r.sweep_id;
+      if (r.sweep_id != sweep_id) {
+        throw InputError(path, "sweep_id",
+                         "mixes sweeps (" + r.sweep_id + " vs " + sweep_id +
+                             "); merge only shards of one sweep");
+      }
+      by_run[r.run] = r;  // a run recorded twice (resume after a torn write) counts once
+    }
+  }
+  MakeOutputDir(out_dir);
+  std::vector<Record> records;
+  std::string merged;
+  for (auto& [index, r] : by_run) {
+    merged += r.line + "\n";
+    records.push_back(r);
+  }
+  // replaced in one rename: a folder that is also one of the inputs is read before it is written
+  sweep::WriteFileChecked(out_dir + "/runs.jsonl.tmp", merged);
+  if (std::rename((out_dir + "/runs.jsonl.tmp").c_str(), (out_dir + "/runs.jsonl").c_str()) != 0) {
+    throw std::runtime_error("cannot write " + out_dir + "/runs.jsonl: " + std::strerror(errno));
+  }
+  sweep::WriteSummary(records, out_dir);
+  std::printf(
+      "merged %zu runs from %zu folders into %s (summary.md, summary.json, crash_rate.png)\n",
+      records.size(), dirs.size(), out_dir.c_str());
+  return 0;
+}
+
+}  // namespace hpa

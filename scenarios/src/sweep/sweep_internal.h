@@ -1,0 +1,85 @@
+#pragma once
+// Private pieces of `hpa sweep` and `hpa merge`, shared by the files of scenarios/src/sweep/ and
+// their unit tests: results I/O (runs.jsonl records, the output-folder lock), the worker pool
+// and the summary.
+
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "hpa/models/params.h"
+#include "hpa/scenarios/scenario.h"
+#include "hpa/scenarios/sweep.h"
+
+namespace hpa::sweep {
+
+/// True if `s` is a whole finite number (then stored in `*v`).
+bool IsNumber(const std::string& s, double* v = nullptr);
+
+/// A number with round-trip precision (drawn values are replayed with --set).
+std::string FormatNumber(double v);
+
+/// Builds the scenario of one run: the base file with the run's values set, validated.
+Scenario BuildScenario(const SweepSpec& spec, const SweepRun& run);
+
+/// One parsed line of runs.jsonl.
+struct Record {
+  int run = -1;
+  unsigned long seed = 0;
+  std::string sweep_id, sweep_file, base;
+  std::vector<std::pair<std::string, std::string>> values;
+  std::string controller;
+  bool error = false;
+  std::string error_text;
+  bool crashed = false;
+  bool expect_failed = false;  // any `expect` bound of the scenario failed (crash included)
+  double payload_rmse_norm_m = 0, quad_dev_max_m = 0, solve_median_ms = 0, slack_time_s = 0;
+  double payload_in_fov = 1;
+  std::string line;  // the raw JSON line
+};
+
+/// Reads runs.jsonl; an unreadable line is skipped with a warning naming it.
+std::vector<Record> ReadRecords(const std::string& path);
+
+/// One JSON line of runs.jsonl: the run's identity and values, then its outcome. `metrics_json`
+/// empty means none; `error` empty means the run finished.
+std::string RecordLine(const SweepSpec& spec, const SweepRun& run, const std::string& controller,
+                       const std::string& error, const std::string& metrics_json);
+
+/// Takes an exclusive lock on an output folder for the life of this process; a second sweep on
+/// the folder is refused (InputError naming the holder's pid).
+void LockOutputDir(const std::string& dir);
+
+/// Cuts an unterminated last line off runs.jsonl (a sweep killed mid-write) and says so.
+void DropTornLastLine(const std::string& jsonl);
+
+/// Rewrites runs.jsonl without its error records (so those runs run again); returns how many
+/// were dropped.
+int DropErrorRecords(const std::string& jsonl);
+
+/// Writes a file whole and checks it reached the disk (a full disk is an error, not silence).
+void WriteFileChecked(const std::string& path, const std::string& text);
+
+/// Wilson score interval (95 %) for k successes in n trials; [0, 1] for n = 0.
+std::pair<double, double> Wilson(int k, int n);
+
+/// Bins over a varied quantity: one per distinct value if there are at most 8, else 6 equal
+/// bins over [min, max]; each bin is [lo, hi].
+std::vector<std::pair<double, double>> MakeBins(const std::vector<double>& values);
+
+/// Index of the bin holding `v` (the last bin for a value past every bin).
+int BinOf(const std::vector<std::pair<double, double>>& bins, double v);
+
+/// Writes summary.json, summary.md and crash_rate.png from the records of one sweep.
+void WriteSummary(const std::vector<Record>& records, const std::string& dir);
+
+/// Runs `runs` in up to `jobs` forked worker processes (crash isolation, a time limit per run);
+/// `record` gets each run's JSON line as it finishes, with whether it failed.
+void RunPool(
+    const SweepSpec& spec, const std::vector<SweepRun>& runs, const Params& params, int jobs,
+    const std::string& tmp_dir,
+    const std::function<void(const std::string& line, bool failed, const SweepRun&)>& record);
+
+}  // namespace hpa::sweep

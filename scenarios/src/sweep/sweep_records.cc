@@ -1,0 +1,168 @@
+// Sweep results I/O: runs.jsonl records (nlohmann-json), the output-folder lock, repairs.
+
+#include <fcntl.h>
+#include <sys/file.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <fstream>
+#include <nlohmann/json.hpp>
+
+#include "hpa/models/input_error.h"
+#include "scenarios/src/sweep/sweep_internal.h"
+
+namespace hpa::sweep {
+
+using Json = nlohmann::ordered_json;
+
+// Two sweeps writing one runs.jsonl would record every run twice: the lock is held (the file
+// descriptor kept open) until the process exits.
+void LockOutputDir(const std::string& dir) {
+  const std::string path = dir + "/.lock";
+  const int fd = open(path.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+  if (fd < 0) throw InputError(path, "--out", std::string("cannot open: ") + std::strerror(errno));
+  if (flock(fd, LOCK_EX | LOCK_NB) != 0) {
+    char holder[32] = {0};
+    const ssize_t n = pread(fd, holder, sizeof(holder) - 1, 0);
+    close(fd);
+    throw InputError(dir, "--out",
+                     "another hpa sweep (pid " + std::string(n > 0 ? holder : "?") +
+                         ") is writing to this folder; wait for it or use another --out");
+  }
+  const std::string pid = std::to_string(getpid());
+  if (ftruncate(fd, 0) != 0 || pwrite(fd, pid.c_str(), pid.size(), 0) < 0) {
+    throw InputError(path, "--out", std::string("cannot write: ") + std::strerror(errno));
+  }
+  // kept open (and locked) until the process exits
+}
+
+// A sweep killed mid-write leaves an unterminated last line; appending after it would glue the
+// next record onto it. Cut it off (its run has no record and runs again) and say so.
+void DropTornLastLine(const std::string& jsonl) {
+  std::ifstream in(jsonl, std::ios::binary);
+  if (!in) return;
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  if (text.empty() || text.back() == '\n') return;
+  const size_t keep = text.rfind('\n') == std::string::npos ? 0 : text.rfind('\n') + 1;
+  if (truncate(jsonl.c_str(), static_cast<off_t>(keep)) != 0) {
+    throw InputError(jsonl, "", std::string("cannot repair: ") + std::strerror(errno));
+  }
+  std::fprintf(stderr,
+               "hpa: %s ended in an unterminated line (a sweep killed mid-write): dropped %zu "
+               "bytes; that run will be run again\n",
+               jsonl.c_str(), text.size() - keep);
+}
+
+// Writes a file whole and checks it reached the disk (a full disk is an error, not silence).
+void WriteFileChecked(const std::string& path, const std::string& text) {
+  std::ofstream out(path, std::ios::trunc);
+  out << text;
+  out.flush();
+  if (!out) throw std::runtime_error("cannot write " + path + ": " + std::strerror(errno));
+}
+
+int DropErrorRecords(const std::string& jsonl) {
+  std::ifstream in(jsonl);
+  if (!in) return 0;
+  std::string kept, line;
+  int dropped = 0;
+  while (std::getline(in, line)) {
+    if (line.empty()) continue;
+    bool error = false;
+    try {
+      error = Json::parse(line).at("status").get<std::string>() != "ok";
+    } catch (const Json::exception&) {
+      error = true;  // an unreadable record is no result either
+    }
+    if (error) {
+      ++dropped;
+    } else {
+      kept += line + "\n";
+    }
+  }
+  if (dropped == 0) return 0;
+  // replaced in one rename: a kill during the rewrite leaves the old file whole
+  WriteFileChecked(jsonl + ".tmp", kept);
+  if (std::rename((jsonl + ".tmp").c_str(), jsonl.c_str()) != 0) {
+    throw std::runtime_error("cannot replace " + jsonl + ": " + std::strerror(errno));
+  }
+  return dropped;
+}
+
+std::vector<Record> ReadRecords(const std::string& path) {
+  std::vector<Record> out;
+  std::ifstream in(path);
+  std::string line;
+  int line_no = 0;
+  while (std::getline(in, line)) {
+    ++line_no;
+    if (line.empty()) continue;
+    Record r;
+    r.line = line;
+    try {
+      const Json n = Json::parse(line);
+      r.run = n.at("run").get<int>();
+      r.seed = n.at("seed").get<unsigned long>();
+      r.sweep_id = n.at("sweep_id").get<std::string>();
+      r.sweep_file = n.at("sweep").get<std::string>();
+      r.base = n.at("base").get<std::string>();
+      for (const auto& [key, value] : n.at("values").items()) {
+        r.values.emplace_back(key, value.is_string() ? value.get<std::string>() : value.dump());
+      }
+      r.controller = n.at("controller").get<std::string>();
+      r.error = n.at("status").get<std::string>() != "ok";
+      if (r.error) {
+        r.error_text = n.at("error").is_string() ? n.at("error").get<std::string>() : "";
+      } else {
+        const Json& m = n.at("metrics");
+        const auto number = [](const Json& v) {
+          return v.is_number() ? v.get<double>() : std::nan("");
+        };
+        r.crashed = m.at("crashed").get<bool>();
+        r.expect_failed = !m.at("expect").at("passed").get<bool>();
+        const Json& e = m.at("payload_rmse_m");
+        r.payload_rmse_norm_m =
+            std::sqrt(std::pow(number(e.at(0)), 2) + std::pow(number(e.at(1)), 2) +
+                      std::pow(number(e.at(2)), 2));
+        r.quad_dev_max_m = number(m.at("quad_position_deviation_max_m"));
+        r.solve_median_ms = number(m.at("mpc_solve_ms").at("median"));
+        r.slack_time_s = number(m.at("slack_time_s"));
+        r.payload_in_fov = number(m.at("payload_in_fov_fraction"));
+      }
+    } catch (const Json::exception& e) {
+      // a torn last line (the sweep was killed mid-write) is skipped; it will be re-run
+      std::fprintf(stderr, "hpa: warning: %s:%d: unreadable line skipped (%s)\n", path.c_str(),
+                   line_no, e.what());
+      continue;
+    }
+    out.push_back(r);
+  }
+  return out;
+}
+
+std::string RecordLine(const SweepSpec& spec, const SweepRun& run, const std::string& controller,
+                       const std::string& error, const std::string& metrics_json) {
+  Json line;
+  line["sweep_id"] = spec.sweep_id;
+  line["sweep"] = spec.file;
+  line["base"] = spec.base_path;
+  line["run"] = run.index;
+  line["draw"] = run.draw;
+  line["seed"] = run.seed;
+  line["values"] = Json::object();
+  for (const auto& [path, value] : run.values) {
+    double number = 0.0;
+    line["values"][path] = IsNumber(value, &number) ? Json(number) : Json(value);
+  }
+  line["controller"] = controller;
+  line["status"] = error.empty() ? "ok" : "error";
+  line["error"] = error.empty() ? Json() : Json(error);
+  line["metrics"] = metrics_json.empty() ? Json() : Json::parse(metrics_json);
+  // one line, invalid UTF-8 in names or messages replaced rather than thrown on
+  return line.dump(-1, ' ', false, Json::error_handler_t::replace);
+}
+
+}  // namespace hpa::sweep

@@ -1,0 +1,205 @@
+// Sweep files: loading and validating `vary`, expansion into runs, shards.
+
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <fstream>
+#include <iomanip>
+#include <random>
+#include <sstream>
+
+#include "hpa/models/input_error.h"
+#include "hpa/models/yaml_reader.h"
+#include "scenarios/src/sweep/sweep_internal.h"
+
+namespace hpa {
+namespace sweep {
+
+bool IsNumber(const std::string& s, double* v) {
+  char* end = nullptr;
+  const double d = std::strtod(s.c_str(), &end);
+  if (s.empty() || *end != '\0' || !std::isfinite(d)) return false;
+  if (v) *v = d;
+  return true;
+}
+
+std::string FormatNumber(double v) {
+  std::ostringstream out;
+  out << std::setprecision(17) << v;
+  return out.str();
+}
+
+Scenario BuildScenario(const SweepSpec& spec, const SweepRun& run) {
+  Scenario s = LoadScenario(spec.base_path, run.values, spec.file);
+  s.seed = run.seed;
+  return s;
+}
+
+}  // namespace sweep
+
+namespace {
+
+using sweep::BuildScenario;
+using sweep::FormatNumber;
+
+// SplitMix64: derives independent seeds from the sweep seed (stable across platforms).
+uint64_t SplitMix64(uint64_t x) {
+  x += 0x9E3779B97F4A7C15ULL;
+  x = (x ^ (x >> 30)) * 0xBF58476D1CE4E5B9ULL;
+  x = (x ^ (x >> 27)) * 0x94D049BB133111EBULL;
+  return x ^ (x >> 31);
+}
+
+std::string ReadFile(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw InputError(path, "", "cannot open file");
+  return std::string(std::istreambuf_iterator<char>(in), {});
+}
+
+std::string Hex(uint64_t v) {
+  std::ostringstream out;
+  out << std::hex << std::setw(16) << std::setfill('0') << v;
+  return out.str();
+}
+
+// FNV-1a of a text: identifies a sweep (its file and its base scenario's text).
+uint64_t Fnv1a(const std::string& text) {
+  uint64_t h = 1469598103934665603ULL;
+  for (unsigned char c : text) h = (h ^ c) * 1099511628211ULL;
+  return h;
+}
+
+std::string Dirname(const std::string& path) {
+  const size_t slash = path.rfind('/');
+  return slash == std::string::npos ? "." : path.substr(0, slash);
+}
+
+}  // namespace
+
+SweepSpec LoadSweep(const std::string& path) {
+  const YamlMap root = YamlMap::LoadFile(path);
+  SweepSpec s;
+  s.file = path;
+  const std::string base = root.String("base");
+  s.base_path = (!base.empty() && base[0] == '/') ? base : Dirname(path) + "/" + base;
+  s.runs = static_cast<int>(root.Integer("runs", 1, 1000000));
+  s.seed = static_cast<unsigned long>(root.Integer("seed", 0, 4294967295L, 1));
+  s.time_limit_s = root.Number("time_limit", 1.0, 1e6, 600.0);
+  if (root.Has("vary")) {
+    const YamlMap vary = root.Map("vary");
+    const YAML::Node node = root.Node("vary");
+    for (const auto& kv : node) {
+      VarySpec v;
+      v.path = kv.first.as<std::string>();
+      if (v.path == "seed") {
+        vary.Fail("seed",
+                  "the seed cannot be varied: each run's seed is drawn from the sweep's "
+                  "`seed`");
+      }
+      const YamlMap d = vary.Map(v.path);
+      const std::vector<std::string> kinds = {"uniform", "normal", "grid", "list"};
+      int found = 0;
+      for (const auto& k : kinds) found += d.Has(k) ? 1 : 0;
+      if (found != 1) d.Fail("", "expected exactly one of uniform | normal | grid | list");
+      if (d.Has("uniform")) {
+        const Eigen::VectorXd ab = d.Vector("uniform", 2, -1e9, 1e9);
+        if (ab(1) < ab(0)) d.Fail("uniform", "expected [low, high] with low <= high");
+        v.kind = VarySpec::Kind::kUniform, v.a = ab(0), v.b = ab(1);
+      } else if (d.Has("normal")) {
+        const Eigen::VectorXd ab = d.Vector("normal", 2, -1e9, 1e9);
+        if (ab(1) < 0) d.Fail("normal", "expected [mean, sigma] with sigma >= 0");
+        v.kind = VarySpec::Kind::kNormal, v.a = ab(0), v.b = ab(1);
+      } else {
+        const std::string key = d.Has("grid") ? "grid" : "list";
+        v.kind = key == "grid" ? VarySpec::Kind::kGrid : VarySpec::Kind::kList;
+        const YAML::Node list = d.Node(key);
+        if (!list.IsSequence() || list.size() == 0) d.Fail(key, "expected a non-empty list");
+        for (const auto& item : list) {
+          if (!item.IsScalar()) d.Fail(key, "expected a list of scalars");
+          v.values.push_back(item.as<std::string>());
+        }
+      }
+      d.RejectUnknownKeys();
+      s.vary.push_back(v);
+    }
+  }
+  root.RejectUnknownKeys();
+
+  // every expanded run must be a valid scenario before anything runs: each draw of a
+  // distribution, not only its first, is checked against its key's range
+  for (const SweepRun& run : ExpandSweep(s)) {
+    try {
+      BuildScenario(s, run);
+    } catch (const InputError& e) {
+      std::string values;
+      for (const auto& [key, value] : run.values) values += " " + key + "=" + value;
+      throw InputError(path, "vary",
+                       "run " + std::to_string(run.index) + " (" + values.substr(1) +
+                           ") is not a valid scenario: " + e.what());
+    }
+  }
+  s.sweep_id = Hex(Fnv1a(ReadFile(path) + "\n--base--\n" + ReadFile(s.base_path)));
+  return s;
+}
+
+std::vector<SweepRun> ExpandSweep(const SweepSpec& spec) {
+  // grid cells: the cartesian product of every grid entry, in file order
+  std::vector<std::vector<std::pair<std::string, std::string>>> cells{{}};
+  for (const VarySpec& v : spec.vary) {
+    if (v.kind != VarySpec::Kind::kGrid) continue;
+    std::vector<std::vector<std::pair<std::string, std::string>>> next;
+    for (const auto& cell : cells) {
+      for (const auto& value : v.values) {
+        auto c = cell;
+        c.emplace_back(v.path, value);
+        next.push_back(c);
+      }
+    }
+    cells = next;
+  }
+  std::vector<SweepRun> runs;
+  for (int d = 0; d < spec.runs; ++d) {
+    // each draw has its own generator: its values do not depend on the other draws
+    const uint64_t draw_seed = SplitMix64(spec.seed * 1000003ULL + static_cast<uint64_t>(d));
+    std::mt19937_64 rng(draw_seed);
+    std::vector<std::pair<std::string, std::string>> drawn;
+    for (const VarySpec& v : spec.vary) {
+      switch (v.kind) {
+        case VarySpec::Kind::kUniform:
+          drawn.emplace_back(v.path,
+                             FormatNumber(std::uniform_real_distribution<double>(v.a, v.b)(rng)));
+          break;
+        case VarySpec::Kind::kNormal:
+          drawn.emplace_back(
+              v.path,
+              FormatNumber(v.b > 0 ? std::normal_distribution<double>(v.a, v.b)(rng) : v.a));
+          break;
+        case VarySpec::Kind::kList:
+          drawn.emplace_back(v.path, v.values[d % v.values.size()]);
+          break;
+        case VarySpec::Kind::kGrid:
+          break;
+      }
+    }
+    for (size_t g = 0; g < cells.size(); ++g) {
+      SweepRun r;
+      r.index = static_cast<int>(d * cells.size() + g);
+      r.draw = d;
+      r.seed = static_cast<unsigned long>(SplitMix64(draw_seed) & 0xFFFFFFFFULL);
+      r.values = drawn;
+      r.values.insert(r.values.end(), cells[g].begin(), cells[g].end());
+      runs.push_back(r);
+    }
+  }
+  return runs;
+}
+
+std::vector<SweepRun> SelectShard(const std::vector<SweepRun>& runs, int shard_k, int shard_n) {
+  std::vector<SweepRun> out;
+  for (const SweepRun& r : runs) {
+    if (r.index % shard_n == shard_k - 1) out.push_back(r);
+  }
+  return out;
+}
+
+}  // namespace hpa

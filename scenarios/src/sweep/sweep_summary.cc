@@ -1,0 +1,245 @@
+// Sweep summaries: crash rates with Wilson intervals per controller and per bin of the main
+// varied quantity, quantiles of the tracking metrics, the worst runs with replay commands.
+
+#include <algorithm>
+#include <cmath>
+#include <iomanip>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <set>
+#include <sstream>
+
+#include "hpa/scenarios/metrics.h"
+#include "hpa/scenarios/plot_canvas.h"
+#include "scenarios/src/sweep/sweep_internal.h"
+
+namespace hpa::sweep {
+namespace {
+
+using Json = nlohmann::ordered_json;
+
+std::string Fixed(double v, int decimals = 3) {
+  if (!std::isfinite(v)) return "-";
+  std::ostringstream out;
+  out << std::fixed << std::setprecision(decimals) << v;
+  return out.str();
+}
+
+}  // namespace
+
+std::pair<double, double> Wilson(int k, int n) {
+  if (n == 0) return {0.0, 1.0};
+  const double z = 1.959963984540054, p = static_cast<double>(k) / n;
+  const double denom = 1 + z * z / n;
+  const double centre = (p + z * z / (2 * n)) / denom;
+  const double half = z * std::sqrt(p * (1 - p) / n + z * z / (4.0 * n * n)) / denom;
+  return {std::max(0.0, centre - half), std::min(1.0, centre + half)};
+}
+
+std::vector<std::pair<double, double>> MakeBins(const std::vector<double>& values) {
+  const std::set<double> distinct(values.begin(), values.end());
+  std::vector<std::pair<double, double>> bins;
+  if (distinct.size() <= 8) {
+    for (double v : distinct) bins.emplace_back(v, v);
+  } else {
+    const double lo = *distinct.begin(), hi = *distinct.rbegin();
+    for (int i = 0; i < 6; ++i) {
+      bins.emplace_back(lo + (hi - lo) * i / 6.0, lo + (hi - lo) * (i + 1) / 6.0);
+    }
+  }
+  return bins;
+}
+
+int BinOf(const std::vector<std::pair<double, double>>& bins, double v) {
+  for (size_t i = 0; i < bins.size(); ++i) {
+    if (v >= bins[i].first - 1e-12 && v <= bins[i].second + 1e-12) return static_cast<int>(i);
+  }
+  return static_cast<int>(bins.size()) - 1;
+}
+
+void WriteSummary(const std::vector<Record>& records, const std::string& dir) {
+  // the main varied quantity: the first numeric vary path that is not the controller type
+  std::string main_path;
+  for (const Record& r : records) {
+    for (const auto& [path, value] : r.values) {
+      if (path != "controller.type" && IsNumber(value) && main_path.empty()) main_path = path;
+    }
+    if (!main_path.empty()) break;
+  }
+  auto main_value = [&](const Record& r) {
+    for (const auto& [path, value] : r.values) {
+      double v;
+      if (path == main_path && IsNumber(value, &v)) return v;
+    }
+    return 0.0;
+  };
+
+  std::vector<double> main_values;
+  for (const Record& r : records) main_values.push_back(main_value(r));
+  const std::vector<std::pair<double, double>> bins = MakeBins(main_values);
+  auto bin_of = [&](double v) { return BinOf(bins, v); };
+
+  std::set<std::string> controllers;
+  for (const Record& r : records) controllers.insert(r.controller);
+
+  struct Cell {
+    int n = 0, crashes = 0, errors = 0, expect_failures = 0;
+    std::vector<double> rmse, dev, solve;
+  };
+  std::map<std::string, Cell> total;
+  std::map<std::string, std::vector<Cell>> per_bin;
+  for (const auto& c : controllers) per_bin[c].resize(bins.size());
+  for (const Record& r : records) {
+    for (Cell* cell : {&total[r.controller], &per_bin[r.controller][bin_of(main_value(r))]}) {
+      if (r.error) {
+        ++cell->errors;
+        continue;
+      }
+      ++cell->n;
+      if (r.crashed) ++cell->crashes;
+      if (r.expect_failed) ++cell->expect_failures;
+      if (!r.crashed) cell->rmse.push_back(r.payload_rmse_norm_m);
+      cell->dev.push_back(r.quad_dev_max_m);
+      cell->solve.push_back(r.solve_median_ms);
+    }
+  }
+
+  // summary.json (non-finite values, e.g. quantiles of no run, are null)
+  const auto num = [](double v) { return std::isfinite(v) ? Json(v) : Json(); };
+  Json summary;
+  summary["runs"] = records.size();
+  summary["main_varied"] = main_path;
+  summary["controllers"] = Json::object();
+  for (const auto& c : controllers) {
+    const Cell& t = total[c];
+    const auto ci = Wilson(t.crashes, t.n);
+    Json entry = {
+        {"runs", t.n},
+        {"errors", t.errors},
+        {"crashes", t.crashes},
+        {"crash_rate", t.n ? num(static_cast<double>(t.crashes) / t.n) : Json()},
+        {"crash_rate_ci95", {num(ci.first), num(ci.second)}},
+        {"expect_failures", t.expect_failures},
+        {"payload_rmse_norm_m",
+         {{"median", num(Quantile(t.rmse, 0.5))}, {"p90", num(Quantile(t.rmse, 0.9))}}},
+        {"quad_deviation_max_m",
+         {{"median", num(Quantile(t.dev, 0.5))}, {"p90", num(Quantile(t.dev, 0.9))}}},
+        {"mpc_solve_median_ms",
+         {{"median", num(Quantile(t.solve, 0.5))}, {"p99", num(Quantile(t.solve, 0.99))}}},
+        {"bins", Json::array()}};
+    for (size_t b = 0; b < bins.size(); ++b) {
+      const Cell& cell = per_bin[c][b];
+      const auto bci = Wilson(cell.crashes, cell.n);
+      entry["bins"].push_back(
+          {{"lo", num(bins[b].first)},
+           {"hi", num(bins[b].second)},
+           {"runs", cell.n},
+           {"crashes", cell.crashes},
+           {"crash_rate", cell.n ? num(static_cast<double>(cell.crashes) / cell.n) : Json()},
+           {"ci95", {num(bci.first), num(bci.second)}},
+           {"expect_failures", cell.expect_failures}});
+    }
+    summary["controllers"][c] = entry;
+  }
+  WriteFileChecked(dir + "/summary.json", summary.dump(2) + "\n");
+
+  // summary.md
+  std::ostringstream md;
+  md << "# Sweep summary\n\n" << records.size() << " runs";
+  if (!records.empty())
+    md << " of `" << records.front().sweep_file << "` (base `" << records.front().base << "`)";
+  md << ". Crash rates with 95 % Wilson intervals; RMSE is the norm of the per-axis payload RMSE "
+        "over runs that did not crash.\n\n";
+  md << "| controller | runs | errors | crashes | crash rate [95% CI] | expect failures [95% CI] | "
+        "payload RMSE median / p90 [m] | quad deviation median / p90 [m] | solve median [ms] "
+        "|\n|---|---|---|---|---|---|---|---|---|\n";
+  for (const auto& c : controllers) {
+    const Cell& t = total[c];
+    const auto ci = Wilson(t.crashes, t.n);
+    md << "| " << c << " | " << t.n << " | " << t.errors << " | " << t.crashes << " | "
+       << Fixed(t.n ? 1.0 * t.crashes / t.n : 0.0, 3) << " [" << Fixed(ci.first, 3) << ", "
+       << Fixed(ci.second, 3) << "] | " << t.expect_failures << "/" << t.n << " ["
+       << Fixed(Wilson(t.expect_failures, t.n).first, 3) << ", "
+       << Fixed(Wilson(t.expect_failures, t.n).second, 3) << "] | " << Fixed(Quantile(t.rmse, 0.5))
+       << " / " << Fixed(Quantile(t.rmse, 0.9)) << " | " << Fixed(Quantile(t.dev, 0.5)) << " / "
+       << Fixed(Quantile(t.dev, 0.9)) << " | " << Fixed(Quantile(t.solve, 0.5)) << " |\n";
+  }
+  if (!main_path.empty()) {
+    md << "\n## Crash rate (and expect-failure count) against `" << main_path << "`\n\n| bin |";
+    for (const auto& c : controllers) md << " " << c << " |";
+    md << "\n|---|";
+    for (size_t i = 0; i < controllers.size(); ++i) md << "---|";
+    md << "\n";
+    for (size_t b = 0; b < bins.size(); ++b) {
+      md << "| " << Fixed(bins[b].first)
+         << (bins[b].first == bins[b].second ? "" : " - " + Fixed(bins[b].second)) << " |";
+      for (const auto& c : controllers) {
+        const Cell& cell = per_bin[c][b];
+        const auto ci = Wilson(cell.crashes, cell.n);
+        md << " " << cell.crashes << "/" << cell.n << " [" << Fixed(ci.first, 2) << ", "
+           << Fixed(ci.second, 2) << "] (expect failed " << cell.expect_failures << ") |";
+      }
+      md << "\n";
+    }
+  }
+  // worst runs, with the command that replays each exactly
+  std::vector<const Record*> worst;
+  for (const Record& r : records) worst.push_back(&r);
+  std::sort(worst.begin(), worst.end(), [](const Record* a, const Record* b) {
+    if (a->error != b->error) return a->error;
+    if (a->crashed != b->crashed) return a->crashed;
+    return a->quad_dev_max_m > b->quad_dev_max_m;
+  });
+  md << "\n## Worst runs (errors, crashes, then largest quadrotor deviation)\n\n";
+  for (size_t i = 0; i < std::min<size_t>(8, worst.size()); ++i) {
+    const Record& r = *worst[i];
+    md << "- run " << r.run << " (" << r.controller << "): "
+       << (r.error ? "ERROR " + r.error_text
+                   : (r.crashed ? std::string("crashed") : std::string("ok")) +
+                         ", quad deviation " + Fixed(r.quad_dev_max_m) + " m")
+       << "\n  `hpa run " << r.base << " --seed " << r.seed;
+    for (const auto& [path, value] : r.values) md << " --set " << path << "=" << value;
+    md << "`\n";
+  }
+  WriteFileChecked(dir + "/summary.md", md.str());
+
+  // crash rate plot, one line per controller
+  if (!main_path.empty()) {
+    cv::Mat fig = BlankFigure(1000, 600);
+    PlotPanel p(&fig, cv::Rect(0, 0, 1000, 600),
+                "crash rate (thick, 95% Wilson CI) and expect-failure rate (thin)", main_path,
+                "rate");
+    double x0 = bins.front().first, x1 = bins.back().second;
+    if (x1 <= x0) x1 = x0 + 1;
+    const double pad = 0.05 * (x1 - x0);
+    p.SetRange(x0 - pad, x1 + pad, -0.02, 1.02);
+    p.DrawAxes();
+    std::vector<std::pair<std::string, cv::Scalar>> legend;
+    int k = 0;
+    for (const auto& c : controllers) {
+      std::vector<double> x, y, lo, hi, fail;
+      for (size_t b = 0; b < bins.size(); ++b) {
+        const Cell& cell = per_bin[c][b];
+        if (cell.n == 0) continue;
+        const auto ci = Wilson(cell.crashes, cell.n);
+        x.push_back(0.5 * (bins[b].first + bins[b].second));
+        y.push_back(1.0 * cell.crashes / cell.n);
+        lo.push_back(ci.first);
+        hi.push_back(ci.second);
+        fail.push_back(1.0 * cell.expect_failures / cell.n);
+      }
+      p.Line(x, fail, SeriesColour(k), 1);
+      p.Line(x, y, SeriesColour(k), 2);
+      p.ErrorBars(x, y, lo, hi, SeriesColour(k));
+      legend.emplace_back(c, SeriesColour(k));
+      ++k;
+    }
+    p.Legend(legend);
+    if (!cv::imwrite(dir + "/crash_rate.png", fig)) {
+      throw std::runtime_error("cannot write " + dir + "/crash_rate.png");
+    }
+  }
+}
+
+}  // namespace hpa::sweep
