@@ -176,5 +176,26 @@ grep -q "unterminated" "$out/torn.log" || fail "the repair was not reported"
 [ "$(unique_runs "$out/torn/runs.jsonl")" -eq 10 ] && [ "$(count_runs "$out/torn/runs.jsonl")" -eq 10 ] \
   || fail "after the repair: $(count_runs "$out/torn/runs.jsonl") lines, expected 10 distinct runs"
 
+echo "== a full disk fails the sweep (exit 3), never exit 0"
+# runs.jsonl: a file-size limit of 4 KiB holds the first record (about 2.5 KiB), not the second;
+# SIGXFSZ ignored (inherited through exec) turns the limit into a failed write (EFBIG)
+(trap '' XFSZ; ulimit -f 4; exec "$hpa" sweep "$out/tiny.yaml" --out "$out/full_jsonl" --jobs 1) \
+  > "$out/full_jsonl.log" 2>&1
+status=$?
+[ "$status" -eq 3 ] || fail "runs.jsonl write past the limit: exit $status, expected 3"
+grep -q "cannot append" "$out/full_jsonl.log" || fail "the failed append is not named: $(tail -2 "$out/full_jsonl.log")"
+# summary.json on /dev/full (ENOSPC)
+mkdir -p "$out/full_summary" && ln -s /dev/full "$out/full_summary/summary.json"
+"$hpa" sweep "$out/tiny.yaml" --out "$out/full_summary" > "$out/full_summary.log" 2>&1
+status=$?
+[ "$status" -eq 3 ] || fail "summary.json on /dev/full: exit $status, expected 3"
+grep -q "cannot write.*summary.json" "$out/full_summary.log" || fail "the failed summary write is not named"
+# a runs.jsonl that is not a regular file (a device, a folder) is refused before anything runs
+mkdir -p "$out/dev_jsonl" && ln -s /dev/full "$out/dev_jsonl/runs.jsonl"
+"$hpa" sweep "$out/tiny.yaml" --out "$out/dev_jsonl" > "$out/dev_jsonl.log" 2>&1
+status=$?
+[ "$status" -eq 2 ] && grep -q "not a regular file" "$out/dev_jsonl.log" \
+  || fail "a runs.jsonl on a device: exit $status: $(tail -1 "$out/dev_jsonl.log")"
+
 if [ $failures -ne 0 ]; then echo "$failures failure(s)"; exit 1; fi
 echo "all sweep checks passed"

@@ -56,6 +56,10 @@ int SweepMain(int argc, char** argv) {
   MakeOutputDir(out_dir);
   const std::string jsonl = out_dir + "/runs.jsonl";
   sweep::LockOutputDir(out_dir);
+  struct stat st;
+  if (lstat(jsonl.c_str(), &st) == 0 && !S_ISREG(st.st_mode)) {
+    throw InputError(jsonl, "", "not a regular file (a link, a device or a folder)");
+  }
   sweep::DropTornLastLine(jsonl);
   if (retry_errors) {
     const int dropped = sweep::DropErrorRecords(jsonl);
