@@ -1,5 +1,7 @@
 #include "hpa/models/hybrid_model.h"
 
+#include <algorithm>
+
 #include <unsupported/Eigen/AutoDiff>
 
 #include "hpa/models/rotor_model.h"
@@ -151,16 +153,24 @@ StateVector HybridModel::ProjectToTaut(const StateVector& x) const {
   const double d = r.norm();
   const Eigen::Vector3d xi = d > 1e-6 ? Eigen::Vector3d(r / d) : Eigen::Vector3d(0, 0, -1);
 
-  // positions: same centre of mass, cable at its length
-  const Eigen::Vector3d p_com = (m * p_Q + m_L * p_L) / (m + m_L);
+  // positions: only as far as the taut band [l - epsilon, l] requires (the mode detector calls
+  // a cable in it taut, and the taut flow's Baumgarte term closes the rest), same centre of mass
+  const double d_taut = std::clamp(d, l - params_.slack_epsilon_m, l);
   StateVector y = x;
-  y.segment<3>(I::kQuadPos) = p_com - m_L / (m + m_L) * l * xi;
-  y.segment<3>(I::kPayloadPos) = p_com + m / (m + m_L) * l * xi;
+  if (d_taut != d || d <= 1e-6) {
+    const Eigen::Vector3d p_com = (m * p_Q + m_L * p_L) / (m + m_L);
+    y.segment<3>(I::kQuadPos) = p_com - m_L / (m + m_L) * d_taut * xi;
+    y.segment<3>(I::kPayloadPos) = p_com + m / (m + m_L) * d_taut * xi;
+  }
 
-  // velocities: perfectly inelastic collision along xi
-  const double v_c = (m * v_Q.dot(xi) + m_L * v_L.dot(xi)) / (m + m_L);
-  y.segment<3>(I::kQuadVel) = v_Q + (v_c - v_Q.dot(xi)) * xi;
-  y.segment<3>(I::kPayloadVel) = v_L + (v_c - v_L.dot(xi)) * xi;
+  // velocities: a cable only pulls. A payload moving away along xi is stopped by a perfectly
+  // inelastic collision (momentum kept); an approaching one gets no impulse
+  const double v_rel_mps = (v_L - v_Q).dot(xi);
+  if (v_rel_mps > 0.0) {
+    const double v_c = (m * v_Q.dot(xi) + m_L * v_L.dot(xi)) / (m + m_L);
+    y.segment<3>(I::kQuadVel) = v_Q + (v_c - v_Q.dot(xi)) * xi;
+    y.segment<3>(I::kPayloadVel) = v_L + (v_c - v_L.dot(xi)) * xi;
+  }
   return y;
 }
 

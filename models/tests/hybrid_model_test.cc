@@ -145,7 +145,7 @@ TEST(HybridModelTest, Rk4OneStepErrorAgainstFineIntegration) {
 TEST(HybridModelTest, ProjectToTautIsTheInelasticCollision) {
   const Params p;
   const HybridModel model(p);
-  // payload 0.4 m below and falling faster than the quadrotor: just past the guard
+  // payload 0.41 m below (short of the taut band) and falling away from the quadrotor
   SystemState s;
   s.p_WQ_W = Eigen::Vector3d(0, 0, 1.2);
   s.p_WL_W = Eigen::Vector3d(0.1, 0, 0.8);
@@ -155,7 +155,8 @@ TEST(HybridModelTest, ProjectToTautIsTheInelasticCollision) {
   const StateVector y = model.ProjectToTaut(x);
   using I = StateIndex;
   const Eigen::Vector3d r = y.segment<3>(I::kPayloadPos) - y.segment<3>(I::kQuadPos);
-  EXPECT_NEAR(r.norm(), p.cable_length_m, 1e-12);
+  // moved only to the edge of the taut band, not to the full length
+  EXPECT_NEAR(r.norm(), p.cable_length_m - p.slack_epsilon_m, 1e-12);
   const Eigen::Vector3d xi = r.normalized();
   const double m = p.quad_mass_kg, m_L = p.payload_mass_kg;
   // momentum and centre of mass kept, no relative velocity along the cable
@@ -170,6 +171,50 @@ TEST(HybridModelTest, ProjectToTautIsTheInelasticCollision) {
   // a state already on the manifold is a fixed point
   const StateVector h = model.HoverState(Eigen::Vector3d(0, 0, 1));
   EXPECT_LT((model.ProjectToTaut(h) - h).norm(), 1e-12);
+}
+
+TEST(HybridModelTest, ProjectToTautGivesNoImpulseToAnApproachingPayload) {
+  const Params p;
+  const HybridModel model(p);
+  // payload on the cable sphere, moving toward the quadrotor (thrown up along the cable)
+  SystemState s;
+  s.p_WQ_W = Eigen::Vector3d(0, 0, 1.2);
+  s.p_WL_W = Eigen::Vector3d(0, 0, 1.2 - p.cable_length_m);
+  s.v_WQ_W = Eigen::Vector3d(0.1, 0, -0.2);
+  s.v_WL_W = Eigen::Vector3d(0.1, 0.2, 1.5);
+  const StateVector x = s.ToVector();
+  const StateVector y = model.ProjectToTaut(x);
+  EXPECT_EQ((y - x).norm(), 0.0) << "a cable cannot push: no velocity change, no move";
+  // moving away by a hair: the impulse is the (small) inelastic one, continuous in v_rel
+  s.v_WL_W = Eigen::Vector3d(0.1, 0.2, -0.2 - 1e-3);
+  const StateVector z = model.ProjectToTaut(s.ToVector());
+  using I = StateIndex;
+  EXPECT_LT((z.segment<3>(I::kPayloadVel) - s.v_WL_W).norm(), 1e-3);
+}
+
+TEST(HybridModelTest, ProjectToTautMovesPositionsOnlyOutsideTheTautBand) {
+  const Params p;
+  const HybridModel model(p);
+  using I = StateIndex;
+  const auto length = [](const StateVector& v) {
+    return (v.segment<3>(I::kPayloadPos) - v.segment<3>(I::kQuadPos)).norm();
+  };
+  SystemState s;
+  s.p_WQ_W = Eigen::Vector3d(0, 0, 1.2);
+  // inside the band (what the mode detector calls taut): positions untouched
+  for (double d : {p.cable_length_m - 0.9 * p.slack_epsilon_m, p.cable_length_m - 0.01}) {
+    s.p_WL_W = s.p_WQ_W + Eigen::Vector3d(0.2, 0, -std::sqrt(d * d - 0.04));
+    const StateVector y = model.ProjectToTaut(s.ToVector());
+    EXPECT_EQ((y.segment<3>(I::kPayloadPos) - s.p_WL_W).norm(), 0.0) << d;
+    EXPECT_EQ((y.segment<3>(I::kQuadPos) - s.p_WQ_W).norm(), 0.0) << d;
+  }
+  // beyond the length (an estimate off the constraint): back to the length, no further
+  s.p_WL_W = s.p_WQ_W + Eigen::Vector3d(0, 0, -(p.cable_length_m + 0.03));
+  EXPECT_NEAR(length(model.ProjectToTaut(s.ToVector())), p.cable_length_m, 1e-12);
+  // the largest move is the distance to the band's edge
+  s.p_WL_W = s.p_WQ_W + Eigen::Vector3d(0, 0, -(p.cable_length_m - 0.2));
+  const StateVector y = model.ProjectToTaut(s.ToVector());
+  EXPECT_NEAR(length(y), p.cable_length_m - p.slack_epsilon_m, 1e-12);
 }
 
 }  // namespace

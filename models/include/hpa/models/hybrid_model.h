@@ -39,10 +39,11 @@ class HybridModel {
   void StepJacobians(const StateVector& x, const InputVector& u, CableMode mode, double dt_s,
                      StateVector* x_next, StateMatrix* a, InputMatrix* b) const;
 
-  /// The jump map onto the taut manifold (DESIGN.md section 9): positions moved along xi to
-  /// |x_L - x_Q| = l keeping the centre of mass, velocities along xi made equal by a perfectly
-  /// inelastic collision (momentum kept). The taut flow assumes this; a state just past the
-  /// guard (re-taut, or an estimate off the constraint) must be projected before predicting.
+  /// The jump map a cable can give (DESIGN.md section 9): positions moved along xi, keeping the
+  /// centre of mass, only as far as the taut band l - epsilon <= |x_L - x_Q| <= l requires;
+  /// a payload moving away along xi stopped by a perfectly inelastic collision (momentum kept),
+  /// an approaching one left alone (a cable cannot push). Applied to a state just past the
+  /// guard (re-taut, or an estimate off the constraint) before the taut model predicts.
   StateVector ProjectToTaut(const StateVector& x) const;
 
   /// Cable tension (N) that the taut model implies at x under u.
