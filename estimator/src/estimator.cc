@@ -30,6 +30,8 @@ class CableEstimator final : public Estimator {
         mode_detector_(params, config.mode_detector, InitialMode(hybrid, params, initial),
                        (initial.p_WL_W - initial.p_WQ_W).norm()),
         tracker_(params, config.payload_tracker),
+        tension_cue_(params, config.tension_cue,
+                     InitialMode(hybrid, params, initial) == CableMode::kSlack),
         thrust_N_(params.HoverThrustN()),
         mode_(InitialMode(hybrid, params, initial)) {
     Matrix6d tracker_cov = Matrix6d::Zero();
@@ -44,6 +46,7 @@ class CableEstimator final : public Estimator {
     if (mode_ == CableMode::kTaut) {
       cable_.Predict(imu.time_s, thrust_N_, quad_.state().q_WB.toRotationMatrix());
     }
+    if (hybrid_ && config_.tension_cue.enabled) UpdateTensionCue(imu);
   }
 
   void OnVio(const VioSample& vio) override { quad_.UpdateVio(vio); }
@@ -85,8 +88,16 @@ class CableEstimator final : public Estimator {
       return;
     }
 
-    const CableMode previous = mode_;
-    mode_ = mode_detector_.Update(detection.time_s, p_BL_B.norm());
+    // a slack entry flagged by the tension cue restarts the tracker from this first detection
+    // as a geometric entry would (its velocity from the last two detections)
+    const bool entered_by_tension = tension_entry_pending_;
+    tension_entry_pending_ = false;
+    const CableMode previous = entered_by_tension ? CableMode::kTaut : mode_;
+    const CableMode geometric = mode_detector_.Update(detection.time_s, p_BL_B.norm());
+    // slack if either cue says so: a payload held at the cable's length is slack to the
+    // tension cue, a payload thrown up faster than the low pass follows to the geometry
+    const bool tension_slack = config_.tension_cue.enabled && tension_cue_.slack();
+    mode_ = geometric == CableMode::kSlack || tension_slack ? CableMode::kSlack : CableMode::kTaut;
     const bool had_last = has_last_detection_;
     const Eigen::Vector3d last_p_WL_W = last_p_WL_W_;
     const double last_time_s = last_detection_time_s_;
@@ -112,7 +123,7 @@ class CableEstimator final : public Estimator {
         }
         cov.block<3, 3>(3, 3).diagonal().setConstant(std::pow(velocity_std_mps, 2));
         tracker_.Reset(detection.time_s, p_WL_W, v_WL_W, cov);
-        ++slack_entries_;
+        if (!entered_by_tension) ++slack_entries_;
       } else {
         tracker_.Update(detection.time_s, p_WL_W, cov_W);
       }
@@ -181,6 +192,7 @@ class CableEstimator final : public Estimator {
     health.detections_non_finite = detections_non_finite_;
     health.thrust_commands_non_finite = thrust_commands_non_finite_;
     health.slack_entries = slack_entries_;
+    health.slack_entries_by_tension = slack_entries_by_tension_;
     health.retaut_restarts = retaut_restarts_;
     health.slack = hybrid_ && mode_ == CableMode::kSlack;
     health.filtered_cable_length_m = mode_detector_.filtered_length_m();
@@ -188,6 +200,37 @@ class CableEstimator final : public Estimator {
   }
 
  private:
+  // Feeds the tension cue; a taut-to-slack switch it flags starts the payload tracker from the
+  // cable EKF's payload state at once (the next detection is up to a frame away).
+  void UpdateTensionCue(const ImuSample& imu) {
+    const QuadFilterState& quad = quad_.state();
+    Eigen::Vector3d xi_W = cable_.xi_W();
+    if (mode_ == CableMode::kSlack) {
+      // the direction to the tracked payload (the cable EKF is frozen while slack)
+      Eigen::Vector3d p_L, v_L;
+      tracker_.PredictTo(imu.time_s, &p_L, &v_L);
+      const Eigen::Vector3d d = p_L - quad.p_WB_W;
+      if (d.norm() > 1e-6) xi_W = d.normalized();
+    }
+    tension_cue_.Update(imu.time_s, imu.accel_B_mps2 - quad.accel_bias_B_mps2,
+                        quad.q_WB.toRotationMatrix(), thrust_N_, xi_W);
+    if (mode_ != CableMode::kTaut || !tension_cue_.slack()) return;
+    const double l_m = params_.cable_length_m;
+    const Eigen::Vector3d p_WL_W = quad.p_WB_W + l_m * cable_.xi_W();
+    const Eigen::Vector3d v_WL_W = quad.v_WB_W + l_m * cable_.xi_dot_W();
+    // covariance: the cable EKF's, scaled by the length, plus the quadrotor's
+    Matrix6d cov = Matrix6d::Zero();
+    cov.block<3, 3>(0, 0) =
+        l_m * l_m * cable_.covariance().block<3, 3>(0, 0) + quad_.covariance().block<3, 3>(0, 0);
+    cov.block<3, 3>(3, 3) =
+        l_m * l_m * cable_.covariance().block<3, 3>(3, 3) + quad_.covariance().block<3, 3>(3, 3);
+    tracker_.Reset(imu.time_s, p_WL_W, v_WL_W, cov);
+    mode_ = CableMode::kSlack;
+    tension_entry_pending_ = true;
+    ++slack_entries_;
+    ++slack_entries_by_tension_;
+  }
+
   // The measured payload: the newest detection in world and a low-passed finite difference of
   // consecutive detections (a first-order filter with time constant tau, alpha = dt/(tau + dt)).
   void UpdateMeasuredPayload(double time_s, const Eigen::Vector3d& p_WL_W) {
@@ -231,6 +274,7 @@ class CableEstimator final : public Estimator {
   CableEkf cable_;
   ModeDetector mode_detector_;
   PayloadTracker tracker_;
+  TensionCue tension_cue_;
   double thrust_N_;                  // last commanded collective thrust
   CableMode mode_;                   // estimated mode (always taut when !hybrid)
   bool payload_visible_ = true;      // last camera frame had a detection
@@ -241,6 +285,8 @@ class CableEstimator final : public Estimator {
   int detections_non_finite_ = 0;
   int thrust_commands_non_finite_ = 0;
   int slack_entries_ = 0;
+  int slack_entries_by_tension_ = 0;
+  bool tension_entry_pending_ = false;  // slack flagged by tension, no detection since
   int retaut_restarts_ = 0;
 };
 

@@ -24,6 +24,7 @@ std::vector<std::pair<std::string, double>> EstimatorHealth::Fields() const {
                                {"detections_non_finite", detections_non_finite},
                                {"thrust_commands_non_finite", thrust_commands_non_finite},
                                {"slack_entries", slack_entries},
+                               {"slack_entries_by_tension", slack_entries_by_tension},
                                {"retaut_restarts", retaut_restarts},
                                {"slack", slack ? 1.0 : 0.0},
                                {"filtered_cable_length_m", filtered_cable_length_m}});

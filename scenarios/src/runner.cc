@@ -86,6 +86,7 @@ RunResult RunScenario(const Scenario& scenario, const Params& params, const RunO
   std::unique_ptr<Controller> controller = MakeController(scenario.controller, params, reference);
   BodyRateController rate_controller(params);
   EstimatorConfig estimator_config;
+  estimator_config.tension_cue.enabled = scenario.estimation.slack_tension_cue;
   std::unique_ptr<Estimator> estimator = MakeEstimator(EstimatorOf(scenario), estimator_config,
                                                        params, InitialState(*reference, params));
   const bool ground_truth = scenario.estimation.ground_truth;

@@ -84,6 +84,8 @@ const std::vector<MetricDef>& MetricDefs() {
        Field([](const Json& m) { return Number(m["retaut"]["quad_vz_min_mps"]); })},
       {"retaut_peak_body_rate_radps", false, false,
        Field([](const Json& m) { return Number(m["retaut"]["peak_body_rate_radps"]); })},
+      {"slack_detection_latency_max_s", false, false,
+       Field([](const Json& m) { return Number(m["slack_detection_latency_s"]["max"]); })},
       {"mpc_solve_median_ms", false, false,
        Field([](const Json& m) { return Number(m["mpc_solve_ms"]["median"]); })},
   };

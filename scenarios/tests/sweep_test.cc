@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <map>
 #include <set>
@@ -163,13 +164,16 @@ TEST(SweepTest, BinsAreDistinctValuesOrSixEqualBins) {
 
 TEST(SweepTest, EveryShippedSweepLoadsAndExpands) {
   const std::string dir = std::string(HPA_SOURCE_DIR) + "/scenarios/sweeps/";
-  for (const char* name :
-       {"impulse_crash_rate.yaml", "model_mismatch.yaml", "perception_noise.yaml", "wind.yaml",
-        "throughput.yaml", "throughput_render.yaml"}) {
+  int sweeps = 0;
+  for (const auto& entry : std::filesystem::directory_iterator(dir)) {
+    if (entry.path().extension() != ".yaml") continue;
+    const std::string name = entry.path().filename().string();
     SweepSpec spec;
-    ASSERT_NO_THROW(spec = LoadSweep(dir + name)) << name;
+    ASSERT_NO_THROW(spec = LoadSweep(entry.path().string())) << name;
     EXPECT_GE(ExpandSweep(spec).size(), static_cast<size_t>(spec.runs)) << name;
+    ++sweeps;
   }
+  EXPECT_GE(sweeps, 7);
 }
 
 TEST(SweepTest, BadPathsFailBeforeAnythingRuns) {

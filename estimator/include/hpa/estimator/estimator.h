@@ -8,6 +8,7 @@
 #include "hpa/estimator/cable_ekf.h"
 #include "hpa/estimator/estimator_health.h"
 #include "hpa/estimator/mode_detector.h"
+#include "hpa/estimator/tension_cue.h"
 #include "hpa/estimator/payload_tracker.h"
 #include "hpa/estimator/quad_filter.h"
 #include "hpa/models/params.h"
@@ -21,6 +22,7 @@ struct EstimatorConfig {
   QuadFilterConfig quad_filter;            // IMU + VIO error-state EKF
   CableEkfConfig cable_ekf;                // (xi, xi_dot) EKF
   ModeDetectorConfig mode_detector;        // low-pass cable length vs l - epsilon
+  TensionCueConfig tension_cue;            // slack from the IMU-implied cable tension
   PayloadTrackerConfig payload_tracker;    // free-fall payload filter used while slack
   CameraNoiseModel detection_noise;        // detector noise -> measurement covariances
   double detection_noise_floor_m = 0.002;  // added per axis (attitude and sync errors)

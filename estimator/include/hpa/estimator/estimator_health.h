@@ -20,6 +20,7 @@ struct EstimatorHealth {
   int detections_non_finite = 0;         // detections refused for a NaN/Inf time or position
   int thrust_commands_non_finite = 0;    // thrust commands refused (the last one is kept)
   int slack_entries = 0;                 // taut-to-slack switches (payload tracker restarted)
+  int slack_entries_by_tension = 0;      // of them, flagged first by the tension cue
   int retaut_restarts = 0;               // slack-to-taut switches (cable EKF restarted)
   bool slack = false;                    // current estimated mode
   double filtered_cable_length_m = 0.0;  // the mode detector's low-passed cable length
