@@ -18,6 +18,7 @@
 #include "hpa/scenarios/metrics.h"
 #include "hpa/scenarios/plot_canvas.h"
 #include "scenarios/src/cli_parse.h"
+#include "scenarios/src/sweep/sweep_internal.h"
 
 namespace hpa {
 namespace {
@@ -189,10 +190,9 @@ void WriteOutputs(const SweepDiff& diff, const SweepDiffOptions& options) {
                             {"higher_is_better", m.higher_is_better},
                             {"verdict", m.verdict}};
   }
-  std::ofstream json(options.out_dir + "/diff.json");
-  json << j.dump(1) << "\n";
+  sweep::WriteFileChecked(options.out_dir + "/diff.json", j.dump(1) + "\n");
 
-  std::ofstream md(options.out_dir + "/diff.md");
+  std::ostringstream md;
   md << "# sweep-diff: B = `" << options.b_dir << "` against A = `" << options.a_dir << "`\n\n"
      << diff.runs_paired << " paired runs. What differs: "
      << (diff.differs.empty() ? std::string("nothing in the varied values (same sweep)") : "")
@@ -210,12 +210,18 @@ void WriteOutputs(const SweepDiff& diff, const SweepDiffOptions& options) {
        << " | **" << m.verdict << "** |\n";
   }
 
-  // one small panel per metric: the difference with its interval against zero
+  sweep::WriteFileChecked(options.out_dir + "/diff.md", md.str());
+
+  // one small panel per compared metric: the difference with its interval against zero
+  std::vector<const MetricDiff*> compared;
+  for (const MetricDiff& m : diff.metrics) {
+    if (m.pairs > 0) compared.push_back(&m);
+  }
   const int cols = 3, w = 420, h = 260;
-  const int rows = (static_cast<int>(diff.metrics.size()) + cols - 1) / cols;
+  const int rows = std::max(1, (static_cast<int>(compared.size()) + cols - 1) / cols);
   cv::Mat fig = BlankFigure(cols * w, rows * h);
-  for (size_t i = 0; i < diff.metrics.size(); ++i) {
-    const MetricDiff& m = diff.metrics[i];
+  for (size_t i = 0; i < compared.size(); ++i) {
+    const MetricDiff& m = *compared[i];
     const cv::Scalar colour = m.verdict == "better"  ? cv::Scalar(60, 160, 40)
                               : m.verdict == "worse" ? cv::Scalar(40, 40, 210)
                                                      : cv::Scalar(120, 120, 120);
@@ -230,7 +236,9 @@ void WriteOutputs(const SweepDiff& diff, const SweepDiffOptions& options) {
     p.Line({-1.0, 1.0}, {0.0, 0.0}, cv::Scalar(0, 0, 0), true);
     p.ErrorBars({0.0}, {m.difference}, {m.ci95.first}, {m.ci95.second}, colour);
   }
-  cv::imwrite(options.out_dir + "/diff.png", fig);
+  if (!cv::imwrite(options.out_dir + "/diff.png", fig)) {
+    throw std::runtime_error("cannot write " + options.out_dir + "/diff.png");
+  }
 }
 
 }  // namespace
@@ -429,6 +437,10 @@ int SweepDiffMain(int argc, char** argv) {
   for (const std::string& d : diff.differs) std::cout << "; " << d;
   std::cout << "\n";
   for (const MetricDiff& m : diff.metrics) {
+    if (m.pairs == 0) {
+      std::printf("  %-30s -      no pair in which both runs define it\n", m.name.c_str());
+      continue;
+    }
     std::printf("  %-30s %-6s B - A = %+.4g  [%+.4g, %+.4g]  p = %.3g  (%d pairs)\n",
                 m.name.c_str(), m.verdict.c_str(), m.difference, m.ci95.first, m.ci95.second,
                 m.p_value, m.pairs);
