@@ -8,7 +8,7 @@
 #include <map>
 #include <random>
 
-#include "hpa/estimator/analytic_camera.h"
+#include "hpa/sim/analytic_camera.h"
 #include "hpa/estimator/estimator_registry.h"
 #include "hpa/models/camera_model.h"
 #include "hpa/models/hybrid_model.h"

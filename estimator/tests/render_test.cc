@@ -1,7 +1,7 @@
 // Detector accuracy on frames rendered by the simulator (MuJoCo 2.2 + OSMesa): payload placed at
 // many camera-frame positions (centre, off-centre, near the edge, partly out of view), position
 // error statistics against ground truth, frames without the payload, and ms per detection.
-// These measurements are the source of CameraNoiseModel's defaults (analytic_camera.h).
+// These measurements are the source of CameraNoiseModel's defaults (detection_noise.h).
 #include <gtest/gtest.h>
 
 #include <chrono>
@@ -14,7 +14,7 @@
 #include <string>
 #include <vector>
 
-#include "hpa/estimator/analytic_camera.h"
+#include "hpa/sim/analytic_camera.h"
 #include "hpa/estimator/payload_detector.h"
 #include "hpa/models/camera_model.h"
 #include "hpa/models/params.h"

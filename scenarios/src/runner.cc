@@ -10,22 +10,18 @@
 #include <random>
 
 #include "hpa/controller/body_rate_controller.h"
-#include "hpa/estimator/analytic_camera.h"
 #include "hpa/estimator/estimator.h"
 #include "hpa/estimator/estimator_registry.h"
 #include "hpa/estimator/payload_detector.h"
 #include "hpa/models/camera_model.h"
 #include "hpa/scenarios/video_recorder.h"
+#include "hpa/sim/analytic_camera.h"
 #include "hpa/sim/world.h"
 
 namespace hpa {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-
-constexpr int kImuDecimation = 2;       // 500 Hz body-rate loop on the 1 kHz physics clock
-constexpr double kCameraRateHz = 30.0;  // payload camera and detector
-constexpr double kVideoRateHz = 30.0;
 
 double Ms(Clock::time_point a, Clock::time_point b) {
   return std::chrono::duration<double, std::milli>(b - a).count();
@@ -43,10 +39,48 @@ SystemState InitialState(const Reference& reference, const Params& params) {
   return s;
 }
 
-// Ticks (1 ms) at which event k of a rate_hz clock fires.
-long TickOf(long k, double rate_hz) {
-  return static_cast<long>(std::llround(k * 1000.0 / rate_hz));
-}
+// The runner's own recorders: log rows and metrics inputs, and the video.
+class LogRecorder final : public RunRecorder {
+ public:
+  explicit LogRecorder(MetricsInputs* inputs) : inputs_(inputs) {}
+  void OnControlStep(const LogRow& row) override { inputs_->rows.push_back(row); }
+  void OnCameraFrame(const CameraFrameRecord& frame) override {
+    inputs_->payload_in_fov_per_frame.push_back(frame.payload_in_image);
+    if (frame.frame != nullptr) {
+      inputs_->render_ms.push_back(frame.render_ms);
+      inputs_->detector_ms.push_back(frame.detector_ms);
+    }
+    if (frame.detected) ++inputs_->detections;
+  }
+
+ private:
+  MetricsInputs* inputs_;
+};
+
+class VideoTickRecorder final : public RunRecorder {
+ public:
+  VideoTickRecorder(const std::string& path, double rate_hz, bool slack_events_only)
+      : video_(path, rate_hz, slack_events_only) {}
+  void OnCameraFrame(const CameraFrameRecord& frame) override {
+    if (frame.frame != nullptr) onboard_ = *frame.frame;
+  }
+  void OnVideoTick(sim::World& world, const LogRow& now, const cv::Mat& onboard) override {
+    (void)onboard;
+    // the onboard inset: the detector's latest frame, else rendered for the video
+    if (onboard_.empty() || !rendered_camera_) onboard_ = world.RenderPayloadCamera();
+    VideoRecorder::Hud hud{now.time_s, now.truth.mode, now.estimate.mode, now.command.thrust_N,
+                           now.cable_tension_N};
+    video_.AddFrame(world.RenderChaseCamera(VideoRecorder::kWidthPx, VideoRecorder::kHeightPx),
+                    onboard_, hud);
+  }
+  void set_rendered_camera(bool rendered) { rendered_camera_ = rendered; }
+  void Finish() { video_.Finish(); }
+
+ private:
+  VideoRecorder video_;
+  cv::Mat onboard_;
+  bool rendered_camera_ = false;  // the detector renders every camera frame
+};
 
 }  // namespace
 
@@ -55,6 +89,12 @@ volatile std::sig_atomic_t g_stop_signal = 0;  // set from a signal handler
 }  // namespace
 
 void RequestStop(int signal_number) { g_stop_signal = signal_number; }
+
+RateTable ScenarioRates(const Scenario& scenario) {
+  RateTable rates;
+  rates.camera.latency_s = scenario.estimation.camera_latency_s;
+  return rates;
+}
 
 Params WorldParams(const Scenario& scenario, const Params& params) {
   Params p = params;
@@ -78,6 +118,8 @@ RunResult RunScenario(const Scenario& scenario, const Params& params, const RunO
   world_config.overrides.payload_mass_kg = scenario.world_payload_mass_kg;
   world_config.overrides.cable_length_m = scenario.world_cable_length_m;
   world_config.seed = scenario.seed;
+  world_config.rates = ScenarioRates(scenario);
+  const RateTable& rates = world_config.rates;
   sim::World world(world_config);
 
   // flight code: reference, controller, rate loop, estimator (flight params only)
@@ -98,32 +140,41 @@ RunResult RunScenario(const Scenario& scenario, const Params& params, const RunO
   AnalyticCamera analytic_camera(params, camera_noise);
   std::mt19937_64 camera_rng(scenario.seed * 0x9E3779B97F4A7C15ULL + 17);
 
-  std::unique_ptr<VideoRecorder> video;
+  // recorders: the log and metrics inputs, the video, the caller's
+  MetricsInputs inputs;
+  LogRecorder log_recorder(&inputs);
+  std::vector<RunRecorder*> recorders{&log_recorder};
+  std::unique_ptr<VideoTickRecorder> video;
   if (!options.video_path.empty()) {
-    video = std::make_unique<VideoRecorder>(options.video_path, kVideoRateHz,
-                                            options.video_slack_events_only);
+    video = std::make_unique<VideoTickRecorder>(options.video_path, rates.video.rate_hz,
+                                                options.video_slack_events_only);
+    video->set_rendered_camera(!ground_truth && render_camera);
+    recorders.push_back(video.get());
   }
+  recorders.insert(recorders.end(), options.recorders.begin(), options.recorders.end());
 
-  // lockstep schedule on the 1 kHz physics clock
+  // lockstep schedule on the physics clock
   const double end_s = std::min(scenario.duration_s, options.stop_at_s.value_or(1e300));
   const long end_tick = static_cast<long>(std::llround(end_s / sim::World::kPhysicsDt_s));
-  const double control_rate_hz = controller->RateHz();
-  long next_control = 0, next_camera = 0, next_video = 0;
+  LockstepClock clock(rates.physics_hz);
+  const int camera_loop = clock.AddLoop("camera", rates.camera.rate_hz);
+  const int control_loop = clock.AddLoop("control", controller->RateHz());
+  const int rate_loop = clock.AddLoop("rate", rates.imu.rate_hz);
+  const int video_loop = video ? clock.AddLoop("video", rates.video.rate_hz) : -1;
+  const double rate_loop_dt_s = 1.0 / rates.imu.rate_hz;
   size_t next_event = 0;
   std::vector<EventSpec> events = scenario.events;
   std::stable_sort(events.begin(), events.end(),
                    [](const EventSpec& a, const EventSpec& b) { return a.at_s < b.at_s; });
-  std::deque<PayloadDetection> in_flight;  // detections waiting out the camera latency
-  MetricsInputs inputs;
+  DelayLine<PayloadDetection> in_flight(rates.camera.latency_s);  // camera to estimator
   ControlOutput control;
   control.command.thrust_N = params.HoverThrustN();
-  cv::Mat last_onboard_frame;
   const bool show_progress = options.progress && isatty(STDERR_FILENO);
   int last_progress_pct = -1;
 
   long tick = 0;
   try {
-    for (; tick <= end_tick; ++tick) {
+    for (; tick <= end_tick; ++tick, clock.Advance()) {
       const double t = tick * sim::World::kPhysicsDt_s;
       if (g_stop_signal != 0) {
         throw std::runtime_error("stopped by signal " + std::to_string(g_stop_signal));
@@ -135,10 +186,11 @@ RunResult RunScenario(const Scenario& scenario, const Params& params, const RunO
       }
 
       // which loops run at this tick; truth and the flight state only when one needs them
-      const bool camera_due = tick == TickOf(next_camera, kCameraRateHz);
-      const bool control_due = tick == TickOf(next_control, control_rate_hz);
-      const bool rate_due = tick % kImuDecimation == 0;
-      const bool video_due = video && tick == TickOf(next_video, kVideoRateHz);
+      clock.BeginTick();
+      const bool camera_due = clock.Fires(camera_loop);
+      const bool control_due = clock.Fires(control_loop);
+      const bool rate_due = clock.Fires(rate_loop);
+      const bool video_due = video_loop >= 0 && clock.Fires(video_loop);
       const bool need_state = control_due || rate_due || video_due;
       sim::Truth truth;
       if (camera_due || control_due || video_due || (ground_truth && rate_due)) {
@@ -147,30 +199,30 @@ RunResult RunScenario(const Scenario& scenario, const Params& params, const RunO
 
       // payload camera: capture now, deliver after the latency
       if (camera_due) {
-        ++next_camera;
         const Eigen::Vector3d p_CL_C = PayloadInCamera_C(params, truth.state);
-        inputs.payload_in_fov_per_frame.push_back(InsideImage(params, p_CL_C));
+        CameraFrameRecord frame;
+        frame.time_s = t;
+        frame.payload_in_image = InsideImage(params, p_CL_C);
+        cv::Mat rendered;
         if (!ground_truth) {
           PayloadDetection detection;
           if (render_camera) {
             const auto r0 = Clock::now();
-            last_onboard_frame = world.RenderPayloadCamera();
+            rendered = world.RenderPayloadCamera();
             const auto r1 = Clock::now();
-            detection = detector.Detect(last_onboard_frame, t);
-            inputs.render_ms.push_back(Ms(r0, r1));
-            inputs.detector_ms.push_back(Ms(r1, Clock::now()));
+            detection = detector.Detect(rendered, t);
+            frame.frame = &rendered;
+            frame.render_ms = Ms(r0, r1);
+            frame.detector_ms = Ms(r1, Clock::now());
           } else {
             detection = analytic_camera.Measure(p_CL_C, t, camera_rng);
           }
-          if (detection.found) ++inputs.detections;
-          in_flight.push_back(detection);
+          frame.detected = detection.found;
+          in_flight.Push(detection.time_s, detection);
         }
+        for (RunRecorder* r : recorders) r->OnCameraFrame(frame);
       }
-      while (!in_flight.empty() &&
-             in_flight.front().time_s + scenario.estimation.camera_latency_s <= t + 1e-9) {
-        estimator->OnPayloadDetection(in_flight.front());
-        in_flight.pop_front();
-      }
+      while (auto detection = in_flight.PopReady(t)) estimator->OnPayloadDetection(*detection);
 
       // what flight code sees
       SystemState state;
@@ -179,7 +231,6 @@ RunResult RunScenario(const Scenario& scenario, const Params& params, const RunO
 
       // high-level controller
       if (control_due) {
-        ++next_control;
         control = controller->Update(state);
         LogRow row;
         row.time_s = t;
@@ -197,27 +248,26 @@ RunResult RunScenario(const Scenario& scenario, const Params& params, const RunO
           row.estimator_rejected_updates = health.RejectedUpdates();
           row.estimator_resets = health.ForcedAccepts();
         }
-        result.rows.push_back(row);
+        for (RunRecorder* r : recorders) r->OnControlStep(row);
       }
 
       // body-rate loop
       if (rate_due) {
-        const InputVector w_cmd = rate_controller.Update(control.command, state.w_B,
-                                                         kImuDecimation * sim::World::kPhysicsDt_s);
+        const InputVector w_cmd =
+            rate_controller.Update(control.command, state.w_B, rate_loop_dt_s);
         world.SetMotorSpeedCommand(w_cmd);
         if (!ground_truth) estimator->OnThrustCommand(control.command.thrust_N);
       }
 
       // video frame
       if (video_due) {
-        ++next_video;
-        if (last_onboard_frame.empty() || ground_truth || !render_camera) {
-          last_onboard_frame = world.RenderPayloadCamera();
-        }
-        VideoRecorder::Hud hud{t, truth.state.mode, state.mode, control.command.thrust_N,
-                               truth.cable_tension_N};
-        video->AddFrame(world.RenderChaseCamera(VideoRecorder::kWidthPx, VideoRecorder::kHeightPx),
-                        last_onboard_frame, hud);
+        LogRow now;
+        now.time_s = t;
+        now.truth = truth.state;
+        now.estimate = state;
+        now.command = control.command;
+        now.cable_tension_N = truth.cable_tension_N;
+        for (RunRecorder* r : recorders) r->OnVideoTick(world, now, cv::Mat());
       }
 
       if (tick == end_tick) break;
@@ -261,7 +311,6 @@ RunResult RunScenario(const Scenario& scenario, const Params& params, const RunO
     metrics.estimator_health = estimator->Health().Fields();
   }
   metrics.sim_time_s = std::min(tick, end_tick) * sim::World::kPhysicsDt_s;
-  inputs.rows = std::move(result.rows);
   ComputeMetrics(inputs, &metrics);
   result.rows = std::move(inputs.rows);
   CheckExpectations(scenario.expect, &metrics);

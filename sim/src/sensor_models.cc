@@ -34,8 +34,8 @@ ImuSample ImuModel::Measure(double time_s, const Eigen::Vector3d& w_B_radps,
   return s;
 }
 
-VioModel::VioModel(const SensorNoiseConfig& noise, std::mt19937_64* rng)
-    : noise_(noise), rng_(rng) {}
+VioModel::VioModel(const SensorNoiseConfig& noise, double latency_s, std::mt19937_64* rng)
+    : noise_(noise), rng_(rng), queue_(latency_s) {}
 
 void VioModel::Capture(double time_s, const Eigen::Vector3d& p_WB_W, const Eigen::Quaterniond& q_WB,
                        const Eigen::Vector3d& v_WB_W) {
@@ -56,18 +56,9 @@ void VioModel::Capture(double time_s, const Eigen::Vector3d& p_WB_W, const Eigen
                                     : Eigen::Quaterniond::Identity();
   s.q_WB = (q_WB * dq).normalized();
   s.v_WB_W = v_WB_W + gaussian3(noise_.vio_velocity_sigma_mps);
-  queue_.push_back(s);
+  queue_.Push(time_s, s);
 }
 
-std::optional<VioSample> VioModel::Take(double now_s) {
-  // a 1 ns margin keeps the delivery time robust to floating-point rounding of the clock
-  constexpr double kRoundingMargin_s = 1e-9;
-  if (queue_.empty() || queue_.front().time_s + noise_.vio_latency_s > now_s + kRoundingMargin_s) {
-    return std::nullopt;
-  }
-  VioSample s = queue_.front();
-  queue_.pop_front();
-  return s;
-}
+std::optional<VioSample> VioModel::Take(double now_s) { return queue_.PopReady(now_s); }
 
 }  // namespace hpa::sim

@@ -50,8 +50,17 @@ World::World(const WorldConfig& config)
     : config_(config),
       world_params_(config.params),
       rng_(config.seed),
-      imu_(config.noise, kImuPeriod_s, &rng_),
-      vio_(config.noise, &rng_) {
+      imu_(config.noise, 1.0 / config.rates.imu.rate_hz, &rng_),
+      vio_(config.noise, config.rates.vio.latency_s, &rng_),
+      sensor_clock_(config.rates.physics_hz),
+      vio_loop_(sensor_clock_.AddLoop("vio", config.rates.vio.rate_hz, TickRounding::kAtOrAfter)) {
+  // the physics step is the MJCF's; the table must agree (checked below), and the IMU averages
+  // a whole number of steps
+  const double imu_steps = config.rates.physics_hz / config.rates.imu.rate_hz;
+  if (!(imu_steps >= 1.0) || std::abs(imu_steps - std::round(imu_steps)) > 1e-9) {
+    throw InputError("", "rates.imu", "the IMU rate must divide the physics rate");
+  }
+  imu_steps_ = static_cast<int>(std::lround(imu_steps));
   InstallWarningHandler();
   const std::string& file = config_.scene_path;
 
@@ -66,7 +75,8 @@ World::World(const WorldConfig& config)
     mj_deleteModel(model_);
     throw InputError(file, "", "MuJoCo warning while loading: " + load_warnings + error);
   }
-  if (std::abs(model_->opt.timestep - kPhysicsDt_s) > 1e-12) {
+  if (std::abs(model_->opt.timestep - kPhysicsDt_s) > 1e-12 ||
+      std::abs(config.rates.physics_hz * kPhysicsDt_s - 1.0) > 1e-12) {
     mj_deleteModel(model_);
     throw InputError(file, "option.timestep", "must be 0.001 s (World::kPhysicsDt_s)");
   }
@@ -215,7 +225,8 @@ void World::Reset(const SystemState& initial) {
   imu_sum_w_B_radps_.setZero();
   imu_sum_specific_force_B_mps2_.setZero();
   imu_sum_count_ = 0;
-  last_vio_slot_ = -1;
+  sensor_clock_ = LockstepClock(config_.rates.physics_hz);
+  vio_loop_ = sensor_clock_.AddLoop("vio", config_.rates.vio.rate_hz, TickRounding::kAtOrAfter);
   crash_ = CrashStatus{};
 
   // motors at hover speed of the simulated system
@@ -292,8 +303,8 @@ void World::ApplyDisturbances() {
 
 void World::Step() {
   // state at t_k is current (mj_forward / mj_step1 ran): sample what the sensors need from it
-  const int64_t vio_slot = (step_ * 30) / 1000;  // 30 Hz capture slots of whole 1 ms steps
-  const bool vio_due = vio_slot != last_vio_slot_;
+  sensor_clock_.BeginTick();  // the clock's tick is step_
+  const bool vio_due = sensor_clock_.Fires(vio_loop_);
   const SystemState before = GetTruth().state;
 
   // first-order motor lag, exact for the 1 ms step; thrust to the actuators
@@ -316,7 +327,7 @@ void World::Step() {
   const double t_k = t0_s_ + (step_ - 1) * kPhysicsDt_s;
   imu_sum_w_B_radps_ += before.w_B;
   imu_sum_specific_force_B_mps2_ += QuadSpecificForce_B(before.q_WB);
-  if (++imu_sum_count_ == 2) {
+  if (++imu_sum_count_ == imu_steps_) {
     const double interval_start_s = t_k - kPhysicsDt_s;
     imu_queue_.push_back(imu_.Measure(interval_start_s, imu_sum_w_B_radps_ / imu_sum_count_,
                                       imu_sum_specific_force_B_mps2_ / imu_sum_count_));
@@ -326,10 +337,8 @@ void World::Step() {
     constexpr size_t kMaxQueued = 1000;  // 2 s of samples if the caller never takes them
     if (imu_queue_.size() > kMaxQueued) imu_queue_.pop_front();
   }
-  if (vio_due) {
-    vio_.Capture(t_k, before.p_WQ_W, before.q_WB, before.v_WQ_W);
-    last_vio_slot_ = vio_slot;
-  }
+  if (vio_due) vio_.Capture(t_k, before.p_WQ_W, before.q_WB, before.v_WQ_W);
+  sensor_clock_.Advance();
   CheckCrash();
 }
 

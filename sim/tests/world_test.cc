@@ -112,8 +112,8 @@ TEST(WorldTest, ImuAt500HzVioAt30HzWithLatency) {
     while (auto vio = world.TakeVio()) {
       // delivered no earlier than capture + latency and within one step after it
       const double age_s = world.time_s() - vio->time_s;
-      EXPECT_GE(age_s, DefaultConfig().noise.vio_latency_s - 1e-9);
-      EXPECT_LT(age_s, DefaultConfig().noise.vio_latency_s + World::kPhysicsDt_s + 1e-9);
+      EXPECT_GE(age_s, DefaultConfig().rates.vio.latency_s - 1e-9);
+      EXPECT_LT(age_s, DefaultConfig().rates.vio.latency_s + World::kPhysicsDt_s + 1e-9);
       EXPECT_LT((vio->p_WB_W - Eigen::Vector3d(0, 0, 1)).norm(), 0.1);  // 10 sigma
       ++n_vio;
     }

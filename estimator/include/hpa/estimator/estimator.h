@@ -4,7 +4,7 @@
 
 #include <memory>
 
-#include "hpa/estimator/analytic_camera.h"
+#include "hpa/estimator/detection_noise.h"
 #include "hpa/estimator/cable_ekf.h"
 #include "hpa/estimator/estimator_health.h"
 #include "hpa/estimator/mode_detector.h"

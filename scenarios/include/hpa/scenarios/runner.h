@@ -1,12 +1,15 @@
 #pragma once
-// The deterministic lockstep scheduler: physics 1 kHz, IMU 500 Hz, VIO 30 Hz, camera + detector
-// 30 Hz with latency, controller at its rate (150 Hz for the MPCs), body-rate loop 500 Hz.
+// The scenario runner: world, flight code and recorders on one lockstep clock (LockstepClock,
+// rates and latencies from RateTable: physics 1 kHz, IMU and body-rate loop 500 Hz, VIO and
+// camera + detector 30 Hz with their latencies, controller at its registered rate).
 
 #include <functional>
+#include <opencv2/core.hpp>
 #include <optional>
 #include <string>
 #include <vector>
 
+#include "hpa/models/lockstep.h"
 #include "hpa/models/params.h"
 #include "hpa/scenarios/metrics.h"
 #include "hpa/scenarios/scenario.h"
@@ -16,6 +19,30 @@ namespace sim {
 class World;
 }
 
+/// One payload camera frame as the runner saw it.
+struct CameraFrameRecord {
+  double time_s = 0.0;             // capture time
+  bool payload_in_image = false;   // the true payload inside the image
+  bool detected = false;           // the detector (or analytic camera) found it
+  const cv::Mat* frame = nullptr;  // the rendered frame (nullptr: analytic camera, ground truth)
+  double render_ms = 0.0, detector_ms = 0.0;  // rendered frames only
+};
+
+/// Observes a run: the runner calls its recorders from the lockstep loop (its own log,
+/// metrics inputs and video are recorders too). Default methods ignore the call.
+class RunRecorder {
+ public:
+  virtual ~RunRecorder() = default;
+  /// After each control step, with its log.csv row.
+  virtual void OnControlStep(const LogRow& row) { (void)row; }
+  /// After each payload camera capture.
+  virtual void OnCameraFrame(const CameraFrameRecord& frame) { (void)frame; }
+  /// At each video tick (RateTable::video) with the world to draw from and the HUD values.
+  virtual void OnVideoTick(sim::World& world, const LogRow& latest, const cv::Mat& onboard) {
+    (void)world, (void)latest, (void)onboard;
+  }
+};
+
 /// How to run (not what: that is the Scenario).
 struct RunOptions {
   bool progress = false;                     // progress line on stderr
@@ -23,7 +50,11 @@ struct RunOptions {
   bool video_slack_events_only = false;      // keep only a window around each slack event
   std::optional<double> stop_at_s;           // stop early (render-frame)
   std::function<void(sim::World&)> at_stop;  // called with the world when the run stops
+  std::vector<RunRecorder*> recorders;       // extra observers (not owned)
 };
+
+/// The rate table a scenario runs with: the defaults, the scenario's camera latency.
+RateTable ScenarioRates(const Scenario& scenario);
 
 /// Everything a run produced.
 struct RunResult {

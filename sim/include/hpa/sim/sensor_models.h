@@ -8,13 +8,14 @@
 #include <optional>
 #include <random>
 
+#include "hpa/models/lockstep.h"
 #include "hpa/models/sensor_types.h"
 
 namespace hpa::sim {
 
 /// Noise of the simulated IMU and VIO. Defaults: a BMI088-class IMU (datasheet noise densities;
 /// bias walks typical of Kalibr/VINS configs for such parts) and a camera-IMU VIO of the kind the
-/// paper flies (cm-level position, ~0.5 deg attitude, 20 ms latency).
+/// paper flies (cm-level position, ~0.5 deg attitude; its 20 ms latency is in the RateTable).
 struct SensorNoiseConfig {
   double gyro_noise_density_radps_rthz = 2.4e-4;  // BMI088: 0.014 deg/s/sqrt(Hz)
   double gyro_bias_walk_radps2_rthz = 2.0e-5;     // gyro bias random walk
@@ -23,7 +24,6 @@ struct SensorNoiseConfig {
   double vio_position_sigma_m = 0.01;             // per-sample position noise (1 sigma)
   double vio_attitude_sigma_rad = 0.01;           // per-sample attitude noise, each axis
   double vio_velocity_sigma_mps = 0.02;           // per-sample velocity noise
-  double vio_latency_s = 0.02;                    // capture -> delivery delay
 };
 
 /// IMU model: adds white noise and a random-walk bias to the true body rate and specific force.
@@ -51,23 +51,23 @@ class ImuModel {
   Eigen::Vector3d accel_bias_B_mps2_ = Eigen::Vector3d::Zero();  // (3)
 };
 
-/// VIO model: captures a noisy pose now, delivers it vio_latency_s later (FIFO).
+/// VIO model: captures a noisy pose now, delivers it the rate table's VIO latency later (FIFO).
 class VioModel {
  public:
   /// `rng` must outlive the model (the World's single generator).
-  VioModel(const SensorNoiseConfig& noise, std::mt19937_64* rng);
+  VioModel(const SensorNoiseConfig& noise, double latency_s, std::mt19937_64* rng);
   /// Captures the true pose and velocity at time_s, with noise, into the delivery queue.
   void Capture(double time_s, const Eigen::Vector3d& p_WB_W, const Eigen::Quaterniond& q_WB,
                const Eigen::Vector3d& v_WB_W);
   /// Oldest captured sample whose delivery time (capture + latency) is <= now_s, if any.
   std::optional<VioSample> Take(double now_s);
   /// Drops every queued sample (World::Reset).
-  void Clear() { queue_.clear(); }
+  void Clear() { queue_.Clear(); }
 
  private:
   SensorNoiseConfig noise_;
   std::mt19937_64* rng_;
-  std::deque<VioSample> queue_;
+  DelayLine<VioSample> queue_;
 };
 
 }  // namespace hpa::sim

@@ -38,6 +38,7 @@ struct WorldConfig {
   std::string scene_path = std::string(HPA_SOURCE_DIR) + "/models/scene.xml";  // MJCF file
   uint64_t seed = 1;        // the one generator for all sensor noise
   SensorNoiseConfig noise;  // IMU and VIO noise
+  RateTable rates;          // physics, IMU and VIO rates, VIO latency
 };
 
 /// Ground truth at the current time.
@@ -68,9 +69,7 @@ class World {
   World(const World&) = delete;
   World& operator=(const World&) = delete;
 
-  static constexpr double kPhysicsDt_s = 0.001;  // MuJoCo timestep (s)
-  static constexpr double kImuPeriod_s = 0.002;  // 500 Hz
-  static constexpr double kVioRate_Hz = 30.0;    // VIO capture rate
+  static constexpr double kPhysicsDt_s = 0.001;  // MuJoCo timestep (s): RateTable::physics_hz
   /// Truth mode threshold: taut when the cable length >= l - kTautLengthTolerance_m.
   static constexpr double kTautLengthTolerance_m = 0.001;
 
@@ -159,6 +158,7 @@ class World {
   Eigen::Vector3d imu_sum_w_B_radps_ = Eigen::Vector3d::Zero();              // (3)
   Eigen::Vector3d imu_sum_specific_force_B_mps2_ = Eigen::Vector3d::Zero();  // (3)
   int imu_sum_count_ = 0;  // physics steps summed into the next IMU sample
+  int imu_steps_ = 2;      // physics steps per IMU sample (rates.physics_hz / rates.imu.rate_hz)
   double t0_s_ = 0.0;
   int64_t step_ = 0;
   int warning_count_[mjNWARNING] = {};
@@ -179,7 +179,8 @@ class World {
   ImuModel imu_;
   VioModel vio_;
   std::deque<ImuSample> imu_queue_;
-  int64_t last_vio_slot_ = -1;
+  LockstepClock sensor_clock_;  // IMU and VIO capture ticks on the physics clock
+  int vio_loop_;                // its VIO loop
 
   CrashStatus crash_;
   std::unique_ptr<OffscreenRenderer> renderer_;

@@ -1,4 +1,4 @@
-#include "hpa/estimator/analytic_camera.h"
+#include "hpa/sim/analytic_camera.h"
 
 #include <gtest/gtest.h>
 
@@ -6,7 +6,7 @@
 
 #include "hpa/estimator/payload_detector.h"
 #include "hpa/models/camera_model.h"
-#include "synthetic_frames.h"
+#include "estimator/tests/synthetic_frames.h"
 
 namespace hpa {
 namespace {

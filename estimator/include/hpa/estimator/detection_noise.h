@@ -1,12 +1,10 @@
 #pragma once
-// Analytic payload camera for fast sweeps: the PayloadDetection the detector would return,
-// computed from the TRUE payload position by exact sphere projection plus the detector's noise.
+// The payload detector's noise in image terms and the measurement covariance it implies: the
+// flight code's model of its own detector (also what the simulated analytic camera draws from).
 
 #include <Eigen/Core>
-#include <random>
 
 #include "hpa/models/params.h"
-#include "hpa/models/sensor_types.h"
 
 namespace hpa {
 
@@ -14,8 +12,8 @@ namespace hpa {
 /// error ~ D sigma_c / f) and the major semi-axis (range error ~ D^2 sigma_a / (f R)).
 ///
 /// Defaults MEASURED with estimator_render_test (RenderedDetectorTest.ErrorStatisticsByRegion):
-/// PayloadDetector on 135 frames rendered off-screen by sim/ (1280x720, payload 0.25-0.45 m from the
-/// camera, 9x5 image positions, level and tilted quadrotor): 31 out of view (all rejected), 64
+/// PayloadDetector on 135 frames rendered off-screen by sim/ (1280x720, payload 0.25-0.45 m from
+/// the camera, 9x5 image positions, level and tilted quadrotor): 31 out of view (all rejected), 64
 /// detected (45 fully visible, 19 partly cut), 40 cut near the 60% visible-outline threshold.
 /// Errors against the exact ellipse of the true position, over the 45 fully visible frames:
 ///   ellipse centre  -0.009 +- 0.075 px (per image axis)
@@ -43,25 +41,5 @@ CameraNoiseModel MeasuredDetectorNoise();
 /// parts from the pixel noise above, plus the semi-axis bias squared on the range.
 Eigen::Matrix3d DetectionCovariance_C(const Params& params, const CameraNoiseModel& noise,
                                       const Eigen::Vector3d& p_CL_C);
-
-/// Sensor model: same acceptance rules as PayloadDetector (too small, partly out of view with
-/// the same visible-outline threshold), Gaussian noise on the image ellipse, then the detector's
-/// own back-projection (SphereCentreFromMajorAxis).
-class AnalyticCamera {
- public:
-  AnalyticCamera(const Params& params, const CameraNoiseModel& noise = MeasuredDetectorNoise(),
-                 double min_visible_outline = 0.60, double min_area_px2 = 200.0);
-
-  /// Detection of a payload whose centre is truly at p_CL_C (camera frame) at time_s; noise
-  /// from the caller's generator (the scenario's single source of randomness).
-  PayloadDetection Measure(const Eigen::Vector3d& p_CL_C, double time_s,
-                           std::mt19937_64& rng) const;
-
- private:
-  Params params_;
-  CameraNoiseModel noise_;
-  double min_visible_outline_;
-  double min_area_px2_;
-};
 
 }  // namespace hpa
