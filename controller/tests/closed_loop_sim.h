@@ -1,7 +1,7 @@
 #pragma once
 // Test harness: hpa::HybridModel as the plant (with taut/slack switching and the inelastic
 // re-taut jump of DESIGN.md section 9), the body-rate controller at 500 Hz and a high-level
-// Controller at its own rate. No MuJoCo: the lead's scenario tests add that.
+// Controller at its own rate, on the runner's LockstepClock. No MuJoCo (the scenario tests add it).
 
 #include <cmath>
 #include <functional>
@@ -11,6 +11,7 @@
 #include "hpa/controller/controller.h"
 #include "hpa/controller/ocp.h"
 #include "hpa/models/hybrid_model.h"
+#include "hpa/models/lockstep.h"
 
 namespace hpa {
 namespace testing_util {
@@ -79,13 +80,16 @@ inline ClosedLoopLog RunClosedLoop(const Params& params, Controller* controller,
   BodyRateController rate_loop(params);
   ClosedLoopLog log;
   const int steps = static_cast<int>(std::lround(duration_s / kDtS));
-  const double ctrl_period_s = 1.0 / controller->RateHz();
-  double next_ctrl_s = 0.0;
+  // the runner's lockstep clock, ticking with the plant; the controller fires on the first tick
+  // at or after each of its periods
+  LockstepClock clock(1.0 / kDtS);
+  const int control_loop = clock.AddLoop("control", controller->RateHz(), TickRounding::kAtOrAfter);
   BodyRateCommand cmd;
-  for (int i = 0; i < steps; ++i) {
+  for (int i = 0; i < steps; ++i, clock.Advance()) {
     const double t = i * kDtS;
     if (event) event(t, plant);
-    if (t + 1e-9 >= next_ctrl_s) {
+    clock.BeginTick();
+    if (clock.Fires(control_loop)) {
       const SystemState s = plant->State(t);
       const ControlOutput out = controller->Update(s);
       cmd = out.command;
@@ -93,7 +97,6 @@ inline ClosedLoopLog RunClosedLoop(const Params& params, Controller* controller,
       log.states.push_back(s);
       log.outputs.push_back(out);
       log.max_solve_ms = std::max(log.max_solve_ms, out.solve_time_ms);
-      next_ctrl_s += ctrl_period_s;
     }
     const SystemState s = plant->State(t);
     const InputVector u = rate_loop.Update(cmd, s.w_B, kDtS);

@@ -18,6 +18,7 @@
 #include "hpa/controller/geometric_controller.h"
 #include "hpa/controller/reference.h"
 #include "hpa/estimator/quad_filter.h"
+#include "hpa/models/lockstep.h"
 #include "hpa/models/params.h"
 #include "hpa/sim/world.h"
 
@@ -27,7 +28,6 @@ namespace {
 constexpr double kDuration_s = 20.0;    // simulated flight
 constexpr double kSettle_s = 2.0;       // initial covariance / bias transient, not scored
 constexpr double kScoreRate_Hz = 50.0;  // NEES samples per second
-constexpr int kRateLoopDecimation = 2;  // 500 Hz body-rate loop on the 1 kHz physics clock
 constexpr int kNeesDof = 9;             // position, velocity, attitude errors (biases: no truth)
 
 /// What one seeded flight measured.
@@ -69,14 +69,19 @@ SimRunResult FlyAndFilter(uint64_t seed) {
   const long score_every_ticks = std::lround(1.0 / (kScoreRate_Hz * sim::World::kPhysicsDt_s));
   const long gust_1_tick = std::lround(9.0 / sim::World::kPhysicsDt_s);
   const long gust_2_tick = std::lround(15.0 / sim::World::kPhysicsDt_s);
-  long next_control = 0;
+  // the runner's clock and rate table: controller at its rate, body-rate loop at the IMU's
+  const RateTable rates;
+  LockstepClock clock(rates.physics_hz);
+  const int control_loop = clock.AddLoop("control", controller.RateHz());
+  const int rate_loop = clock.AddLoop("rate", rates.imu.rate_hz);
   ControlOutput control;
   control.command.thrust_N = params.HoverThrustN();
   std::deque<std::pair<long, SystemState>> recent_truth;  // truth before each step, by tick
   long last_scored_tick = -1;
   double nees_sum = 0.0, squared_position_error_sum_m2 = 0.0;
-  for (long tick = 0; tick < end_tick; ++tick) {
+  for (long tick = 0; tick < end_tick; ++tick, clock.Advance()) {
     const double t_s = tick * sim::World::kPhysicsDt_s;
+    clock.BeginTick();
     const SystemState truth = world.GetTruth().state;
     recent_truth.emplace_back(tick, truth);
     if (recent_truth.size() > 50) recent_truth.pop_front();
@@ -86,15 +91,14 @@ SimRunResult FlyAndFilter(uint64_t seed) {
     if (tick == gust_2_tick) world.SetWind(Eigen::Vector3d(0.0, -0.8, 0.0), 1.0);
 
     // geometric controller at 150 Hz and rate loop at 500 Hz, both on ground truth (runner.cc)
-    if (tick == std::lround(next_control * 1000.0 / controller.RateHz())) {
-      ++next_control;
+    if (clock.Fires(control_loop)) {
       SystemState state = truth;
       state.time_s = t_s;
       control = controller.Update(state);
     }
-    if (tick % kRateLoopDecimation == 0) {
-      world.SetMotorSpeedCommand(rate_controller.Update(
-          control.command, truth.w_B, kRateLoopDecimation * sim::World::kPhysicsDt_s));
+    if (clock.Fires(rate_loop)) {
+      world.SetMotorSpeedCommand(
+          rate_controller.Update(control.command, truth.w_B, 1.0 / rates.imu.rate_hz));
     }
 
     world.Step();
