@@ -1,4 +1,4 @@
-#include "hpa/sim/offscreen_renderer.h"
+#include "offscreen_renderer.h"
 
 #include <GL/osmesa.h>
 

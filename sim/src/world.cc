@@ -1,5 +1,7 @@
 #include "hpa/sim/world.h"
 
+#include <mujoco/mujoco.h>
+
 #include <algorithm>
 #include <cmath>
 #include <fstream>
@@ -9,7 +11,7 @@
 
 #include "hpa/models/input_error.h"
 #include "hpa/models/rotor_model.h"
-#include "hpa/sim/offscreen_renderer.h"
+#include "offscreen_renderer.h"
 
 namespace hpa::sim {
 namespace {
@@ -212,7 +214,7 @@ void World::Reset(const SystemState& initial) {
   t0_s_ = initial.time_s;
   step_ = 0;
   data_->time = t0_s_;
-  for (int i = 0; i < mjNWARNING; ++i) warning_count_[i] = 0;
+  warning_count_.assign(mjNWARNING, 0);
 
   // disturbances, gripper, sensors, crash flag
   forces_.clear();
@@ -491,8 +493,5 @@ cv::Mat World::RenderPayloadCamera() {
 cv::Mat World::RenderChaseCamera(int width_px, int height_px) {
   return renderer_->Render(data_, ids_.chase_camera, width_px, height_px);
 }
-
-const mjModel* World::model() const { return model_; }
-mjData* World::data() { return data_; }
 
 }  // namespace hpa::sim

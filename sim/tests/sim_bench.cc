@@ -4,6 +4,7 @@
 
 #include "hpa/models/params.h"
 #include "hpa/sim/world.h"
+#include "sim/src/world_internals.h"
 
 namespace {
 
@@ -31,7 +32,8 @@ BENCHMARK(BM_WorldStep);
 // Bare mj_step of the same model (no motors, sensors or checks).
 void BM_MjStepBare(benchmark::State& state) {
   hpa::sim::World world(Config());
-  for (auto _ : state) mj_step(world.model(), world.data());
+  for (auto _ : state)
+    mj_step(hpa::sim::WorldInternals::Model(world), hpa::sim::WorldInternals::Data(world));
 }
 BENCHMARK(BM_MjStepBare);
 

@@ -13,6 +13,7 @@
 #include "hpa/models/params.h"
 #include "hpa/models/rotor_model.h"
 #include "models/tests/temp_dir.h"
+#include "sim/src/world_internals.h"
 
 namespace hpa::sim {
 namespace {
@@ -252,8 +253,9 @@ TEST(WorldTest, OverridesChangeTheWorldOnly) {
   EXPECT_NEAR(t.cable_length_m, 0.6, 1e-3);  // stretch 0.04 mm (cable test)
   EXPECT_EQ(t.state.mode, CableMode::kTaut);
   // inertia scaled with the mass: 2/5 m r^2
-  const int payload = mj_name2id(world.model(), mjOBJ_BODY, "payload");
-  EXPECT_NEAR(world.model()->body_inertia[3 * payload], 0.4 * 0.15 * 0.04 * 0.04, 1e-12);
+  const int payload = mj_name2id(WorldInternals::Model(world), mjOBJ_BODY, "payload");
+  EXPECT_NEAR(WorldInternals::Model(world)->body_inertia[3 * payload], 0.4 * 0.15 * 0.04 * 0.04,
+              1e-12);
 }
 
 }  // namespace
@@ -273,7 +275,7 @@ TEST(WorldParamsTest, NonDefaultParamsReachTheModel) {
   c.params.camera_fovy_deg = 60.0;
   c.params.t_BC_B_m = Eigen::Vector3d(0.01, 0.0, -0.04);
   World world(c);
-  const mjModel* m = world.model();
+  const mjModel* m = WorldInternals::Model(world);
   const int act = mj_name2id(m, mjOBJ_ACTUATOR, "rotor0");
   const int site = m->actuator_trnid[2 * act];
   const Eigen::Vector3d r = RotorPosition_B(c.params, 0);

@@ -2,9 +2,8 @@
 // The simulated world (DESIGN.md sections 2, 3, 6, 8, 9): MuJoCo physics of the quadrotor, the
 // cable (a length-limited tendon) and the payload at 1 kHz, first-order motors, IMU and VIO
 // models, disturbances, the gripper, crash detection and the rendered cameras.
-// The only place (with offscreen_renderer.h) that includes MuJoCo; flight code never sees it.
-
-#include <mujoco/mujoco.h>
+// MuJoCo stays inside sim/src (this header only points to its model and data); flight code never
+// sees it.
 
 #include <Eigen/Core>
 #include <cstdint>
@@ -20,6 +19,10 @@
 #include "hpa/models/sensor_types.h"
 #include "hpa/models/state.h"
 #include "hpa/sim/sensor_models.h"
+
+// MuJoCo's model and data, only pointed to here (sim/src includes MuJoCo)
+struct mjModel_;
+struct mjData_;
 
 namespace hpa::sim {
 
@@ -123,8 +126,6 @@ class World {
 
   /// Parameters the world actually simulates (params with overrides applied).
   const Params& world_params() const { return world_params_; }
-  const mjModel* model() const;
-  mjData* data();
 
  private:
   struct Ids {
@@ -152,8 +153,9 @@ class World {
 
   WorldConfig config_;
   Params world_params_;
-  mjModel* model_ = nullptr;
-  mjData* data_ = nullptr;
+  friend struct WorldInternals;  // sim/src/world_internals.h: MuJoCo access for sim tests
+  mjModel_* model_ = nullptr;
+  mjData_* data_ = nullptr;
   Ids ids_{};
   Eigen::Vector3d imu_sum_w_B_radps_ = Eigen::Vector3d::Zero();              // (3)
   Eigen::Vector3d imu_sum_specific_force_B_mps2_ = Eigen::Vector3d::Zero();  // (3)
@@ -161,7 +163,7 @@ class World {
   int imu_steps_ = 2;      // physics steps per IMU sample (rates.physics_hz / rates.imu.rate_hz)
   double t0_s_ = 0.0;
   int64_t step_ = 0;
-  int warning_count_[mjNWARNING] = {};
+  std::vector<int> warning_count_;  // per MuJoCo warning kind (mjNWARNING)
 
   InputVector motor_speed_radps_ = InputVector::Zero();    // actual (4)
   InputVector motor_command_radps_ = InputVector::Zero();  // commanded, clamped (4)
