@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <cstring>
 #include <fstream>
+#include <functional>
 #include <iostream>
 #include <map>
 #include <opencv2/imgcodecs.hpp>
@@ -55,7 +56,8 @@ usage:
                         [--seed N] [--video-slack-events] [--quiet] [--params FILE]
                         [--set PATH=VALUE]...
       Runs the scenario once per controller (default hpa_mpc,nonhybrid_mpc) into DIR/<type>/
-      and writes DIR/comparison.png; with --video-slack-events, a slack-event video per run.
+      and writes DIR/comparison.png and DIR/comparison.md (each controller's metrics and their
+      differences to the first); with --video-slack-events, a slack-event video per run.
   hpa render-frame SCENARIO.yaml --at T --out FILE.png [--seed N] [--controller TYPE]
                         [--params FILE] [--set PATH=VALUE]...
       Runs the scenario to time T (s) and writes one 1280x720 onboard payload-camera frame.
@@ -234,6 +236,62 @@ int Run(int argc, char** argv) {
   return result.metrics.expect_passed ? kExitOk : kExitExpectFailed;
 }
 
+// The paired comparison of one scenario's runs (same seed): each controller's metrics and,
+// for every controller after the first, its difference to the first.
+std::string ComparisonTable(const std::vector<RunResult>& results,
+                            const std::vector<std::string>& types) {
+  struct Row {
+    std::string name;
+    std::function<std::optional<double>(const Metrics&)> value;
+  };
+  const auto norm = [](const Eigen::Vector3d& v) { return std::optional<double>(v.norm()); };
+  const std::vector<Row> rows = {
+      {"crashed", [](const Metrics& m) { return std::optional<double>(m.crashed ? 1 : 0); }},
+      {"payload RMSE norm [m]", [&](const Metrics& m) { return norm(m.payload_rmse_m); }},
+      {"quad deviation max [m]",
+       [](const Metrics& m) { return std::optional<double>(m.quad_position_deviation_max_m); }},
+      {"payload in view",
+       [](const Metrics& m) { return std::optional<double>(m.payload_in_fov_fraction); }},
+      {"mode accuracy", [](const Metrics& m) { return std::optional<double>(m.mode_accuracy); }},
+      {"slack detection latency max [s]",
+       [](const Metrics& m) { return m.slack_detection_latency_max_s; }},
+      {"re-taut v_z min [m/s]",
+       [](const Metrics& m) {
+         return m.retaut_count > 0 ? std::optional<double>(m.retaut_quad_vz_min_mps) : std::nullopt;
+       }},
+      {"re-taut peak body rate [rad/s]",
+       [](const Metrics& m) {
+         return m.retaut_count > 0 ? std::optional<double>(m.retaut_peak_body_rate_radps)
+                                   : std::nullopt;
+       }},
+      {"MPC failures", [](const Metrics& m) { return std::optional<double>(m.mpc_failures); }},
+      {"expect passed", [](const Metrics& m) { return std::optional<double>(m.expect_passed); }},
+  };
+  const auto cell = [](std::optional<double> v) {
+    if (!v || !std::isfinite(*v)) return std::string("-");
+    char text[32];
+    std::snprintf(text, sizeof(text), "%.4g", *v);
+    return std::string(text);
+  };
+  std::string md = "| metric (seed " + std::to_string(results.front().metrics.seed) + ") |";
+  for (const std::string& t : types) md += " " + t + " |";
+  for (size_t i = 1; i < types.size(); ++i) md += " " + types[i] + " - " + types[0] + " |";
+  md += "\n|---|";
+  for (size_t i = 0; i < 2 * types.size() - 1; ++i) md += "---|";
+  md += "\n";
+  for (const Row& row : rows) {
+    md += "| " + row.name + " |";
+    for (const RunResult& r : results) md += " " + cell(row.value(r.metrics)) + " |";
+    const std::optional<double> first = row.value(results.front().metrics);
+    for (size_t i = 1; i < results.size(); ++i) {
+      const std::optional<double> v = row.value(results[i].metrics);
+      md += " " + cell(v && first ? std::optional<double>(*v - *first) : std::nullopt) + " |";
+    }
+    md += "\n";
+  }
+  return md;
+}
+
 int Compare(int argc, char** argv) {
   ScenarioOptions o;
   std::string out_dir, list = "hpa_mpc,nonhybrid_mpc";
@@ -286,6 +344,9 @@ int Compare(int argc, char** argv) {
   }
   const std::string png = out_dir + "/comparison.png";
   WriteComparisonPlot(results, params, png);
+  const std::string table = ComparisonTable(results, types);
+  WriteText(out_dir + "/comparison.md", table);
+  if (!o.quiet) std::printf("\n%s", table.c_str());
   if (!o.quiet) std::printf("comparison plot %s\n", png.c_str());
   if (run_error) return kExitInternal;
   return all_passed ? kExitOk : kExitExpectFailed;

@@ -128,6 +128,20 @@ expect_exit 2 "not a readable file" merge "$out/bad_shard" --out "$out/bad_merge
 expect_exit 2 "controllers" compare "$scen/hover.yaml" --out "$out/cmp" --controllers ,,
 expect_exit 2 "unknown controller 'pid'" compare "$scen/hover.yaml" --out "$out/cmp2" --controllers geometric,pid
 [ -e "$out/cmp2/geometric" ] && fail "compare ran geometric before refusing pid"
+# compare's paired table: both controllers' metrics and the difference, equal to their metrics
+"$hpa" compare "$base" --out "$out/cmp3" --controllers geometric,hpa_mpc --set duration=0.5 --quiet \
+  > /dev/null 2>&1
+python3 - "$out/cmp3" <<'PY' || fail "compare's comparison.md does not match the runs' metrics"
+import json, sys
+d = sys.argv[1]
+rows = {l.split("|")[1].strip(): [c.strip() for c in l.split("|")[2:-1]]
+        for l in open(d + "/comparison.md") if l.startswith("| ") and "---" not in l}
+a = json.load(open(d + "/geometric/metrics.json"))["quad_position_deviation_max_m"]
+b = json.load(open(d + "/hpa_mpc/metrics.json"))["quad_position_deviation_max_m"]
+got = [float(x) for x in rows["quad deviation max [m]"]]
+assert abs(got[0] - a) <= 1e-3 * max(a, 1e-9) and abs(got[1] - b) <= 1e-3 * max(b, 1e-9), got
+assert abs(got[2] - (b - a)) <= 1e-3 * max(abs(b - a), 1e-6) + 1e-6, got
+PY
 # a directory given as a file, malformed values, complex keys: bad input naming file and key
 expect_exit 2 "not a regular file" run "$out" --out "$out/x"
 expect_exit 2 "not a regular file" run "$base" --params "$out" --out "$out/x"
