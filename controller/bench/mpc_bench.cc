@@ -131,7 +131,7 @@ void BM_CondenseAndQp(benchmark::State& st) {
   for (int k = 0; k < n; ++k) {
     StageResidual(ocp, k, x, u[k], &r, &r_x, &r_u);
     stages[k] = GaussNewtonStage(r, r_x, r_u);
-    sc.mpc->model().StepJacobians(x, u[k], ocp.mode, ocp.stage_dt_s, &x, &a[k], &b[k]);
+    ocp.StepJacobians(x, u[k], &x, &a[k], &b[k]);
   }
   StageResidual(ocp, n, x, InputVector::Zero(), &r, &r_x, &r_u);
   stages[n] = GaussNewtonStage(r, r_x, ResidualInputJacobian::Zero());

@@ -10,7 +10,10 @@ namespace hpa {
 
 HpaMpc::HpaMpc(const Params& params, std::shared_ptr<const Reference> reference,
                const MpcSettings& settings)
-    : params_(params), model_(params), reference_(std::move(reference)), settings_(settings) {
+    : params_(params),
+      model_(std::make_shared<const HybridModel>(params)),
+      reference_(std::move(reference)),
+      settings_(settings) {
   if (settings_.solver != "rti" && settings_.solver != "nlopt") {
     throw std::invalid_argument("controller.solver: expected rti or nlopt, got '" +
                                 settings_.solver + "'");
@@ -33,7 +36,7 @@ void HpaMpc::Reset() {
 Ocp HpaMpc::BuildProblem(const SystemState& state) const {
   const CableMode mode = settings_.hybrid ? state.mode : CableMode::kTaut;
   const double perception = settings_.hybrid ? settings_.perception_weight : 0.0;
-  Ocp ocp = BuildOcp(params_, *reference_, state.time_s, mode, perception, settings_.weights);
+  Ocp ocp = BuildOcp(model_, *reference_, state.time_s, mode, perception, settings_.weights);
   SetCameraDeadzone(state, &ocp);
   return ocp;
 }
@@ -91,7 +94,7 @@ ControlOutput HpaMpc::Update(const SystemState& state) {
   // non-hybrid baseline starts the taut model from the state as measured, as the paper's does:
   // a payload lifted along the cable stays an error it acts on
   const StateVector x0 = ocp.mode == CableMode::kTaut && settings_.hybrid
-                             ? model_.ProjectToTaut(state.ToVector())
+                             ? model_->ProjectToTaut(state.ToVector())
                              : state.ToVector();
   const std::vector<InputVector> guess = WarmStart(state.time_s);
   const bool had_plan = plan_u_.size() == static_cast<size_t>(ocp.horizon_steps);
@@ -101,13 +104,13 @@ ControlOutput HpaMpc::Update(const SystemState& state) {
   std::vector<StateVector> x;
   double cost = 0.0;
   if (settings_.solver == "nlopt") {
-    NloptResult r = NloptSolve(ocp, model_, x0, guess, settings_.nlopt);
+    NloptResult r = NloptSolve(ocp, x0, guess, settings_.nlopt);
     status = r.status;
     u = std::move(r.u);
     x = std::move(r.x);
     cost = r.cost;
   } else {
-    RtiResult r = RtiIteration(ocp, model_, x0, guess, settings_.rti);
+    RtiResult r = RtiIteration(ocp, x0, guess, settings_.rti);
     status = r.status;
     u = std::move(r.u);
     x = std::move(r.x);
@@ -118,7 +121,7 @@ ControlOutput HpaMpc::Update(const SystemState& state) {
   if (!solved) {
     // fallback 1: the previous plan shifted; fallback 2: hover
     u = guess;
-    cost = OcpCost(ocp, model_, x0, u, &x);
+    cost = OcpCost(ocp, x0, u, &x);
     bool usable = had_plan && std::isfinite(cost);
     for (const StateVector& xi : x) usable = usable && xi.allFinite();
     if (!usable) {

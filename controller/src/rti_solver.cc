@@ -6,7 +6,7 @@
 
 namespace hpa {
 
-RtiResult RtiIteration(const Ocp& ocp, const HybridModel& model, const StateVector& x0,
+RtiResult RtiIteration(const Ocp& ocp, const StateVector& x0,
                        const std::vector<InputVector>& u_guess, const RtiSettings& settings) {
   const int n = ocp.horizon_steps;
   RtiResult result;
@@ -29,7 +29,7 @@ RtiResult RtiIteration(const Ocp& ocp, const HybridModel& model, const StateVect
     StageResidual(ocp, k, x[k], result.u[k], &r, &r_x, &r_u);
     cost += r.squaredNorm();
     stages[k] = GaussNewtonStage(r, r_x, r_u);
-    model.StepJacobians(x[k], result.u[k], ocp.mode, ocp.stage_dt_s, &x[k + 1], &a[k], &b[k]);
+    ocp.StepJacobians(x[k], result.u[k], &x[k + 1], &a[k], &b[k]);
   }
   StageResidual(ocp, n, x[n], InputVector::Zero(), &r, &r_x, &r_u);
   r_u.setZero();
@@ -87,7 +87,7 @@ RtiResult RtiIteration(const Ocp& ocp, const HybridModel& model, const StateVect
                        .cwiseMax(ocp.u_min_radps)
                        .cwiseMin(ocp.u_max_radps);
       }
-      const double cost_try = OcpCost(ocp, model, x0, u_try, &x_try);
+      const double cost_try = OcpCost(ocp, x0, u_try, &x_try);
       ++result.cost_evaluations;
       if (std::isfinite(cost_try) && cost_try <= cost + settings.armijo * alpha * slope) {
         result.u = u_try;

@@ -60,13 +60,13 @@ class HpaMpc : public Controller {
   void Reset();
 
   const MpcSettings& settings() const { return settings_; }
-  const HybridModel& model() const { return model_; }
+  const HybridModel& model() const { return *model_; }
 
  private:
   BodyRateCommand CommandFromPlan() const;
 
   Params params_;
-  HybridModel model_;
+  std::shared_ptr<const HybridModel> model_;  // the OCPs' dynamics
   std::shared_ptr<const Reference> reference_;
   MpcSettings settings_;
   std::vector<InputVector> plan_u_;  // (N)

@@ -1,7 +1,7 @@
 #pragma once
 // Real-time iteration (the paper's acados scheme): one Gauss-Newton SQP iteration per call.
 // Single shooting: the guess is simulated from x0 (so the trajectory is dynamically exact),
-// linearised with HybridModel::StepJacobians, condensed onto the 4N rotor speeds and the
+// linearised with Ocp::StepJacobians, condensed onto the 4N rotor speeds and the
 // box QP (rotor bounds) is solved in-house. The step is globalised (the plain full step
 // diverged at a re-taut from a near-horizontal cable, ClosedLoopTest.RetautFrom...): an Armijo
 // backtracking line search on the OCP cost (single shooting: every trial is simulated exactly,
@@ -14,7 +14,6 @@
 #include "hpa/controller/box_qp.h"
 #include "hpa/controller/controller.h"
 #include "hpa/controller/ocp.h"
-#include "hpa/models/hybrid_model.h"
 
 namespace hpa {
 
@@ -51,7 +50,7 @@ struct RtiResult {
 /// globalised per `settings`. Non-finite guess cost: kNonFinite; every QP failing: kQpFailure
 /// (u = the guess in both). No descent after all LM tries: kSuccess with step 0 and u = the
 /// guess (the guess is then the best plan known; the next call relinearises).
-RtiResult RtiIteration(const Ocp& ocp, const HybridModel& model, const StateVector& x0,
+RtiResult RtiIteration(const Ocp& ocp, const StateVector& x0,
                        const std::vector<InputVector>& u_guess,
                        const RtiSettings& settings = RtiSettings());
 
