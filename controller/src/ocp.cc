@@ -418,37 +418,47 @@ double OcpCost(const Ocp& ocp, const StateVector& x0, const std::vector<InputVec
   return cost + r.squaredNorm();
 }
 
+OcpLinearization LinearizeAlong(const Ocp& ocp, const StateVector& x0,
+                                const std::vector<InputVector>& u) {
+  const int n = ocp.horizon_steps;
+  OcpLinearization lin;
+  lin.x.resize(n + 1);
+  lin.a.resize(n);
+  lin.b.resize(n);
+  lin.r.resize(n + 1);
+  lin.r_x.resize(n + 1);
+  lin.r_u.resize(n + 1);
+  lin.x[0] = x0;
+  double cost = 0.0;
+  for (int k = 0; k < n; ++k) {
+    StageResidual(ocp, k, lin.x[k], u[k], &lin.r[k], &lin.r_x[k], &lin.r_u[k]);
+    cost += lin.r[k].squaredNorm();
+    ocp.StepJacobians(lin.x[k], u[k], &lin.x[k + 1], &lin.a[k], &lin.b[k]);
+  }
+  StageResidual(ocp, n, lin.x[n], InputVector::Zero(), &lin.r[n], &lin.r_x[n], &lin.r_u[n]);
+  lin.cost = cost + lin.r[n].squaredNorm();
+  return lin;
+}
+
 double OcpCostAndGradient(const Ocp& ocp, const StateVector& x0, const std::vector<InputVector>& u,
                           Eigen::VectorXd* gradient) {
   const int n = ocp.horizon_steps;
-  std::vector<StateVector> x(n + 1);
-  std::vector<StateMatrix> a(n);
-  std::vector<InputMatrix> b(n);
+  const OcpLinearization lin = LinearizeAlong(ocp, x0, u);
+  // stage gradients 2 J^T r
   std::vector<StateVector> gx(n + 1);
   std::vector<InputVector> gu(n);
-  ResidualVector r;
-  ResidualStateJacobian r_x;
-  ResidualInputJacobian r_u;
-  double cost = 0.0;
-  x[0] = x0;
-  // forward: trajectory, sensitivities, stage gradients 2 J^T r
   for (int k = 0; k < n; ++k) {
-    StageResidual(ocp, k, x[k], u[k], &r, &r_x, &r_u);
-    cost += r.squaredNorm();
-    gx[k] = 2.0 * r_x.transpose() * r;
-    gu[k] = 2.0 * r_u.transpose() * r;
-    ocp.StepJacobians(x[k], u[k], &x[k + 1], &a[k], &b[k]);
+    gx[k] = 2.0 * lin.r_x[k].transpose() * lin.r[k];
+    gu[k] = 2.0 * lin.r_u[k].transpose() * lin.r[k];
   }
-  StageResidual(ocp, n, x[n], InputVector::Zero(), &r, &r_x, nullptr);
-  cost += r.squaredNorm();
   // backward adjoint: lambda_N = gx_N, lambda_k = gx_k + A_k^T lambda_{k+1}
   gradient->resize(kNu * n);
-  StateVector lambda = 2.0 * r_x.transpose() * r;
+  StateVector lambda = 2.0 * lin.r_x[n].transpose() * lin.r[n];
   for (int k = n - 1; k >= 0; --k) {
-    gradient->segment<kNu>(kNu * k) = gu[k] + b[k].transpose() * lambda;
-    lambda = gx[k] + a[k].transpose() * lambda;
+    gradient->segment<kNu>(kNu * k) = gu[k] + lin.b[k].transpose() * lambda;
+    lambda = gx[k] + lin.a[k].transpose() * lambda;
   }
-  return cost;
+  return lin.cost;
 }
 
 }  // namespace hpa

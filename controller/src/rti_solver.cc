@@ -15,28 +15,13 @@ RtiResult RtiIteration(const Ocp& ocp, const StateVector& x0,
     result.u[k] = u_guess[k].cwiseMax(ocp.u_min_radps).cwiseMin(ocp.u_max_radps);
   }
 
-  // linearise: simulate the guess, sensitivities and Gauss-Newton stage models
-  std::vector<StateMatrix> a(n);
-  std::vector<InputMatrix> b(n);
+  // linearise along the guess, Gauss-Newton stage models
+  OcpLinearization lin = LinearizeAlong(ocp, x0, result.u);
   std::vector<StageQuadratic> stages(n + 1);
-  std::vector<StateVector> x(n + 1);
-  ResidualVector r;
-  ResidualStateJacobian r_x;
-  ResidualInputJacobian r_u;
-  x[0] = x0;
-  double cost = 0.0;
-  for (int k = 0; k < n; ++k) {
-    StageResidual(ocp, k, x[k], result.u[k], &r, &r_x, &r_u);
-    cost += r.squaredNorm();
-    stages[k] = GaussNewtonStage(r, r_x, r_u);
-    ocp.StepJacobians(x[k], result.u[k], &x[k + 1], &a[k], &b[k]);
-  }
-  StageResidual(ocp, n, x[n], InputVector::Zero(), &r, &r_x, &r_u);
-  r_u.setZero();
-  cost += r.squaredNorm();
-  stages[n] = GaussNewtonStage(r, r_x, r_u);
+  for (int k = 0; k <= n; ++k) stages[k] = GaussNewtonStage(lin.r[k], lin.r_x[k], lin.r_u[k]);
+  const double cost = lin.cost;
   result.cost_guess = cost;
-  result.x = x;
+  result.x = std::move(lin.x);
   result.cost = cost;
   if (!std::isfinite(cost)) {
     result.status = ControlStatus::kNonFinite;
@@ -46,7 +31,7 @@ RtiResult RtiIteration(const Ocp& ocp, const StateVector& x0,
   // condense; the QP on du has bounds u_min - u <= du <= u_max - u
   Eigen::MatrixXd h;
   Eigen::VectorXd g;
-  Condense(a, b, stages, &h, &g);
+  Condense(lin.a, lin.b, stages, &h, &g);
   Eigen::VectorXd lb(kNu * n), ub(kNu * n);
   for (int k = 0; k < n; ++k) {
     lb.segment<kNu>(kNu * k) = ocp.u_min_radps - result.u[k];

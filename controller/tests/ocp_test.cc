@@ -278,6 +278,32 @@ TEST(OcpTest, SoftLimitsArePenalisedOnlyBeyondTheirBounds) {
   EXPECT_NEAR(r(kRateRow + 1), std::sqrt(w.body_rate_weight) * 1.0, 1e-12);
 }
 
+// The linearisation RTI and the adjoint share is the simulation OcpCost runs, bit for bit, with
+// the dynamics' own Jacobians and no input rows at the terminal stage.
+TEST(OcpTest, LinearizationIsTheSimulatedTrajectory) {
+  const Params params;
+  const Ocp ocp = BuildOcp(params, *MakeLissajousReference(params, LissajousSpec()), 2.5,
+                           CableMode::kTaut, 1.0);
+  const StateVector x0 = ocp.model->HoverState(Eigen::Vector3d(0.1, 0.2, 1.4));
+  std::vector<InputVector> u(ocp.horizon_steps);
+  for (int k = 0; k < ocp.horizon_steps; ++k) u[k] = (1.0 + 0.01 * k) * ocp.u_ref[k];
+  std::vector<StateVector> x;
+  const double cost = OcpCost(ocp, x0, u, &x);
+  const OcpLinearization lin = LinearizeAlong(ocp, x0, u);
+  EXPECT_EQ(lin.cost, cost);
+  ASSERT_EQ(lin.x.size(), x.size());
+  for (size_t k = 0; k < x.size(); ++k) EXPECT_EQ(lin.x[k], x[k]) << k;
+  for (int k = 0; k < ocp.horizon_steps; ++k) {
+    StateVector x_next;
+    StateMatrix a;
+    InputMatrix b;
+    ocp.StepJacobians(x[k], u[k], &x_next, &a, &b);
+    EXPECT_EQ(lin.a[k], a) << k;
+    EXPECT_EQ(lin.b[k], b) << k;
+  }
+  EXPECT_TRUE(lin.r_u.back().isZero(0.0));
+}
+
 TEST(OcpTest, CostGradientMatchesFiniteDifferences) {
   const Params params;
   LissajousSpec spec;

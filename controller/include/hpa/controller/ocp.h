@@ -181,8 +181,24 @@ void StageResidual(const Ocp& ocp, int k, const StateVector& x, const InputVecto
 double OcpCost(const Ocp& ocp, const StateVector& x0, const std::vector<InputVector>& u,
                std::vector<StateVector>* x_traj = nullptr);
 
+/// The OCP linearised along the trajectory simulated from x0 with u (single shooting): what
+/// the RTI QP and the adjoint gradient are both built from.
+struct OcpLinearization {
+  std::vector<StateVector> x;              // simulated states  (N + 1)
+  std::vector<StateMatrix> a;              // dF/dx at each stage  (N, 19 x 19)
+  std::vector<InputMatrix> b;              // dF/du at each stage  (N, 19 x 4)
+  std::vector<ResidualVector> r;           // stage residuals, r[N] terminal  (N + 1, 29)
+  std::vector<ResidualStateJacobian> r_x;  // d r_k / d x_k  (N + 1, 29 x 19)
+  std::vector<ResidualInputJacobian> r_u;  // d r_k / d u_k; r_u[N] = 0  (N + 1, 29 x 4)
+  double cost = 0.0;                       // sum_k |r_k|^2
+};
+
+/// Simulates u (N inputs) from x0 and linearises dynamics and residuals at every stage.
+OcpLinearization LinearizeAlong(const Ocp& ocp, const StateVector& x0,
+                                const std::vector<InputVector>& u);
+
 /// Cost and its exact gradient d cost / d u (4N, stage-major) by the adjoint of the
-/// single-shooting chain (exact sensitivities from Ocp::StepJacobians).
+/// single-shooting chain, from LinearizeAlong.
 double OcpCostAndGradient(const Ocp& ocp, const StateVector& x0, const std::vector<InputVector>& u,
                           Eigen::VectorXd* gradient);
 
