@@ -13,11 +13,8 @@ HpaMpc::HpaMpc(const Params& params, std::shared_ptr<const Reference> reference,
     : params_(params),
       model_(std::make_shared<const HybridModel>(params)),
       reference_(std::move(reference)),
-      settings_(settings) {
-  if (settings_.solver != "rti" && settings_.solver != "nlopt") {
-    throw std::invalid_argument("controller.solver: expected rti or nlopt, got '" +
-                                settings_.solver + "'");
-  }
+      settings_(settings),
+      solver_(MakeOcpSolver(settings_.solver, settings_.solvers)) {
   if (!std::isfinite(settings_.perception_weight) || settings_.perception_weight < 0.0) {
     throw std::invalid_argument("controller.perception_weight: expected a finite value >= 0");
   }
@@ -26,6 +23,21 @@ HpaMpc::HpaMpc(const Params& params, std::shared_ptr<const Reference> reference,
     throw std::invalid_argument("mpc output_stage outside the horizon");
   }
   if (!reference_) throw std::invalid_argument("mpc: null reference");
+}
+
+HpaMpc::HpaMpc(const HpaMpc& other)
+    : params_(other.params_),
+      model_(other.model_),
+      reference_(other.reference_),
+      settings_(other.settings_),
+      solver_(other.solver_->Clone()),
+      plan_u_(other.plan_u_),
+      plan_x_(other.plan_x_),
+      plan_time_s_(other.plan_time_s_) {}
+
+HpaMpc& HpaMpc::operator=(const HpaMpc& other) {
+  if (this != &other) *this = HpaMpc(other);
+  return *this;
 }
 
 void HpaMpc::Reset() {
@@ -99,23 +111,11 @@ ControlOutput HpaMpc::Update(const SystemState& state) {
   const std::vector<InputVector> guess = WarmStart(state.time_s);
   const bool had_plan = plan_u_.size() == static_cast<size_t>(ocp.horizon_steps);
 
-  ControlStatus status;
-  std::vector<InputVector> u;
-  std::vector<StateVector> x;
-  double cost = 0.0;
-  if (settings_.solver == "nlopt") {
-    NloptResult r = NloptSolve(ocp, x0, guess, settings_.nlopt);
-    status = r.status;
-    u = std::move(r.u);
-    x = std::move(r.x);
-    cost = r.cost;
-  } else {
-    RtiResult r = RtiIteration(ocp, x0, guess, settings_.rti);
-    status = r.status;
-    u = std::move(r.u);
-    x = std::move(r.x);
-    cost = r.cost;
-  }
+  OcpSolution solution = solver_->Solve(ocp, x0, guess);
+  const ControlStatus status = solution.status;
+  std::vector<InputVector> u = std::move(solution.u);
+  std::vector<StateVector> x = std::move(solution.x);
+  double cost = solution.cost;
 
   const bool solved = status == ControlStatus::kSuccess || status == ControlStatus::kMaxIterations;
   if (!solved) {

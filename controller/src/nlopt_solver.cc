@@ -5,6 +5,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "ocp_solver_factories.h"
+
 namespace hpa {
 namespace {
 
@@ -79,6 +81,31 @@ NloptResult NloptSolve(const Ocp& ocp, const StateVector& x0,
   }
   if (!std::isfinite(result.cost)) result.status = ControlStatus::kNonFinite;
   return result;
+}
+
+namespace {
+
+// NloptSolve behind the OcpSolver interface.
+class NloptSolver final : public OcpSolver {
+ public:
+  explicit NloptSolver(const NloptSettings& settings) : settings_(settings) {}
+
+  OcpSolution Solve(const Ocp& ocp, const StateVector& x0,
+                    const std::vector<InputVector>& u_guess) override {
+    NloptResult r = NloptSolve(ocp, x0, u_guess, settings_);
+    return {r.status, std::move(r.u), std::move(r.x), r.cost};
+  }
+
+  std::unique_ptr<OcpSolver> Clone() const override { return std::make_unique<NloptSolver>(*this); }
+
+ private:
+  NloptSettings settings_;
+};
+
+}  // namespace
+
+std::unique_ptr<OcpSolver> MakeNloptSolver(const OcpSolverSettings& settings) {
+  return std::make_unique<NloptSolver>(settings.nlopt);
 }
 
 }  // namespace hpa

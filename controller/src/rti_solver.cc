@@ -3,6 +3,7 @@
 #include <cmath>
 
 #include "hpa/controller/condensing.h"
+#include "ocp_solver_factories.h"
 
 namespace hpa {
 
@@ -90,6 +91,31 @@ RtiResult RtiIteration(const Ocp& ocp, const StateVector& x0,
   // no step accepted: keep the guess (already in result.u / x / cost)
   result.status = any_qp_solved ? ControlStatus::kSuccess : ControlStatus::kQpFailure;
   return result;
+}
+
+namespace {
+
+// RtiIteration behind the OcpSolver interface.
+class RtiSolver final : public OcpSolver {
+ public:
+  explicit RtiSolver(const RtiSettings& settings) : settings_(settings) {}
+
+  OcpSolution Solve(const Ocp& ocp, const StateVector& x0,
+                    const std::vector<InputVector>& u_guess) override {
+    RtiResult r = RtiIteration(ocp, x0, u_guess, settings_);
+    return {r.status, std::move(r.u), std::move(r.x), r.cost};
+  }
+
+  std::unique_ptr<OcpSolver> Clone() const override { return std::make_unique<RtiSolver>(*this); }
+
+ private:
+  RtiSettings settings_;
+};
+
+}  // namespace
+
+std::unique_ptr<OcpSolver> MakeRtiSolver(const OcpSolverSettings& settings) {
+  return std::make_unique<RtiSolver>(settings.rti);
 }
 
 }  // namespace hpa
