@@ -9,7 +9,8 @@
 #include <ctime>
 
 #include "../tests/closed_loop_sim.h"
-#include "hpa/controller/condensing.h"
+#include "box_qp.h"
+#include "condensing.h"
 #include "hpa/controller/hpa_mpc.h"
 
 namespace hpa {

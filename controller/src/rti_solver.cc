@@ -2,7 +2,8 @@
 
 #include <cmath>
 
-#include "hpa/controller/condensing.h"
+#include "box_qp.h"
+#include "condensing.h"
 #include "ocp_solver_factories.h"
 
 namespace hpa {
@@ -56,10 +57,11 @@ RtiResult RtiIteration(const Ocp& ocp, const StateVector& x0,
       h_qp = &h_reg;
     }
     du.setZero();
-    result.qp = SolveBoxQp(*h_qp, g, lb, ub, &du);
+    const BoxQpResult qp = SolveBoxQp(*h_qp, g, lb, ub, &du);
+    result.qp_iterations = qp.iterations;
     ++result.qp_solves;
-    if (result.qp.status == BoxQpStatus::kNotPositiveDefinite ||
-        result.qp.status == BoxQpStatus::kNonFinite || !du.allFinite()) {
+    if (qp.status == BoxQpStatus::kNotPositiveDefinite || qp.status == BoxQpStatus::kNonFinite ||
+        !du.allFinite()) {
       continue;  // more regularisation
     }
     any_qp_solved = true;
@@ -81,9 +83,8 @@ RtiResult RtiIteration(const Ocp& ocp, const StateVector& x0,
         result.cost = cost_try;
         result.step = alpha;
         result.lm = mu;
-        result.status = result.qp.status == BoxQpStatus::kMaxIterations
-                            ? ControlStatus::kMaxIterations
-                            : ControlStatus::kSuccess;
+        result.status = qp.status == BoxQpStatus::kMaxIterations ? ControlStatus::kMaxIterations
+                                                                 : ControlStatus::kSuccess;
         return result;
       }
     }

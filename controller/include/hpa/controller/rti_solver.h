@@ -11,7 +11,6 @@
 
 #include <vector>
 
-#include "hpa/controller/box_qp.h"
 #include "hpa/controller/controller.h"
 #include "hpa/controller/ocp.h"
 
@@ -35,7 +34,7 @@ struct RtiSettings {
 /// Result of one RTI (or of an iterated Gauss-Newton solve).
 struct RtiResult {
   ControlStatus status = ControlStatus::kSuccess;
-  BoxQpResult qp;              // the last QP's outcome
+  int qp_iterations = 0;       // active-set iterations of the last QP
   std::vector<InputVector> u;  // new plan inputs, inside the bounds  (N)
   std::vector<StateVector> x;  // states simulated with u from x0  (N + 1)
   double cost = 0.0;           // OCP cost of the new plan
