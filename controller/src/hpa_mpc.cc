@@ -101,10 +101,8 @@ ControlOutput HpaMpc::Update(const SystemState& state) {
   }
 
   const Ocp ocp = BuildProblem(state);
-  // the taut flow holds only on the taut manifold: a state just past the guard (the cable
-  // snapping taut, or an estimate off the constraint) goes through the jump map first. The
-  // non-hybrid baseline starts the taut model from the state as measured, as the paper's does:
-  // a payload lifted along the cable stays an error it acts on
+  // the taut flow holds on the taut manifold only: hpa_mpc projects x0 onto it (jump map);
+  // nonhybrid_mpc starts from the state as measured, as the paper's baseline does
   const StateVector x0 = ocp.mode == CableMode::kTaut && settings_.hybrid
                              ? model_->ProjectToTaut(state.ToVector())
                              : state.ToVector();

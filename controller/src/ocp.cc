@@ -147,8 +147,7 @@ OcpTermWeight TiltWeight(const OcpWeights& w, CableMode) {
   return OcpTermWeight::Constant(1, w.tilt_weight);
 }
 
-// Soft tilt: sqrt(w) h, h = (1 - cos tilt) - (1 - cos tilt_max) > 0, 1 - cos tilt = 2 (qx^2 +
-// qy^2).
+// Soft tilt: sqrt(w) h where h = (1 - cos tilt) - (1 - cos tilt_max) > 0, 1 - cos = 2 (qx^2+qy^2).
 void TiltExcess(const Ocp& ocp, int, const StateVector& x, const InputVector&,
                 const OcpTermWeight& sqrt_w, OcpTermResidual* r, OcpTermStateJacobian* r_x,
                 OcpTermInputJacobian*) {
@@ -232,7 +231,7 @@ void EvaluateTerm(const Ocp& ocp, const OcpTerm& term, int k, const StateVector&
     term.residual(ocp, k, x, u, sqrt_weight, &r_rows, nullptr, nullptr);
     return;
   }
-  // a null Jacobian is written to a scratch copy of the other's shape only when asked
+  // a block needs a matrix to view: an unrequested Jacobian views scratch that is never written
   ResidualStateJacobian r_x_unused;
   ResidualInputJacobian r_u_unused;
   OcpTermStateJacobian r_x_rows(r_x != nullptr ? *r_x : r_x_unused, term.offset, 0, term.rows, kNx);
@@ -255,8 +254,7 @@ OcpWeights OcpWeights::Tuned() {
       1, 1, 1,                // quadrotor velocity (weak)
       0.0, 20, 20, 20,        // attitude q - q_ref (w, x, y, z); w follows from x, y, z
       0.5, 0.5, 0.5;          // body rate regularisation, (rad/s)^-2
-  // L_quad (slack): quadrotor position/velocity, payload states zero (free fall is not
-  // controllable)
+  // L_quad (slack): quadrotor position/velocity, payload zero (its free fall is not controllable)
   w.q_quad << 0, 0, 0, 0, 0, 0,            // payload
       200, 200, 200,                       // quadrotor position
       15, 15, 15,                          // quadrotor velocity

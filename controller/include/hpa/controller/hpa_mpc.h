@@ -19,15 +19,10 @@ struct MpcSettings {
   double perception_weight = 1.0;  // scale on q_cam (hybrid only)
   std::string solver = "rti";      // a name from OcpSolvers(): rti | nlopt
   OcpWeights weights = OcpWeights::Tuned();
-  OcpSolverSettings solvers;  // settings of the solver named by `solver`
-  // Command taken from the plan: body rates of state x[rate_output_stage] (the paper's second
-  // stage) and collective thrust of input u[thrust_output_stage]. The thrust comes from u_0 by
-  // default: with 0.1 s stages re-solved every 6.7 ms, flying u_1 never applies the plan's
-  // first input, and the closed loop then has equilibria with a standing error (measured:
-  // 0.67 m in z after a 0.2 m altitude offset on the analytic plant).
-  int rate_output_stage = 1;
-  int thrust_output_stage = 0;
-  double rate_hz = 150.0;  // rate the runner calls Update at
+  OcpSolverSettings solvers;    // settings of the solver named by `solver`
+  int rate_output_stage = 1;    // body rates flown: plan state x[1] (the paper's second stage)
+  int thrust_output_stage = 0;  // thrust flown: plan input u[0] (why not u[1]: README)
+  double rate_hz = 150.0;       // rate the runner calls Update at
 };
 
 /// Model predictive controller over the OCP of ocp.h.

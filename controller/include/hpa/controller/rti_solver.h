@@ -1,9 +1,8 @@
 #pragma once
 // Real-time iteration (the paper's acados scheme): one Gauss-Newton SQP iteration per call.
 // Single shooting: the guess is simulated from x0 (so the trajectory is dynamically exact),
-// linearised with Ocp::StepJacobians, condensed onto the 4N rotor speeds and the
-// box QP (rotor bounds) is solved in-house. The step is globalised (the plain full step
-// diverged at a re-taut from a near-horizontal cable, ClosedLoopTest.RetautFrom...): an Armijo
+// linearised by LinearizeAlong (ocp.h), condensed onto the 4N rotor speeds and the
+// box QP (rotor bounds) is solved in-house. The step is globalised (why: README): an Armijo
 // backtracking line search on the OCP cost (single shooting: every trial is simulated exactly,
 // and the box is convex so every trial is feasible), and Levenberg-Marquardt regularisation
 // of the Gauss-Newton Hessian, raised when the QP is not positive definite or no step along
