@@ -34,11 +34,14 @@ TEST(HpaMpcTest, HoverAtReferenceKeepsHoverThrust) {
   SystemState s = HoverAt(params, Eigen::Vector3d(0, 0, 1.5));
   const ControlOutput out = mpc.Update(s);
   EXPECT_EQ(out.status, ControlStatus::kSuccess);
-  // at the reference the optimum is hover: thrust within 1% and rates below 0.01 rad/s
-  // (the only pull away from hover is the 1e-12-scale rounding of the references)
-  EXPECT_NEAR(out.command.thrust_N, params.HoverThrustN(), 0.01 * params.HoverThrustN());
-  EXPECT_LT(out.command.w_B_radps.norm(), 1e-2);
-  EXPECT_LT(out.cost, 1e-3);
+  std::printf("hover at reference: thrust error %.3e N, |w| %.3e rad/s, cost %.3e\n",
+              out.command.thrust_N - params.HoverThrustN(), out.command.w_B_radps.norm(), out.cost);
+  // at the reference the optimum is hover; the only pull away from it is the rounding of the
+  // references. Measured: thrust error 1.8e-15 N (1 ulp of 8 N), body rate 0, cost 6e-28;
+  // bounds at rounding scale with room for reordered sums (1e-9 N, 1e-9 rad/s, 1e-18)
+  EXPECT_NEAR(out.command.thrust_N, params.HoverThrustN(), 1e-9);
+  EXPECT_LT(out.command.w_B_radps.norm(), 1e-9);
+  EXPECT_LT(out.cost, 1e-18);
   ExpectInBounds(params, mpc.plan_inputs());
 }
 
@@ -75,11 +78,15 @@ TEST(HpaMpcTest, WarmStartReducesCost) {
   const RtiResult warm = RtiIteration(ocp, x0, mpc.WarmStart(s.time_s));
   const RtiResult cold = RtiIteration(
       ocp, x0, std::vector<InputVector>(10, InputVector::Constant(params.HoverMotorSpeedRadps())));
-  std::printf("warm start: guess %.3f -> %.3f, cold: guess %.3f -> %.3f\n", warm.cost_guess,
+  std::printf("warm start: guess %.6f -> %.6f, cold: guess %.6f -> %.6f\n", warm.cost_guess,
               warm.cost, cold.cost_guess, cold.cost);
   EXPECT_LT(warm.cost_guess, cold.cost_guess);
   EXPECT_LT(warm.cost, cold.cost);
-  EXPECT_LT(warm.cost, warm.cost_guess);
+  // measured: warm 267.561 -> 248.389 (a decrease of 19.172), cold 10912.6 -> 1777.96;
+  // bounds: costs x 1.4, the warm decrease / 1.4
+  EXPECT_LT(warm.cost, 1.4 * 248.389);
+  EXPECT_GT(warm.cost_guess - warm.cost, 19.172 / 1.4);
+  EXPECT_LT(cold.cost, 1.4 * 1777.96);
 }
 
 TEST(HpaMpcTest, RepeatedRtiConvergesToNloptOptimum) {
@@ -93,11 +100,16 @@ TEST(HpaMpcTest, RepeatedRtiConvergesToNloptOptimum) {
   RtiResult r = first;
   for (int i = 0; i < 15; ++i) r = RtiIteration(ocp, x0, r.u);
   const NloptResult nl = NloptSolve(ocp, x0, u);
+  std::printf("from hover guess: one RTI %.6f, 16 RTIs %.6f, NLopt %.6f (%d evaluations)\n",
+              first.cost, r.cost, nl.cost, nl.evaluations);
   ASSERT_TRUE(nl.status == ControlStatus::kSuccess) << nl.nlopt_code;
   // NLopt reaches the (local) optimum; one RTI is close to it, iterated Gauss-Newton agrees to
-  // 1% (GN converges linearly at the residual-curvature rate; measured ratio ~1.000x)
+  // 1% (GN converges linearly at the residual-curvature rate). Measured: one RTI 258.649,
+  // 16 RTIs 218.35899, NLopt 218.35899 (ratio 1.000); the costs are bounded at measured x 1.4
   EXPECT_LE(nl.cost, first.cost * (1 + 1e-9));
   EXPECT_NEAR(r.cost, nl.cost, 0.01 * nl.cost);
+  EXPECT_LT(first.cost, 1.4 * 258.649);
+  EXPECT_LT(nl.cost, 1.4 * 218.359);
   ExpectInBounds(params, nl.u);
 }
 
