@@ -56,7 +56,7 @@ struct OcpWeights {
 
 /// One instance of the optimal control problem: dynamics, references, weights, bounds.
 struct Ocp {
-  std::shared_ptr<const HybridModel> model;  // discretised hybrid dynamics F and its Jacobians
+  std::shared_ptr<const HybridModel> model;  // dynamics F and its Jacobians (set by BuildOcp)
   int horizon_steps = kOcpHorizonSteps;      // N
   double stage_dt_s = kOcpStageDtS;          // stage length
   CableMode mode = CableMode::kTaut;         // held over the horizon
@@ -130,7 +130,7 @@ const std::vector<OcpTerm>& OcpTerms();
 /// The term named `name`, or nullptr.
 const OcpTerm* FindOcpTerm(std::string_view name);
 
-/// Diagonal weight of `term`'s rows at stage k of `ocp` (zero where the term is not evaluated).
+/// Diagonal weight of `term`'s rows at stage k of `ocp` (zero at stage N for kOmitted terms).
 OcpTermWeight OcpTermStageWeight(const Ocp& ocp, const OcpTerm& term, int k);
 
 /// One term's weighted residual (rows) and, if asked, its Jacobians (rows x 19, rows x 4) at
