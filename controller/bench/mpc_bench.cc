@@ -9,7 +9,8 @@
 #include <ctime>
 
 #include "../tests/closed_loop_sim.h"
-#include "hpa/controller/condensing.h"
+#include "box_qp.h"
+#include "condensing.h"
 #include "hpa/controller/hpa_mpc.h"
 
 namespace hpa {
@@ -120,21 +121,10 @@ void BM_CondenseAndQp(benchmark::State& st) {
   WarmScenario sc("rti");
   const Ocp ocp = sc.mpc->BuildProblem(sc.state);
   const int n = ocp.horizon_steps;
-  std::vector<StateMatrix> a(n);
-  std::vector<InputMatrix> b(n);
-  std::vector<StageQuadratic> stages(n + 1);
-  StateVector x = sc.state.ToVector();
-  ResidualVector r;
-  ResidualStateJacobian r_x;
-  ResidualInputJacobian r_u;
   const std::vector<InputVector> u = sc.mpc->WarmStart(sc.state.time_s);
-  for (int k = 0; k < n; ++k) {
-    StageResidual(ocp, k, x, u[k], &r, &r_x, &r_u);
-    stages[k] = GaussNewtonStage(r, r_x, r_u);
-    sc.mpc->model().StepJacobians(x, u[k], ocp.mode, ocp.stage_dt_s, &x, &a[k], &b[k]);
-  }
-  StageResidual(ocp, n, x, InputVector::Zero(), &r, &r_x, &r_u);
-  stages[n] = GaussNewtonStage(r, r_x, ResidualInputJacobian::Zero());
+  const OcpLinearization lin = LinearizeAlong(ocp, sc.state.ToVector(), u);
+  std::vector<StageQuadratic> stages(n + 1);
+  for (int k = 0; k <= n; ++k) stages[k] = GaussNewtonStage(lin.r[k], lin.r_x[k], lin.r_u[k]);
   Eigen::VectorXd lb(kNu * n), ub(kNu * n);
   for (int k = 0; k < n; ++k) {
     lb.segment<kNu>(kNu * k) = ocp.u_min_radps - u[k];
@@ -143,7 +133,7 @@ void BM_CondenseAndQp(benchmark::State& st) {
   Eigen::MatrixXd h;
   Eigen::VectorXd g;
   for (auto _ : st) {
-    Condense(a, b, stages, &h, &g);
+    Condense(lin.a, lin.b, stages, &h, &g);
     Eigen::VectorXd du = Eigen::VectorXd::Zero(kNu * n);
     benchmark::DoNotOptimize(SolveBoxQp(h, g, lb, ub, &du));
   }

@@ -1,4 +1,4 @@
-#include "hpa/controller/box_qp.h"
+#include "box_qp.h"
 
 #include <Eigen/Cholesky>
 #include <algorithm>

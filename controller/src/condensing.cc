@@ -1,4 +1,4 @@
-#include "hpa/controller/condensing.h"
+#include "condensing.h"
 
 namespace hpa {
 

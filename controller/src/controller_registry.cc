@@ -57,6 +57,4 @@ void RegisterController(ControllerRegistration registration) {
   Registry().push_back(std::move(registration));
 }
 
-std::vector<std::string> OcpSolverNames() { return {"rti", "nlopt"}; }
-
 }  // namespace hpa

@@ -10,11 +10,11 @@ namespace hpa {
 
 HpaMpc::HpaMpc(const Params& params, std::shared_ptr<const Reference> reference,
                const MpcSettings& settings)
-    : params_(params), model_(params), reference_(std::move(reference)), settings_(settings) {
-  if (settings_.solver != "rti" && settings_.solver != "nlopt") {
-    throw std::invalid_argument("controller.solver: expected rti or nlopt, got '" +
-                                settings_.solver + "'");
-  }
+    : params_(params),
+      model_(std::make_shared<const HybridModel>(params)),
+      reference_(std::move(reference)),
+      settings_(settings),
+      solver_(MakeOcpSolver(settings_.solver, settings_.solvers)) {
   if (!std::isfinite(settings_.perception_weight) || settings_.perception_weight < 0.0) {
     throw std::invalid_argument("controller.perception_weight: expected a finite value >= 0");
   }
@@ -25,6 +25,21 @@ HpaMpc::HpaMpc(const Params& params, std::shared_ptr<const Reference> reference,
   if (!reference_) throw std::invalid_argument("mpc: null reference");
 }
 
+HpaMpc::HpaMpc(const HpaMpc& other)
+    : params_(other.params_),
+      model_(other.model_),
+      reference_(other.reference_),
+      settings_(other.settings_),
+      solver_(other.solver_->Clone()),
+      plan_u_(other.plan_u_),
+      plan_x_(other.plan_x_),
+      plan_time_s_(other.plan_time_s_) {}
+
+HpaMpc& HpaMpc::operator=(const HpaMpc& other) {
+  if (this != &other) *this = HpaMpc(other);
+  return *this;
+}
+
 void HpaMpc::Reset() {
   plan_u_.clear();
   plan_x_.clear();
@@ -33,7 +48,7 @@ void HpaMpc::Reset() {
 Ocp HpaMpc::BuildProblem(const SystemState& state) const {
   const CableMode mode = settings_.hybrid ? state.mode : CableMode::kTaut;
   const double perception = settings_.hybrid ? settings_.perception_weight : 0.0;
-  Ocp ocp = BuildOcp(params_, *reference_, state.time_s, mode, perception, settings_.weights);
+  Ocp ocp = BuildOcp(model_, *reference_, state.time_s, mode, perception, settings_.weights);
   SetCameraDeadzone(state, &ocp);
   return ocp;
 }
@@ -86,39 +101,25 @@ ControlOutput HpaMpc::Update(const SystemState& state) {
   }
 
   const Ocp ocp = BuildProblem(state);
-  // the taut flow holds only on the taut manifold: a state just past the guard (the cable
-  // snapping taut, or an estimate off the constraint) goes through the jump map first. The
-  // non-hybrid baseline starts the taut model from the state as measured, as the paper's does:
-  // a payload lifted along the cable stays an error it acts on
+  // the taut flow holds on the taut manifold only: hpa_mpc projects x0 onto it (jump map);
+  // nonhybrid_mpc starts from the state as measured, as the paper's baseline does
   const StateVector x0 = ocp.mode == CableMode::kTaut && settings_.hybrid
-                             ? model_.ProjectToTaut(state.ToVector())
+                             ? model_->ProjectToTaut(state.ToVector())
                              : state.ToVector();
   const std::vector<InputVector> guess = WarmStart(state.time_s);
   const bool had_plan = plan_u_.size() == static_cast<size_t>(ocp.horizon_steps);
 
-  ControlStatus status;
-  std::vector<InputVector> u;
-  std::vector<StateVector> x;
-  double cost = 0.0;
-  if (settings_.solver == "nlopt") {
-    NloptResult r = NloptSolve(ocp, model_, x0, guess, settings_.nlopt);
-    status = r.status;
-    u = std::move(r.u);
-    x = std::move(r.x);
-    cost = r.cost;
-  } else {
-    RtiResult r = RtiIteration(ocp, model_, x0, guess, settings_.rti);
-    status = r.status;
-    u = std::move(r.u);
-    x = std::move(r.x);
-    cost = r.cost;
-  }
+  OcpSolution solution = solver_->Solve(ocp, x0, guess);
+  const ControlStatus status = solution.status;
+  std::vector<InputVector> u = std::move(solution.u);
+  std::vector<StateVector> x = std::move(solution.x);
+  double cost = solution.cost;
 
   const bool solved = status == ControlStatus::kSuccess || status == ControlStatus::kMaxIterations;
   if (!solved) {
     // fallback 1: the previous plan shifted; fallback 2: hover
     u = guess;
-    cost = OcpCost(ocp, model_, x0, u, &x);
+    cost = OcpCost(ocp, x0, u, &x);
     bool usable = had_plan && std::isfinite(cost);
     for (const StateVector& xi : x) usable = usable && xi.allFinite();
     if (!usable) {

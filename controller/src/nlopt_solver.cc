@@ -5,14 +5,15 @@
 #include <algorithm>
 #include <cmath>
 
+#include "ocp_solver_factories.h"
+
 namespace hpa {
 namespace {
 
 // Data the NLopt callback needs; decision variables are u / u_hover.
 struct Problem {
-  const Ocp* ocp;
-  const HybridModel* model;
-  const StateVector* x0;
+  const Ocp* ocp = nullptr;
+  const StateVector* x0 = nullptr;
   int evaluations = 0;
   std::vector<InputVector> u;
   Eigen::VectorXd gradient;
@@ -25,15 +26,15 @@ double Objective(unsigned n, const double* z, double* grad, void* data) {
   for (int k = 0; k < p->ocp->horizon_steps; ++k) {
     for (int i = 0; i < kNu; ++i) p->u[k](i) = z[kNu * k + i] * scale;
   }
-  if (grad == nullptr) return OcpCost(*p->ocp, *p->model, *p->x0, p->u);
-  const double cost = OcpCostAndGradient(*p->ocp, *p->model, *p->x0, p->u, &p->gradient);
+  if (grad == nullptr) return OcpCost(*p->ocp, *p->x0, p->u);
+  const double cost = OcpCostAndGradient(*p->ocp, *p->x0, p->u, &p->gradient);
   for (unsigned i = 0; i < n; ++i) grad[i] = p->gradient(i) * scale;
   return cost;
 }
 
 }  // namespace
 
-NloptResult NloptSolve(const Ocp& ocp, const HybridModel& model, const StateVector& x0,
+NloptResult NloptSolve(const Ocp& ocp, const StateVector& x0,
                        const std::vector<InputVector>& u_guess, const NloptSettings& settings) {
   const int n = ocp.horizon_steps;
   const unsigned dim = static_cast<unsigned>(kNu * n);
@@ -46,7 +47,9 @@ NloptResult NloptSolve(const Ocp& ocp, const HybridModel& model, const StateVect
       z[kNu * k + i] = std::clamp(u_guess[k](i) / scale, lb[kNu * k + i], ub[kNu * k + i]);
     }
   }
-  Problem problem{&ocp, &model, &x0};
+  Problem problem;
+  problem.ocp = &ocp;
+  problem.x0 = &x0;
   problem.u.resize(n);
 
   nlopt_opt opt = nlopt_create(NLOPT_LD_LBFGS, dim);
@@ -70,7 +73,7 @@ NloptResult NloptSolve(const Ocp& ocp, const HybridModel& model, const StateVect
       result.u[k](i) = std::clamp(z[kNu * k + i] * scale, ocp.u_min_radps(i), ocp.u_max_radps(i));
     }
   }
-  result.cost = OcpCost(ocp, model, x0, result.u, &result.x);
+  result.cost = OcpCost(ocp, x0, result.u, &result.x);
   if (code == NLOPT_MAXEVAL_REACHED || code == NLOPT_MAXTIME_REACHED) {
     result.status = ControlStatus::kMaxIterations;
   } else if (code < 0 && code != NLOPT_ROUNDOFF_LIMITED) {
@@ -78,6 +81,31 @@ NloptResult NloptSolve(const Ocp& ocp, const HybridModel& model, const StateVect
   }
   if (!std::isfinite(result.cost)) result.status = ControlStatus::kNonFinite;
   return result;
+}
+
+namespace {
+
+// NloptSolve behind the OcpSolver interface.
+class NloptSolver final : public OcpSolver {
+ public:
+  explicit NloptSolver(const NloptSettings& settings) : settings_(settings) {}
+
+  OcpSolution Solve(const Ocp& ocp, const StateVector& x0,
+                    const std::vector<InputVector>& u_guess) override {
+    NloptResult r = NloptSolve(ocp, x0, u_guess, settings_);
+    return {r.status, std::move(r.u), std::move(r.x), r.cost};
+  }
+
+  std::unique_ptr<OcpSolver> Clone() const override { return std::make_unique<NloptSolver>(*this); }
+
+ private:
+  NloptSettings settings_;
+};
+
+}  // namespace
+
+std::unique_ptr<OcpSolver> MakeNloptSolver(const OcpSolverSettings& settings) {
+  return std::make_unique<NloptSolver>(settings.nlopt);
 }
 
 }  // namespace hpa

@@ -1,5 +1,6 @@
 #include "hpa/controller/ocp.h"
 
+#include <array>
 #include <cmath>
 #include <limits>
 #include <unsupported/Eigen/AutoDiff>
@@ -8,11 +9,7 @@ namespace hpa {
 namespace {
 
 using I = StateIndex;
-constexpr int kRowInput = kNx;          // 4 rows: input
-constexpr int kRowCam = kNx + kNu;      // 2 rows: camera x, y
 constexpr double kCamMinDepthM = 0.12;  // slack L_cam off nearer the lens plane (thrown payload)
-constexpr int kRowTilt = kRowCam + 2;   // 1 row: soft tilt
-constexpr int kRowRate = kRowTilt + 1;  // 3 rows: soft body rate
 
 // Rotation matrix of a (unit) quaternion w, x, y, z, for any scalar type.
 template <typename T>
@@ -33,9 +30,8 @@ Eigen::Matrix<T, 3, 1> CameraPoint(const Ocp& ocp, const Eigen::Vector3d& d_W,
   return ocp.R_BC.transpose().cast<T>() * (d_B - ocp.t_BC_B_m.cast<T>());
 }
 
-// Collective thrust direction and magnitude the reference point needs in `mode`:
-// taut: m (a_Q + g e3) + m_L (a_L + g e3) (quadrotor plus the cable tension), slack: m (a_Q + g
-// e3).
+// Collective thrust vector the reference point needs: taut m (a_Q + g e3) + m_L (a_L + g e3)
+// (quadrotor plus the cable tension), slack m (a_Q + g e3).
 Eigen::Vector3d ThrustVector(const Params& params, const ReferencePoint& point, CableMode mode) {
   const Eigen::Vector3d g_e3(0, 0, params.gravity_mps2);
   Eigen::Vector3d f = params.quad_mass_kg * (point.a_WQ_W + g_e3);
@@ -43,48 +39,229 @@ Eigen::Vector3d ThrustVector(const Params& params, const ReferencePoint& point, 
   return f;
 }
 
+// State reference of stage k (the terminal one past the horizon).
+const StateVector& StageStateReference(const Ocp& ocp, int k) {
+  return ocp.x_ref[std::min<int>(k, ocp.x_ref.size() - 1)];
+}
+
+// --- the terms: weight per mode and weighted residual --------------------------------------
+
+// State tracking weight of the block [kStart, kStart + kRows): Q_load taut, Q_quad slack.
+template <int kStart, int kRows>
+OcpTermWeight StateWeight(const OcpWeights& w, CableMode mode) {
+  const StateVector& q = mode == CableMode::kTaut ? w.q_load : w.q_quad;
+  return q.segment<kRows>(kStart);
+}
+
+// State tracking residual sqrt(q) (x - x_ref) of one vector block of the state.
+template <int kStart, int kRows>
+void StateError(const Ocp& ocp, int k, const StateVector& x, const InputVector&,
+                const OcpTermWeight& sqrt_w, OcpTermResidual* r, OcpTermStateJacobian* r_x,
+                OcpTermInputJacobian*) {
+  const StateVector& x_ref = StageStateReference(ocp, k);
+  *r = sqrt_w.cwiseProduct(x.segment<kRows>(kStart) - x_ref.segment<kRows>(kStart));
+  if (r_x != nullptr) r_x->middleCols<kRows>(kStart).diagonal() = sqrt_w;
+}
+
+// Attitude residual sqrt(q) (q - q_ref), q_ref taken with the sign nearest q (same rotation).
+void AttitudeError(const Ocp& ocp, int k, const StateVector& x, const InputVector&,
+                   const OcpTermWeight& sqrt_w, OcpTermResidual* r, OcpTermStateJacobian* r_x,
+                   OcpTermInputJacobian*) {
+  Eigen::Vector4d q_ref = StageStateReference(ocp, k).segment<4>(I::kQuat);
+  if (x.segment<4>(I::kQuat).dot(q_ref) < 0.0) q_ref *= -1.0;
+  *r = sqrt_w.cwiseProduct(x.segment<4>(I::kQuat) - q_ref);
+  if (r_x != nullptr) r_x->middleCols<4>(I::kQuat).diagonal() = sqrt_w;
+}
+
+// Input weight R (per rotor, both modes).
+OcpTermWeight InputWeight(const OcpWeights& w, CableMode) { return w.r_input; }
+
+// Input residual sqrt(R) (u - u_ref) / u_hover.
+void InputError(const Ocp& ocp, int k, const StateVector&, const InputVector& u,
+                const OcpTermWeight& sqrt_w, OcpTermResidual* r, OcpTermStateJacobian*,
+                OcpTermInputJacobian* r_u) {
+  const InputVector sqrt_r = sqrt_w / ocp.u_hover_radps;
+  *r = sqrt_r.cwiseProduct(u - ocp.u_ref[k]);
+  if (r_u != nullptr) r_u->diagonal() = sqrt_r;
+}
+
+// L_cam weight per mode (taut: the payload hangs in view; slack: beyond the dead zone).
+OcpTermWeight PerceptionWeight(const OcpWeights& w, CableMode mode) {
+  return mode == CableMode::kTaut ? w.q_cam_per_m2 : w.q_cam_slack_per_m2;
+}
+
+// L_cam is scaled by the controller's perception weight.
+double PerceptionScale(const Ocp& ocp) { return ocp.perception_weight; }
+
+// L_cam residual: sqrt(q_cam) times the x, y of p_C (slack: beyond the dead zone).
+void PerceptionError(const Ocp& ocp, int k, const StateVector& x, const InputVector&,
+                     const OcpTermWeight& sqrt_cam, OcpTermResidual* r, OcpTermStateJacobian* r_x,
+                     OcpTermInputJacobian*) {
+  const OcpWeights& w = ocp.weights;
+  if (w.cam_at_reference_attitude) {
+    // camera at the reference attitude: p_C is affine in x_L - x_Q, no attitude lever
+    const Eigen::Vector4d q_ref = StageStateReference(ocp, k).segment<4>(I::kQuat);
+    const Eigen::Matrix3d r_ref = RotationOf<double>(q_ref(0), q_ref(1), q_ref(2), q_ref(3));
+    const Eigen::Matrix3d rr = (r_ref * ocp.R_BC).transpose();
+    const Eigen::Vector3d d_W = x.segment<3>(I::kPayloadPos) - x.segment<3>(I::kQuadPos);
+    const Eigen::Vector3d p_C = rr * (d_W - r_ref * ocp.t_BC_B_m);
+    const double deadzone = ocp.mode == CableMode::kSlack ? w.cam_slack_deadzone_fraction : 0.0;
+    for (int i = 0; i < 2; ++i) {
+      if (deadzone <= 0.0) {
+        (*r)(i) = sqrt_cam(i) * p_C(i);
+      } else {
+        // dead zone: r_i = sqrt(q) (p_i - sign(p_i) d_i) where |p_i| > d_i, else 0
+        const double excess = std::abs(p_C(i)) - ocp.cam_slack_deadzone_m(i);
+        if (!(excess > 0.0)) continue;
+        const double sign = p_C(i) > 0.0 ? 1.0 : -1.0;
+        (*r)(i) = sqrt_cam(i) * sign * excess;
+      }
+      if (r_x != nullptr) {
+        r_x->block<1, 3>(i, I::kPayloadPos) = sqrt_cam(i) * rr.row(i);
+        r_x->block<1, 3>(i, I::kQuadPos) = -sqrt_cam(i) * rr.row(i);
+      }
+    }
+    return;
+  }
+  // camera at the state's attitude (the paper's literal L_cam)
+  const Eigen::Vector3d d_W = x.segment<3>(I::kPayloadPos) - x.segment<3>(I::kQuadPos);
+  using Ad = Eigen::AutoDiffScalar<Eigen::Vector4d>;
+  Eigen::Matrix<Ad, 4, 1> q_ad;
+  for (int i = 0; i < 4; ++i) q_ad(i) = Ad(x(I::kQuat + i), 4, i);
+  const Eigen::Matrix<Ad, 3, 1> p_C = CameraPoint<Ad>(ocp, d_W, q_ad);
+  // d p_C / d x_L = (R R_BC)^T, d p_C / d x_Q = -(R R_BC)^T
+  const Eigen::Vector4d q = x.segment<4>(I::kQuat);
+  const Eigen::Matrix3d rr = (RotationOf<double>(q(0), q(1), q(2), q(3)) * ocp.R_BC).transpose();
+  for (int i = 0; i < 2; ++i) {
+    (*r)(i) = sqrt_cam(i) * p_C(i).value();
+    if (r_x != nullptr) {
+      r_x->block<1, 3>(i, I::kPayloadPos) = sqrt_cam(i) * rr.row(i);
+      r_x->block<1, 3>(i, I::kQuadPos) = -sqrt_cam(i) * rr.row(i);
+      r_x->block<1, 4>(i, I::kQuat) = sqrt_cam(i) * p_C(i).derivatives().transpose();
+    }
+  }
+}
+
+// Soft tilt weight (both modes).
+OcpTermWeight TiltWeight(const OcpWeights& w, CableMode) {
+  return OcpTermWeight::Constant(1, w.tilt_weight);
+}
+
+// Soft tilt: sqrt(w) h where h = (1 - cos tilt) - (1 - cos tilt_max) > 0, 1 - cos = 2 (qx^2+qy^2).
+void TiltExcess(const Ocp& ocp, int, const StateVector& x, const InputVector&,
+                const OcpTermWeight& sqrt_w, OcpTermResidual* r, OcpTermStateJacobian* r_x,
+                OcpTermInputJacobian*) {
+  const double qx = x(I::kQuat + 1), qy = x(I::kQuat + 2);
+  const double h_tilt = 2.0 * (qx * qx + qy * qy) - (1.0 - std::cos(ocp.weights.tilt_max_rad));
+  if (!(h_tilt > 0.0)) return;
+  const double s = sqrt_w(0);
+  (*r)(0) = s * h_tilt;
+  if (r_x != nullptr) {
+    (*r_x)(0, I::kQuat + 1) = s * 4.0 * qx;
+    (*r_x)(0, I::kQuat + 2) = s * 4.0 * qy;
+  }
+}
+
+// Soft body-rate weight (per axis, both modes).
+OcpTermWeight BodyRateLimitWeight(const OcpWeights& w, CableMode) {
+  return OcpTermWeight::Constant(3, w.body_rate_weight);
+}
+
+// Soft body-rate limit: sqrt(w) (|w_i| - max) where positive, per axis.
+void BodyRateExcess(const Ocp& ocp, int, const StateVector& x, const InputVector&,
+                    const OcpTermWeight& sqrt_w, OcpTermResidual* r, OcpTermStateJacobian* r_x,
+                    OcpTermInputJacobian*) {
+  for (int i = 0; i < 3; ++i) {
+    const double rate = x(I::kBodyRate + i);
+    const double excess = std::abs(rate) - ocp.weights.body_rate_max_radps;
+    if (excess > 0.0) {
+      (*r)(i) = sqrt_w(i) * excess;
+      if (r_x != nullptr) (*r_x)(i, I::kBodyRate + i) = sqrt_w(i) * (rate > 0 ? 1 : -1);
+    }
+  }
+}
+
+// The term list with each term's first row: offsets follow from the order, never written.
+template <size_t kCount>
+constexpr std::array<OcpTerm, kCount> WithOffsets(const OcpTerm (&terms)[kCount]) {
+  std::array<OcpTerm, kCount> out{};
+  int offset = 0;
+  for (size_t i = 0; i < kCount; ++i) {
+    out[i] = terms[i];
+    out[i].offset = offset;
+    offset += terms[i].rows;
+  }
+  return out;
+}
+
+// The stage cost: one line per term (name, rows, terminal role, weight, scale, residual).
+// m L_load + (1 - m) L_quad is the six state-tracking terms with their per-mode weights.
+constexpr OcpTermAtTerminal kTerminalFactor = OcpTermAtTerminal::kTimesTerminalFactor;
+constexpr OcpTerm kTermList[] = {
+    {"payload_position", 3, kTerminalFactor, &StateWeight<I::kPayloadPos, 3>, nullptr,
+     &StateError<I::kPayloadPos, 3>},
+    {"payload_velocity", 3, kTerminalFactor, &StateWeight<I::kPayloadVel, 3>, nullptr,
+     &StateError<I::kPayloadVel, 3>},
+    {"quad_position", 3, kTerminalFactor, &StateWeight<I::kQuadPos, 3>, nullptr,
+     &StateError<I::kQuadPos, 3>},
+    {"quad_velocity", 3, kTerminalFactor, &StateWeight<I::kQuadVel, 3>, nullptr,
+     &StateError<I::kQuadVel, 3>},
+    {"attitude", 4, kTerminalFactor, &StateWeight<I::kQuat, 4>, nullptr, &AttitudeError},
+    {"body_rate", 3, kTerminalFactor, &StateWeight<I::kBodyRate, 3>, nullptr,
+     &StateError<I::kBodyRate, 3>},
+    {"input", kNu, OcpTermAtTerminal::kOmitted, &InputWeight, nullptr, &InputError},
+    {"perception", 2, kTerminalFactor, &PerceptionWeight, &PerceptionScale, &PerceptionError},
+    {"tilt_limit", 1, OcpTermAtTerminal::kAsStage, &TiltWeight, nullptr, &TiltExcess},
+    {"body_rate_limit", 3, OcpTermAtTerminal::kAsStage, &BodyRateLimitWeight, nullptr,
+     &BodyRateExcess},
+};
+constexpr auto kTerms = WithOffsets(kTermList);
+static_assert(kTerms.back().offset + kTerms.back().rows == kNr,
+              "kNr (ocp.h) must be the sum of the term rows");
+
+// Evaluates one term into its rows of the full residual and Jacobians (already zeroed).
+void EvaluateTerm(const Ocp& ocp, const OcpTerm& term, int k, const StateVector& x,
+                  const InputVector& u, ResidualVector* r, ResidualStateJacobian* r_x,
+                  ResidualInputJacobian* r_u) {
+  const OcpTermWeight weight = OcpTermStageWeight(ocp, term, k);
+  if (!(weight.array() > 0.0).any()) return;
+  const OcpTermWeight sqrt_weight = weight.cwiseSqrt();
+  OcpTermResidual r_rows(*r, term.offset, 0, term.rows, 1);
+  if (r_x == nullptr && r_u == nullptr) {
+    term.residual(ocp, k, x, u, sqrt_weight, &r_rows, nullptr, nullptr);
+    return;
+  }
+  // a block needs a matrix to view: an unrequested Jacobian views scratch that is never written
+  ResidualStateJacobian r_x_unused;
+  ResidualInputJacobian r_u_unused;
+  OcpTermStateJacobian r_x_rows(r_x != nullptr ? *r_x : r_x_unused, term.offset, 0, term.rows, kNx);
+  OcpTermInputJacobian r_u_rows(r_u != nullptr ? *r_u : r_u_unused, term.offset, 0, term.rows, kNu);
+  term.residual(ocp, k, x, u, sqrt_weight, &r_rows, r_x != nullptr ? &r_x_rows : nullptr,
+                r_u != nullptr ? &r_u_rows : nullptr);
+}
+
 }  // namespace
 
-// Tuned weights. Cost units: position errors in m, velocities in m/s, quaternion components,
-// rates in rad/s, inputs normalised by the hover speed. Chosen by closed-loop runs on the
-// analytic plant (controller_test): hover from a 0.3 m offset settles without overshoot past
-// 0.1 m, the Lissajous (a = 2, b = 0.5, T = 5 s) is tracked within the paper's RMSE scale, and
-// the slack test does not dive toward the payload.
+// Tuned weights (why each has its value: controller/README.md, "Tuning history"). Units:
+// position errors in m, velocities in m/s, quaternion components, rates in rad/s, inputs
+// normalised by the hover speed.
 OcpWeights OcpWeights::Tuned() {
   OcpWeights w;
-  // L_load: payload position/velocity strongly, quadrotor states weakly
+  // L_load (taut): payload position/velocity strongly, quadrotor states weakly
   w.q_load << 200, 200, 200,  // payload position, 1/m^2
       15, 15, 15,             // payload velocity, (m/s)^-2
       2, 2, 2,                // quadrotor position (weak)
       1, 1, 1,                // quadrotor velocity (weak)
       0.0, 20, 20, 20,        // attitude q - q_ref (w, x, y, z); w follows from x, y, z
       0.5, 0.5, 0.5;          // body rate regularisation, (rad/s)^-2
-  // L_quad: quadrotor position/velocity, payload states zero
-  w.q_quad << 0, 0, 0, 0, 0, 0,            // payload: zero (free fall cannot be controlled)
+  // L_quad (slack): quadrotor position/velocity, payload zero (its free fall is not controllable)
+  w.q_quad << 0, 0, 0, 0, 0, 0,            // payload
       200, 200, 200,                       // quadrotor position
       15, 15, 15,                          // quadrotor velocity
       0.0, 20, 20, 20,                     // attitude
       0.5, 0.5, 0.5;                       // body rate
   w.r_input = InputVector::Constant(5.0);  // on (u - u_ref) / u_hover
-  // L_cam (x perception_weight). Taut: the payload hangs at the cable's end along the thrust,
-  // so it stays near the image centre; a small weight (20) keeps the Lissajous tracking (700
-  // in taut mode raised the T = 3.5 s payload RMSE in y from 0.011 to 0.041 m).
-  // Slack: a dead zone (cam_slack_deadzone_fraction 0.5 of the half field of view, sized from
-  // the payload's current depth, off when the payload is within 0.12 m of the lens plane)
-  // with a weight that beats the quadrotor position weight (200). A plain quadratic made the
-  // quadrotor chase every thrown payload's predicted free fall (line_impulse with a 0.05 N s
-  // sideways component: 0.43 m deviation); the dead zone follows a payload moved out of view
-  // and leaves one well inside the image alone. Measured (analytic camera, `hpa run
-  // scenarios/person_moves_payload.yaml --set controller.perception_weight=W`): payload in
-  // view 0.65 (W = 0), 1.0 (W = 1), 1.0 (W = 10), 0.998 (W = 50), no crash up to W = 1000;
-  // line_impulse with impulses [0.05,0.05,0.35], [0.2,0,0.5], [0,0.1,0.4] N s: quadrotor
-  // deviation 0.23 / 0.14 / 0.20 m (nonhybrid_mpc 0.21 / 0.13 / 0.29 m).
-  // L_cam uses the camera at the stage's REFERENCE attitude (cam_at_reference_attitude): the
-  // paper's form with the state's attitude lets the solver cut L_cam by tilting toward the
-  // payload, which at these weights tipped the quadrotor over (tilt > 90 deg at weight >= 10
-  // with Q_cam 500); with the reference attitude L_cam is a cost on x_L - x_Q only, and in
-  // taut flight the reference attitude is the thrust direction the cable hangs along, so it
-  // keeps the paper's meaning there.
+  // L_cam (x perception_weight): small in taut mode, beats the quadrotor position in slack
   w.q_cam_per_m2 = Eigen::Vector2d(20.0, 20.0);
   w.q_cam_slack_per_m2 = Eigen::Vector2d(1500.0, 1500.0);
   w.cam_slack_deadzone_fraction = 0.5;
@@ -94,6 +271,52 @@ OcpWeights OcpWeights::Tuned() {
   w.body_rate_max_radps = 6.0;
   w.body_rate_weight = 10.0;
   return w;
+}
+
+StateVector Ocp::Step(const StateVector& x, const InputVector& u) const {
+  return model->Step(x, u, mode, stage_dt_s);
+}
+
+void Ocp::StepJacobians(const StateVector& x, const InputVector& u, StateVector* x_next,
+                        StateMatrix* a, InputMatrix* b) const {
+  model->StepJacobians(x, u, mode, stage_dt_s, x_next, a, b);
+}
+
+const std::vector<OcpTerm>& OcpTerms() {
+  static const std::vector<OcpTerm> terms(kTerms.begin(), kTerms.end());
+  return terms;
+}
+
+const OcpTerm* FindOcpTerm(std::string_view name) {
+  for (const OcpTerm& term : OcpTerms()) {
+    if (term.name == name) return &term;
+  }
+  return nullptr;
+}
+
+OcpTermWeight OcpTermStageWeight(const Ocp& ocp, const OcpTerm& term, int k) {
+  const bool terminal = k >= ocp.horizon_steps;
+  if (terminal && term.at_terminal == OcpTermAtTerminal::kOmitted) {
+    return OcpTermWeight::Zero(term.rows);
+  }
+  double scale = terminal && term.at_terminal == OcpTermAtTerminal::kTimesTerminalFactor
+                     ? ocp.weights.terminal_factor
+                     : 1.0;
+  if (term.scale != nullptr) scale *= term.scale(ocp);
+  return scale * term.weight(ocp.weights, ocp.mode);
+}
+
+void EvaluateOcpTerm(const Ocp& ocp, const OcpTerm& term, int k, const StateVector& x,
+                     const InputVector& u, Eigen::VectorXd* r, Eigen::MatrixXd* r_x,
+                     Eigen::MatrixXd* r_u) {
+  ResidualVector r_full = ResidualVector::Zero();
+  ResidualStateJacobian r_x_full = ResidualStateJacobian::Zero();
+  ResidualInputJacobian r_u_full = ResidualInputJacobian::Zero();
+  EvaluateTerm(ocp, term, k, x, u, &r_full, r_x != nullptr ? &r_x_full : nullptr,
+               r_u != nullptr ? &r_u_full : nullptr);
+  *r = r_full.segment(term.offset, term.rows);
+  if (r_x != nullptr) *r_x = r_x_full.middleRows(term.offset, term.rows);
+  if (r_u != nullptr) *r_u = r_u_full.middleRows(term.offset, term.rows);
 }
 
 StateVector StateReference(const Params& params, const ReferencePoint& point, CableMode mode) {
@@ -123,8 +346,9 @@ void SetCameraDeadzone(const SystemState& state, Ocp* ocp) {
   }
 }
 
-Ocp BuildOcp(const Params& params, const Reference& reference, double t0_s, CableMode mode,
-             double perception_weight, const OcpWeights& weights) {
+Ocp BuildOcp(std::shared_ptr<const HybridModel> model, const Reference& reference, double t0_s,
+             CableMode mode, double perception_weight, const OcpWeights& weights) {
+  const Params& params = model->params();
   Ocp ocp;
   ocp.mode = mode;
   ocp.perception_weight = perception_weight;
@@ -144,7 +368,14 @@ Ocp BuildOcp(const Params& params, const Reference& reference, double t0_s, Cabl
     ocp.x_ref[k] = StateReference(params, point, mode);
     if (k < ocp.horizon_steps) ocp.u_ref[k] = InputReference(params, point, mode);
   }
+  ocp.model = std::move(model);
   return ocp;
+}
+
+Ocp BuildOcp(const Params& params, const Reference& reference, double t0_s, CableMode mode,
+             double perception_weight, const OcpWeights& weights) {
+  return BuildOcp(std::make_shared<const HybridModel>(params), reference, t0_s, mode,
+                  perception_weight, weights);
 }
 
 Eigen::Vector3d PayloadInCamera(const Ocp& ocp, const StateVector& x) {
@@ -156,117 +387,20 @@ Eigen::Vector3d PayloadInCamera(const Ocp& ocp, const StateVector& x) {
 Eigen::Vector3d CostPayloadInCamera(const Ocp& ocp, int k, const StateVector& x) {
   if (!ocp.weights.cam_at_reference_attitude) return PayloadInCamera(ocp, x);
   StateVector x_cam = x;
-  x_cam.segment<4>(I::kQuat) =
-      ocp.x_ref[std::min<int>(k, ocp.x_ref.size() - 1)].segment<4>(I::kQuat);
+  x_cam.segment<4>(I::kQuat) = StageStateReference(ocp, k).segment<4>(I::kQuat);
   return PayloadInCamera(ocp, x_cam);
 }
 
 void StageResidual(const Ocp& ocp, int k, const StateVector& x, const InputVector& u,
                    ResidualVector* r, ResidualStateJacobian* r_x, ResidualInputJacobian* r_u) {
-  const bool terminal = (k >= ocp.horizon_steps);
-  const OcpWeights& w = ocp.weights;
-  const double state_scale = terminal ? w.terminal_factor : 1.0;
   r->setZero();
   if (r_x != nullptr) r_x->setZero();
   if (r_u != nullptr) r_u->setZero();
-
-  // state tracking: m L_load + (1 - m) L_quad (m held over the horizon, so one of the two)
-  const StateVector& q_diag = (ocp.mode == CableMode::kTaut) ? w.q_load : w.q_quad;
-  StateVector x_ref = ocp.x_ref[std::min<int>(k, ocp.x_ref.size() - 1)];
-  if (x.segment<4>(I::kQuat).dot(x_ref.segment<4>(I::kQuat)) < 0.0) {
-    x_ref.segment<4>(I::kQuat) *= -1.0;  // same rotation, nearest sign
-  }
-  const StateVector sqrt_q = (state_scale * q_diag).cwiseSqrt();
-  r->head<kNx>() = sqrt_q.cwiseProduct(x - x_ref);
-  if (r_x != nullptr) r_x->topLeftCorner<kNx, kNx>().diagonal() = sqrt_q;
-
-  // input cost on (u - u_ref) / u_hover
-  if (!terminal) {
-    const InputVector sqrt_r = w.r_input.cwiseSqrt() / ocp.u_hover_radps;
-    r->segment<kNu>(kRowInput) = sqrt_r.cwiseProduct(u - ocp.u_ref[k]);
-    if (r_u != nullptr) r_u->block<kNu, kNu>(kRowInput, 0).diagonal() = sqrt_r;
-  }
-
-  // perception cost on the x, y of p_C (terminal: scaled like the state cost)
-  const Eigen::Vector2d& q_cam =
-      (ocp.mode == CableMode::kTaut) ? w.q_cam_per_m2 : w.q_cam_slack_per_m2;
-  const Eigen::Vector2d sqrt_cam = (state_scale * ocp.perception_weight * q_cam).cwiseSqrt();
-  if (ocp.perception_weight > 0.0 && w.cam_at_reference_attitude) {
-    // camera at the reference attitude: p_C is affine in x_L - x_Q, no attitude lever
-    const StateVector& x_ref_k = ocp.x_ref[std::min<int>(k, ocp.x_ref.size() - 1)];
-    const Eigen::Vector4d q_ref = x_ref_k.segment<4>(I::kQuat);
-    const Eigen::Matrix3d r_ref = RotationOf<double>(q_ref(0), q_ref(1), q_ref(2), q_ref(3));
-    const Eigen::Matrix3d rr = (r_ref * ocp.R_BC).transpose();
-    const Eigen::Vector3d d_W = x.segment<3>(I::kPayloadPos) - x.segment<3>(I::kQuadPos);
-    const Eigen::Vector3d p_C = rr * (d_W - r_ref * ocp.t_BC_B_m);
-    const double deadzone = ocp.mode == CableMode::kSlack ? w.cam_slack_deadzone_fraction : 0.0;
-    if (deadzone <= 0.0) {
-      for (int i = 0; i < 2; ++i) {
-        (*r)(kRowCam + i) = sqrt_cam(i) * p_C(i);
-        if (r_x != nullptr) {
-          r_x->block<1, 3>(kRowCam + i, I::kPayloadPos) = sqrt_cam(i) * rr.row(i);
-          r_x->block<1, 3>(kRowCam + i, I::kQuadPos) = -sqrt_cam(i) * rr.row(i);
-        }
-      }
-    } else {
-      // dead zone: r_i = sqrt(q) (p_i - sign(p_i) d_i) where |p_i| > d_i, else 0
-      for (int i = 0; i < 2; ++i) {
-        const double excess = std::abs(p_C(i)) - ocp.cam_slack_deadzone_m(i);
-        if (!(excess > 0.0)) continue;
-        const double sign = p_C(i) > 0.0 ? 1.0 : -1.0;
-        (*r)(kRowCam + i) = sqrt_cam(i) * sign * excess;
-        if (r_x != nullptr) {
-          r_x->block<1, 3>(kRowCam + i, I::kPayloadPos) = sqrt_cam(i) * rr.row(i);
-          r_x->block<1, 3>(kRowCam + i, I::kQuadPos) = -sqrt_cam(i) * rr.row(i);
-        }
-      }
-    }
-  } else if (ocp.perception_weight > 0.0) {
-    // camera at the state's attitude (the paper's literal L_cam)
-    const Eigen::Vector3d d_W = x.segment<3>(I::kPayloadPos) - x.segment<3>(I::kQuadPos);
-    using Ad = Eigen::AutoDiffScalar<Eigen::Vector4d>;
-    Eigen::Matrix<Ad, 4, 1> q_ad;
-    for (int i = 0; i < 4; ++i) q_ad(i) = Ad(x(I::kQuat + i), 4, i);
-    const Eigen::Matrix<Ad, 3, 1> p_C = CameraPoint<Ad>(ocp, d_W, q_ad);
-    // d p_C / d x_L = (R R_BC)^T, d p_C / d x_Q = -(R R_BC)^T
-    const Eigen::Vector4d q = x.segment<4>(I::kQuat);
-    const Eigen::Matrix3d rr = (RotationOf<double>(q(0), q(1), q(2), q(3)) * ocp.R_BC).transpose();
-    for (int i = 0; i < 2; ++i) {
-      (*r)(kRowCam + i) = sqrt_cam(i) * p_C(i).value();
-      if (r_x != nullptr) {
-        r_x->block<1, 3>(kRowCam + i, I::kPayloadPos) = sqrt_cam(i) * rr.row(i);
-        r_x->block<1, 3>(kRowCam + i, I::kQuadPos) = -sqrt_cam(i) * rr.row(i);
-        r_x->block<1, 4>(kRowCam + i, I::kQuat) = sqrt_cam(i) * p_C(i).derivatives().transpose();
-      }
-    }
-  }
-
-  // soft tilt limit: h = (1 - cos tilt) - (1 - cos tilt_max), 1 - cos tilt = 2 (q_x^2 + q_y^2)
-  const double qx = x(I::kQuat + 1), qy = x(I::kQuat + 2);
-  const double h_tilt = 2.0 * (qx * qx + qy * qy) - (1.0 - std::cos(w.tilt_max_rad));
-  if (h_tilt > 0.0) {
-    const double s = std::sqrt(w.tilt_weight);
-    (*r)(kRowTilt) = s * h_tilt;
-    if (r_x != nullptr) {
-      (*r_x)(kRowTilt, I::kQuat + 1) = s * 4.0 * qx;
-      (*r_x)(kRowTilt, I::kQuat + 2) = s * 4.0 * qy;
-    }
-  }
-
-  // soft body-rate limit, per axis
-  const double s_rate = std::sqrt(w.body_rate_weight);
-  for (int i = 0; i < 3; ++i) {
-    const double rate = x(I::kBodyRate + i);
-    const double excess = std::abs(rate) - w.body_rate_max_radps;
-    if (excess > 0.0) {
-      (*r)(kRowRate + i) = s_rate * excess;
-      if (r_x != nullptr) (*r_x)(kRowRate + i, I::kBodyRate + i) = s_rate * (rate > 0 ? 1 : -1);
-    }
-  }
+  for (const OcpTerm& term : kTerms) EvaluateTerm(ocp, term, k, x, u, r, r_x, r_u);
 }
 
-double OcpCost(const Ocp& ocp, const HybridModel& model, const StateVector& x0,
-               const std::vector<InputVector>& u, std::vector<StateVector>* x_traj) {
+double OcpCost(const Ocp& ocp, const StateVector& x0, const std::vector<InputVector>& u,
+               std::vector<StateVector>* x_traj) {
   const int n = ocp.horizon_steps;
   StateVector x = x0;
   double cost = 0.0;
@@ -275,44 +409,54 @@ double OcpCost(const Ocp& ocp, const HybridModel& model, const StateVector& x0,
   for (int k = 0; k < n; ++k) {
     StageResidual(ocp, k, x, u[k], &r, nullptr, nullptr);
     cost += r.squaredNorm();
-    x = model.Step(x, u[k], ocp.mode, ocp.stage_dt_s);
+    x = ocp.Step(x, u[k]);
     if (x_traj != nullptr) (*x_traj)[k + 1] = x;
   }
   StageResidual(ocp, n, x, InputVector::Zero(), &r, nullptr, nullptr);
   return cost + r.squaredNorm();
 }
 
-double OcpCostAndGradient(const Ocp& ocp, const HybridModel& model, const StateVector& x0,
-                          const std::vector<InputVector>& u, Eigen::VectorXd* gradient) {
+OcpLinearization LinearizeAlong(const Ocp& ocp, const StateVector& x0,
+                                const std::vector<InputVector>& u) {
   const int n = ocp.horizon_steps;
-  std::vector<StateVector> x(n + 1);
-  std::vector<StateMatrix> a(n);
-  std::vector<InputMatrix> b(n);
+  OcpLinearization lin;
+  lin.x.resize(n + 1);
+  lin.a.resize(n);
+  lin.b.resize(n);
+  lin.r.resize(n + 1);
+  lin.r_x.resize(n + 1);
+  lin.r_u.resize(n + 1);
+  lin.x[0] = x0;
+  double cost = 0.0;
+  for (int k = 0; k < n; ++k) {
+    StageResidual(ocp, k, lin.x[k], u[k], &lin.r[k], &lin.r_x[k], &lin.r_u[k]);
+    cost += lin.r[k].squaredNorm();
+    ocp.StepJacobians(lin.x[k], u[k], &lin.x[k + 1], &lin.a[k], &lin.b[k]);
+  }
+  StageResidual(ocp, n, lin.x[n], InputVector::Zero(), &lin.r[n], &lin.r_x[n], &lin.r_u[n]);
+  lin.cost = cost + lin.r[n].squaredNorm();
+  return lin;
+}
+
+double OcpCostAndGradient(const Ocp& ocp, const StateVector& x0, const std::vector<InputVector>& u,
+                          Eigen::VectorXd* gradient) {
+  const int n = ocp.horizon_steps;
+  const OcpLinearization lin = LinearizeAlong(ocp, x0, u);
+  // stage gradients 2 J^T r
   std::vector<StateVector> gx(n + 1);
   std::vector<InputVector> gu(n);
-  ResidualVector r;
-  ResidualStateJacobian r_x;
-  ResidualInputJacobian r_u;
-  double cost = 0.0;
-  x[0] = x0;
-  // forward: trajectory, sensitivities, stage gradients 2 J^T r
   for (int k = 0; k < n; ++k) {
-    StageResidual(ocp, k, x[k], u[k], &r, &r_x, &r_u);
-    cost += r.squaredNorm();
-    gx[k] = 2.0 * r_x.transpose() * r;
-    gu[k] = 2.0 * r_u.transpose() * r;
-    model.StepJacobians(x[k], u[k], ocp.mode, ocp.stage_dt_s, &x[k + 1], &a[k], &b[k]);
+    gx[k] = 2.0 * lin.r_x[k].transpose() * lin.r[k];
+    gu[k] = 2.0 * lin.r_u[k].transpose() * lin.r[k];
   }
-  StageResidual(ocp, n, x[n], InputVector::Zero(), &r, &r_x, nullptr);
-  cost += r.squaredNorm();
   // backward adjoint: lambda_N = gx_N, lambda_k = gx_k + A_k^T lambda_{k+1}
   gradient->resize(kNu * n);
-  StateVector lambda = 2.0 * r_x.transpose() * r;
+  StateVector lambda = 2.0 * lin.r_x[n].transpose() * lin.r[n];
   for (int k = n - 1; k >= 0; --k) {
-    gradient->segment<kNu>(kNu * k) = gu[k] + b[k].transpose() * lambda;
-    lambda = gx[k] + a[k].transpose() * lambda;
+    gradient->segment<kNu>(kNu * k) = gu[k] + lin.b[k].transpose() * lambda;
+    lambda = gx[k] + lin.a[k].transpose() * lambda;
   }
-  return cost;
+  return lin.cost;
 }
 
 }  // namespace hpa

@@ -2,11 +2,13 @@
 
 #include <cmath>
 
-#include "hpa/controller/condensing.h"
+#include "box_qp.h"
+#include "condensing.h"
+#include "ocp_solver_factories.h"
 
 namespace hpa {
 
-RtiResult RtiIteration(const Ocp& ocp, const HybridModel& model, const StateVector& x0,
+RtiResult RtiIteration(const Ocp& ocp, const StateVector& x0,
                        const std::vector<InputVector>& u_guess, const RtiSettings& settings) {
   const int n = ocp.horizon_steps;
   RtiResult result;
@@ -15,28 +17,13 @@ RtiResult RtiIteration(const Ocp& ocp, const HybridModel& model, const StateVect
     result.u[k] = u_guess[k].cwiseMax(ocp.u_min_radps).cwiseMin(ocp.u_max_radps);
   }
 
-  // linearise: simulate the guess, sensitivities and Gauss-Newton stage models
-  std::vector<StateMatrix> a(n);
-  std::vector<InputMatrix> b(n);
+  // linearise along the guess, Gauss-Newton stage models
+  OcpLinearization lin = LinearizeAlong(ocp, x0, result.u);
   std::vector<StageQuadratic> stages(n + 1);
-  std::vector<StateVector> x(n + 1);
-  ResidualVector r;
-  ResidualStateJacobian r_x;
-  ResidualInputJacobian r_u;
-  x[0] = x0;
-  double cost = 0.0;
-  for (int k = 0; k < n; ++k) {
-    StageResidual(ocp, k, x[k], result.u[k], &r, &r_x, &r_u);
-    cost += r.squaredNorm();
-    stages[k] = GaussNewtonStage(r, r_x, r_u);
-    model.StepJacobians(x[k], result.u[k], ocp.mode, ocp.stage_dt_s, &x[k + 1], &a[k], &b[k]);
-  }
-  StageResidual(ocp, n, x[n], InputVector::Zero(), &r, &r_x, &r_u);
-  r_u.setZero();
-  cost += r.squaredNorm();
-  stages[n] = GaussNewtonStage(r, r_x, r_u);
+  for (int k = 0; k <= n; ++k) stages[k] = GaussNewtonStage(lin.r[k], lin.r_x[k], lin.r_u[k]);
+  const double cost = lin.cost;
   result.cost_guess = cost;
-  result.x = x;
+  result.x = std::move(lin.x);
   result.cost = cost;
   if (!std::isfinite(cost)) {
     result.status = ControlStatus::kNonFinite;
@@ -46,7 +33,7 @@ RtiResult RtiIteration(const Ocp& ocp, const HybridModel& model, const StateVect
   // condense; the QP on du has bounds u_min - u <= du <= u_max - u
   Eigen::MatrixXd h;
   Eigen::VectorXd g;
-  Condense(a, b, stages, &h, &g);
+  Condense(lin.a, lin.b, stages, &h, &g);
   Eigen::VectorXd lb(kNu * n), ub(kNu * n);
   for (int k = 0; k < n; ++k) {
     lb.segment<kNu>(kNu * k) = ocp.u_min_radps - result.u[k];
@@ -70,10 +57,11 @@ RtiResult RtiIteration(const Ocp& ocp, const HybridModel& model, const StateVect
       h_qp = &h_reg;
     }
     du.setZero();
-    result.qp = SolveBoxQp(*h_qp, g, lb, ub, &du);
+    const BoxQpResult qp = SolveBoxQp(*h_qp, g, lb, ub, &du);
+    result.qp_iterations = qp.iterations;
     ++result.qp_solves;
-    if (result.qp.status == BoxQpStatus::kNotPositiveDefinite ||
-        result.qp.status == BoxQpStatus::kNonFinite || !du.allFinite()) {
+    if (qp.status == BoxQpStatus::kNotPositiveDefinite || qp.status == BoxQpStatus::kNonFinite ||
+        !du.allFinite()) {
       continue;  // more regularisation
     }
     any_qp_solved = true;
@@ -87,7 +75,7 @@ RtiResult RtiIteration(const Ocp& ocp, const HybridModel& model, const StateVect
                        .cwiseMax(ocp.u_min_radps)
                        .cwiseMin(ocp.u_max_radps);
       }
-      const double cost_try = OcpCost(ocp, model, x0, u_try, &x_try);
+      const double cost_try = OcpCost(ocp, x0, u_try, &x_try);
       ++result.cost_evaluations;
       if (std::isfinite(cost_try) && cost_try <= cost + settings.armijo * alpha * slope) {
         result.u = u_try;
@@ -95,9 +83,8 @@ RtiResult RtiIteration(const Ocp& ocp, const HybridModel& model, const StateVect
         result.cost = cost_try;
         result.step = alpha;
         result.lm = mu;
-        result.status = result.qp.status == BoxQpStatus::kMaxIterations
-                            ? ControlStatus::kMaxIterations
-                            : ControlStatus::kSuccess;
+        result.status = qp.status == BoxQpStatus::kMaxIterations ? ControlStatus::kMaxIterations
+                                                                 : ControlStatus::kSuccess;
         return result;
       }
     }
@@ -105,6 +92,31 @@ RtiResult RtiIteration(const Ocp& ocp, const HybridModel& model, const StateVect
   // no step accepted: keep the guess (already in result.u / x / cost)
   result.status = any_qp_solved ? ControlStatus::kSuccess : ControlStatus::kQpFailure;
   return result;
+}
+
+namespace {
+
+// RtiIteration behind the OcpSolver interface.
+class RtiSolver final : public OcpSolver {
+ public:
+  explicit RtiSolver(const RtiSettings& settings) : settings_(settings) {}
+
+  OcpSolution Solve(const Ocp& ocp, const StateVector& x0,
+                    const std::vector<InputVector>& u_guess) override {
+    RtiResult r = RtiIteration(ocp, x0, u_guess, settings_);
+    return {r.status, std::move(r.u), std::move(r.x), r.cost};
+  }
+
+  std::unique_ptr<OcpSolver> Clone() const override { return std::make_unique<RtiSolver>(*this); }
+
+ private:
+  RtiSettings settings_;
+};
+
+}  // namespace
+
+std::unique_ptr<OcpSolver> MakeRtiSolver(const OcpSolverSettings& settings) {
+  return std::make_unique<RtiSolver>(settings.rti);
 }
 
 }  // namespace hpa

@@ -31,11 +31,20 @@ TEST(ClosedLoopTest, HpaMpcHoverHoldsFromOffset) {
   const auto log = RunClosedLoop(params, mpc.get(), &plant, 5.0);
   ASSERT_TRUE(log.finite);
   for (const ControlOutput& out : log.outputs) EXPECT_EQ(out.status, ControlStatus::kSuccess);
-  // settled: payload within 2 cm of its set point after 5 s (measured in the report)
   const Eigen::Vector3d rmse = testing_util::PayloadRmse(log, *ref, 4.0);
-  std::printf("hover from offset: payload RMSE over [4, 5] s = %.4f %.4f %.4f m\n", rmse.x(),
-              rmse.y(), rmse.z());
-  EXPECT_LT(rmse.maxCoeff(), 0.02);
+  // settling time: from then on the payload stays within 2 cm of its set point
+  double settle_s = 0.0;
+  for (size_t i = 0; i < log.states.size(); ++i) {
+    const double error_m = (log.states[i].p_WL_W - ref->At(log.t_s[i]).p_WL_W).norm();
+    if (error_m >= 0.02) settle_s = log.t_s[i];
+  }
+  std::printf(
+      "hover from offset: payload RMSE over [4, 5] s = %.3e %.3e %.3e m (norm %.3e), "
+      "settled within 2 cm at %.3f s\n",
+      rmse.x(), rmse.y(), rmse.z(), rmse.norm(), settle_s);
+  // measured: RMSE norm 4.546e-4 m, settling 1.114 s; bounds = measured x 1.4
+  EXPECT_LT(rmse.norm(), 1.4 * 4.546e-4);
+  EXPECT_LT(settle_s, 1.4 * 1.114);
   EXPECT_EQ(plant.mode(), CableMode::kTaut);
 }
 
@@ -51,8 +60,10 @@ TEST(ClosedLoopTest, StageOneThrustLeavesStandingError) {
                     CableMode::kTaut);
   const auto log = RunClosedLoop(params, &mpc, &plant, 5.0);
   ASSERT_TRUE(log.finite);
-  // measured 0.67 m in z after 5 s (vs 0.0000 m with stage-0 thrust); bound at half of it
-  EXPECT_GT(testing_util::PayloadRmse(log, *ref, 4.0).z(), 0.3);
+  const double rmse_z = testing_util::PayloadRmse(log, *ref, 4.0).z();
+  std::printf("stage-1 thrust: payload z RMSE over [4, 5] s = %.6f m\n", rmse_z);
+  // measured 0.6736 m in z over [4, 5] s (1.6e-6 m with stage-0 thrust); bound = measured / 1.4
+  EXPECT_GT(rmse_z, 0.6736 / 1.4);
 }
 
 // The payload is thrown up (cable slack) while hovering. The hybrid controller knows the
@@ -79,19 +90,20 @@ TEST(ClosedLoopTest, SlackPayloadDoesNotMakeHpaMpcDive) {
   ASSERT_TRUE(run(true, &min_z_hybrid, &dev_hybrid));
   const bool nonhybrid_finite = run(false, &min_z_nonhybrid, &dev_nonhybrid);
   std::printf(
-      "slack throw: hpa_mpc min z %.3f m, max dev %.3f m; nonhybrid min z %.3f m, "
-      "max dev %.3f m (finite %d)\n",
-      min_z_hybrid, dev_hybrid, min_z_nonhybrid, dev_nonhybrid, nonhybrid_finite);
-  // hybrid: never drops more than 15 cm below its set point (measured 0.008 m; 0.125 m before
-  // the RTI line search) and stays within 40 cm of it (measured 0.295 m: the slack perception
-  // cost, Q_cam 700, follows the horizontally thrown payload in x-y by design; 0.16 m at the
-  // old Q_cam 20, which did not keep a payload moved by hand in view)
-  EXPECT_GT(min_z_hybrid, p_q_ref.z() - 0.15);
-  EXPECT_LT(dev_hybrid, 0.4);
-  // The always-taut baseline is only printed: with the true payload state its outcome is
-  // chaotic (it fell to the ground in one build and held 1.42 m after a rounding-level change
-  // to the condensing); the paper's crash needs the always-taut estimator, which the lead's
-  // MuJoCo scenario tests exercise.
+      "slack throw: hpa_mpc drop %.5f m, max dev %.5f m; nonhybrid drop %.5f m, "
+      "max dev %.5f m (finite %d)\n",
+      p_q_ref.z() - min_z_hybrid, dev_hybrid, p_q_ref.z() - min_z_nonhybrid, dev_nonhybrid,
+      nonhybrid_finite);
+  // Measured drop below the set point / largest deviation from it: hpa_mpc 0.0855 / 0.1826 m,
+  // nonhybrid_mpc 0.0689 / 0.1589 m. Both vary by < 0.1% when the throw speed changes by up to
+  // 1e-3 relative (not chaotic here), so the bounds are measured x 1.4. With the true payload
+  // state the baseline does not dive on this plant either; the paper's crash needs the
+  // always-taut estimator, which the MuJoCo scenarios exercise.
+  EXPECT_LT(p_q_ref.z() - min_z_hybrid, 1.4 * 0.0855);
+  EXPECT_LT(dev_hybrid, 1.4 * 0.1826);
+  ASSERT_TRUE(nonhybrid_finite);
+  EXPECT_LT(p_q_ref.z() - min_z_nonhybrid, 1.4 * 0.0689);
+  EXPECT_LT(dev_nonhybrid, 1.4 * 0.1589);
 }
 
 TEST(ClosedLoopTest, LissajousTracked) {
@@ -106,14 +118,14 @@ TEST(ClosedLoopTest, LissajousTracked) {
   ASSERT_TRUE(log.finite);
   const Eigen::Vector3d rmse = testing_util::PayloadRmse(log, *ref, spec.ramp_s);
   std::printf(
-      "lissajous T=5 s: payload RMSE after the ramp = %.4f %.4f %.4f m, "
+      "lissajous T=5 s: payload RMSE after the ramp = %.6f %.6f %.6f m, "
       "max solve %.3f ms\n",
       rmse.x(), rmse.y(), rmse.z(), log.max_solve_ms);
-  // paper, Table: 0.052 / 0.021 / 0.039 m on hardware at T = 5 s; on the analytic plant we
-  // must do at least as well as the hardware figure x 1.5
-  EXPECT_LT(rmse.x(), 1.5 * 0.052);
-  EXPECT_LT(rmse.y(), 1.5 * 0.021 + 0.02);
-  EXPECT_LT(rmse.z(), 1.5 * 0.039);
+  // measured 0.002764 / 0.005592 / 0.002254 m (the paper's hardware: 0.052 / 0.021 / 0.039 m
+  // at T = 5 s); bounds = measured x 1.4
+  EXPECT_LT(rmse.x(), 1.4 * 0.002764);
+  EXPECT_LT(rmse.y(), 1.4 * 0.005592);
+  EXPECT_LT(rmse.z(), 1.4 * 0.002254);
   EXPECT_EQ(plant.mode(), CableMode::kTaut);
 }
 
@@ -141,9 +153,12 @@ TEST(ClosedLoopTest, RtiCostCloseToNlopt) {
   };
   const double rti = closed_loop_cost("rti");
   const double nlopt = closed_loop_cost("nlopt");
-  std::printf("closed-loop cost over 1.5 s: RTI %.4f, NLopt %.4f, ratio %.3f\n", rti, nlopt,
+  std::printf("closed-loop cost over 1.5 s: RTI %.6f, NLopt %.6f, ratio %.5f\n", rti, nlopt,
               rti / nlopt);
+  // measured RTI 22.646, NLopt 22.538 (ratio 1.005); bounds: ratio 1.15, each cost x 1.4
   EXPECT_LT(rti, 1.15 * nlopt);
+  EXPECT_LT(rti, 1.4 * 22.646);
+  EXPECT_LT(nlopt, 1.4 * 22.538);
 }
 
 // The paper's line with an impulse on the payload (scenarios/line_impulse.yaml with a sideways
@@ -155,43 +170,62 @@ TEST(ClosedLoopTest, RetautFromNearHorizontalCableDoesNotDiverge) {
   const Params params;
   const auto ref =
       MakeLineReference(params, Eigen::Vector3d(-1.5, 0, 0.8), Eigen::Vector3d(1.5, 0, 0.8), 6.0);
-  const std::vector<Eigen::Vector3d> impulses_Ns = {
-      {0.0, 0.0, 0.35}, {0.1, 0.05, 0.35}, {0.15, 0.1, 0.6}, {0.2, 0.0, 0.5}};
-  for (const bool hybrid : {true, false}) {
-    for (const Eigen::Vector3d& impulse_Ns : impulses_Ns) {
-      auto mpc = MakeMpc(params, ref, hybrid);
-      HybridPlant plant(params, HybridModel(params).HoverState(ref->At(0).p_WQ_W),
-                        CableMode::kTaut);
-      bool kicked = false;
-      // the reference starts at t = 0 here (1 s in the scenario): kick at 2.5 s
-      const auto kick = [&](double t, HybridPlant* p) {
-        if (kicked || t < 2.5) return;
-        kicked = true;
-        StateVector x = p->x();
-        x.segment<3>(StateIndex::kPayloadVel) += impulse_Ns / params.payload_mass_kg;
-        *p = HybridPlant(params, x, CableMode::kSlack);
-      };
-      const auto log = RunClosedLoop(params, mpc.get(), &plant, 6.0, kick);
-      ASSERT_TRUE(log.finite);
-      double max_tilt_deg = 0.0, max_cmd_rate = 0.0, max_dev_m = 0.0;
-      int failures = 0;
-      for (size_t i = 0; i < log.states.size(); ++i) {
-        const Eigen::Vector3d z_B = log.states[i].q_WB * Eigen::Vector3d::UnitZ();
-        max_tilt_deg =
-            std::max(max_tilt_deg, std::acos(std::clamp(z_B.z(), -1.0, 1.0)) * 180 / M_PI);
-        max_cmd_rate =
-            std::max(max_cmd_rate, log.outputs[i].command.w_B_radps.cwiseAbs().maxCoeff());
-        max_dev_m = std::max(max_dev_m, (log.states[i].p_WQ_W - ref->At(log.t_s[i]).p_WQ_W).norm());
-        const ControlStatus st = log.outputs[i].status;
-        if (st != ControlStatus::kSuccess && st != ControlStatus::kMaxIterations) ++failures;
-      }
-      std::printf(
-          "re-taut %s impulse [%.2f %.2f %.2f]: max tilt %.1f deg, max cmd rate %.1f rad/s, "
-          "max quad dev %.3f m, failed solves %d\n",
-          hybrid ? "hpa_mpc" : "nonhybrid_mpc", impulse_Ns.x(), impulse_Ns.y(), impulse_Ns.z(),
-          max_tilt_deg, max_cmd_rate, max_dev_m, failures);
-      EXPECT_LT(max_tilt_deg, 60.0);
+  // What each run measured (max tilt, max commanded body rate, max quadrotor deviation from its
+  // reference, failed solves); the bounds are measured x 1.4.
+  // hpa_mpc varies smoothly with the impulse (< 5% for a 1e-3 relative change): per impulse.
+  // nonhybrid_mpc is chaotic here (a 1e-9 relative change of the impulse moves its deviation
+  // from 0.47 to 0.81 m): one envelope over the four impulses each scaled by 1 +- {0, 1e-9,
+  // 1e-6, 1e-3}, measured 43.7 deg, 14.9 rad/s, 0.875 m, 5 failed solves.
+  struct Run {
+    bool hybrid;
+    Eigen::Vector3d impulse_Ns;
+    double tilt_deg, rate_radps, dev_m;
+    int failures;
+  };
+  const std::vector<Run> runs = {
+      {true, {0.0, 0.0, 0.35}, 3.90, 0.40, 0.0336, 0},
+      {true, {0.1, 0.05, 0.35}, 14.46, 3.44, 0.3173, 0},
+      {true, {0.15, 0.1, 0.6}, 19.31, 5.31, 0.1642, 0},
+      {true, {0.2, 0.0, 0.5}, 22.65, 7.92, 0.1801, 0},
+      {false, {0.0, 0.0, 0.35}, 43.7, 14.9, 0.875, 5},
+      {false, {0.1, 0.05, 0.35}, 43.7, 14.9, 0.875, 5},
+      {false, {0.15, 0.1, 0.6}, 43.7, 14.9, 0.875, 5},
+      {false, {0.2, 0.0, 0.5}, 43.7, 14.9, 0.875, 5},
+  };
+  for (const Run& run : runs) {
+    auto mpc = MakeMpc(params, ref, run.hybrid);
+    HybridPlant plant(params, HybridModel(params).HoverState(ref->At(0).p_WQ_W), CableMode::kTaut);
+    bool kicked = false;
+    // the reference starts at t = 0 here (1 s in the scenario): kick at 2.5 s
+    const auto kick = [&](double t, HybridPlant* p) {
+      if (kicked || t < 2.5) return;
+      kicked = true;
+      StateVector x = p->x();
+      x.segment<3>(StateIndex::kPayloadVel) += run.impulse_Ns / params.payload_mass_kg;
+      *p = HybridPlant(params, x, CableMode::kSlack);
+    };
+    const auto log = RunClosedLoop(params, mpc.get(), &plant, 6.0, kick);
+    ASSERT_TRUE(log.finite);
+    double max_tilt_deg = 0.0, max_cmd_rate = 0.0, max_dev_m = 0.0;
+    int failures = 0;
+    for (size_t i = 0; i < log.states.size(); ++i) {
+      const Eigen::Vector3d z_B = log.states[i].q_WB * Eigen::Vector3d::UnitZ();
+      max_tilt_deg = std::max(max_tilt_deg, std::acos(std::clamp(z_B.z(), -1.0, 1.0)) * 180 / M_PI);
+      max_cmd_rate = std::max(max_cmd_rate, log.outputs[i].command.w_B_radps.cwiseAbs().maxCoeff());
+      max_dev_m = std::max(max_dev_m, (log.states[i].p_WQ_W - ref->At(log.t_s[i]).p_WQ_W).norm());
+      const ControlStatus st = log.outputs[i].status;
+      if (st != ControlStatus::kSuccess && st != ControlStatus::kMaxIterations) ++failures;
     }
+    const char* name = run.hybrid ? "hpa_mpc" : "nonhybrid_mpc";
+    std::printf(
+        "re-taut %s impulse [%.2f %.2f %.2f]: max tilt %.2f deg, max cmd rate %.2f rad/s, "
+        "max quad dev %.4f m, failed solves %d\n",
+        name, run.impulse_Ns.x(), run.impulse_Ns.y(), run.impulse_Ns.z(), max_tilt_deg,
+        max_cmd_rate, max_dev_m, failures);
+    EXPECT_LT(max_tilt_deg, 1.4 * run.tilt_deg) << name;
+    EXPECT_LT(max_cmd_rate, 1.4 * run.rate_radps) << name;
+    EXPECT_LT(max_dev_m, 1.4 * run.dev_m) << name;
+    EXPECT_LE(failures, static_cast<int>(1.4 * run.failures)) << name;
   }
 }
 

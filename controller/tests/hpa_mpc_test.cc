@@ -28,145 +28,20 @@ void ExpectInBounds(const Params& params, const std::vector<InputVector>& u) {
   }
 }
 
-TEST(OcpTest, CameraTransformOfHangingPayload) {
-  const Params params;
-  const Ocp ocp = BuildOcp(params, *HoverRef(params), 0.0, CableMode::kTaut, 1.0);
-  const StateVector x = HybridModel(params).HoverState(Eigen::Vector3d(0, 0, 1.5));
-  // payload l below the body, camera 0.05 m below the body looking down: p_C = (0, 0, l - 0.05)
-  const Eigen::Vector3d p_C = PayloadInCamera(ocp, x);
-  EXPECT_TRUE(p_C.isApprox(Eigen::Vector3d(0, 0, params.cable_length_m - 0.05), 1e-12));
-  // payload displaced +x in world (body level): camera x = body x -> positive
-  StateVector x2 = x;
-  x2(StateIndex::kPayloadPos) += 0.1;
-  x2(StateIndex::kPayloadPos + 1) += 0.1;
-  const Eigen::Vector3d p_C2 = PayloadInCamera(ocp, x2);
-  EXPECT_NEAR(p_C2.x(), 0.1, 1e-12);
-  EXPECT_NEAR(p_C2.y(), -0.1, 1e-12);  // camera y = -body y
-}
-
-// L_cam is evaluated with the camera at the stage's reference attitude: no attitude lever
-// (zero quaternion Jacobian), the slack weight applies in slack mode, and the residual is
-// sqrt(pw Q_cam) times the level-camera offset.
-TEST(OcpTest, PerceptionCostHasNoAttitudeLever) {
-  const Params params;
-  const Ocp ocp = BuildOcp(params, *HoverRef(params), 0.0, CableMode::kSlack, 2.0);
-  SystemState s;
-  s.FromVector(HybridModel(params).HoverState(Eigen::Vector3d(0, 0, 1.5)));
-  s.p_WL_W = s.p_WQ_W + Eigen::Vector3d(0.3, 0.1, -0.2);  // held beside, cable slack
-  s.q_WB = Eigen::AngleAxisd(0.3, Eigen::Vector3d(1, 1, 0).normalized());
-  ResidualVector r;
-  ResidualStateJacobian r_x;
-  ResidualInputJacobian r_u;
-  StageResidual(ocp, 1, s.ToVector(), ocp.u_ref[1], &r, &r_x, &r_u);
-  constexpr int kCamRow = kNx + kNu;
-  EXPECT_EQ((r_x.block<2, 4>(kCamRow, StateIndex::kQuat).norm()), 0.0);
-  const double scale = std::sqrt(2.0 * ocp.weights.q_cam_slack_per_m2.x());
-  // level camera: camera x = body x = world x, camera y = -world y (rounding-level bound)
-  EXPECT_NEAR(r(kCamRow), scale * 0.3, 1e-12);
-  EXPECT_NEAR(r(kCamRow + 1), -scale * 0.1, 1e-12);
-  EXPECT_TRUE(CostPayloadInCamera(ocp, 1, s.ToVector())
-                  .head<2>()
-                  .isApprox(Eigen::Vector2d(0.3, -0.1), 1e-12));
-}
-
-TEST(OcpTest, SlackCameraCostHasADeadZone) {
-  const Params params;
-  Ocp ocp = BuildOcp(params, *HoverRef(params), 0.0, CableMode::kSlack, 1.0);
-  SystemState s;
-  s.FromVector(HybridModel(params).HoverState(Eigen::Vector3d(0, 0, 1.5)));
-  // payload held 0.3 m below the body origin: depth 0.25 m below the lens
-  s.p_WL_W = s.p_WQ_W + Eigen::Vector3d(0.1, 0.05, -0.3);
-  SetCameraDeadzone(s, &ocp);
-  const double f = params.CameraFocalPx();
-  const Eigen::Vector2d dead = ocp.weights.cam_slack_deadzone_fraction * 0.25 *
-                               Eigen::Vector2d(640.0 / f, 360.0 / f);
-  EXPECT_TRUE(ocp.cam_slack_deadzone_m.isApprox(dead, 1e-12));
-  constexpr int kCamRow = kNx + kNu;
-  ResidualVector r;
-  ResidualStateJacobian r_x;
-  ResidualInputJacobian r_u;
-  // inside the dead zone: no cost, no gradient
-  StageResidual(ocp, 1, s.ToVector(), ocp.u_ref[1], &r, &r_x, &r_u);
-  EXPECT_EQ(r.segment<2>(kCamRow).norm(), 0.0);
-  EXPECT_EQ(r_x.middleRows<2>(kCamRow).norm(), 0.0);
-  // beyond it: the excess, with the sign of the offset (camera y = -world y)
-  s.p_WL_W = s.p_WQ_W + Eigen::Vector3d(0.3, -0.2, -0.3);
-  StageResidual(ocp, 1, s.ToVector(), ocp.u_ref[1], &r, &r_x, &r_u);
-  const double scale = std::sqrt(ocp.weights.q_cam_slack_per_m2.x());
-  EXPECT_NEAR(r(kCamRow), scale * (0.3 - dead.x()), 1e-12);
-  EXPECT_NEAR(r(kCamRow + 1), scale * (0.2 - dead.y()), 1e-12);
-  // a payload thrown above the lens plane cannot be brought into view: L_cam off
-  s.p_WL_W = s.p_WQ_W + Eigen::Vector3d(0.3, -0.2, 0.1);
-  SetCameraDeadzone(s, &ocp);
-  StageResidual(ocp, 1, s.ToVector(), ocp.u_ref[1], &r, &r_x, &r_u);
-  EXPECT_EQ(r.segment<2>(kCamRow).norm(), 0.0);
-}
-
-TEST(OcpTest, SoftLimitsArePenalisedOnlyBeyondTheirBounds) {
-  const Params params;
-  const Ocp ocp = BuildOcp(params, *HoverRef(params), 0.0, CableMode::kTaut, 1.0);
-  const HybridModel model(params);
-  const InputVector u = ocp.u_ref[0];
-  ResidualVector r;
-  constexpr int kTiltRow = kNx + kNu + 2;
-  constexpr int kRateRow = kTiltRow + 1;
-  SystemState s;
-  s.FromVector(model.HoverState(Eigen::Vector3d(0, 0, 1.5)));
-  // 40 deg tilt and 5.9 rad/s: inside the 45 deg / 6 rad/s limits, no penalty
-  s.q_WB = Eigen::AngleAxisd(40 * M_PI / 180, Eigen::Vector3d::UnitX());
-  s.w_B = Eigen::Vector3d(5.9, -5.9, 0);
-  StageResidual(ocp, 1, s.ToVector(), u, &r, nullptr, nullptr);
-  EXPECT_EQ(r(kTiltRow), 0.0);
-  EXPECT_TRUE(r.segment<3>(kRateRow).isZero(0.0));
-  // 50 deg and 7 rad/s: one-sided quadratic penalty with the closed-form residual
-  s.q_WB = Eigen::AngleAxisd(50 * M_PI / 180, Eigen::Vector3d::UnitY());
-  s.w_B = Eigen::Vector3d(0, -7.0, 0);
-  StageResidual(ocp, 1, s.ToVector(), u, &r, nullptr, nullptr);
-  const OcpWeights& w = ocp.weights;
-  const double h_tilt = std::cos(w.tilt_max_rad) - std::cos(50 * M_PI / 180);
-  EXPECT_NEAR(r(kTiltRow), std::sqrt(w.tilt_weight) * h_tilt, 1e-12);
-  EXPECT_NEAR(r(kRateRow + 1), std::sqrt(w.body_rate_weight) * 1.0, 1e-12);
-}
-
-TEST(OcpTest, CostGradientMatchesFiniteDifferences) {
-  const Params params;
-  LissajousSpec spec;
-  const auto ref = MakeLissajousReference(params, spec);
-  const HybridModel model(params);
-  for (CableMode mode : {CableMode::kTaut, CableMode::kSlack}) {
-    const Ocp ocp = BuildOcp(params, *ref, 2.5, mode, 1.0);
-    StateVector x0 = model.HoverState(Eigen::Vector3d(0.1, 0.2, 1.4));
-    x0(StateIndex::kBodyRate) = 7.0;  // beyond the soft rate limit: its penalty is active
-    std::vector<InputVector> u(ocp.horizon_steps);
-    for (int k = 0; k < ocp.horizon_steps; ++k) {
-      u[k] = params.HoverMotorSpeedRadps() * InputVector(1.0 + 0.01 * k, 0.98, 1.02, 1.0);
-    }
-    Eigen::VectorXd grad;
-    OcpCostAndGradient(ocp, model, x0, u, &grad);
-    for (int i = 0; i < kNu * ocp.horizon_steps; i += 3) {
-      const double h = 1e-2;  // rad/s on ~1e3 rad/s inputs
-      std::vector<InputVector> up = u, um = u;
-      up[i / kNu](i % kNu) += h;
-      um[i / kNu](i % kNu) -= h;
-      const double fd = (OcpCost(ocp, model, x0, up) - OcpCost(ocp, model, x0, um)) / (2 * h);
-      // central-difference truncation h^2 f''' ~ 1e-4 * 1e-6 relative; kinks of the soft
-      // penalties are avoided by construction; 1e-5 relative + 1e-7 absolute
-      EXPECT_NEAR(grad(i), fd, 1e-5 * std::abs(fd) + 1e-7) << "mode " << ToString(mode);
-    }
-  }
-}
-
 TEST(HpaMpcTest, HoverAtReferenceKeepsHoverThrust) {
   const Params params;
   HpaMpc mpc(params, HoverRef(params), MpcSettings());
   SystemState s = HoverAt(params, Eigen::Vector3d(0, 0, 1.5));
   const ControlOutput out = mpc.Update(s);
   EXPECT_EQ(out.status, ControlStatus::kSuccess);
-  // at the reference the optimum is hover: thrust within 1% and rates below 0.01 rad/s
-  // (the only pull away from hover is the 1e-12-scale rounding of the references)
-  EXPECT_NEAR(out.command.thrust_N, params.HoverThrustN(), 0.01 * params.HoverThrustN());
-  EXPECT_LT(out.command.w_B_radps.norm(), 1e-2);
-  EXPECT_LT(out.cost, 1e-3);
+  std::printf("hover at reference: thrust error %.3e N, |w| %.3e rad/s, cost %.3e\n",
+              out.command.thrust_N - params.HoverThrustN(), out.command.w_B_radps.norm(), out.cost);
+  // at the reference the optimum is hover; the only pull away from it is the rounding of the
+  // references. Measured: thrust error 1.8e-15 N (1 ulp of 8 N), body rate 0, cost 6e-28;
+  // bounds at rounding scale with room for reordered sums (1e-9 N, 1e-9 rad/s, 1e-18)
+  EXPECT_NEAR(out.command.thrust_N, params.HoverThrustN(), 1e-9);
+  EXPECT_LT(out.command.w_B_radps.norm(), 1e-9);
+  EXPECT_LT(out.cost, 1e-18);
   ExpectInBounds(params, mpc.plan_inputs());
 }
 
@@ -200,15 +75,18 @@ TEST(HpaMpcTest, WarmStartReducesCost) {
   const SystemState s = plant.State(0.1);
   const Ocp ocp = mpc.BuildProblem(s);
   const StateVector x0 = s.ToVector();
-  const RtiResult warm = RtiIteration(ocp, mpc.model(), x0, mpc.WarmStart(s.time_s));
+  const RtiResult warm = RtiIteration(ocp, x0, mpc.WarmStart(s.time_s));
   const RtiResult cold = RtiIteration(
-      ocp, mpc.model(), x0,
-      std::vector<InputVector>(10, InputVector::Constant(params.HoverMotorSpeedRadps())));
-  std::printf("warm start: guess %.3f -> %.3f, cold: guess %.3f -> %.3f\n", warm.cost_guess,
+      ocp, x0, std::vector<InputVector>(10, InputVector::Constant(params.HoverMotorSpeedRadps())));
+  std::printf("warm start: guess %.6f -> %.6f, cold: guess %.6f -> %.6f\n", warm.cost_guess,
               warm.cost, cold.cost_guess, cold.cost);
   EXPECT_LT(warm.cost_guess, cold.cost_guess);
   EXPECT_LT(warm.cost, cold.cost);
-  EXPECT_LT(warm.cost, warm.cost_guess);
+  // measured: warm 267.561 -> 248.389 (a decrease of 19.172), cold 10912.6 -> 1777.96;
+  // bounds: costs x 1.4, the warm decrease / 1.4
+  EXPECT_LT(warm.cost, 1.4 * 248.389);
+  EXPECT_GT(warm.cost_guess - warm.cost, 19.172 / 1.4);
+  EXPECT_LT(cold.cost, 1.4 * 1777.96);
 }
 
 TEST(HpaMpcTest, RepeatedRtiConvergesToNloptOptimum) {
@@ -218,15 +96,20 @@ TEST(HpaMpcTest, RepeatedRtiConvergesToNloptOptimum) {
   const Ocp ocp = BuildOcp(params, *ref, 0.0, CableMode::kTaut, 1.0);
   const StateVector x0 = model.HoverState(Eigen::Vector3d(0.3, -0.2, 1.4));
   std::vector<InputVector> u(10, InputVector::Constant(params.HoverMotorSpeedRadps()));
-  const RtiResult first = RtiIteration(ocp, model, x0, u);
+  const RtiResult first = RtiIteration(ocp, x0, u);
   RtiResult r = first;
-  for (int i = 0; i < 15; ++i) r = RtiIteration(ocp, model, x0, r.u);
-  const NloptResult nl = NloptSolve(ocp, model, x0, u);
+  for (int i = 0; i < 15; ++i) r = RtiIteration(ocp, x0, r.u);
+  const NloptResult nl = NloptSolve(ocp, x0, u);
+  std::printf("from hover guess: one RTI %.6f, 16 RTIs %.6f, NLopt %.6f (%d evaluations)\n",
+              first.cost, r.cost, nl.cost, nl.evaluations);
   ASSERT_TRUE(nl.status == ControlStatus::kSuccess) << nl.nlopt_code;
   // NLopt reaches the (local) optimum; one RTI is close to it, iterated Gauss-Newton agrees to
-  // 1% (GN converges linearly at the residual-curvature rate; measured ratio ~1.000x)
+  // 1% (GN converges linearly at the residual-curvature rate). Measured: one RTI 258.649,
+  // 16 RTIs 218.35899, NLopt 218.35899 (ratio 1.000); the costs are bounded at measured x 1.4
   EXPECT_LE(nl.cost, first.cost * (1 + 1e-9));
   EXPECT_NEAR(r.cost, nl.cost, 0.01 * nl.cost);
+  EXPECT_LT(first.cost, 1.4 * 258.649);
+  EXPECT_LT(nl.cost, 1.4 * 218.359);
   ExpectInBounds(params, nl.u);
 }
 

@@ -34,7 +34,8 @@ std::vector<std::string> ControllerNames();
 /// duplicate name or a missing factory.
 void RegisterController(ControllerRegistration registration);
 
-/// Names of the optimal-control solvers an MPC controller accepts (controller.solver).
+/// Names of the optimal-control solvers an MPC controller accepts (controller.solver), read
+/// from the solver registry of ocp_solver.h (OcpSolvers).
 std::vector<std::string> OcpSolverNames();
 
 }  // namespace hpa

@@ -7,9 +7,8 @@
 #include <vector>
 
 #include "hpa/controller/controller.h"
-#include "hpa/controller/nlopt_solver.h"
 #include "hpa/controller/ocp.h"
-#include "hpa/controller/rti_solver.h"
+#include "hpa/controller/ocp_solver.h"
 #include "hpa/models/hybrid_model.h"
 
 namespace hpa {
@@ -18,18 +17,12 @@ namespace hpa {
 struct MpcSettings {
   bool hybrid = true;              // false: nonhybrid_mpc (always taut, no perception cost)
   double perception_weight = 1.0;  // scale on q_cam (hybrid only)
-  std::string solver = "rti";      // rti | nlopt
+  std::string solver = "rti";      // a name from OcpSolvers(): rti | nlopt
   OcpWeights weights = OcpWeights::Tuned();
-  NloptSettings nlopt;  // stopping rules of the nlopt solver
-  RtiSettings rti;      // globalisation of the rti solver
-  // Command taken from the plan: body rates of state x[rate_output_stage] (the paper's second
-  // stage) and collective thrust of input u[thrust_output_stage]. The thrust comes from u_0 by
-  // default: with 0.1 s stages re-solved every 6.7 ms, flying u_1 never applies the plan's
-  // first input, and the closed loop then has equilibria with a standing error (measured:
-  // 0.67 m in z after a 0.2 m altitude offset on the analytic plant).
-  int rate_output_stage = 1;
-  int thrust_output_stage = 0;
-  double rate_hz = 150.0;  // rate the runner calls Update at
+  OcpSolverSettings solvers;    // settings of the solver named by `solver`
+  int rate_output_stage = 1;    // body rates flown: plan state x[1] (the paper's second stage)
+  int thrust_output_stage = 0;  // thrust flown: plan input u[0] (why not u[1]: README)
+  double rate_hz = 150.0;       // rate the runner calls Update at
 };
 
 /// Model predictive controller over the OCP of ocp.h.
@@ -38,11 +31,20 @@ class HpaMpc : public Controller {
   /// Throws std::invalid_argument for an unknown solver or a bad perception weight.
   HpaMpc(const Params& params, std::shared_ptr<const Reference> reference,
          const MpcSettings& settings);
+  /// Copies plan, settings and a clone of the solver.
+  HpaMpc(const HpaMpc& other);
+  /// Copy-assigns plan, settings and a clone of the solver.
+  HpaMpc& operator=(const HpaMpc& other);
+  /// Moves (the moved-from controller has no solver and must not be updated).
+  HpaMpc(HpaMpc&&) noexcept = default;
+  /// Move-assigns, as the move constructor.
+  HpaMpc& operator=(HpaMpc&&) noexcept = default;
 
-  /// One solve (RTI or NLopt) warm-started from the previous plan; always a safe command:
-  /// non-finite state -> kNonFinite + level hover command; solver failure -> previous plan
-  /// shifted (kQpFailure), or hover (kFallback) when there is no usable plan.
+  /// One solve of the solver named by settings.solver, warm-started from the previous plan; always
+  /// a safe command: non-finite state -> kNonFinite + level hover command; solver failure ->
+  /// previous plan shifted (kQpFailure), or hover (kFallback) when there is no usable plan.
   ControlOutput Update(const SystemState& state) override;
+  /// Rate the runner calls Update at (MpcSettings::rate_hz).
   double RateHz() const override { return settings_.rate_hz; }
 
   /// Warm start for time t_s: the previous plan shifted by the elapsed time (linear
@@ -53,25 +55,29 @@ class HpaMpc : public Controller {
   /// The OCP this controller would solve for `state` (mode and perception per settings).
   Ocp BuildProblem(const SystemState& state) const;
 
-  /// Current plan (empty before the first successful Update).
+  /// Current plan inputs (empty before the first successful Update).  (N)
   const std::vector<InputVector>& plan_inputs() const { return plan_u_; }
+  /// States of the current plan, simulated from its x0.  (N + 1)
   const std::vector<StateVector>& plan_states() const { return plan_x_; }
   /// Forgets the plan (next call starts from hover).
   void Reset();
 
+  /// The settings this controller was made with.
   const MpcSettings& settings() const { return settings_; }
-  const HybridModel& model() const { return model_; }
+  /// The hybrid model its OCPs predict with.
+  const HybridModel& model() const { return *model_; }
 
  private:
   BodyRateCommand CommandFromPlan() const;
 
   Params params_;
-  HybridModel model_;
+  std::shared_ptr<const HybridModel> model_;  // the OCPs' dynamics
   std::shared_ptr<const Reference> reference_;
   MpcSettings settings_;
-  std::vector<InputVector> plan_u_;  // (N)
-  std::vector<StateVector> plan_x_;  // (N + 1)
-  double plan_time_s_ = 0.0;         // time of plan stage 0
+  std::unique_ptr<OcpSolver> solver_;  // made from the registry by settings_.solver
+  std::vector<InputVector> plan_u_;    // (N)
+  std::vector<StateVector> plan_x_;    // (N + 1)
+  double plan_time_s_ = 0.0;           // time of plan stage 0
 };
 
 }  // namespace hpa

@@ -1,13 +1,12 @@
 #pragma once
 // Fully converged NMPC solve of the same OCP with NLopt (L-BFGS with box bounds on the 4N
-// rotor speeds, exact gradient by the adjoint through HybridModel::StepJacobians). Used to
+// rotor speeds, exact gradient by the adjoint through Ocp::StepJacobians). Used to
 // check RTI's answer and selectable by ControllerConfig::solver == "nlopt". Not real-time.
 
 #include <vector>
 
 #include "hpa/controller/controller.h"
 #include "hpa/controller/ocp.h"
-#include "hpa/models/hybrid_model.h"
 
 namespace hpa {
 
@@ -31,7 +30,7 @@ struct NloptResult {
 
 /// Minimises the OCP cost over the rotor speeds from u_guess (clamped into the bounds).
 /// On NLopt failure: status kQpFailure (the solver failed), u = the best point found.
-NloptResult NloptSolve(const Ocp& ocp, const HybridModel& model, const StateVector& x0,
+NloptResult NloptSolve(const Ocp& ocp, const StateVector& x0,
                        const std::vector<InputVector>& u_guess,
                        const NloptSettings& settings = NloptSettings());
 

@@ -1,14 +1,16 @@
 #pragma once
 // The HPA-MPC optimal control problem as a plain struct (OCS2 habit): horizon, mode held over
-// the horizon, state/input references, diagonal weights. Any solver (RTI, NLopt) takes it.
+// the horizon, dynamics, state/input references, weights. Any solver (RTI, NLopt) takes it.
 //
-// Cost, written as a sum of squared residuals: J = sum_{k<N} |r_k(x_k, u_k)|^2 + |r_N(x_N)|^2,
-//   |r_k|^2 = m L_load + (1 - m) L_quad + L_cam + soft tilt + soft body rate + input cost,
-// with every quadratic term e^T Q e, Q diagonal. Rotor-speed bounds are hard box constraints
-// of the solvers; tilt and body-rate limits are SOFT: one-sided quadratic penalties
-// w max(0, h(x))^2 (they never make the problem infeasible).
+// Cost, a sum of squared residuals: J = sum_{k<N} |r_k(x_k, u_k)|^2 + |r_N(x_N)|^2, where r_k
+// stacks the named terms of OcpTerms() (MJPC's weighted residual terms): state tracking
+// (m L_load + (1 - m) L_quad), input, perception L_cam, soft tilt, soft body rate. Every term
+// is sqrt(diagonal weight) times its error. Rotor-speed bounds are hard box constraints of the
+// solvers; tilt and body-rate limits are SOFT: one-sided penalties w max(0, h(x))^2.
 
 #include <Eigen/Core>
+#include <memory>
+#include <string_view>
 #include <vector>
 
 #include "hpa/controller/reference.h"
@@ -18,15 +20,18 @@
 
 namespace hpa {
 
-constexpr int kOcpHorizonSteps = 10;        // N
-constexpr double kOcpStageDtS = 0.1;        // s per stage: horizon 1 s
-constexpr int kNr = kNx + kNu + 2 + 1 + 3;  // residual rows: state, input, camera x/y, tilt, rates
+constexpr int kOcpHorizonSteps = 10;  // N
+constexpr double kOcpStageDtS = 0.1;  // s per stage: horizon 1 s
+// Rows of the stage residual: the sum of the rows of OcpTerms() (checked by a static_assert in
+// ocp.cc). Fixed at compile time so the Gauss-Newton products use fixed-size Eigen kernels.
+constexpr int kNr = 29;
 
 using ResidualVector = Eigen::Matrix<double, kNr, 1>;
 using ResidualStateJacobian = Eigen::Matrix<double, kNr, kNx>;
 using ResidualInputJacobian = Eigen::Matrix<double, kNr, kNu>;
 
-/// Diagonal weights of the stage cost (the tuned defaults are documented in ocp.cc).
+/// Diagonal weights of the stage cost (the tuned values: OcpWeights::Tuned, history in
+/// controller/README.md).
 struct OcpWeights {
   StateVector q_load;            // L_load: taut mode, on x - x_ref  (19)
   StateVector q_quad;            // L_quad: slack mode, on x - x_ref; payload entries zero  (19)
@@ -34,13 +39,10 @@ struct OcpWeights {
   Eigen::Vector2d q_cam_per_m2;  // L_cam in taut mode, on the x, y of p_C (m)  (2)
   Eigen::Vector2d q_cam_slack_per_m2;  // L_cam in slack mode (both x perception_weight)  (2)
   // L_cam's camera attitude: true -> the stage's reference attitude (L_cam is then a cost on
-  // positions only; the default, see ocp.cc), false -> the state's attitude (the paper's
-  // literal form, whose attitude lever tips the quadrotor over at high perception weight).
+  // positions only, the default), false -> the state's attitude (the paper's literal form).
   bool cam_at_reference_attitude = true;
   // Slack-mode L_cam penalises only the part of the payload's image offset beyond this
-  // fraction of the half field of view (per axis, a dead zone): a payload moved out of view is
-  // followed, a thrown one still well inside the image is not chased. 0 = the paper's plain
-  // quadratic.
+  // fraction of the half field of view (per axis, a dead zone). 0 = the paper's plain quadratic.
   double cam_slack_deadzone_fraction = 0.0;
   double terminal_factor = 1.0;      // terminal state weights = factor * stage state weights
   double tilt_max_rad = 0.0;         // soft limit on the angle between body z and world z
@@ -48,16 +50,17 @@ struct OcpWeights {
   double body_rate_max_radps = 0.0;  // soft limit on each |w_B|
   double body_rate_weight = 0.0;     // weight on max(0, |w_i| - max)^2, (rad/s)^-2
 
-  /// The tuned weights (see ocp.cc for the values and why).
+  /// The tuned weights (values in ocp.cc, why in controller/README.md "Tuning history").
   static OcpWeights Tuned();
 };
 
-/// One instance of the optimal control problem.
+/// One instance of the optimal control problem: dynamics, references, weights, bounds.
 struct Ocp {
-  int horizon_steps = kOcpHorizonSteps;  // N
-  double stage_dt_s = kOcpStageDtS;      // stage length
-  CableMode mode = CableMode::kTaut;     // held over the horizon
-  double perception_weight = 1.0;        // scale on q_cam (0: L_cam off)
+  std::shared_ptr<const HybridModel> model;  // dynamics F and its Jacobians (set by BuildOcp)
+  int horizon_steps = kOcpHorizonSteps;      // N
+  double stage_dt_s = kOcpStageDtS;          // stage length
+  CableMode mode = CableMode::kTaut;         // held over the horizon
+  double perception_weight = 1.0;            // scale on q_cam (0: L_cam off)
   OcpWeights weights = OcpWeights::Tuned();
   double u_hover_radps = 1.0;                          // normalisation of the input residual
   InputVector u_min_radps = InputVector::Zero();       // hard bounds  (4)
@@ -70,15 +73,86 @@ struct Ocp {
   // slack L_cam dead zone in metres of camera x, y, fixed for the solve from the payload's
   // current depth (the predicted free fall would otherwise widen it); infinite = no L_cam
   Eigen::Vector2d cam_slack_deadzone_m = Eigen::Vector2d::Zero();  // (2)
+
+  /// One stage of the dynamics in this problem's mode: x_{k+1} = F(x_k, u_k).
+  StateVector Step(const StateVector& x, const InputVector& u) const;
+  /// F and its Jacobians a = dF/dx (19 x 19), b = dF/du (19 x 4).
+  void StepJacobians(const StateVector& x, const InputVector& u, StateVector* x_next,
+                     StateMatrix* a, InputMatrix* b) const;
 };
+
+// --- the cost as a list of named terms -------------------------------------------------------
+
+/// Diagonal weight or square-rooted weight of one term's rows (at most kNr rows, no heap).
+using OcpTermWeight = Eigen::Matrix<double, Eigen::Dynamic, 1, 0, kNr, 1>;
+/// A term's rows of the stage residual (rows).
+using OcpTermResidual = Eigen::Block<ResidualVector, Eigen::Dynamic, 1>;
+/// A term's rows of d r / d x (rows x 19).
+using OcpTermStateJacobian = Eigen::Block<ResidualStateJacobian, Eigen::Dynamic, kNx>;
+/// A term's rows of d r / d u (rows x 4).
+using OcpTermInputJacobian = Eigen::Block<ResidualInputJacobian, Eigen::Dynamic, kNu>;
+
+/// How a term enters the terminal stage N.
+enum class OcpTermAtTerminal {
+  kOmitted,              // not at stage N (the input term)
+  kTimesTerminalFactor,  // weight x OcpWeights::terminal_factor
+  kAsStage,              // same weight as the stages
+};
+
+/// Diagonal weight of a term's rows in a cable mode (taut / slack), before the stage factor.
+using OcpTermWeightFunction = OcpTermWeight (*)(const OcpWeights& weights, CableMode mode);
+/// Problem-level scale of a term's weight (the perception weight for L_cam).
+using OcpTermScaleFunction = double (*)(const Ocp& ocp);
+/// Writes the term's weighted residual sqrt_weight .* e(x, u, k) into r and, when not null,
+/// its Jacobians into r_x and r_u; all three arrive zeroed. The term applies sqrt_weight itself.
+using OcpTermResidualFunction = void (*)(const Ocp& ocp, int k, const StateVector& x,
+                                         const InputVector& u, const OcpTermWeight& sqrt_weight,
+                                         OcpTermResidual* r, OcpTermStateJacobian* r_x,
+                                         OcpTermInputJacobian* r_u);
+
+/// One named, weighted residual term of the stage cost. Its weight at stage k is
+/// factor_k * scale(ocp) * weight(weights, mode), factor_k = terminal_factor at stage N for
+/// kTimesTerminalFactor terms and 1 otherwise; a term with no positive weight at a stage is
+/// not evaluated (its rows stay zero).
+struct OcpTerm {
+  std::string_view name;                                        // e.g. "perception"
+  int rows = 0;                                                 // residual rows
+  OcpTermAtTerminal at_terminal = OcpTermAtTerminal::kAsStage;  // role at stage N
+  OcpTermWeightFunction weight = nullptr;                       // per-mode diagonal weight
+  OcpTermScaleFunction scale = nullptr;                         // nullptr: no extra scale
+  OcpTermResidualFunction residual = nullptr;                   // weighted residual, Jacobians
+  int offset = 0;  // first row in the stage residual, computed from the list order
+};
+
+/// The terms of the stage cost, in residual order (their rows add up to kNr).
+const std::vector<OcpTerm>& OcpTerms();
+
+/// The term named `name`, or nullptr.
+const OcpTerm* FindOcpTerm(std::string_view name);
+
+/// Diagonal weight of `term`'s rows at stage k of `ocp` (zero at stage N for kOmitted terms).
+OcpTermWeight OcpTermStageWeight(const Ocp& ocp, const OcpTerm& term, int k);
+
+/// One term's weighted residual (rows) and, if asked, its Jacobians (rows x 19, rows x 4) at
+/// stage k; zero where the term is not evaluated.
+void EvaluateOcpTerm(const Ocp& ocp, const OcpTerm& term, int k, const StateVector& x,
+                     const InputVector& u, Eigen::VectorXd* r, Eigen::MatrixXd* r_x,
+                     Eigen::MatrixXd* r_u);
+
+// --- building the problem --------------------------------------------------------------------
 
 /// Sets ocp->cam_slack_deadzone_m from the current state: deadzone fraction x tan(half FOV) x
 /// the payload's depth in the camera; a payload at or above the lens plane (thrown up) cannot
 /// be brought into view by moving, so the slack L_cam is switched off (infinite dead zone).
 void SetCameraDeadzone(const SystemState& state, Ocp* ocp);
 
-/// Builds the OCP at time t0_s: references from `reference` at t0 + k dt, mode, weights,
-/// bounds and camera transform from params.
+/// Builds the OCP at time t0_s on `model`: references from `reference` at t0 + k dt, mode,
+/// weights, and bounds and camera transform from model->params().
+Ocp BuildOcp(std::shared_ptr<const HybridModel> model, const Reference& reference, double t0_s,
+             CableMode mode, double perception_weight,
+             const OcpWeights& weights = OcpWeights::Tuned());
+
+/// BuildOcp on a HybridModel of its own made from params.
 Ocp BuildOcp(const Params& params, const Reference& reference, double t0_s, CableMode mode,
              double perception_weight, const OcpWeights& weights = OcpWeights::Tuned());
 
@@ -96,18 +170,36 @@ Eigen::Vector3d PayloadInCamera(const Ocp& ocp, const StateVector& x);
 /// stage k when weights.cam_at_reference_attitude (the default), else the state's.
 Eigen::Vector3d CostPayloadInCamera(const Ocp& ocp, int k, const StateVector& x);
 
-/// Residual of stage k (k = N: terminal, u ignored and its rows zero) and, if asked, its
+// --- evaluating the problem ------------------------------------------------------------------
+
+/// Residual of stage k (k = N: terminal, u ignored) stacked from OcpTerms() and, if asked, its
 /// Jacobians. Stage cost = r.squaredNorm().
 void StageResidual(const Ocp& ocp, int k, const StateVector& x, const InputVector& u,
                    ResidualVector* r, ResidualStateJacobian* r_x, ResidualInputJacobian* r_u);
 
-/// Simulates u from x0 with the OCP's mode and returns the cost; x_traj (N+1) if not null.
-double OcpCost(const Ocp& ocp, const HybridModel& model, const StateVector& x0,
-               const std::vector<InputVector>& u, std::vector<StateVector>* x_traj = nullptr);
+/// Simulates u from x0 with the OCP's dynamics and returns the cost; x_traj (N+1) if not null.
+double OcpCost(const Ocp& ocp, const StateVector& x0, const std::vector<InputVector>& u,
+               std::vector<StateVector>* x_traj = nullptr);
+
+/// The OCP linearised along the trajectory simulated from x0 with u (single shooting): what
+/// the RTI QP and the adjoint gradient are both built from.
+struct OcpLinearization {
+  std::vector<StateVector> x;              // simulated states  (N + 1)
+  std::vector<StateMatrix> a;              // dF/dx at each stage  (N, 19 x 19)
+  std::vector<InputMatrix> b;              // dF/du at each stage  (N, 19 x 4)
+  std::vector<ResidualVector> r;           // stage residuals, r[N] terminal  (N + 1, 29)
+  std::vector<ResidualStateJacobian> r_x;  // d r_k / d x_k  (N + 1, 29 x 19)
+  std::vector<ResidualInputJacobian> r_u;  // d r_k / d u_k; r_u[N] = 0  (N + 1, 29 x 4)
+  double cost = 0.0;                       // sum_k |r_k|^2
+};
+
+/// Simulates u (N inputs) from x0 and linearises dynamics and residuals at every stage.
+OcpLinearization LinearizeAlong(const Ocp& ocp, const StateVector& x0,
+                                const std::vector<InputVector>& u);
 
 /// Cost and its exact gradient d cost / d u (4N, stage-major) by the adjoint of the
-/// single-shooting chain (exact sensitivities from HybridModel::StepJacobians).
-double OcpCostAndGradient(const Ocp& ocp, const HybridModel& model, const StateVector& x0,
-                          const std::vector<InputVector>& u, Eigen::VectorXd* gradient);
+/// single-shooting chain, from LinearizeAlong.
+double OcpCostAndGradient(const Ocp& ocp, const StateVector& x0, const std::vector<InputVector>& u,
+                          Eigen::VectorXd* gradient);
 
 }  // namespace hpa

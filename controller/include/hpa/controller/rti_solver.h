@@ -1,9 +1,8 @@
 #pragma once
 // Real-time iteration (the paper's acados scheme): one Gauss-Newton SQP iteration per call.
 // Single shooting: the guess is simulated from x0 (so the trajectory is dynamically exact),
-// linearised with HybridModel::StepJacobians, condensed onto the 4N rotor speeds and the
-// box QP (rotor bounds) is solved in-house. The step is globalised (the plain full step
-// diverged at a re-taut from a near-horizontal cable, ClosedLoopTest.RetautFrom...): an Armijo
+// linearised by LinearizeAlong (ocp.h), condensed onto the 4N rotor speeds and the
+// box QP (rotor bounds) is solved in-house. The step is globalised (why: README): an Armijo
 // backtracking line search on the OCP cost (single shooting: every trial is simulated exactly,
 // and the box is convex so every trial is feasible), and Levenberg-Marquardt regularisation
 // of the Gauss-Newton Hessian, raised when the QP is not positive definite or no step along
@@ -11,10 +10,8 @@
 
 #include <vector>
 
-#include "hpa/controller/box_qp.h"
 #include "hpa/controller/controller.h"
 #include "hpa/controller/ocp.h"
-#include "hpa/models/hybrid_model.h"
 
 namespace hpa {
 
@@ -36,7 +33,7 @@ struct RtiSettings {
 /// Result of one RTI (or of an iterated Gauss-Newton solve).
 struct RtiResult {
   ControlStatus status = ControlStatus::kSuccess;
-  BoxQpResult qp;              // the last QP's outcome
+  int qp_iterations = 0;       // active-set iterations of the last QP
   std::vector<InputVector> u;  // new plan inputs, inside the bounds  (N)
   std::vector<StateVector> x;  // states simulated with u from x0  (N + 1)
   double cost = 0.0;           // OCP cost of the new plan
@@ -51,7 +48,7 @@ struct RtiResult {
 /// globalised per `settings`. Non-finite guess cost: kNonFinite; every QP failing: kQpFailure
 /// (u = the guess in both). No descent after all LM tries: kSuccess with step 0 and u = the
 /// guess (the guess is then the best plan known; the next call relinearises).
-RtiResult RtiIteration(const Ocp& ocp, const HybridModel& model, const StateVector& x0,
+RtiResult RtiIteration(const Ocp& ocp, const StateVector& x0,
                        const std::vector<InputVector>& u_guess,
                        const RtiSettings& settings = RtiSettings());
 

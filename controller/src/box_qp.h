@@ -1,5 +1,6 @@
 #pragma once
-// Dense box-constrained QP, solved in-house with Eigen by a primal active-set method:
+// Private to the controller library (RTI). Dense box-constrained QP, solved in-house with Eigen by
+// a primal active-set method:
 //   min 1/2 z^T H z + g^T z   s.t.  lb <= z <= ub,   H symmetric positive definite.
 
 #include <Eigen/Core>

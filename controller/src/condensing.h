@@ -1,5 +1,6 @@
 #pragma once
-// Condensing of a linearised OCP onto its inputs (single shooting, dx_0 = 0):
+// Private to the controller library (RTI). Condensing of a linearised OCP onto its inputs (single
+// shooting, dx_0 = 0):
 //   dx_{k+1} = A_k dx_k + B_k du_k,
 //   cost = sum_k 1/2 [dx;du]^T [Hxx Hxu; Hxu^T Huu] [dx;du] + gx^T dx + gu^T du  (+ terminal)
 // becomes the dense QP  min 1/2 du^T H du + g^T du  over du = [du_0 .. du_{N-1}].
