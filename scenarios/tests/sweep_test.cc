@@ -129,6 +129,18 @@ TEST(SweepTest, EveryDrawIsValidatedNotOnlyTheFirst) {
   EXPECT_NO_THROW(Spec("  world.payload_mass: {uniform: [0.1, 1.0]}\n", 30));
 }
 
+TEST(SweepTest, ABadBaseWithoutVaryIsNamed) {
+  // found by the fuzzer: a sweep with no `vary` whose base cannot be loaded
+  Write("no_vary.yaml", "base: missing_base.yaml\nruns: 4\n");
+  try {
+    LoadSweep(TestTempDir() + "no_vary.yaml");
+    ADD_FAILURE() << "a sweep on a missing base was accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("key 'base'"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("missing_base.yaml"), std::string::npos) << e.what();
+  }
+}
+
 TEST(SweepTest, WilsonIntervalMatchesReferenceValues) {
   // reference values from the closed form (Wilson 1927, z = 1.96), e.g. statsmodels'
   // proportion_confint(k, n, method="wilson"): 0/10 -> [0, 0.2775], 1/6 -> [0.0301, 0.5635],

@@ -131,10 +131,14 @@ SweepSpec LoadSweep(const std::string& path) {
     try {
       BuildScenario(s, run);
     } catch (const InputError& e) {
+      // no varied value: the base scenario itself is bad
+      if (run.values.empty()) throw InputError(path, "base", e.what());
       std::string values;
-      for (const auto& [key, value] : run.values) values += " " + key + "=" + value;
+      for (const auto& [key, value] : run.values) {
+        values += (values.empty() ? "" : " ") + key + "=" + value;
+      }
       throw InputError(path, "vary",
-                       "run " + std::to_string(run.index) + " (" + values.substr(1) +
+                       "run " + std::to_string(run.index) + " (" + values +
                            ") is not a valid scenario: " + e.what());
     }
   }
