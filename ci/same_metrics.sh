@@ -4,6 +4,7 @@
 # recorded in ci/metrics_recorded/. A refactor that must not change behaviour passes this.
 #   ci/same_metrics.sh            compare (exit 1 on any difference, printing it)
 #   ci/same_metrics.sh --record   overwrite the recorded copies
+# HPA_RUN_ARGS adds arguments to every run (e.g. HPA_RUN_ARGS="--set world.profile=ideal").
 set -euo pipefail
 cd "$(dirname "$0")/.."
 hpa=${HPA_BUILD_DIR:-build}/bin/hpa
@@ -22,10 +23,12 @@ run_one() {
   set -- $1
   local extra=()
   [ "$3" != default ] && extra=(--controller "$3")
-  "$hpa" run "$1" --out "$out/$2" --quiet "${extra[@]}" > "$out/$2.log" 2>&1 || true
+  # shellcheck disable=SC2086
+  "$hpa" run "$1" --out "$out/$2" --quiet "${extra[@]}" ${HPA_RUN_ARGS:-} > "$out/$2.log" 2>&1 \
+    || true
   [ -f "$out/$2/metrics.json" ] || { echo "no metrics for $2:"; cat "$out/$2.log"; }
 }
-export -f run_one; export hpa out
+export -f run_one; export hpa out HPA_RUN_ARGS
 printf '%s\n' "${jobs[@]}" | xargs -P "$(nproc)" -I{} bash -c 'run_one "{}"'
 mkdir -p "$recorded"
 args=()

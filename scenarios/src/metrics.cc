@@ -77,7 +77,7 @@ void ComputeMetrics(const MetricsInputs& in, Metrics* m) {
     const Eigen::Vector3d e_Q = r.truth.p_WQ_W - r.reference.p_WQ_W;
     quad_sq += e_Q.cwiseAbs2();
     m->quad_position_deviation_max_m = std::max(m->quad_position_deviation_max_m, e_Q.norm());
-    if (slack.empty() || !in_slack(r.time_s)) {
+    if ((slack.empty() || !in_slack(r.time_s)) && r.time_s >= m->payload_rmse_from_s - 1e-9) {
       payload_sq += (r.truth.p_WL_W - r.reference.p_WL_W).cwiseAbs2();
       ++payload_n;
     }
@@ -192,6 +192,7 @@ std::string MetricsToJson(const Metrics& m) {
   const auto measured = [&](const Json& v) { return controlled ? v : Json(); };
   o["payload_rmse_m"] = measured(vec(m.payload_rmse_m));
   o["payload_rmse_over"] = m.payload_rmse_over;
+  o["payload_rmse_from_s"] = num(m.payload_rmse_from_s);
   o["quad_rmse_m"] = measured(vec(m.quad_rmse_m));
   o["quad_position_deviation_max_m"] = measured(num(m.quad_position_deviation_max_m));
   o["payload_max_speed_mps"] = measured(num(m.payload_max_speed_mps));
@@ -210,6 +211,12 @@ std::string MetricsToJson(const Metrics& m) {
   o["mpc_solve_ms"] = quantiles(m.mpc_solve_ms);
   o["mpc_failures"] = m.mpc_failures;
   o["closed_loop_cost"] = num(m.closed_loop_cost);
+  o["world_profile"] = m.world_profile;
+  o["payload_quad_min_distance_m"] = num(m.payload_quad_min_distance_m);
+  o["contacts"] = {{"payload_body", m.contacts_payload_body},
+                   {"payload_rotor", m.contacts_payload_rotor},
+                   {"payload_ground", m.contacts_payload_ground},
+                   {"quad_ground", m.contacts_quad_ground}};
   o["render_ms"] = quantiles(m.render_ms);
   o["detector_ms"] = quantiles(m.detector_ms);
   if (!m.estimator.empty()) {

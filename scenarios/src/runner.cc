@@ -119,12 +119,18 @@ RunResult RunScenario(const Scenario& scenario, const Params& params, const RunO
   world_config.overrides.cable_length_m = scenario.world_cable_length_m;
   world_config.seed = scenario.seed;
   world_config.rates = ScenarioRates(scenario);
+  world_config.profile = scenario.world;
   const RateTable& rates = world_config.rates;
   sim::World world(world_config);
+  metrics.world_profile = scenario.world.name;
+  if (scenario.reference.type == "lissajous") {
+    metrics.payload_rmse_from_s = scenario.reference.lissajous.ramp_s;
+  }
 
-  // flight code: reference, controller, rate loop, estimator (flight params only)
+  // flight code: reference, controller, rate loop, estimator (flight params only); the world
+  // starts from its own parameters (mismatch draw and overrides)
   const std::shared_ptr<const Reference> reference = MakeReference(scenario, params);
-  world.Reset(InitialState(*reference, WorldParams(scenario, params)));
+  world.Reset(InitialState(*reference, world.world_params()));
   std::unique_ptr<Controller> controller = MakeController(scenario.controller, params, reference);
   BodyRateController rate_controller(params);
   EstimatorConfig estimator_config;
@@ -167,8 +173,17 @@ RunResult RunScenario(const Scenario& scenario, const Params& params, const RunO
   std::stable_sort(events.begin(), events.end(),
                    [](const EventSpec& a, const EventSpec& b) { return a.at_s < b.at_s; });
   DelayLine<PayloadDetection> in_flight(rates.camera.latency_s);  // camera to estimator
-  ControlOutput control;
+  ControlOutput control;  // the command the rate loop tracks
   control.command.thrust_N = params.HoverThrustN();
+  // latencies of the flight code (world profile): a command reaches the rate loop compute +
+  // transport after the state it was computed from; the controller reads an estimate that is
+  // estimate_s old
+  const sim::LatencyProfile& latency = scenario.world.latency;
+  DelayLine<ControlOutput> commands_in_flight(latency.compute_s + latency.transport_s);
+  const bool delayed_estimate = latency.estimate_s > 0.0;
+  DelayLine<SystemState> estimates_in_flight(latency.estimate_s);
+  SystemState delayed_state;  // latest estimate old enough to have reached the controller
+  bool have_delayed_state = false;
   const bool show_progress = options.progress && isatty(STDERR_FILENO);
   int last_progress_pct = -1;
 
@@ -191,9 +206,9 @@ RunResult RunScenario(const Scenario& scenario, const Params& params, const RunO
       const bool control_due = clock.Fires(control_loop);
       const bool rate_due = clock.Fires(rate_loop);
       const bool video_due = video_loop >= 0 && clock.Fires(video_loop);
-      const bool need_state = control_due || rate_due || video_due;
+      const bool need_state = control_due || rate_due || video_due || delayed_estimate;
       sim::Truth truth;
-      if (camera_due || control_due || video_due || (ground_truth && rate_due)) {
+      if (camera_due || control_due || video_due || (ground_truth && need_state)) {
         truth = world.GetTruth();
       }
 
@@ -229,18 +244,32 @@ RunResult RunScenario(const Scenario& scenario, const Params& params, const RunO
       if (need_state) state = ground_truth ? truth.state : estimator->Estimate(t);
       state.time_s = t;
 
-      // high-level controller
+      // the estimate the controller may read: now, or estimate_s ago (labelled with the time it
+      // is read: the controller does not know its age)
+      SystemState controller_state = state;
+      if (delayed_estimate) {
+        estimates_in_flight.Push(t, state);
+        while (auto old = estimates_in_flight.PopReady(t)) {
+          delayed_state = *old;
+          have_delayed_state = true;
+        }
+        if (have_delayed_state) controller_state = delayed_state;
+        controller_state.time_s = t;
+      }
+
+      // high-level controller; its command reaches the rate loop after compute + transport
       if (control_due) {
-        control = controller->Update(state);
+        const ControlOutput computed = controller->Update(controller_state);
+        commands_in_flight.Push(t, computed);
         LogRow row;
         row.time_s = t;
         row.truth = truth.state;
         row.estimate = state;
         row.reference = reference->At(t);
-        row.command = control.command;
-        row.status = control.status;
-        row.solve_time_ms = control.solve_time_ms;
-        row.cost = control.cost;
+        row.command = computed.command;
+        row.status = computed.status;
+        row.solve_time_ms = computed.solve_time_ms;
+        row.cost = computed.cost;
         row.cable_tension_N = truth.cable_tension_N;
         row.gripper_active = world.gripper_active();
         if (!ground_truth) {
@@ -250,6 +279,8 @@ RunResult RunScenario(const Scenario& scenario, const Params& params, const RunO
         }
         for (RunRecorder* r : recorders) r->OnControlStep(row);
       }
+
+      while (auto arrived = commands_in_flight.PopReady(t)) control = *arrived;
 
       // body-rate loop
       if (rate_due) {
@@ -311,6 +342,12 @@ RunResult RunScenario(const Scenario& scenario, const Params& params, const RunO
     metrics.estimator_health = estimator->Health().Fields();
   }
   metrics.sim_time_s = std::min(tick, end_tick) * sim::World::kPhysicsDt_s;
+  metrics.payload_quad_min_distance_m = world.payload_quad_min_distance_m();
+  const sim::ContactCounts& contacts = world.contact_counts();
+  metrics.contacts_payload_body = contacts.payload_body;
+  metrics.contacts_payload_rotor = contacts.payload_rotor;
+  metrics.contacts_payload_ground = contacts.payload_ground;
+  metrics.contacts_quad_ground = contacts.quad_ground;
   ComputeMetrics(inputs, &metrics);
   result.rows = std::move(inputs.rows);
   CheckExpectations(scenario.expect, &metrics);

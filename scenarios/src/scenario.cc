@@ -10,6 +10,7 @@
 #include "hpa/models/input_error.h"
 #include "hpa/models/yaml_reader.h"
 #include "hpa/scenarios/expect_keys.h"
+#include "hpa/scenarios/world_profile_yaml.h"
 
 namespace hpa {
 namespace {
@@ -167,8 +168,13 @@ Scenario ParseScenario(const YamlMap& root) {
   s.duration_s = root.Number("duration", 1e-3, kMaxScenarioDuration_s);
   s.seed = static_cast<unsigned long>(root.Integer("seed", 0, 4294967295L, 1));
 
+  // the world's realism profile (flight unless the scenario says), then its single-number
+  // overrides and the explicit world-only parameters
+  s.world = LoadWorldProfile("flight");
   if (root.Has("world")) {
     const YamlMap w = root.Map("world");
+    s.world = LoadWorldProfile(w.Choice("profile", WorldProfileNames(), "flight"));
+    ReadWorldProfileSections(w, &s.world);
     if (w.Has("payload_mass")) s.world_payload_mass_kg = w.Number("payload_mass", 1e-3, 10.0);
     if (w.Has("cable_length")) s.world_cable_length_m = w.Number("cable_length", 0.05, 5.0);
     w.RejectUnknownKeys();

@@ -45,6 +45,21 @@ int RequireId(const mjModel* m, const std::string& file, mjtObj type, const char
 }
 
 const char* kRotorActuatorNames[4] = {"rotor0", "rotor1", "rotor2", "rotor3"};
+const char* kRotorDiscNames[4] = {"rotor0_disc", "rotor1_disc", "rotor2_disc", "rotor3_disc"};
+
+// Signed distance (m) from point p to an axis-aligned box of half sizes h at the origin
+// (negative inside: minus the depth to the nearest face).
+double BoxSignedDistance(const Eigen::Vector3d& p, const Eigen::Vector3d& h) {
+  const Eigen::Vector3d q = p.cwiseAbs() - h;
+  return q.cwiseMax(0.0).norm() + std::min(q.maxCoeff(), 0.0);
+}
+
+// Signed distance (m) from point p to a solid cylinder of radius r and half height h along z at
+// the origin (negative inside).
+double CylinderSignedDistance(const Eigen::Vector3d& p, double r, double h) {
+  const Eigen::Vector2d q(p.head<2>().norm() - r, std::abs(p.z()) - h);
+  return q.cwiseMax(0.0).norm() + std::min(q.maxCoeff(), 0.0);
+}
 
 }  // namespace
 
@@ -108,13 +123,20 @@ World::World(const WorldConfig& config)
     for (int i = 0; i < 4; ++i) {
       ids_.rotor_actuator[i] =
           RequireId(model_, file, mjOBJ_ACTUATOR, kRotorActuatorNames[i], "actuator");
+      ids_.rotor_disc_geom[i] =
+          RequireId(model_, file, mjOBJ_GEOM, kRotorDiscNames[i], "rotor disk geom");
     }
+    ids_.payload_geom = RequireId(model_, file, mjOBJ_GEOM, "payload_sphere", "geom");
+    ids_.quad_box_geom = RequireId(model_, file, mjOBJ_GEOM, "quadrotor_box", "geom");
+    ids_.ground_geom = RequireId(model_, file, mjOBJ_GEOM, "ground", "geom");
   } catch (...) {
     mj_deleteModel(model_);
     throw;
   }
 
-  // the world's own parameters: flight params with the scenario's overrides
+  // the world's own parameters: flight params, the profile's mismatch draw, then the scenario's
+  // explicit overrides (which win over the draw)
+  DrawMismatch();
   if (config_.overrides.payload_mass_kg) {
     if (!(*config_.overrides.payload_mass_kg > 0)) {
       mj_deleteModel(model_);
@@ -184,11 +206,21 @@ void World::ApplyWorldParams() {
     const int site = model_->actuator_trnid[2 * a];
     const Eigen::Vector3d r_B = RotorPosition_B(p, i);
     for (int k = 0; k < 3; ++k) model_->site_pos[3 * site + k] = r_B(k);
-    model_->actuator_gear[6 * a + 5] = RotorSpin(i) * p.k_m_Nm_per_radps2 / p.k_f_N_per_radps2;
-    model_->actuator_ctrlrange[2 * a + 0] =
-        p.k_f_N_per_radps2 * p.motor_speed_min_radps * p.motor_speed_min_radps;
-    model_->actuator_ctrlrange[2 * a + 1] =
-        p.k_f_N_per_radps2 * p.motor_speed_max_radps * p.motor_speed_max_radps;
+    const double k_f = p.k_f_N_per_radps2 * rotor_kf_factor_(i);
+    const double k_m = p.k_m_Nm_per_radps2 * rotor_km_factor_(i);
+    model_->actuator_gear[6 * a + 5] = RotorSpin(i) * k_m / k_f;
+    model_->actuator_ctrlrange[2 * a + 0] = k_f * p.motor_speed_min_radps * p.motor_speed_min_radps;
+    model_->actuator_ctrlrange[2 * a + 1] = k_f * p.motor_speed_max_radps * p.motor_speed_max_radps;
+  }
+
+  // contact between payload and vehicle: the payload (contype 4) meets the body box and the rotor
+  // disks when their conaffinity has bit 4; the disks never touch the ground (contype 0)
+  if (config_.profile.contact.enabled) {
+    model_->geom_conaffinity[ids_.quad_box_geom] |= 4;
+    for (int i = 0; i < 4; ++i) {
+      model_->geom_contype[ids_.rotor_disc_geom[i]] = 0;
+      model_->geom_conaffinity[ids_.rotor_disc_geom[i]] = 4;
+    }
   }
 
   // payload camera: field of view, image size, and pose in the body. MuJoCo's camera axes are
@@ -207,6 +239,86 @@ void World::ApplyWorldParams() {
 
   // derived constants (subtree masses, invweight0 used by the constraint softness)
   mj_setConst(model_, data_);
+}
+
+void World::DrawMismatch() {
+  // a generator of its own, so the sensor noise stream is the same with and without mismatch
+  std::mt19937_64 rng(config_.seed * 0x9E3779B97F4A7C15ULL + 0x6D69736D61746368ULL);
+  std::normal_distribution<double> normal(0.0, 1.0);
+  const MismatchProfile& m = config_.profile.mismatch;
+  if (m.enabled) {
+    Params& p = world_params_;
+    p.payload_mass_kg = std::max(1e-3, p.payload_mass_kg + m.payload_mass_sigma_kg * normal(rng));
+    p.cable_length_m = std::max(0.05, p.cable_length_m + m.cable_length_sigma_m * normal(rng));
+    p.quad_mass_kg = std::max(0.05, p.quad_mass_kg + m.quad_mass_sigma_kg * normal(rng));
+    for (int i = 0; i < 3; ++i) {
+      p.inertia_B_kgm2(i) *= std::max(0.2, 1.0 + m.inertia_sigma_fraction * normal(rng));
+    }
+    p.k_f_N_per_radps2 *= std::max(0.2, 1.0 + m.thrust_coefficient_sigma_fraction * normal(rng));
+    for (int i = 0; i < 3; ++i) p.t_BC_B_m(i) += m.camera_position_sigma_m * normal(rng);
+    Eigen::Vector3d dtheta_B;
+    for (int i = 0; i < 3; ++i) dtheta_B(i) = m.camera_angle_sigma_rad * normal(rng);
+    if (dtheta_B.norm() > 0.0) {
+      p.R_BC = Eigen::AngleAxisd(dtheta_B.norm(), dtheta_B.normalized()).toRotationMatrix() * p.R_BC;
+    }
+  }
+  const ActuationProfile& a = config_.profile.actuation;
+  if (a.enabled) {
+    for (int i = 0; i < 4; ++i) {
+      rotor_kf_factor_(i) = std::max(0.2, 1.0 + a.thrust_coefficient_spread * normal(rng));
+      rotor_km_factor_(i) = std::max(0.2, 1.0 + a.torque_coefficient_spread * normal(rng));
+    }
+  }
+}
+
+double World::BatterySpeedFactor() const {
+  const ActuationProfile& a = config_.profile.actuation;
+  if (!a.enabled) return 1.0;
+  return std::max(0.0, 1.0 - a.battery_voltage_drop_per_s * step_ * kPhysicsDt_s);
+}
+
+double World::PayloadQuadDistance() const {
+  const Eigen::Vector3d p_WL_W(data_->xpos + 3 * ids_.payload_body);
+  const double radius_m = model_->geom_size[3 * ids_.payload_geom];
+  // the payload centre in a geom's frame: R_WG^T (p_WL - p_WG)
+  auto in_geom = [&](int g) {
+    const Eigen::Map<const Eigen::Matrix<double, 3, 3, Eigen::RowMajor>> R_WG(data_->geom_xmat +
+                                                                                9 * g);
+    return Eigen::Vector3d(R_WG.transpose() * (p_WL_W - Eigen::Vector3d(data_->geom_xpos + 3 * g)));
+  };
+  const int box = ids_.quad_box_geom;
+  double d = BoxSignedDistance(in_geom(box), Eigen::Vector3d(model_->geom_size + 3 * box));
+  for (int i = 0; i < 4; ++i) {
+    const int g = ids_.rotor_disc_geom[i];
+    d = std::min(d, CylinderSignedDistance(in_geom(g), model_->geom_size[3 * g],
+                                           model_->geom_size[3 * g + 1]));
+  }
+  return d - radius_m;
+}
+
+void World::UpdateContacts() {
+  bool now[4] = {false, false, false, false};  // the ContactCounts fields, in order
+  bool rotor_strike = false;
+  for (int i = 0; i < data_->ncon; ++i) {
+    const mjContact& c = data_->contact[i];
+    for (const auto& [a, b] : {std::pair{c.geom1, c.geom2}, std::pair{c.geom2, c.geom1}}) {
+      if (a == ids_.payload_geom) {
+        if (b == ids_.quad_box_geom) now[0] = true;
+        for (int r = 0; r < 4; ++r) rotor_strike |= b == ids_.rotor_disc_geom[r];
+        if (b == ids_.ground_geom) now[2] = true;
+      }
+      if (a == ids_.ground_geom && model_->geom_bodyid[b] == ids_.quad_body) now[3] = true;
+    }
+  }
+  now[1] = rotor_strike;
+  int* counts[4] = {&contact_counts_.payload_body, &contact_counts_.payload_rotor,
+                    &contact_counts_.payload_ground, &contact_counts_.quad_ground};
+  for (int k = 0; k < 4; ++k) {
+    if (now[k] && !touching_[k]) ++*counts[k];
+    touching_[k] = now[k];
+  }
+  payload_quad_min_distance_m_ = std::min(payload_quad_min_distance_m_, PayloadQuadDistance());
+  if (rotor_strike) LatchCrash("rotor_strike");
 }
 
 void World::Reset(const SystemState& initial) {
@@ -230,10 +342,13 @@ void World::Reset(const SystemState& initial) {
   sensor_clock_ = LockstepClock(config_.rates.physics_hz);
   vio_loop_ = sensor_clock_.AddLoop("vio", config_.rates.vio.rate_hz, TickRounding::kAtOrAfter);
   crash_ = CrashStatus{};
+  contact_counts_ = ContactCounts{};
+  for (bool& t : touching_) t = false;
 
   // motors at hover speed of the simulated system
   const double w_hover = world_params_.HoverMotorSpeedRadps();
   SetState(initial.ToVector(), InputVector::Constant(w_hover));
+  payload_quad_min_distance_m_ = PayloadQuadDistance();
 }
 
 void World::SetState(const StateVector& x, const InputVector& motor_speed_radps) {
@@ -276,7 +391,8 @@ void World::SetMotorSpeedCommand(const InputVector& w_cmd_radps) {
 void World::WriteMotorControls() {
   for (int i = 0; i < 4; ++i) {
     const double w = motor_speed_radps_(i);
-    data_->ctrl[ids_.rotor_actuator[i]] = world_params_.k_f_N_per_radps2 * w * w;
+    data_->ctrl[ids_.rotor_actuator[i]] =
+        world_params_.k_f_N_per_radps2 * rotor_kf_factor_(i) * w * w;
   }
 }
 
@@ -311,7 +427,11 @@ void World::Step() {
 
   // first-order motor lag, exact for the 1 ms step; thrust to the actuators
   const double alpha = 1.0 - std::exp(-kPhysicsDt_s / world_params_.motor_time_constant_s);
-  motor_speed_radps_ += alpha * (motor_command_radps_ - motor_speed_radps_);
+  // (with battery sag the speed a command reaches falls with the pack voltage)
+  const InputVector target_radps =
+      config_.profile.actuation.enabled ? InputVector(motor_command_radps_ * BatterySpeedFactor())
+                                        : motor_command_radps_;
+  motor_speed_radps_ += alpha * (target_radps - motor_speed_radps_);
   WriteMotorControls();
   ApplyDisturbances();
 
@@ -341,6 +461,7 @@ void World::Step() {
   }
   if (vio_due) vio_.Capture(t_k, before.p_WQ_W, before.q_WB, before.v_WQ_W);
   sensor_clock_.Advance();
+  UpdateContacts();
   CheckCrash();
 }
 
@@ -464,6 +585,8 @@ void World::CheckCrash() {
     const int b1 = model_->geom_bodyid[c.geom1], b2 = model_->geom_bodyid[c.geom2];
     if (b1 == ids_.quad_body || b2 == ids_.quad_body) {
       const int other = b1 == ids_.quad_body ? c.geom2 : c.geom1;
+      // the payload against the body is contact, not a crash (against a rotor: UpdateContacts)
+      if (other == ids_.payload_geom) continue;
       const char* name = mj_id2name(model_, mjOBJ_GEOM, other);
       return LatchCrash(std::string("quadrotor contact with ") + (name ? name : "a geom"));
     }

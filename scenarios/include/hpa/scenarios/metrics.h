@@ -46,6 +46,7 @@ struct Metrics {
   // intervals (payload_rmse_over = "taut_time"), else over the whole run ("whole_run").
   Eigen::Vector3d payload_rmse_m = Eigen::Vector3d::Zero();
   std::string payload_rmse_over = "whole_run";
+  double payload_rmse_from_s = 0.0;  // payload RMSE from this time on (a reference's ramp end)
   Eigen::Vector3d quad_rmse_m = Eigen::Vector3d::Zero();
   double quad_position_deviation_max_m = 0.0;  // max |p_Q - p_Q,ref| over the run
   double payload_max_speed_mps = 0.0;
@@ -64,6 +65,12 @@ struct Metrics {
   Quantiles detector_ms;                 // per rendered frame, detection only
   Quantiles render_ms;                   // per rendered frame
   std::optional<std::string> run_error;  // the run stopped on an exception (results kept)
+  std::string world_profile = "ideal";   // realism profile of the simulated world
+  // smallest payload-to-vehicle surface distance over the run (m; negative: they overlapped)
+  double payload_quad_min_distance_m = 0.0;
+  // contact episodes: payload-body, payload-rotor, payload-ground, quadrotor-ground
+  int contacts_payload_body = 0, contacts_payload_rotor = 0, contacts_payload_ground = 0,
+      contacts_quad_ground = 0;
   // estimator variant flown ("" with ground truth) and its published health counts at the end
   std::string estimator;
   std::vector<std::pair<std::string, double>> estimator_health;

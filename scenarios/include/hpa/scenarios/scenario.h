@@ -12,6 +12,7 @@
 #include "hpa/controller/controller.h"
 #include "hpa/controller/reference.h"
 #include "hpa/scenarios/events.h"
+#include "hpa/sim/world_profile.h"
 
 namespace hpa {
 
@@ -51,6 +52,9 @@ struct Scenario {
   std::string name;
   double duration_s = 10.0;
   unsigned long seed = 1;
+  // world realism profile; a scenario file gets `flight` unless it says `world.profile: ideal`,
+  // a Scenario built in code the ideal world
+  sim::WorldProfile world;
   std::optional<double> world_payload_mass_kg;  // world-only overrides (model mismatch)
   std::optional<double> world_cable_length_m;
   ControllerConfig controller;

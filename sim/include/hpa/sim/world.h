@@ -19,6 +19,7 @@
 #include "hpa/models/sensor_types.h"
 #include "hpa/models/state.h"
 #include "hpa/sim/sensor_models.h"
+#include "hpa/sim/world_profile.h"
 
 // MuJoCo's model and data, only pointed to here (sim/src includes MuJoCo)
 struct mjModel_;
@@ -42,6 +43,15 @@ struct WorldConfig {
   uint64_t seed = 1;        // the one generator for all sensor noise
   SensorNoiseConfig noise;  // IMU and VIO noise
   RateTable rates;          // physics, IMU and VIO rates, VIO latency
+  WorldProfile profile;     // realism parts (default: all off, the ideal world)
+};
+
+/// Contact episodes since Reset (a pair counts once each time it starts touching).
+struct ContactCounts {
+  int payload_body = 0;    // payload against the quadrotor's body box
+  int payload_rotor = 0;   // payload against a rotor disk (a crash: rotor_strike)
+  int payload_ground = 0;  // payload against the ground
+  int quad_ground = 0;     // quadrotor against the ground (a crash)
 };
 
 /// Ground truth at the current time.
@@ -124,8 +134,21 @@ class World {
   /// motor_speed_radps, then recomputes kinematics; no lag transient follows.
   void SetState(const StateVector& x, const InputVector& motor_speed_radps);
 
-  /// Parameters the world actually simulates (params with overrides applied).
+  /// Parameters the world actually simulates (params with the profile's mismatch draw and the
+  /// overrides applied).
   const Params& world_params() const { return world_params_; }
+
+  /// Smallest surface-to-surface distance (m) between the payload sphere and the vehicle (body
+  /// box and rotor disks) since Reset; negative: they overlapped by that much.
+  double payload_quad_min_distance_m() const { return payload_quad_min_distance_m_; }
+  /// Surface-to-surface distance (m) between the payload and the vehicle now.
+  double PayloadQuadDistance() const;
+  /// Contact episodes since Reset.
+  const ContactCounts& contact_counts() const { return contact_counts_; }
+  /// Thrust coefficient of each rotor relative to the world's k_f (actuation spread)  (4)
+  const Eigen::Vector4d& rotor_thrust_factor() const { return rotor_kf_factor_; }
+  /// Rotor speed reached per unit command now (battery sag; 1 with a full pack or no sag).
+  double BatterySpeedFactor() const;
 
  private:
   struct Ids {
@@ -133,6 +156,8 @@ class World {
     int quad_jnt_qpos, quad_jnt_dof, payload_jnt_qpos, payload_jnt_dof;
     int cable_tendon, tension_sensor_adr, payload_camera, chase_camera;
     int rotor_actuator[4];
+    int payload_geom, quad_box_geom, ground_geom;
+    int rotor_disc_geom[4];
   };
   struct TimedForce {
     Body body;
@@ -147,6 +172,8 @@ class World {
   void UpdateSensors();
   void CheckCrash();
   void CheckWarnings();
+  void DrawMismatch();
+  void UpdateContacts();
   void LatchCrash(const std::string& reason);
   // specific force R^T (a + g e3) from qacc (time t_k) in the attitude q_WB of that same time
   Eigen::Vector3d QuadSpecificForce_B(const Eigen::Quaterniond& q_WB) const;
@@ -186,6 +213,13 @@ class World {
 
   CrashStatus crash_;
   std::unique_ptr<OffscreenRenderer> renderer_;
+
+  // realism profile state
+  Eigen::Vector4d rotor_kf_factor_ = Eigen::Vector4d::Ones();  // per-rotor k_f spread  (4)
+  Eigen::Vector4d rotor_km_factor_ = Eigen::Vector4d::Ones();  // per-rotor k_m spread  (4)
+  double payload_quad_min_distance_m_ = 0.0;
+  ContactCounts contact_counts_;
+  bool touching_[4] = {false, false, false, false};  // ContactCounts fields, last step
 };
 
 }  // namespace hpa::sim
