@@ -215,12 +215,25 @@ void World::ApplyWorldParams() {
 
   // contact between payload and vehicle: the payload (contype 4) meets the body box and the rotor
   // disks when their conaffinity has bit 4; the disks never touch the ground (contype 0)
+  // Solver settings for these contacts at the 1 ms step (checked by sim/tests/contact_test.cc):
+  // the payload's contacts are as stiff as MuJoCo resolves at this step (time constant 2 steps,
+  // critically damped: a hard ball against a carbon frame, no rebound of a soft contact), and the
+  // vehicle's geoms start their contact kMargin_m before the surfaces meet, so a payload
+  // arriving at up to kMargin_m per step is stopped before it overlaps the vehicle (the body's
+  // contact with the ground, a crash, then also counts from kMargin_m).
   if (config_.profile.contact.enabled) {
+    constexpr double kMargin_m = 0.01;
     model_->geom_conaffinity[ids_.quad_box_geom] |= 4;
+    model_->geom_margin[ids_.quad_box_geom] = kMargin_m;
     for (int i = 0; i < 4; ++i) {
       model_->geom_contype[ids_.rotor_disc_geom[i]] = 0;
       model_->geom_conaffinity[ids_.rotor_disc_geom[i]] = 4;
+      model_->geom_margin[ids_.rotor_disc_geom[i]] = kMargin_m;
     }
+    model_->geom_solref[mjNREF * ids_.payload_geom + 0] = 2 * kPhysicsDt_s;
+    model_->geom_solref[mjNREF * ids_.payload_geom + 1] = 1.0;
+    // its solref wins in every pair it is in (MuJoCo mixes a pair's solref by solmix)
+    model_->geom_solmix[ids_.payload_geom] = 1e3;
   }
 
   // payload camera: field of view, image size, and pose in the body. MuJoCo's camera axes are

@@ -1,0 +1,122 @@
+// Contact of the flight profile: the payload dropped on the body and on the ground comes to rest
+// on the surface without sinking in or bouncing away, a payload flying into a rotor disk is a
+// rotor_strike crash, and the ideal world lets it pass through (its known defect).
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <memory>
+
+#include "hpa/models/params.h"
+#include "hpa/sim/world.h"
+
+namespace hpa::sim {
+namespace {
+
+WorldConfig ContactConfig(bool contact) {
+  WorldConfig c;
+  c.params = LoadParams(DefaultParamsPath());
+  c.profile.contact.enabled = contact;
+  return c;
+}
+
+// The quadrotor standing on the ground (box bottom at z = 0, motors idle) and the payload at
+// p_WL_W, at rest or with velocity v_WL_W.
+void PlaceOnGround(World* world, const Eigen::Vector3d& p_WL_W,
+                   const Eigen::Vector3d& v_WL_W = Eigen::Vector3d::Zero()) {
+  SystemState s;
+  s.p_WQ_W = Eigen::Vector3d(0, 0, world->world_params().body_half_size_m.z());
+  s.p_WL_W = p_WL_W;
+  s.v_WL_W = v_WL_W;
+  world->SetState(s.ToVector(), InputVector::Constant(world->world_params().motor_speed_min_radps));
+  world->SetMotorSpeedCommand(InputVector::Constant(world->world_params().motor_speed_min_radps));
+}
+
+TEST(ContactTest, PayloadDroppedOnTheBodyRestsOnItsTop) {
+  World world(ContactConfig(true));
+  const Params& p = world.world_params();
+  const double top_m = 2 * p.body_half_size_m.z();
+  // dropped from 0.3 m above the top: 2.4 m/s at impact, 2.4 mm per step
+  PlaceOnGround(&world, Eigen::Vector3d(0, 0, top_m + p.payload_radius_m + 0.3));
+  double min_distance_m = 1.0, rebound_max_z_m = 0.0;
+  bool touched = false;
+  for (int k = 0; k < 1500; ++k) {
+    world.Step();
+    const double z = world.GetTruth().state.p_WL_W.z();
+    min_distance_m = std::min(min_distance_m, world.PayloadQuadDistance());
+    if (world.contact_counts().payload_body > 0) touched = true;
+    if (touched) rebound_max_z_m = std::max(rebound_max_z_m, z);
+  }
+  const Truth t = world.GetTruth();
+  // never overlaps the body: the 1 cm contact margin stops it first
+  EXPECT_GT(min_distance_m, 0.0);
+  // rests on the top, the margin (1 cm) above it, within 1 mm (the quadrotor itself stands on
+  // the ground the same margin up)
+  const double top_now_m = t.state.p_WQ_W.z() + p.body_half_size_m.z();
+  EXPECT_NEAR(t.state.p_WL_W.z(), top_now_m + p.payload_radius_m + 0.01, 0.001);
+  EXPECT_LT(t.state.v_WL_W.norm(), 0.01);
+  // a hard contact: no bounce back up by more than 1 cm
+  EXPECT_LT(rebound_max_z_m, top_now_m + p.payload_radius_m + 0.01 + 0.01);
+  // the impact and at most one re-contact after a sub-centimetre hop (measured: 2)
+  EXPECT_GE(world.contact_counts().payload_body, 1);
+  EXPECT_LE(world.contact_counts().payload_body, 2);
+  EXPECT_NE(world.Crash().reason, "rotor_strike");
+}
+
+TEST(ContactTest, PayloadDroppedOnTheGroundRestsOnIt) {
+  World world(ContactConfig(true));
+  const double r = world.world_params().payload_radius_m;
+  PlaceOnGround(&world, Eigen::Vector3d(0.3, 0, r + 0.3));
+  double min_z_m = 1.0;
+  for (int k = 0; k < 1500; ++k) {
+    world.Step();
+    min_z_m = std::min(min_z_m, world.GetTruth().state.p_WL_W.z());
+  }
+  const Truth t = world.GetTruth();
+  // sinks at most 2 mm at the impact (MuJoCo's soft contact; measured about 1 mm) and rests
+  // within 1 mm of the surface
+  EXPECT_GT(min_z_m, r - 0.002);
+  EXPECT_NEAR(t.state.p_WL_W.z(), r, 0.001);
+  EXPECT_LT(t.state.v_WL_W.norm(), 0.01);
+  // the impact and at most one re-contact after a sub-centimetre hop (measured: 2)
+  EXPECT_GE(world.contact_counts().payload_ground, 1);
+  EXPECT_LE(world.contact_counts().payload_ground, 2);
+}
+
+// The payload shot up at 5 m/s under rotor 0 (beside the body box, under the rotor disk).
+std::unique_ptr<World> ShootIntoRotor(bool contact, double* min_distance_m) {
+  auto owned = std::make_unique<World>(ContactConfig(contact));
+  World& world = *owned;
+  SystemState s;
+  s.p_WQ_W = Eigen::Vector3d(0, 0, 1.0);
+  s.p_WL_W = Eigen::Vector3d(0.15, 0.15, 0.8);
+  s.v_WL_W = Eigen::Vector3d(0, 0, 5.0);
+  const double w_hover = world.world_params().HoverMotorSpeedRadps();
+  world.SetState(s.ToVector(), InputVector::Constant(w_hover));
+  *min_distance_m = 1.0;
+  for (int k = 0; k < 150 && !world.Crash().crashed; ++k) {
+    world.Step();
+    *min_distance_m = std::min(*min_distance_m, world.PayloadQuadDistance());
+  }
+  return owned;
+}
+
+TEST(ContactTest, PayloadReachingARotorDiskIsARotorStrike) {
+  double min_distance_m = 0;
+  const World& world = *ShootIntoRotor(true, &min_distance_m);
+  EXPECT_TRUE(world.Crash().crashed);
+  EXPECT_EQ(world.Crash().reason, "rotor_strike");
+  EXPECT_EQ(world.contact_counts().payload_rotor, 1);
+  // stopped at the margin: 5 mm per step against a 1 cm margin
+  EXPECT_GE(world.payload_quad_min_distance_m(), 0.0);
+}
+
+TEST(ContactTest, IdealWorldLetsThePayloadPassThroughTheVehicle) {
+  double min_distance_m = 0;
+  const World& world = *ShootIntoRotor(false, &min_distance_m);
+  EXPECT_FALSE(world.Crash().crashed);
+  EXPECT_EQ(world.contact_counts().payload_rotor, 0);
+  EXPECT_LT(world.payload_quad_min_distance_m(), -0.01);
+}
+
+}  // namespace
+}  // namespace hpa::sim
