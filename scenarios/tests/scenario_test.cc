@@ -101,3 +101,43 @@ TEST(ScenarioTest, MissingAndMalformedFiles) {
 
 }  // namespace
 }  // namespace hpa
+
+namespace hpa {
+namespace {
+
+TEST(WorldProfileTest, ScenarioFilesFlyTheFlightProfileUnlessTheySayIdeal) {
+  const Scenario flight = LoadScenario(Write("flight.yaml", kMinimal));
+  EXPECT_EQ(flight.world.name, "flight");
+  EXPECT_TRUE(flight.world.contact.enabled);
+  EXPECT_GT(flight.world.latency.compute_s, 0.0);
+  const Scenario ideal = LoadScenario(Write("ideal.yaml", kMinimal), {{"world.profile", "ideal"}});
+  EXPECT_EQ(ideal.world.name, "ideal");
+  EXPECT_FALSE(ideal.world.contact.enabled);
+  EXPECT_FALSE(ideal.world.mismatch.enabled);
+  EXPECT_EQ(ideal.world.latency.compute_s, 0.0);
+  // a scenario built in code is the ideal world
+  EXPECT_EQ(Scenario().world.name, "ideal");
+}
+
+TEST(WorldProfileTest, ASingleNumberOverridesTheProfile) {
+  const Scenario s = LoadScenario(Write("override.yaml", kMinimal),
+                                  {{"world.latency.compute_s", "0.02"}});
+  EXPECT_EQ(s.world.name, "flight");
+  EXPECT_DOUBLE_EQ(s.world.latency.compute_s, 0.02);
+  // the rest of the profile is kept
+  EXPECT_GT(s.world.latency.transport_s, 0.0);
+  EXPECT_TRUE(s.world.contact.enabled);
+}
+
+TEST(WorldProfileTest, BadProfilesAndKeysAreNamed) {
+  ExpectError(std::string(kMinimal) + "world: {profile: windy}\n", {"world.profile", "windy"});
+  ExpectError(std::string(kMinimal) + "world: {latency: {compute: 0.01}}\n",
+              {"world.latency.compute"});
+  ExpectError(std::string(kMinimal) + "world: {latency: {compute_s: 5}}\n",
+              {"world.latency.compute_s"});
+  ExpectError(std::string(kMinimal) + "world: {contact: {enabled: maybe}}\n",
+              {"world.contact.enabled"});
+}
+
+}  // namespace
+}  // namespace hpa

@@ -1,6 +1,6 @@
-// Contact of the flight profile: the payload dropped on the body and on the ground comes to rest
-// on the surface without sinking in or bouncing away, a payload flying into a rotor disk is a
-// rotor_strike crash, and the ideal world lets it pass through (its known defect).
+// The flight profile's world: contact (the payload dropped on the body and on the ground comes to
+// rest on the surface, a payload flying into a rotor disk is a rotor_strike crash, the ideal world
+// lets it pass through), the model-mismatch draw and the battery sag.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -116,6 +116,52 @@ TEST(ContactTest, IdealWorldLetsThePayloadPassThroughTheVehicle) {
   EXPECT_FALSE(world.Crash().crashed);
   EXPECT_EQ(world.contact_counts().payload_rotor, 0);
   EXPECT_LT(world.payload_quad_min_distance_m(), -0.01);
+}
+
+}  // namespace
+}  // namespace hpa::sim
+
+namespace hpa::sim {
+namespace {
+
+WorldConfig MismatchConfig(uint64_t seed) {
+  WorldConfig c;
+  c.params = LoadParams(DefaultParamsPath());
+  c.seed = seed;
+  c.profile.mismatch = {true, 0.002, 0.005, 0.1, 0.005, 0.03, 0.002, 0.0087};
+  c.profile.actuation = {true, 0.02, 0.03, 2.8e-4};
+  return c;
+}
+
+TEST(ProfileTest, MismatchIsADrawPerSeedWithinItsTolerance) {
+  const Params flight = LoadParams(DefaultParamsPath());
+  World a(MismatchConfig(1)), a_again(MismatchConfig(1)), b(MismatchConfig(2));
+  const Params& pa = a.world_params();
+  // the world differs from the flight code's numbers, the same way for the same seed
+  EXPECT_NE(pa.payload_mass_kg, flight.payload_mass_kg);
+  EXPECT_NE(pa.cable_length_m, flight.cable_length_m);
+  EXPECT_NE(pa.k_f_N_per_radps2, flight.k_f_N_per_radps2);
+  EXPECT_FALSE(pa.t_BC_B_m.isApprox(flight.t_BC_B_m));
+  EXPECT_EQ(pa.payload_mass_kg, a_again.world_params().payload_mass_kg);
+  EXPECT_NE(pa.payload_mass_kg, b.world_params().payload_mass_kg);
+  // within 5 sigma of the tolerances
+  EXPECT_NEAR(pa.payload_mass_kg, flight.payload_mass_kg, 5 * 0.002);
+  EXPECT_NEAR(pa.cable_length_m, flight.cable_length_m, 5 * 0.005);
+  // the per-rotor spread is drawn too, and the ideal world has none
+  EXPECT_FALSE(a.rotor_thrust_factor().isApproxToConstant(1.0));
+  WorldConfig ideal;
+  ideal.params = flight;
+  World w(ideal);
+  EXPECT_TRUE(w.rotor_thrust_factor().isApproxToConstant(1.0));
+  EXPECT_EQ(w.world_params().payload_mass_kg, flight.payload_mass_kg);
+}
+
+TEST(ProfileTest, BatterySagLowersTheSpeedACommandReaches) {
+  World world(MismatchConfig(1));
+  EXPECT_DOUBLE_EQ(world.BatterySpeedFactor(), 1.0);
+  for (int k = 0; k < 1000; ++k) world.Step();
+  // linear voltage drop: 1 - 2.8e-4 / s * 1 s
+  EXPECT_NEAR(world.BatterySpeedFactor(), 1.0 - 2.8e-4, 1e-12);
 }
 
 }  // namespace
