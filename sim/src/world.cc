@@ -218,11 +218,11 @@ void World::ApplyWorldParams() {
   // Solver settings for these contacts at the 1 ms step (checked by sim/tests/contact_test.cc):
   // the payload's contacts are as stiff as MuJoCo resolves at this step (time constant 2 steps,
   // critically damped: a hard ball against a carbon frame, no rebound of a soft contact), and the
-  // vehicle's geoms start their contact kMargin_m before the surfaces meet, so a payload
-  // arriving at up to kMargin_m per step is stopped before it overlaps the vehicle (the body's
-  // contact with the ground, a crash, then also counts from kMargin_m).
+  // vehicle's geoms start their contact kContactMargin_m before the surfaces meet, so a payload
+  // arriving at up to kContactMargin_m per step is stopped before it overlaps the vehicle (the
+  // body's contact with the ground, a crash, then also counts from kContactMargin_m).
   if (config_.profile.contact.enabled) {
-    constexpr double kMargin_m = 0.01;
+    constexpr double kMargin_m = kContactMargin_m;
     model_->geom_conaffinity[ids_.quad_box_geom] |= 4;
     model_->geom_margin[ids_.quad_box_geom] = kMargin_m;
     for (int i = 0; i < 4; ++i) {

@@ -47,15 +47,16 @@ TEST(ContactTest, PayloadDroppedOnTheBodyRestsOnItsTop) {
     if (touched) rebound_max_z_m = std::max(rebound_max_z_m, z);
   }
   const Truth t = world.GetTruth();
-  // never overlaps the body: the 1 cm contact margin stops it first
+  // never overlaps the body: the contact margin stops it first
   EXPECT_GT(min_distance_m, 0.0);
-  // rests on the top, the margin (1 cm) above it, within 1 mm (the quadrotor itself stands on
-  // the ground the same margin up)
+  // rests on the top, the margin above it, within 1 mm (the quadrotor itself stands on the
+  // ground the same margin up)
   const double top_now_m = t.state.p_WQ_W.z() + p.body_half_size_m.z();
-  EXPECT_NEAR(t.state.p_WL_W.z(), top_now_m + p.payload_radius_m + 0.01, 0.001);
+  const double rest_z_m = top_now_m + p.payload_radius_m + World::kContactMargin_m;
+  EXPECT_NEAR(t.state.p_WL_W.z(), rest_z_m, 0.001);
   EXPECT_LT(t.state.v_WL_W.norm(), 0.01);
   // a hard contact: no bounce back up by more than 1 cm
-  EXPECT_LT(rebound_max_z_m, top_now_m + p.payload_radius_m + 0.01 + 0.01);
+  EXPECT_LT(rebound_max_z_m, rest_z_m + 0.01);
   // the impact and at most one re-contact after a sub-centimetre hop (measured: 2)
   EXPECT_GE(world.contact_counts().payload_body, 1);
   EXPECT_LE(world.contact_counts().payload_body, 2);
@@ -106,7 +107,7 @@ TEST(ContactTest, PayloadReachingARotorDiskIsARotorStrike) {
   EXPECT_TRUE(world.Crash().crashed);
   EXPECT_EQ(world.Crash().reason, "rotor_strike");
   EXPECT_EQ(world.contact_counts().payload_rotor, 1);
-  // stopped at the margin: 5 mm per step against a 1 cm margin
+  // struck within the margin before it overlaps: 5 mm per step against the margin
   EXPECT_GE(world.payload_quad_min_distance_m(), 0.0);
 }
 

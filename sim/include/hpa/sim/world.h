@@ -85,6 +85,11 @@ class World {
   static constexpr double kPhysicsDt_s = 0.001;  // MuJoCo timestep (s): RateTable::physics_hz
   /// Truth mode threshold: taut when the cable length >= l - kTautLengthTolerance_m.
   static constexpr double kTautLengthTolerance_m = 0.001;
+  /// Flight profile: the vehicle's contacts start this far before the surfaces meet, so a payload
+  /// arriving at up to 30 m/s (3 cm per step; the impulse sweep's top, 2.5 N s on 0.1 kg, is
+  /// 25 m/s) is stopped before it overlaps the vehicle. A payload within it of a rotor disk has
+  /// struck the rotor.
+  static constexpr double kContactMargin_m = 0.03;
 
   /// Places quad + payload at `initial` (velocities and body rate as given, zero by default),
   /// motors at hover speed (also the command), time = initial.time_s; clears disturbances,
