@@ -2,7 +2,6 @@
 
 #include <gtest/gtest.h>
 
-#include <chrono>
 #include <opencv2/imgproc.hpp>
 #include <random>
 
@@ -156,21 +155,19 @@ TEST(PayloadDetectorTest, BadFrameIsRejected) {
   EXPECT_FALSE(d.found);
 }
 
-TEST(PayloadDetectorTest, TimePerDetection) {
+TEST(PayloadDetectorTest, RepeatedDetectionsOfOneFrameAgree) {
+  // the detector keeps no state between frames: the same frame gives the same answer. (Its time
+  // per frame is measured, not tested: detector_ms in metrics.json and sim_bench.)
   const Params p = DefaultParams();
   const PayloadDetector detector(p);
   const cv::Mat frame = RenderSphere(p, Eigen::Vector3d(0.05, 0.02, 0.45));
-  constexpr int kRuns = 20;
-  const auto start = std::chrono::steady_clock::now();
-  int found = 0;
-  for (int i = 0; i < kRuns; ++i) found += detector.Detect(frame, 0.0).found;
-  const double ms =
-      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count() /
-      kRuns;
-  std::printf("detection: %.2f ms per 1280x720 frame\n", ms);
-  EXPECT_EQ(found, kRuns);
-  // the 30 Hz camera leaves 33 ms per frame; a Release build measured a few ms
-  EXPECT_LT(ms, 33.0);
+  const PayloadDetection first = detector.Detect(frame, 0.0);
+  ASSERT_TRUE(first.found);
+  for (int i = 0; i < 5; ++i) {
+    const PayloadDetection again = detector.Detect(frame, 0.0);
+    EXPECT_TRUE(again.found);
+    EXPECT_EQ(again.p_CL_C, first.p_CL_C);
+  }
 }
 
 }  // namespace
