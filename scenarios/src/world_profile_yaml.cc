@@ -57,6 +57,52 @@ void ReadWorldProfileSections(const YamlMap& map, sim::WorldProfile* profile) {
         m.Number("camera_angle_sigma_rad", 0.0, 0.2, x.camera_angle_sigma_rad);
     m.RejectUnknownKeys();
   }
+  if (map.Has("aero")) {
+    const YamlMap m = map.Map("aero");
+    sim::AeroProfile& a = profile->aero;
+    a.enabled = m.Bool("enabled", a.enabled);
+    a.air_density_kgpm3 = m.Number("air_density_kgpm3", 0.5, 1.5, a.air_density_kgpm3);
+    a.rotor_drag_coefficient = m.Number("rotor_drag_coefficient", 0.0, 1e-3, a.rotor_drag_coefficient);
+    a.body_drag_coefficient = m.Number("body_drag_coefficient", 0.0, 3.0, a.body_drag_coefficient);
+    a.payload_drag_coefficient =
+        m.Number("payload_drag_coefficient", 0.0, 3.0, a.payload_drag_coefficient);
+    m.RejectUnknownKeys();
+  }
+  if (map.Has("wind")) {
+    const YamlMap m = map.Map("wind");
+    sim::WindProfile& w = profile->wind;
+    w.mean_x_mps = m.Number("mean_x_mps", -30.0, 30.0, w.mean_x_mps);
+    w.mean_y_mps = m.Number("mean_y_mps", -30.0, 30.0, w.mean_y_mps);
+    w.mean_z_mps = m.Number("mean_z_mps", -10.0, 10.0, w.mean_z_mps);
+    w.gust_sigma_mps = m.Number("gust_sigma_mps", 0.0, 10.0, w.gust_sigma_mps);
+    w.gust_length_m = m.Number("gust_length_m", 0.1, 1000.0, w.gust_length_m);
+    w.gust_min_speed_mps = m.Number("gust_min_speed_mps", 0.1, 30.0, w.gust_min_speed_mps);
+    m.RejectUnknownKeys();
+  }
+  if (map.Has("vio")) {
+    const YamlMap m = map.Map("vio");
+    sim::VioDriftProfile& v = profile->vio;
+    v.enabled = m.Bool("enabled", v.enabled);
+    v.position_drift_m_per_sqrt_m =
+        m.Number("position_drift_m_per_sqrt_m", 0.0, 1.0, v.position_drift_m_per_sqrt_m);
+    v.yaw_drift_rad_per_sqrt_m =
+        m.Number("yaw_drift_rad_per_sqrt_m", 0.0, 0.5, v.yaw_drift_rad_per_sqrt_m);
+    v.dropout_rate_per_s = m.Number("dropout_rate_per_s", 0.0, 10.0, v.dropout_rate_per_s);
+    v.dropout_duration_s = m.Number("dropout_duration_s", 0.0, 5.0, v.dropout_duration_s);
+    v.relocalisation_keep_fraction =
+        m.Number("relocalisation_keep_fraction", 0.0, 1.0, v.relocalisation_keep_fraction);
+    m.RejectUnknownKeys();
+  }
+  if (map.Has("imu")) {
+    const YamlMap m = map.Map("imu");
+    sim::ImuProfile& i = profile->imu;
+    i.enabled = m.Bool("enabled", i.enabled);
+    i.gyro_noise_density_radps_rthz =
+        m.Number("gyro_noise_density_radps_rthz", 0.0, 0.1, i.gyro_noise_density_radps_rthz);
+    i.accel_noise_density_mps2_rthz =
+        m.Number("accel_noise_density_mps2_rthz", 0.0, 1.0, i.accel_noise_density_mps2_rthz);
+    m.RejectUnknownKeys();
+  }
 }
 
 sim::WorldProfile LoadWorldProfile(const std::string& name) {

@@ -37,8 +37,62 @@ ImuSample ImuModel::Measure(double time_s, const Eigen::Vector3d& w_B_radps,
 VioModel::VioModel(const SensorNoiseConfig& noise, double latency_s, std::mt19937_64* rng)
     : noise_(noise), rng_(rng), queue_(latency_s) {}
 
-void VioModel::Capture(double time_s, const Eigen::Vector3d& p_WB_W, const Eigen::Quaterniond& q_WB,
-                       const Eigen::Vector3d& v_WB_W) {
+void VioModel::Clear() {
+  queue_.Clear();
+  drift_rng_.seed(drift_seed_);
+  drift_W_m_.setZero();
+  yaw_drift_rad_ = 0.0;
+  has_last_ = false;
+  last_capture_s_ = 0.0;
+  dropout_until_s_ = -1.0;
+  in_dropout_ = false;
+}
+
+void VioModel::SetDrift(const VioDriftProfile& drift, uint64_t drift_seed) {
+  drift_ = drift;
+  drift_seed_ = drift_seed;
+  Clear();
+}
+
+void VioModel::Capture(double time_s, const Eigen::Vector3d& p_WB_W_true,
+                       const Eigen::Quaterniond& q_WB_true, const Eigen::Vector3d& v_WB_W_true) {
+  // drift: random walks in position and yaw with the distance travelled since the last capture,
+  // applied as a yaw rotation about the world origin (where the VIO started) plus an offset
+  Eigen::Vector3d p_WB_W = p_WB_W_true;
+  Eigen::Quaterniond q_WB = q_WB_true;
+  Eigen::Vector3d v_WB_W = v_WB_W_true;
+  bool deliver = true;
+  if (drift_.enabled) {
+    std::normal_distribution<double> unit(0.0, 1.0);
+    const double distance_m = has_last_ ? (p_WB_W_true - last_p_WB_W_).norm() : 0.0;
+    const double dt_s = has_last_ ? time_s - last_capture_s_ : 0.0;
+    last_p_WB_W_ = p_WB_W_true;
+    last_capture_s_ = time_s;
+    has_last_ = true;
+    const double sqrt_d = std::sqrt(distance_m);
+    for (int i = 0; i < 3; ++i) {
+      drift_W_m_(i) += drift_.position_drift_m_per_sqrt_m * sqrt_d * unit(drift_rng_);
+    }
+    yaw_drift_rad_ += drift_.yaw_drift_rad_per_sqrt_m * sqrt_d * unit(drift_rng_);
+    // dropouts: a Poisson process; when tracking resumes the map re-localises and part of the
+    // drift is removed at once (a jump the estimator sees)
+    const double u = std::uniform_real_distribution<double>(0.0, 1.0)(drift_rng_);
+    if (in_dropout_ && time_s >= dropout_until_s_) {
+      in_dropout_ = false;
+      drift_W_m_ *= drift_.relocalisation_keep_fraction;
+      yaw_drift_rad_ *= drift_.relocalisation_keep_fraction;
+    }
+    if (!in_dropout_ && u < 1.0 - std::exp(-drift_.dropout_rate_per_s * dt_s)) {
+      in_dropout_ = true;
+      dropout_until_s_ = time_s + drift_.dropout_duration_s;
+    }
+    deliver = !in_dropout_;
+    const Eigen::Matrix3d R_yaw = Eigen::AngleAxisd(yaw_drift_rad_, Eigen::Vector3d::UnitZ())
+                                      .toRotationMatrix();
+    p_WB_W = R_yaw * p_WB_W_true + drift_W_m_;
+    q_WB = Eigen::Quaterniond(R_yaw) * q_WB_true;
+    v_WB_W = R_yaw * v_WB_W_true;
+  }
   std::normal_distribution<double> normal(0.0, 1.0);
   auto gaussian3 = [&](double sigma) {
     Eigen::Vector3d v;
@@ -56,7 +110,7 @@ void VioModel::Capture(double time_s, const Eigen::Vector3d& p_WB_W, const Eigen
                                     : Eigen::Quaterniond::Identity();
   s.q_WB = (q_WB * dq).normalized();
   s.v_WB_W = v_WB_W + gaussian3(noise_.vio_velocity_sigma_mps);
-  queue_.Push(time_s, s);
+  if (deliver) queue_.Push(time_s, s);
 }
 
 std::optional<VioSample> VioModel::Take(double now_s) { return queue_.PopReady(now_s); }

@@ -61,13 +61,26 @@ double CylinderSignedDistance(const Eigen::Vector3d& p, double r, double h) {
   return q.cwiseMax(0.0).norm() + std::min(q.maxCoeff(), 0.0);
 }
 
+// The IMU noise the world simulates: the profile's IMU part when it has one.
+SensorNoiseConfig ImuNoise(const WorldConfig& config) {
+  SensorNoiseConfig noise = config.noise;
+  if (config.profile.imu.enabled) {
+    noise.gyro_noise_density_radps_rthz = config.profile.imu.gyro_noise_density_radps_rthz;
+    noise.accel_noise_density_mps2_rthz = config.profile.imu.accel_noise_density_mps2_rthz;
+  }
+  return noise;
+}
+
+// Seeds of the profile's own generators, apart from the sensor noise stream.
+uint64_t DerivedSeed(uint64_t seed, uint64_t salt) { return seed * 0x9E3779B97F4A7C15ULL + salt; }
+
 }  // namespace
 
 World::World(const WorldConfig& config)
     : config_(config),
       world_params_(config.params),
       rng_(config.seed),
-      imu_(config.noise, 1.0 / config.rates.imu.rate_hz, &rng_),
+      imu_(ImuNoise(config), 1.0 / config.rates.imu.rate_hz, &rng_),
       vio_(config.noise, config.rates.vio.latency_s, &rng_),
       sensor_clock_(config.rates.physics_hz),
       vio_loop_(sensor_clock_.AddLoop("vio", config.rates.vio.rate_hz, TickRounding::kAtOrAfter)) {
@@ -256,7 +269,7 @@ void World::ApplyWorldParams() {
 
 void World::DrawMismatch() {
   // a generator of its own, so the sensor noise stream is the same with and without mismatch
-  std::mt19937_64 rng(config_.seed * 0x9E3779B97F4A7C15ULL + 0x6D69736D61746368ULL);
+  std::mt19937_64 rng(DerivedSeed(config_.seed, 0x6D69736D61746368ULL));
   std::normal_distribution<double> normal(0.0, 1.0);
   const MismatchProfile& m = config_.profile.mismatch;
   if (m.enabled) {
@@ -347,8 +360,15 @@ void World::Reset(const SystemState& initial) {
   model_->eq_active[ids_.gripper_weld] = 0;
   rng_.seed(config_.seed);
   imu_.ResetBias();
-  vio_.Clear();
+  vio_.SetDrift(config_.profile.vio, DerivedSeed(config_.seed, 0x76696F));
   imu_queue_.clear();
+  wind_rng_.seed(DerivedSeed(config_.seed, 0x77696E64));
+  gust_W_mps_.setZero();
+  if (config_.profile.wind.gust_sigma_mps > 0.0) {
+    // the gust starts from its stationary distribution
+    std::normal_distribution<double> unit(0.0, 1.0);
+    for (int i = 0; i < 3; ++i) gust_W_mps_(i) = config_.profile.wind.gust_sigma_mps * unit(wind_rng_);
+  }
   imu_sum_w_B_radps_.setZero();
   imu_sum_specific_force_B_mps2_.setZero();
   imu_sum_count_ = 0;
@@ -420,8 +440,59 @@ void World::UpdateGripper() {
   if (s >= 1.0) gripper_moving_ = false;
 }
 
+Eigen::Vector3d World::Wind_W_mps() const {
+  const WindProfile& w = config_.profile.wind;
+  return Eigen::Vector3d(w.mean_x_mps, w.mean_y_mps, w.mean_z_mps) + gust_W_mps_;
+}
+
+void World::ApplyAerodynamics() {
+  const WindProfile& wind = config_.profile.wind;
+  if (!config_.profile.aero.enabled && wind.gust_sigma_mps <= 0.0) return;
+  const Truth truth = GetTruth();
+  const SystemState& s = truth.state;
+  // gust: per axis first-order Gauss-Markov, exact for the step: x' = a x + sigma sqrt(1-a^2) n,
+  // a = exp(-dt / tau), tau = L / airspeed (Dryden's low-altitude form at the vehicle's airspeed)
+  if (wind.gust_sigma_mps > 0.0) {
+    const Eigen::Vector3d mean(wind.mean_x_mps, wind.mean_y_mps, wind.mean_z_mps);
+    const double airspeed_mps = std::max(wind.gust_min_speed_mps, (s.v_WQ_W - mean).norm());
+    const double a = std::exp(-kPhysicsDt_s * airspeed_mps / wind.gust_length_m);
+    std::normal_distribution<double> unit(0.0, 1.0);
+    for (int i = 0; i < 3; ++i) {
+      gust_W_mps_(i) = a * gust_W_mps_(i) +
+                       wind.gust_sigma_mps * std::sqrt(1.0 - a * a) * unit(wind_rng_);
+    }
+  }
+  const AeroProfile& aero = config_.profile.aero;
+  if (!aero.enabled) return;
+  const Eigen::Vector3d wind_W = Wind_W_mps();
+  const Eigen::Matrix3d R_WB = s.q_WB.normalized().toRotationMatrix();
+  const Eigen::Vector3d air_B = R_WB.transpose() * (s.v_WQ_W - wind_W);  // airspeed, body  (3)
+
+  // rotor drag: each rotor, -w_i c (airspeed in the rotor plane) (PX4 SITL's Gazebo motor model)
+  const Eigen::Vector3d air_plane_B(air_B.x(), air_B.y(), 0.0);
+  Eigen::Vector3d f_B = -aero.rotor_drag_coefficient * motor_speed_radps_.sum() * air_plane_B;
+  // body drag: quadratic per body axis over the box's faces
+  const Eigen::Vector3d& h = world_params_.body_half_size_m;
+  const Eigen::Vector3d area_B_m2(4 * h.y() * h.z(), 4 * h.x() * h.z(), 4 * h.x() * h.y());
+  for (int i = 0; i < 3; ++i) {
+    f_B(i) -= 0.5 * aero.air_density_kgpm3 * aero.body_drag_coefficient * area_B_m2(i) *
+              std::abs(air_B(i)) * air_B(i);
+  }
+  aero_quad_W_N_ = R_WB * f_B;
+  // payload drag: a sphere
+  const Eigen::Vector3d air_L_W = s.v_WL_W - wind_W;
+  const double r = world_params_.payload_radius_m;
+  aero_payload_W_N_ = -0.5 * aero.air_density_kgpm3 * aero.payload_drag_coefficient * M_PI * r *
+                      r * air_L_W.norm() * air_L_W;
+  for (int i = 0; i < 3; ++i) {
+    data_->xfrc_applied[6 * ids_.quad_body + i] += aero_quad_W_N_(i);
+    data_->xfrc_applied[6 * ids_.payload_body + i] += aero_payload_W_N_(i);
+  }
+}
+
 void World::ApplyDisturbances() {
   mju_zero(data_->xfrc_applied, 6 * model_->nbody);
+  ApplyAerodynamics();
   for (const TimedForce& f : forces_) {
     if (step_ >= f.end_step) continue;
     const int body = f.body == Body::kQuadrotor ? ids_.quad_body : ids_.payload_body;

@@ -10,6 +10,7 @@
 
 #include "hpa/models/lockstep.h"
 #include "hpa/models/sensor_types.h"
+#include "hpa/sim/world_profile.h"
 
 namespace hpa::sim {
 
@@ -61,13 +62,32 @@ class VioModel {
                const Eigen::Vector3d& v_WB_W);
   /// Oldest captured sample whose delivery time (capture + latency) is <= now_s, if any.
   std::optional<VioSample> Take(double now_s);
-  /// Drops every queued sample (World::Reset).
-  void Clear() { queue_.Clear(); }
+  /// Drops every queued sample and resets the drift, its generator (to drift_seed) and any
+  /// dropout (World::Reset).
+  void Clear();
+  /// Switches the drift, dropouts and re-localisation jumps on (off by default: the true pose
+  /// plus white noise). Their randomness comes from a generator of their own, seeded here, so
+  /// the white noise stream is the same with and without drift.
+  void SetDrift(const VioDriftProfile& drift, uint64_t drift_seed);
+  /// Current position drift (m, world frame)  (3)
+  const Eigen::Vector3d& drift_W_m() const { return drift_W_m_; }
+  /// Current yaw drift (rad)
+  double yaw_drift_rad() const { return yaw_drift_rad_; }
 
  private:
   SensorNoiseConfig noise_;
   std::mt19937_64* rng_;
   DelayLine<VioSample> queue_;
+  VioDriftProfile drift_;
+  uint64_t drift_seed_ = 0;
+  std::mt19937_64 drift_rng_;
+  Eigen::Vector3d drift_W_m_ = Eigen::Vector3d::Zero();  // position drift, world  (3)
+  double yaw_drift_rad_ = 0.0;
+  Eigen::Vector3d last_p_WB_W_ = Eigen::Vector3d::Zero();  // true position at last capture  (3)
+  bool has_last_ = false;
+  double last_capture_s_ = 0.0;
+  double dropout_until_s_ = -1.0;  // no sample is delivered before this time
+  bool in_dropout_ = false;
 };
 
 }  // namespace hpa::sim

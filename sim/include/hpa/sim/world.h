@@ -154,6 +154,12 @@ class World {
   const Eigen::Vector4d& rotor_thrust_factor() const { return rotor_kf_factor_; }
   /// Rotor speed reached per unit command now (battery sag; 1 with a full pack or no sag).
   double BatterySpeedFactor() const;
+  /// Wind velocity at the vehicle now (m/s, world frame): steady part plus gust  (3)
+  Eigen::Vector3d Wind_W_mps() const;
+  /// Aerodynamic force on the quadrotor in the last step (N, world frame)  (3)
+  const Eigen::Vector3d& aero_quad_W_N() const { return aero_quad_W_N_; }
+  /// Aerodynamic force on the payload in the last step (N, world frame)  (3)
+  const Eigen::Vector3d& aero_payload_W_N() const { return aero_payload_W_N_; }
 
  private:
   struct Ids {
@@ -178,6 +184,7 @@ class World {
   void CheckCrash();
   void CheckWarnings();
   void DrawMismatch();
+  void ApplyAerodynamics();
   void UpdateContacts();
   void LatchCrash(const std::string& reason);
   // specific force R^T (a + g e3) from qacc (time t_k) in the attitude q_WB of that same time
@@ -224,6 +231,10 @@ class World {
   Eigen::Vector4d rotor_km_factor_ = Eigen::Vector4d::Ones();  // per-rotor k_m spread  (4)
   double payload_quad_min_distance_m_ = 0.0;
   ContactCounts contact_counts_;
+  std::mt19937_64 wind_rng_;                                   // the gust's own generator
+  Eigen::Vector3d gust_W_mps_ = Eigen::Vector3d::Zero();       // gust velocity, world  (3)
+  Eigen::Vector3d aero_quad_W_N_ = Eigen::Vector3d::Zero();    // last drag on the quad  (3)
+  Eigen::Vector3d aero_payload_W_N_ = Eigen::Vector3d::Zero();  // last drag on the payload  (3)
   bool touching_[4] = {false, false, false, false};  // ContactCounts fields, last step
 };
 

@@ -44,6 +44,43 @@ struct MismatchProfile {
   double camera_angle_sigma_rad = 0.0;        // camera orientation in the body, each axis
 };
 
+/// Air: rotor drag, body drag and payload drag against the airspeed (velocity minus wind).
+struct AeroProfile {
+  bool enabled = false;
+  double air_density_kgpm3 = 1.225;
+  // per rotor: F = -w_i c v_perp (v_perp: airspeed in the rotor plane), N / (m/s) / (rad/s)
+  double rotor_drag_coefficient = 0.0;
+  double body_drag_coefficient = 0.0;     // quadratic drag Cd of the body box, each body axis
+  double payload_drag_coefficient = 0.0;  // quadratic drag Cd of the payload sphere
+};
+
+/// Wind at the vehicle: a steady part plus a Dryden-type gust per axis (first-order
+/// Gauss-Markov with stationary std gust_sigma_mps and correlation length gust_length_m).
+struct WindProfile {
+  double mean_x_mps = 0.0, mean_y_mps = 0.0, mean_z_mps = 0.0;  // steady wind, world frame
+  double gust_sigma_mps = 0.0;    // stationary std of the gust, each axis
+  double gust_length_m = 10.0;    // turbulence length scale L: correlation time L / airspeed
+  double gust_min_speed_mps = 1.0;  // floor on the airspeed in L / airspeed (hover)
+};
+
+/// VIO that drifts as a real one: position and yaw random walks with distance travelled, white
+/// velocity noise, dropouts and re-localisation jumps (VioModel).
+struct VioDriftProfile {
+  bool enabled = false;
+  double position_drift_m_per_sqrt_m = 0.0;  // drift std after distance D: this * sqrt(D)
+  double yaw_drift_rad_per_sqrt_m = 0.0;     // yaw drift std after distance D: this * sqrt(D)
+  double dropout_rate_per_s = 0.0;           // Poisson rate of dropouts
+  double dropout_duration_s = 0.0;           // no sample is delivered for this long
+  double relocalisation_keep_fraction = 1.0;  // drift kept when tracking resumes (0: all reset)
+};
+
+/// IMU noise of the flight profile (the vehicle's own IMU part); unset keeps SensorNoiseConfig.
+struct ImuProfile {
+  bool enabled = false;
+  double gyro_noise_density_radps_rthz = 0.0;
+  double accel_noise_density_mps2_rthz = 0.0;
+};
+
 /// The whole profile: its name and its parts.
 struct WorldProfile {
   std::string name = "ideal";  // ideal | flight (the file it came from)
@@ -51,6 +88,10 @@ struct WorldProfile {
   ActuationProfile actuation;
   LatencyProfile latency;
   MismatchProfile mismatch;
+  AeroProfile aero;
+  WindProfile wind;
+  VioDriftProfile vio;
+  ImuProfile imu;
 };
 
 }  // namespace hpa::sim
