@@ -68,6 +68,10 @@ const std::map<std::string, Case>& Cases() {
        {{-0.5},
         [](Metrics* m) { m->retaut_quad_vz_min_mps = -0.3; },
         [](Metrics* m) { m->retaut_quad_vz_min_mps = -0.7; }}},
+      {"payload_quad_min_distance_min",
+       {{0.0},
+        [](Metrics* m) { m->payload_quad_min_distance_m = 0.01; },
+        [](Metrics* m) { m->payload_quad_min_distance_m = -0.01; }}},
   };
   return cases;
 }

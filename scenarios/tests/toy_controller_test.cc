@@ -48,7 +48,7 @@ TEST(ToyControllerTest, RegisteredControllerRunsThroughHpaRun) {
   }
   const std::string dir = TestTempDir();
   std::ofstream(dir + "toy.yaml")
-      << "name: toy\nduration: 1.0\n"
+      << "name: toy\nduration: 1.0\nworld: {profile: ideal}\n"
          "controller: {type: toy_hold}\n"
          "estimation: {ground_truth: true, camera: analytic}\n"
          "reference: {type: hover, payload_position: [0, 0, 0.7]}\n"
