@@ -56,40 +56,48 @@ void VioModel::SetDrift(const VioDriftProfile& drift, uint64_t drift_seed) {
 
 void VioModel::Capture(double time_s, const Eigen::Vector3d& p_WB_W_true,
                        const Eigen::Quaterniond& q_WB_true, const Eigen::Vector3d& v_WB_W_true) {
-  // drift: random walks in position and yaw with the distance travelled since the last capture,
-  // applied as a yaw rotation about the world origin (where the VIO started) plus an offset
+  // drift: random walks in position and yaw with the distance travelled since the last capture.
+  // The displacement since then is reported rotated by the yaw drift (so the reported path
+  // agrees with the reported velocity and nothing drifts while hovering), plus the position walk.
   Eigen::Vector3d p_WB_W = p_WB_W_true;
   Eigen::Quaterniond q_WB = q_WB_true;
   Eigen::Vector3d v_WB_W = v_WB_W_true;
   bool deliver = true;
   if (drift_.enabled) {
     std::normal_distribution<double> unit(0.0, 1.0);
-    const double distance_m = has_last_ ? (p_WB_W_true - last_p_WB_W_).norm() : 0.0;
+    const Eigen::Vector3d step_W = has_last_ ? Eigen::Vector3d(p_WB_W_true - last_p_WB_W_)
+                                             : Eigen::Vector3d::Zero();
     const double dt_s = has_last_ ? time_s - last_capture_s_ : 0.0;
     last_p_WB_W_ = p_WB_W_true;
     last_capture_s_ = time_s;
     has_last_ = true;
-    const double sqrt_d = std::sqrt(distance_m);
-    for (int i = 0; i < 3; ++i) {
-      drift_W_m_(i) += drift_.position_drift_m_per_sqrt_m * sqrt_d * unit(drift_rng_);
-    }
+    const double sqrt_d = std::sqrt(step_W.norm());
+    const Eigen::Matrix3d R_yaw_before =
+        Eigen::AngleAxisd(yaw_drift_rad_, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+    drift_W_m_ += (R_yaw_before - Eigen::Matrix3d::Identity()) * step_W;
+    drift_W_m_.x() += drift_.position_drift_horizontal_m_per_sqrt_m * sqrt_d * unit(drift_rng_);
+    drift_W_m_.y() += drift_.position_drift_horizontal_m_per_sqrt_m * sqrt_d * unit(drift_rng_);
+    drift_W_m_.z() += drift_.position_drift_vertical_m_per_sqrt_m * sqrt_d * unit(drift_rng_);
     yaw_drift_rad_ += drift_.yaw_drift_rad_per_sqrt_m * sqrt_d * unit(drift_rng_);
-    // dropouts: a Poisson process; when tracking resumes the map re-localises and part of the
-    // drift is removed at once (a jump the estimator sees)
+    // dropouts: a Poisson process while tracking; when tracking resumes the VIO re-localises:
+    // part of the drift is kept and it steps by the dead-reckoning error of the gap
     const double u = std::uniform_real_distribution<double>(0.0, 1.0)(drift_rng_);
     if (in_dropout_ && time_s >= dropout_until_s_) {
       in_dropout_ = false;
       drift_W_m_ *= drift_.relocalisation_keep_fraction;
       yaw_drift_rad_ *= drift_.relocalisation_keep_fraction;
-    }
-    if (!in_dropout_ && u < 1.0 - std::exp(-drift_.dropout_rate_per_s * dt_s)) {
+      drift_W_m_.x() += drift_.relocalisation_jump_horizontal_m * unit(drift_rng_);
+      drift_W_m_.y() += drift_.relocalisation_jump_horizontal_m * unit(drift_rng_);
+      drift_W_m_.z() += drift_.relocalisation_jump_vertical_m * unit(drift_rng_);
+      yaw_drift_rad_ += drift_.relocalisation_jump_yaw_rad * unit(drift_rng_);
+    } else if (!in_dropout_ && u < 1.0 - std::exp(-drift_.dropout_rate_per_s * dt_s)) {
       in_dropout_ = true;
       dropout_until_s_ = time_s + drift_.dropout_duration_s;
     }
     deliver = !in_dropout_;
-    const Eigen::Matrix3d R_yaw = Eigen::AngleAxisd(yaw_drift_rad_, Eigen::Vector3d::UnitZ())
-                                      .toRotationMatrix();
-    p_WB_W = R_yaw * p_WB_W_true + drift_W_m_;
+    const Eigen::Matrix3d R_yaw =
+        Eigen::AngleAxisd(yaw_drift_rad_, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+    p_WB_W = p_WB_W_true + drift_W_m_;
     q_WB = Eigen::Quaterniond(R_yaw) * q_WB_true;
     v_WB_W = R_yaw * v_WB_W_true;
   }

@@ -4,9 +4,13 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <memory>
+#include <random>
+#include <vector>
 
 #include "hpa/models/params.h"
+#include "hpa/sim/sensor_models.h"
 #include "hpa/sim/world.h"
 
 namespace hpa::sim {
@@ -163,6 +167,130 @@ TEST(ProfileTest, BatterySagLowersTheSpeedACommandReaches) {
   for (int k = 0; k < 1000; ++k) world.Step();
   // linear voltage drop: 1 - 2.8e-4 / s * 1 s
   EXPECT_NEAR(world.BatterySpeedFactor(), 1.0 - 2.8e-4, 1e-12);
+}
+
+}  // namespace
+}  // namespace hpa::sim
+
+namespace hpa::sim {
+namespace {
+
+WorldConfig AeroConfig() {
+  WorldConfig c;
+  c.params = LoadParams(DefaultParamsPath());
+  c.profile.aero = {true, 1.225, 3.0e-5, 1.05, 0.47};
+  return c;
+}
+
+// Level quadrotor at hover speed moving at v_WQ_W, payload hanging and moving with it.
+void Moving(World* world, const Eigen::Vector3d& v_W_mps) {
+  SystemState s;
+  s.p_WQ_W = Eigen::Vector3d(0, 0, 1.0);
+  s.p_WL_W = Eigen::Vector3d(0, 0, 0.5);
+  s.v_WQ_W = v_W_mps;
+  s.v_WL_W = v_W_mps;
+  world->SetState(s.ToVector(), InputVector::Constant(world->world_params().HoverMotorSpeedRadps()));
+}
+
+TEST(AeroTest, DragOpposesTheAirspeedWithTheClosedFormMagnitude) {
+  World world(AeroConfig());
+  const Params& p = world.world_params();
+  Moving(&world, Eigen::Vector3d(3.0, 0, 0));
+  world.Step();
+  // rotor drag c sum(w) v plus the body's 0.5 rho Cd A v^2 over its 0.2 x 0.06 m face
+  const double w_sum = 4 * p.HoverMotorSpeedRadps();
+  const double expected_N = 3.0e-5 * w_sum * 3.0 + 0.5 * 1.225 * 1.05 * (0.2 * 0.06) * 9.0;
+  EXPECT_NEAR(world.aero_quad_W_N().x(), -expected_N, 0.02 * expected_N);  // motors lag 1 step
+  EXPECT_NEAR(world.aero_quad_W_N().y(), 0.0, 1e-9);
+  // the payload sphere: 0.5 rho Cd pi r^2 v^2
+  const double payload_N = 0.5 * 1.225 * 0.47 * M_PI * 0.04 * 0.04 * 9.0;
+  EXPECT_NEAR(world.aero_payload_W_N().x(), -payload_N, 1e-9);
+}
+
+TEST(AeroTest, NoDragWhenMovingWithTheWindOrWhenOff) {
+  WorldConfig c = AeroConfig();
+  c.profile.wind.mean_x_mps = 3.0;
+  World with_wind(c);
+  Moving(&with_wind, Eigen::Vector3d(3.0, 0, 0));
+  with_wind.Step();
+  EXPECT_LT(with_wind.aero_quad_W_N().norm(), 1e-9);
+  EXPECT_LT(with_wind.aero_payload_W_N().norm(), 1e-9);
+  c.profile.aero.enabled = false;
+  World off(c);
+  Moving(&off, Eigen::Vector3d(3.0, 0, 0));
+  off.Step();
+  EXPECT_EQ(off.aero_quad_W_N().norm(), 0.0);
+}
+
+TEST(WindTest, GustHasItsStationaryStdAndCorrelationTime) {
+  WorldConfig c = AeroConfig();
+  c.profile.wind.gust_sigma_mps = 1.0;
+  c.profile.wind.gust_length_m = 0.2;  // at the 1 m/s floor: tau = 0.2 s
+  World world(c);
+  std::vector<double> gust;
+  for (int k = 0; k < 60000; ++k) {
+    if (k % 100 == 0) Moving(&world, Eigen::Vector3d::Zero());  // keep the vehicle at rest
+    world.Step();
+    gust.push_back(world.Wind_W_mps().x());
+  }
+  double sum = 0, sq = 0, lag = 0;
+  for (double g : gust) sum += g, sq += g * g;
+  const double n = static_cast<double>(gust.size()), mean = sum / n, var = sq / n - mean * mean;
+  for (size_t k = 200; k < gust.size(); ++k) lag += (gust[k] - mean) * (gust[k - 200] - mean);
+  // 60 s / 0.2 s = 300 correlation times. Measured over seeds 1-5: std 0.94-1.08, lag-tau
+  // autocorrelation 0.34-0.47 (exp(-1) = 0.37); bounds 3x that spread.
+  EXPECT_NEAR(std::sqrt(var), 1.0, 0.2);
+  EXPECT_NEAR(lag / (n - 200) / var, std::exp(-1.0), 0.15);
+}
+
+TEST(VioDriftTest, DriftGrowsWithTheSquareRootOfDistanceAndIsOffByDefault) {
+  SensorNoiseConfig noise;
+  VioDriftProfile drift{true, 0.0158, 0.0158, 0.0, 0.0, 0.0, 1.0};
+  // many vehicles flying 100 m straight in 1 m captures: drift std sigma sqrt(100) per axis
+  double sq = 0;
+  constexpr int kRuns = 400;
+  for (int run = 0; run < kRuns; ++run) {
+    std::mt19937_64 rng(run);
+    VioModel vio(noise, 0.0, &rng);
+    vio.SetDrift(drift, 1000 + run);
+    for (int k = 0; k <= 100; ++k) vio.Capture(k * 0.1, Eigen::Vector3d(k, 0, 0), {1, 0, 0, 0}, {});
+    sq += vio.drift_W_m().squaredNorm() / 3.0;
+  }
+  // std of a std estimate over 1200 samples: 2 %; bound 8 %
+  EXPECT_NEAR(std::sqrt(sq / kRuns), 0.0158 * 10.0, 0.08 * 0.158);
+  // hovering in place: no drift
+  std::mt19937_64 rng(1);
+  VioModel still(noise, 0.0, &rng);
+  still.SetDrift(drift, 7);
+  for (int k = 0; k < 100; ++k) still.Capture(k * 0.03, Eigen::Vector3d(1, 2, 3), {1, 0, 0, 0}, {});
+  EXPECT_EQ(still.drift_W_m().norm(), 0.0);
+  // off: the same samples as a model that never heard of drift
+  std::mt19937_64 rng_a(5), rng_b(5);
+  VioModel plain(noise, 0.0, &rng_a), disabled(noise, 0.0, &rng_b);
+  disabled.SetDrift(VioDriftProfile{}, 9);
+  for (int k = 0; k < 10; ++k) {
+    plain.Capture(k * 0.03, Eigen::Vector3d(k, 0, 1), {1, 0, 0, 0}, {1, 0, 0});
+    disabled.Capture(k * 0.03, Eigen::Vector3d(k, 0, 1), {1, 0, 0, 0}, {1, 0, 0});
+    EXPECT_EQ(plain.Take(1.0)->p_WB_W, disabled.Take(1.0)->p_WB_W);
+  }
+}
+
+TEST(VioDriftTest, DropoutsWithholdSamplesAndEndInAJump) {
+  SensorNoiseConfig noise;
+  VioDriftProfile drift{true, 0.05, 0.05, 0.0, 2.0, 0.3, 0.0};  // frequent dropouts, full reset
+  std::mt19937_64 rng(3);
+  VioModel vio(noise, 0.0, &rng);
+  vio.SetDrift(drift, 11);
+  int delivered = 0, captured = 0;
+  for (int k = 0; k < 3000; ++k) {
+    vio.Capture(k / 30.0, Eigen::Vector3d(0.1 * k, 0, 1), {1, 0, 0, 0}, {});
+    ++captured;
+    while (vio.Take(1e9)) ++delivered;
+  }
+  // renewal process: a dropout of 0.3 s starts at 2 per s of tracking: missing share
+  // 2 * 0.3 / (1 + 2 * 0.3) = 0.375 (capture rounding adds a frame per dropout); bound +-0.08
+  const double missing = 1.0 - static_cast<double>(delivered) / captured;
+  EXPECT_NEAR(missing, 0.375, 0.08);
 }
 
 }  // namespace

@@ -67,11 +67,15 @@ struct WindProfile {
 /// velocity noise, dropouts and re-localisation jumps (VioModel).
 struct VioDriftProfile {
   bool enabled = false;
-  double position_drift_m_per_sqrt_m = 0.0;  // drift std after distance D: this * sqrt(D)
-  double yaw_drift_rad_per_sqrt_m = 0.0;     // yaw drift std after distance D: this * sqrt(D)
-  double dropout_rate_per_s = 0.0;           // Poisson rate of dropouts
-  double dropout_duration_s = 0.0;           // no sample is delivered for this long
+  double position_drift_horizontal_m_per_sqrt_m = 0.0;  // x, y drift std: this * sqrt(distance)
+  double position_drift_vertical_m_per_sqrt_m = 0.0;    // z drift std: this * sqrt(distance)
+  double yaw_drift_rad_per_sqrt_m = 0.0;                // yaw drift std: this * sqrt(distance)
+  double dropout_rate_per_s = 0.0;     // Poisson rate of dropouts (while tracking)
+  double dropout_duration_s = 0.0;     // no sample is delivered for this long
   double relocalisation_keep_fraction = 1.0;  // drift kept when tracking resumes (0: all reset)
+  double relocalisation_jump_horizontal_m = 0.0;  // 1-sigma step of x, y when tracking resumes
+  double relocalisation_jump_vertical_m = 0.0;    // 1-sigma step of z when tracking resumes
+  double relocalisation_jump_yaw_rad = 0.0;       // 1-sigma step of yaw when tracking resumes
 };
 
 /// IMU noise of the flight profile (the vehicle's own IMU part); unset keeps SensorNoiseConfig.
