@@ -62,8 +62,12 @@ void ReadWorldProfileSections(const YamlMap& map, sim::WorldProfile* profile) {
     sim::AeroProfile& a = profile->aero;
     a.enabled = m.Bool("enabled", a.enabled);
     a.air_density_kgpm3 = m.Number("air_density_kgpm3", 0.5, 1.5, a.air_density_kgpm3);
-    a.rotor_drag_coefficient = m.Number("rotor_drag_coefficient", 0.0, 1e-3, a.rotor_drag_coefficient);
-    a.body_drag_coefficient = m.Number("body_drag_coefficient", 0.0, 3.0, a.body_drag_coefficient);
+    a.rotor_drag_x_Nspm = m.Number("rotor_drag_x_Nspm", 0.0, 10.0, a.rotor_drag_x_Nspm);
+    a.rotor_drag_y_Nspm = m.Number("rotor_drag_y_Nspm", 0.0, 10.0, a.rotor_drag_y_Nspm);
+    a.body_drag_coefficient_xy =
+        m.Number("body_drag_coefficient_xy", 0.0, 3.0, a.body_drag_coefficient_xy);
+    a.body_drag_coefficient_z =
+        m.Number("body_drag_coefficient_z", 0.0, 3.0, a.body_drag_coefficient_z);
     a.payload_drag_coefficient =
         m.Number("payload_drag_coefficient", 0.0, 3.0, a.payload_drag_coefficient);
     m.RejectUnknownKeys();
@@ -76,6 +80,10 @@ void ReadWorldProfileSections(const YamlMap& map, sim::WorldProfile* profile) {
     w.mean_z_mps = m.Number("mean_z_mps", -10.0, 10.0, w.mean_z_mps);
     w.gust_sigma_mps = m.Number("gust_sigma_mps", 0.0, 10.0, w.gust_sigma_mps);
     w.gust_length_m = m.Number("gust_length_m", 0.1, 1000.0, w.gust_length_m);
+    w.gust_vertical_sigma_ratio =
+        m.Number("gust_vertical_sigma_ratio", 0.0, 2.0, w.gust_vertical_sigma_ratio);
+    w.gust_vertical_length_m =
+        m.Number("gust_vertical_length_m", 0.1, 1000.0, w.gust_vertical_length_m);
     w.gust_min_speed_mps = m.Number("gust_min_speed_mps", 0.1, 30.0, w.gust_min_speed_mps);
     m.RejectUnknownKeys();
   }

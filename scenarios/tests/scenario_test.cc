@@ -141,3 +141,21 @@ TEST(WorldProfileTest, BadProfilesAndKeysAreNamed) {
 
 }  // namespace
 }  // namespace hpa
+
+namespace hpa {
+namespace {
+
+TEST(WorldProfileTest, AWindEventIsAForceOrAVelocityNotBoth) {
+  const std::string base = std::string(kMinimal) + "events:\n  - {at: 0.5, type: wind, ";
+  ExpectError(base + "force: [1, 0, 0], velocity: [3, 0, 0], duration: 1}\n", {"events.0"});
+  ExpectError(base + "duration: 1}\n", {"events.0"});
+  const Scenario s =
+      LoadScenario(Write("wind_velocity.yaml", base + "velocity: [3, 0, 0], duration: 1}\n"));
+  ASSERT_EQ(s.events.size(), 1u);
+  const auto& wind = std::get<WindEvent>(s.events[0].action);
+  ASSERT_TRUE(wind.velocity_W_mps.has_value());
+  EXPECT_EQ(wind.velocity_W_mps->x(), 3.0);
+}
+
+}  // namespace
+}  // namespace hpa

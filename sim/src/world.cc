@@ -364,10 +364,16 @@ void World::Reset(const SystemState& initial) {
   imu_queue_.clear();
   wind_rng_.seed(DerivedSeed(config_.seed, 0x77696E64));
   gust_W_mps_.setZero();
+  event_wind_W_mps_.setZero();
+  event_wind_end_step_ = 0;
   if (config_.profile.wind.gust_sigma_mps > 0.0) {
     // the gust starts from its stationary distribution
     std::normal_distribution<double> unit(0.0, 1.0);
-    for (int i = 0; i < 3; ++i) gust_W_mps_(i) = config_.profile.wind.gust_sigma_mps * unit(wind_rng_);
+    const WindProfile& wind = config_.profile.wind;
+    for (int i = 0; i < 3; ++i) {
+      gust_W_mps_(i) =
+          wind.gust_sigma_mps * (i == 2 ? wind.gust_vertical_sigma_ratio : 1.0) * unit(wind_rng_);
+    }
   }
   imu_sum_w_B_radps_.setZero();
   imu_sum_specific_force_B_mps2_.setZero();
@@ -442,12 +448,22 @@ void World::UpdateGripper() {
 
 Eigen::Vector3d World::Wind_W_mps() const {
   const WindProfile& w = config_.profile.wind;
-  return Eigen::Vector3d(w.mean_x_mps, w.mean_y_mps, w.mean_z_mps) + gust_W_mps_;
+  const Eigen::Vector3d event_W =
+      step_ < event_wind_end_step_ ? event_wind_W_mps_ : Eigen::Vector3d::Zero();
+  return Eigen::Vector3d(w.mean_x_mps, w.mean_y_mps, w.mean_z_mps) + gust_W_mps_ + event_W;
+}
+
+void World::SetWindVelocity(const Eigen::Vector3d& velocity_W_mps, double duration_s) {
+  if (!velocity_W_mps.allFinite() || !std::isfinite(duration_s)) {
+    throw std::invalid_argument("World::SetWindVelocity: non-finite velocity or duration");
+  }
+  event_wind_W_mps_ = velocity_W_mps;
+  event_wind_end_step_ = step_ + std::max<int64_t>(0, std::llround(duration_s / kPhysicsDt_s));
 }
 
 void World::ApplyAerodynamics() {
   const WindProfile& wind = config_.profile.wind;
-  if (!config_.profile.aero.enabled && wind.gust_sigma_mps <= 0.0) return;
+  if (!config_.profile.aero.enabled && wind.gust_sigma_mps <= 0.0) return;  // no air
   const Truth truth = GetTruth();
   const SystemState& s = truth.state;
   // gust: per axis first-order Gauss-Markov, exact for the step: x' = a x + sigma sqrt(1-a^2) n,
@@ -455,11 +471,14 @@ void World::ApplyAerodynamics() {
   if (wind.gust_sigma_mps > 0.0) {
     const Eigen::Vector3d mean(wind.mean_x_mps, wind.mean_y_mps, wind.mean_z_mps);
     const double airspeed_mps = std::max(wind.gust_min_speed_mps, (s.v_WQ_W - mean).norm());
-    const double a = std::exp(-kPhysicsDt_s * airspeed_mps / wind.gust_length_m);
     std::normal_distribution<double> unit(0.0, 1.0);
     for (int i = 0; i < 3; ++i) {
-      gust_W_mps_(i) = a * gust_W_mps_(i) +
-                       wind.gust_sigma_mps * std::sqrt(1.0 - a * a) * unit(wind_rng_);
+      const bool vertical = i == 2;
+      const double sigma =
+          wind.gust_sigma_mps * (vertical ? wind.gust_vertical_sigma_ratio : 1.0);
+      const double length_m = vertical ? wind.gust_vertical_length_m : wind.gust_length_m;
+      const double a = std::exp(-kPhysicsDt_s * airspeed_mps / length_m);
+      gust_W_mps_(i) = a * gust_W_mps_(i) + sigma * std::sqrt(1.0 - a * a) * unit(wind_rng_);
     }
   }
   const AeroProfile& aero = config_.profile.aero;
@@ -468,16 +487,14 @@ void World::ApplyAerodynamics() {
   const Eigen::Matrix3d R_WB = s.q_WB.normalized().toRotationMatrix();
   const Eigen::Vector3d air_B = R_WB.transpose() * (s.v_WQ_W - wind_W);  // airspeed, body  (3)
 
-  // rotor drag: each rotor, -w_i c (airspeed in the rotor plane) (PX4 SITL's Gazebo motor model)
-  const Eigen::Vector3d air_plane_B(air_B.x(), air_B.y(), 0.0);
-  Eigen::Vector3d f_B = -aero.rotor_drag_coefficient * motor_speed_radps_.sum() * air_plane_B;
-  // body drag: quadratic per body axis over the box's faces
+  // rotor drag: linear in the airspeed in the rotor plane (Faessler et al., RA-L 2018)
+  Eigen::Vector3d f_B(-aero.rotor_drag_x_Nspm * air_B.x(), -aero.rotor_drag_y_Nspm * air_B.y(), 0);
+  // body drag: quadratic, -0.5 rho |v| diag(Cd_i A_i) v over the box's faces
   const Eigen::Vector3d& h = world_params_.body_half_size_m;
-  const Eigen::Vector3d area_B_m2(4 * h.y() * h.z(), 4 * h.x() * h.z(), 4 * h.x() * h.y());
-  for (int i = 0; i < 3; ++i) {
-    f_B(i) -= 0.5 * aero.air_density_kgpm3 * aero.body_drag_coefficient * area_B_m2(i) *
-              std::abs(air_B(i)) * air_B(i);
-  }
+  const Eigen::Vector3d cd_area_B_m2(aero.body_drag_coefficient_xy * 4 * h.y() * h.z(),
+                                     aero.body_drag_coefficient_xy * 4 * h.x() * h.z(),
+                                     aero.body_drag_coefficient_z * 4 * h.x() * h.y());
+  f_B -= 0.5 * aero.air_density_kgpm3 * air_B.norm() * cd_area_B_m2.cwiseProduct(air_B);
   aero_quad_W_N_ = R_WB * f_B;
   // payload drag: a sphere
   const Eigen::Vector3d air_L_W = s.v_WL_W - wind_W;

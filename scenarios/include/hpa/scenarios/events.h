@@ -6,6 +6,7 @@
 #include <Eigen/Core>
 #include <functional>
 #include <string>
+#include <optional>
 #include <variant>
 #include <vector>
 
@@ -47,7 +48,10 @@ struct ImpulseEvent {
 
 /// A constant force on the quadrotor for a while.
 struct WindEvent {
-  Eigen::Vector3d force_W_N = Eigen::Vector3d::Zero();  // (3)
+  Eigen::Vector3d force_W_N = Eigen::Vector3d::Zero();  // constant force on the quadrotor  (3)
+  // or: a wind velocity added to the profile's wind, acting through the drag of the quadrotor,
+  // its rotors and the payload (flight profile; the ideal world has no air)  (3)
+  std::optional<Eigen::Vector3d> velocity_W_mps;
   double duration_s = 0.0;
   static WindEvent Parse(const YamlMap& map);
   void Apply(sim::World* world) const;

@@ -116,6 +116,9 @@ class World {
   void ApplyImpulse(Body body, const Eigen::Vector3d& impulse_W_Ns, double duration_s = 0.01);
   /// Constant force (N, world frame) on the quadrotor's centre of mass for duration_s.
   void SetWind(const Eigen::Vector3d& force_W_N, double duration_s);
+  /// Adds a wind velocity (m/s, world frame) to the profile's wind for duration_s; it acts
+  /// through the profile's drag (none in a world without aerodynamics).
+  void SetWindVelocity(const Eigen::Vector3d& velocity_W_mps, double duration_s);
 
   /// Welds the payload to the gripper where it is now (moves the mocap body onto it first).
   void GripperGrab();
@@ -233,6 +236,8 @@ class World {
   ContactCounts contact_counts_;
   std::mt19937_64 wind_rng_;                                   // the gust's own generator
   Eigen::Vector3d gust_W_mps_ = Eigen::Vector3d::Zero();       // gust velocity, world  (3)
+  Eigen::Vector3d event_wind_W_mps_ = Eigen::Vector3d::Zero();  // wind event's velocity  (3)
+  int64_t event_wind_end_step_ = 0;                             // applied while step < this
   Eigen::Vector3d aero_quad_W_N_ = Eigen::Vector3d::Zero();    // last drag on the quad  (3)
   Eigen::Vector3d aero_payload_W_N_ = Eigen::Vector3d::Zero();  // last drag on the payload  (3)
   bool touching_[4] = {false, false, false, false};  // ContactCounts fields, last step

@@ -48,9 +48,10 @@ struct MismatchProfile {
 struct AeroProfile {
   bool enabled = false;
   double air_density_kgpm3 = 1.225;
-  // per rotor: F = -w_i c v_perp (v_perp: airspeed in the rotor plane), N / (m/s) / (rad/s)
-  double rotor_drag_coefficient = 0.0;
-  double body_drag_coefficient = 0.0;     // quadratic drag Cd of the body box, each body axis
+  // rotor drag F_B = -diag(x, y, 0) (airspeed in the body frame), N s/m
+  double rotor_drag_x_Nspm = 0.0, rotor_drag_y_Nspm = 0.0;
+  // quadratic drag Cd of the body box per body axis (faces from body_half_size_m)
+  double body_drag_coefficient_xy = 0.0, body_drag_coefficient_z = 0.0;
   double payload_drag_coefficient = 0.0;  // quadratic drag Cd of the payload sphere
 };
 
@@ -58,9 +59,11 @@ struct AeroProfile {
 /// Gauss-Markov with stationary std gust_sigma_mps and correlation length gust_length_m).
 struct WindProfile {
   double mean_x_mps = 0.0, mean_y_mps = 0.0, mean_z_mps = 0.0;  // steady wind, world frame
-  double gust_sigma_mps = 0.0;    // stationary std of the gust, each axis
-  double gust_length_m = 10.0;    // turbulence length scale L: correlation time L / airspeed
-  double gust_min_speed_mps = 1.0;  // floor on the airspeed in L / airspeed (hover)
+  double gust_sigma_mps = 0.0;            // stationary std of the horizontal gust, each axis
+  double gust_length_m = 23.05;           // horizontal turbulence length L: tau = L / airspeed
+  double gust_vertical_sigma_ratio = 0.5094;  // vertical gust std / horizontal
+  double gust_vertical_length_m = 3.048;      // vertical turbulence length
+  double gust_min_speed_mps = 1.0;            // floor on the airspeed in L / airspeed (hover)
 };
 
 /// VIO that drifts as a real one: position and yaw random walks with distance travelled, white
