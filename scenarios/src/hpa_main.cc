@@ -92,12 +92,13 @@ std::string Usage() {
     text += "  " + e.name + std::string(24 - std::min<size_t>(23, e.name.size()), ' ') +
             e.description + "\n";
   }
-  text += "world profiles (world.profile; default flight; any number of one overridable under "
-          "world:, e.g. --set world.latency.compute_s=0):\n"
-          "  flight   contact, drag and wind, actuation spread and battery sag, latency, drifting "
-          "VIO,\n"
-          "           model mismatch (models/profiles/flight.yaml, each number with its source)\n"
-          "  ideal    none of these: controller-only tests (models/profiles/ideal.yaml)\n";
+  text +=
+      "world profiles (world.profile; default flight; any number of one overridable under "
+      "world:, e.g. --set world.latency.compute_s=0):\n"
+      "  flight   contact, drag and wind, actuation spread and battery sag, latency, drifting "
+      "VIO,\n"
+      "           model mismatch (models/profiles/flight.yaml, each number with its source)\n"
+      "  ideal    none of these: controller-only tests (models/profiles/ideal.yaml)\n";
   text += "expect keys (scenario `expect:` block):\n";
   for (const ExpectKey& k : ExpectKeys()) {
     text += "  " + k.key + std::string(30 - std::min<size_t>(29, k.key.size()), ' ') +

@@ -91,18 +91,19 @@ void ReadWorldProfileSections(const YamlMap& map, sim::WorldProfile* profile) {
     const YamlMap m = map.Map("vio");
     sim::VioDriftProfile& v = profile->vio;
     v.enabled = m.Bool("enabled", v.enabled);
-    v.position_drift_horizontal_m_per_sqrt_m = m.Number(
-        "position_drift_horizontal_m_per_sqrt_m", 0.0, 1.0, v.position_drift_horizontal_m_per_sqrt_m);
-    v.position_drift_vertical_m_per_sqrt_m = m.Number(
-        "position_drift_vertical_m_per_sqrt_m", 0.0, 1.0, v.position_drift_vertical_m_per_sqrt_m);
+    v.position_drift_horizontal_m_per_sqrt_m =
+        m.Number("position_drift_horizontal_m_per_sqrt_m", 0.0, 1.0,
+                 v.position_drift_horizontal_m_per_sqrt_m);
+    v.position_drift_vertical_m_per_sqrt_m = m.Number("position_drift_vertical_m_per_sqrt_m", 0.0,
+                                                      1.0, v.position_drift_vertical_m_per_sqrt_m);
     v.yaw_drift_rad_per_sqrt_m =
         m.Number("yaw_drift_rad_per_sqrt_m", 0.0, 0.5, v.yaw_drift_rad_per_sqrt_m);
     v.dropout_rate_per_s = m.Number("dropout_rate_per_s", 0.0, 10.0, v.dropout_rate_per_s);
     v.dropout_duration_s = m.Number("dropout_duration_s", 0.0, 10.0, v.dropout_duration_s);
     v.relocalisation_keep_fraction =
         m.Number("relocalisation_keep_fraction", 0.0, 1.0, v.relocalisation_keep_fraction);
-    v.relocalisation_jump_horizontal_m = m.Number("relocalisation_jump_horizontal_m", 0.0, 5.0,
-                                                  v.relocalisation_jump_horizontal_m);
+    v.relocalisation_jump_horizontal_m =
+        m.Number("relocalisation_jump_horizontal_m", 0.0, 5.0, v.relocalisation_jump_horizontal_m);
     v.relocalisation_jump_vertical_m =
         m.Number("relocalisation_jump_vertical_m", 0.0, 5.0, v.relocalisation_jump_vertical_m);
     v.relocalisation_jump_yaw_rad =

@@ -120,8 +120,8 @@ TEST(WorldProfileTest, ScenarioFilesFlyTheFlightProfileUnlessTheySayIdeal) {
 }
 
 TEST(WorldProfileTest, ASingleNumberOverridesTheProfile) {
-  const Scenario s = LoadScenario(Write("override.yaml", kMinimal),
-                                  {{"world.latency.compute_s", "0.02"}});
+  const Scenario s =
+      LoadScenario(Write("override.yaml", kMinimal), {{"world.latency.compute_s", "0.02"}});
   EXPECT_EQ(s.world.name, "flight");
   EXPECT_DOUBLE_EQ(s.world.latency.compute_s, 0.02);
   // the rest of the profile is kept

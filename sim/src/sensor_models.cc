@@ -65,8 +65,8 @@ void VioModel::Capture(double time_s, const Eigen::Vector3d& p_WB_W_true,
   bool deliver = true;
   if (drift_.enabled) {
     std::normal_distribution<double> unit(0.0, 1.0);
-    const Eigen::Vector3d step_W = has_last_ ? Eigen::Vector3d(p_WB_W_true - last_p_WB_W_)
-                                             : Eigen::Vector3d::Zero();
+    const Eigen::Vector3d step_W =
+        has_last_ ? Eigen::Vector3d(p_WB_W_true - last_p_WB_W_) : Eigen::Vector3d::Zero();
     const double dt_s = has_last_ ? time_s - last_capture_s_ : 0.0;
     last_p_WB_W_ = p_WB_W_true;
     last_capture_s_ = time_s;

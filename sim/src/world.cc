@@ -285,7 +285,8 @@ void World::DrawMismatch() {
     Eigen::Vector3d dtheta_B;
     for (int i = 0; i < 3; ++i) dtheta_B(i) = m.camera_angle_sigma_rad * normal(rng);
     if (dtheta_B.norm() > 0.0) {
-      p.R_BC = Eigen::AngleAxisd(dtheta_B.norm(), dtheta_B.normalized()).toRotationMatrix() * p.R_BC;
+      p.R_BC =
+          Eigen::AngleAxisd(dtheta_B.norm(), dtheta_B.normalized()).toRotationMatrix() * p.R_BC;
     }
   }
   const ActuationProfile& a = config_.profile.actuation;
@@ -309,7 +310,7 @@ double World::PayloadQuadDistance() const {
   // the payload centre in a geom's frame: R_WG^T (p_WL - p_WG)
   auto in_geom = [&](int g) {
     const Eigen::Map<const Eigen::Matrix<double, 3, 3, Eigen::RowMajor>> R_WG(data_->geom_xmat +
-                                                                                9 * g);
+                                                                              9 * g);
     return Eigen::Vector3d(R_WG.transpose() * (p_WL_W - Eigen::Vector3d(data_->geom_xpos + 3 * g)));
   };
   const int box = ids_.quad_box_geom;
@@ -474,8 +475,7 @@ void World::ApplyAerodynamics() {
     std::normal_distribution<double> unit(0.0, 1.0);
     for (int i = 0; i < 3; ++i) {
       const bool vertical = i == 2;
-      const double sigma =
-          wind.gust_sigma_mps * (vertical ? wind.gust_vertical_sigma_ratio : 1.0);
+      const double sigma = wind.gust_sigma_mps * (vertical ? wind.gust_vertical_sigma_ratio : 1.0);
       const double length_m = vertical ? wind.gust_vertical_length_m : wind.gust_length_m;
       const double a = std::exp(-kPhysicsDt_s * airspeed_mps / length_m);
       gust_W_mps_(i) = a * gust_W_mps_(i) + sigma * std::sqrt(1.0 - a * a) * unit(wind_rng_);
@@ -499,8 +499,8 @@ void World::ApplyAerodynamics() {
   // payload drag: a sphere
   const Eigen::Vector3d air_L_W = s.v_WL_W - wind_W;
   const double r = world_params_.payload_radius_m;
-  aero_payload_W_N_ = -0.5 * aero.air_density_kgpm3 * aero.payload_drag_coefficient * M_PI * r *
-                      r * air_L_W.norm() * air_L_W;
+  aero_payload_W_N_ = -0.5 * aero.air_density_kgpm3 * aero.payload_drag_coefficient * M_PI * r * r *
+                      air_L_W.norm() * air_L_W;
   for (int i = 0; i < 3; ++i) {
     data_->xfrc_applied[6 * ids_.quad_body + i] += aero_quad_W_N_(i);
     data_->xfrc_applied[6 * ids_.payload_body + i] += aero_payload_W_N_(i);
@@ -529,9 +529,9 @@ void World::Step() {
   // first-order motor lag, exact for the 1 ms step; thrust to the actuators
   const double alpha = 1.0 - std::exp(-kPhysicsDt_s / world_params_.motor_time_constant_s);
   // (with battery sag the speed a command reaches falls with the pack voltage)
-  const InputVector target_radps =
-      config_.profile.actuation.enabled ? InputVector(motor_command_radps_ * BatterySpeedFactor())
-                                        : motor_command_radps_;
+  const InputVector target_radps = config_.profile.actuation.enabled
+                                       ? InputVector(motor_command_radps_ * BatterySpeedFactor())
+                                       : motor_command_radps_;
   motor_speed_radps_ += alpha * (target_radps - motor_speed_radps_);
   WriteMotorControls();
   ApplyDisturbances();

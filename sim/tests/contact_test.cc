@@ -189,7 +189,8 @@ void Moving(World* world, const Eigen::Vector3d& v_W_mps) {
   s.p_WL_W = Eigen::Vector3d(0, 0, 0.5);
   s.v_WQ_W = v_W_mps;
   s.v_WL_W = v_W_mps;
-  world->SetState(s.ToVector(), InputVector::Constant(world->world_params().HoverMotorSpeedRadps()));
+  world->SetState(s.ToVector(),
+                  InputVector::Constant(world->world_params().HoverMotorSpeedRadps()));
 }
 
 TEST(AeroTest, DragOpposesTheAirspeedWithTheClosedFormMagnitude) {

@@ -5,8 +5,8 @@
 
 #include <Eigen/Core>
 #include <functional>
-#include <string>
 #include <optional>
+#include <string>
 #include <variant>
 #include <vector>
 

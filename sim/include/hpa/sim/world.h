@@ -234,13 +234,13 @@ class World {
   Eigen::Vector4d rotor_km_factor_ = Eigen::Vector4d::Ones();  // per-rotor k_m spread  (4)
   double payload_quad_min_distance_m_ = 0.0;
   ContactCounts contact_counts_;
-  std::mt19937_64 wind_rng_;                                   // the gust's own generator
-  Eigen::Vector3d gust_W_mps_ = Eigen::Vector3d::Zero();       // gust velocity, world  (3)
+  std::mt19937_64 wind_rng_;                                    // the gust's own generator
+  Eigen::Vector3d gust_W_mps_ = Eigen::Vector3d::Zero();        // gust velocity, world  (3)
   Eigen::Vector3d event_wind_W_mps_ = Eigen::Vector3d::Zero();  // wind event's velocity  (3)
   int64_t event_wind_end_step_ = 0;                             // applied while step < this
-  Eigen::Vector3d aero_quad_W_N_ = Eigen::Vector3d::Zero();    // last drag on the quad  (3)
+  Eigen::Vector3d aero_quad_W_N_ = Eigen::Vector3d::Zero();     // last drag on the quad  (3)
   Eigen::Vector3d aero_payload_W_N_ = Eigen::Vector3d::Zero();  // last drag on the payload  (3)
-  bool touching_[4] = {false, false, false, false};  // ContactCounts fields, last step
+  bool touching_[4] = {false, false, false, false};             // ContactCounts fields, last step
 };
 
 }  // namespace hpa::sim

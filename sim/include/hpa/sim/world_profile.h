@@ -19,8 +19,8 @@ struct ContactProfile {
 /// Per-vehicle actuation imperfections: coefficients drawn once per seed, battery sag in time.
 struct ActuationProfile {
   bool enabled = false;
-  double thrust_coefficient_spread = 0.0;  // 1-sigma relative spread of each rotor's k_f
-  double torque_coefficient_spread = 0.0;  // 1-sigma relative spread of each rotor's k_m
+  double thrust_coefficient_spread = 0.0;   // 1-sigma relative spread of each rotor's k_f
+  double torque_coefficient_spread = 0.0;   // 1-sigma relative spread of each rotor's k_m
   double battery_voltage_drop_per_s = 0.0;  // relative pack voltage drop per second of flight
 };
 
@@ -35,13 +35,13 @@ struct LatencyProfile {
 /// within the stated 1-sigma tolerances (each term zero: no mismatch).
 struct MismatchProfile {
   bool enabled = false;
-  double payload_mass_sigma_kg = 0.0;         // payload mass
-  double cable_length_sigma_m = 0.0;          // cable length
-  double inertia_sigma_fraction = 0.0;        // relative, each diagonal entry
-  double quad_mass_sigma_kg = 0.0;            // quadrotor mass
+  double payload_mass_sigma_kg = 0.0;              // payload mass
+  double cable_length_sigma_m = 0.0;               // cable length
+  double inertia_sigma_fraction = 0.0;             // relative, each diagonal entry
+  double quad_mass_sigma_kg = 0.0;                 // quadrotor mass
   double thrust_coefficient_sigma_fraction = 0.0;  // relative, all rotors together
-  double camera_position_sigma_m = 0.0;       // camera origin in the body, each axis
-  double camera_angle_sigma_rad = 0.0;        // camera orientation in the body, each axis
+  double camera_position_sigma_m = 0.0;            // camera origin in the body, each axis
+  double camera_angle_sigma_rad = 0.0;             // camera orientation in the body, each axis
 };
 
 /// Air: rotor drag, body drag and payload drag against the airspeed (velocity minus wind).
@@ -59,8 +59,8 @@ struct AeroProfile {
 /// Gauss-Markov with stationary std gust_sigma_mps and correlation length gust_length_m).
 struct WindProfile {
   double mean_x_mps = 0.0, mean_y_mps = 0.0, mean_z_mps = 0.0;  // steady wind, world frame
-  double gust_sigma_mps = 0.0;            // stationary std of the horizontal gust, each axis
-  double gust_length_m = 23.05;           // horizontal turbulence length L: tau = L / airspeed
+  double gust_sigma_mps = 0.0;                // stationary std of the horizontal gust, each axis
+  double gust_length_m = 23.05;               // horizontal turbulence length L: tau = L / airspeed
   double gust_vertical_sigma_ratio = 0.5094;  // vertical gust std / horizontal
   double gust_vertical_length_m = 3.048;      // vertical turbulence length
   double gust_min_speed_mps = 1.0;            // floor on the airspeed in L / airspeed (hover)
@@ -73,9 +73,9 @@ struct VioDriftProfile {
   double position_drift_horizontal_m_per_sqrt_m = 0.0;  // x, y drift std: this * sqrt(distance)
   double position_drift_vertical_m_per_sqrt_m = 0.0;    // z drift std: this * sqrt(distance)
   double yaw_drift_rad_per_sqrt_m = 0.0;                // yaw drift std: this * sqrt(distance)
-  double dropout_rate_per_s = 0.0;     // Poisson rate of dropouts (while tracking)
-  double dropout_duration_s = 0.0;     // no sample is delivered for this long
-  double relocalisation_keep_fraction = 1.0;  // drift kept when tracking resumes (0: all reset)
+  double dropout_rate_per_s = 0.0;                      // Poisson rate of dropouts (while tracking)
+  double dropout_duration_s = 0.0;                      // no sample is delivered for this long
+  double relocalisation_keep_fraction = 1.0;      // drift kept when tracking resumes (0: all reset)
   double relocalisation_jump_horizontal_m = 0.0;  // 1-sigma step of x, y when tracking resumes
   double relocalisation_jump_vertical_m = 0.0;    // 1-sigma step of z when tracking resumes
   double relocalisation_jump_yaw_rad = 0.0;       // 1-sigma step of yaw when tracking resumes
