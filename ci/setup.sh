@@ -7,6 +7,7 @@ packages=(
   build-essential cmake ninja-build pkg-config git
   libmujoco-dev            # physics (MuJoCo 2.2.2) and its renderer
   libosmesa6-dev           # headless OpenGL context for off-screen camera rendering
+  libegl-dev libegl-mesa0  # --gl egl: EGL headers (libEGL is dlopen'ed) and Mesa's EGL driver
   libeigen3-dev            # linear algebra in models, estimator, controller
   libopencv-core-dev libopencv-imgproc-dev libopencv-imgcodecs-dev libopencv-videoio-dev
                            # payload detector, PNG frames and plots, MP4 video

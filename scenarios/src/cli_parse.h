@@ -6,6 +6,7 @@
 #include <string>
 
 #include "hpa/models/input_error.h"
+#include "hpa/sim/gl_backend.h"
 
 namespace hpa {
 
@@ -21,6 +22,30 @@ inline std::optional<int> ParseCommandLine(CLI::App& app, int argc, char** argv)
     throw InputError(app.get_name(), "", e.what());
   }
   return std::nullopt;
+}
+
+/// Adds --gl osmesa|egl (the rendered cameras' GL context) to a command's parser.
+inline void AddGlOption(CLI::App& app, std::string* gl) {
+  app.add_option("--gl", *gl,
+                 "GL context of the rendered cameras: osmesa (default, CPU) or egl (headless "
+                 "GPU on cluster nodes)")
+      ->check([](const std::string& value) {
+        try {
+          sim::ParseGlBackend(value);
+          return std::string();
+        } catch (const std::invalid_argument& e) {
+          return std::string(e.what());
+        }
+      });
+}
+
+/// The back end of a --gl value; InputError naming --gl and the value for a bad one.
+inline sim::GlBackend ParseGlOption(const std::string& gl) {
+  try {
+    return sim::ParseGlBackend(gl);
+  } catch (const std::invalid_argument& e) {
+    throw InputError("", "--gl", e.what());
+  }
 }
 
 }  // namespace hpa

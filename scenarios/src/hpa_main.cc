@@ -45,7 +45,7 @@ const char* kUsage =
 usage:
   hpa run SCENARIO.yaml [--out DIR] [--seed N] [--controller TYPE] [--camera render|analytic]
                         [--video FILE.mp4] [--video-slack-events] [--plots] [--quiet]
-                        [--params FILE] [--set PATH=VALUE]...
+                        [--gl osmesa|egl] [--params FILE] [--set PATH=VALUE]...
       Runs one scenario; writes DIR/metrics.json and DIR/log.csv (one row per control step),
       plus PNG plots with --plots and an MP4 with --video (--video-slack-events keeps only
       the slack events; alone it writes DIR/slack_events.mp4). DIR defaults to
@@ -53,15 +53,17 @@ usage:
       TYPE: a registered controller (listed below). --set changes one dotted key of the
       scenario (e.g. --set events.1.impulse.2=0.5); sweeps print such replay commands.
   hpa compare SCENARIO.yaml --out DIR [--controllers A,B] [--camera render|analytic]
-                        [--seed N] [--video-slack-events] [--quiet] [--params FILE]
-                        [--set PATH=VALUE]...
+                        [--seed N] [--video-slack-events] [--quiet] [--gl osmesa|egl]
+                        [--params FILE] [--set PATH=VALUE]...
       Runs the scenario once per controller (default hpa_mpc,nonhybrid_mpc) into DIR/<type>/
       and writes DIR/comparison.png and DIR/comparison.md (each controller's metrics and their
       differences to the first); with --video-slack-events, a slack-event video per run.
   hpa render-frame SCENARIO.yaml --at T --out FILE.png [--seed N] [--controller TYPE]
-                        [--params FILE] [--set PATH=VALUE]...
+                        [--gl osmesa|egl] [--params FILE] [--set PATH=VALUE]...
       Runs the scenario to time T (s) and writes one 1280x720 onboard payload-camera frame.
+      --gl egl renders through EGL (a GPU where there is one) instead of OSMesa.
   hpa sweep SWEEP.yaml --out DIR [--jobs N] [--shard K/N] [--resume [--retry-errors]]
+                        [--gl osmesa|egl]
       Monte Carlo sweep: one JSON line per run in DIR/runs.jsonl, then a summary. --jobs
       defaults to the number of cores; --shard K/N (K = 1..N) runs every N-th run; --resume
       skips recorded runs, --retry-errors runs the recorded errors (killed, timed out) again.
@@ -113,7 +115,8 @@ struct ScenarioOptions {
   std::string params_file;
   std::vector<std::string> sets;  // --set PATH=VALUE, in order
   std::optional<unsigned long> seed;
-  std::string camera;  // "" keeps the scenario's
+  std::string camera;         // "" keeps the scenario's
+  std::string gl = "osmesa";  // --gl: GL back end of the rendered cameras
   bool quiet = false;
 };
 
@@ -131,6 +134,7 @@ void AddScenarioOptions(CLI::App& app, ScenarioOptions* o, bool with_camera, boo
         ->check(CLI::IsMember({"render", "analytic"}));
   }
   if (with_quiet) app.add_flag("--quiet", o->quiet, "no progress or summary lines");
+  AddGlOption(app, &o->gl);
 }
 
 // Loads the scenario with --set applied, then --seed and --camera.
@@ -211,6 +215,7 @@ int Run(int argc, char** argv) {
 
   RunOptions options;
   options.progress = !o.quiet;
+  options.gl_backend = ParseGlOption(o.gl);
   options.video_path = video;
   options.video_slack_events_only = slack_events;
   if (options.video_slack_events_only && options.video_path.empty()) {
@@ -333,6 +338,7 @@ int Compare(int argc, char** argv) {
     MakeOutputDir(dir);
     RunOptions options;
     options.progress = !o.quiet;
+    options.gl_backend = ParseGlOption(o.gl);
     if (slack_events) {
       options.video_path = dir + "/slack_events.mp4";
       options.video_slack_events_only = true;
@@ -385,6 +391,7 @@ int RenderFrame(int argc, char** argv) {
   }
   RunOptions options;
   options.stop_at_s = at_s;
+  options.gl_backend = ParseGlOption(o.gl);
   bool written = false;
   double frame_time_s = at_s;
   options.at_stop = [&](sim::World& world) {

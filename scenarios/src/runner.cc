@@ -120,6 +120,7 @@ RunResult RunScenario(const Scenario& scenario, const Params& params, const RunO
   world_config.seed = scenario.seed;
   world_config.rates = ScenarioRates(scenario);
   world_config.profile = scenario.world;
+  world_config.gl_backend = options.gl_backend;
   const RateTable& rates = world_config.rates;
   sim::World world(world_config);
   metrics.world_profile = scenario.world.name;

@@ -97,6 +97,8 @@ expect_exit 0 "wrote" render-frame "$scen/hover.yaml" --at 1.0 --out "$out/frame
 size=$(od -An -tu1 -j16 -N8 "$out/frame.png" | tr -s ' ')
 [ "$size" = " 0 0 5 0 0 0 2 208" ] || fail "frame.png is not 1280x720 (IHDR bytes:$size)"
 expect_exit 2 "key '--at'" render-frame "$scen/hover.yaml" --at 99 --out "$out/frame2.png"
+expect_exit 2 "--gl: unknown GL back end 'vulkan'" render-frame "$scen/hover.yaml" --at 1.0 \
+  --out "$out/frame3.png" --gl vulkan
 
 echo "== plots and video"
 expect_exit 0 "plot" run "$base" --out "$out/plots" --plots --video "$out/plots/run.mp4"

@@ -1,17 +1,16 @@
 #include "offscreen_renderer.h"
 
-#include <GL/osmesa.h>
-
 #include <opencv2/imgproc.hpp>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
+#include "gl_context.h"
+
 namespace hpa::sim {
 
 struct OffscreenRenderer::Gl {
-  OSMesaContext context = nullptr;
-  std::vector<unsigned char> window_buffer;  // OSMesa's default framebuffer (unused for drawing)
+  std::unique_ptr<GlContext> context;  // OSMesa or EGL
   mjvScene scene;
   mjrContext render_context;
   mjvOption option;
@@ -19,16 +18,25 @@ struct OffscreenRenderer::Gl {
   std::vector<unsigned char> rgb;  // mjr_readPixels output, bottom row first
 };
 
-OffscreenRenderer::OffscreenRenderer(const mjModel* model) : model_(model) {}
+OffscreenRenderer::OffscreenRenderer(const mjModel* model, GlBackend backend)
+    : model_(model), backend_(backend) {}
 
 OffscreenRenderer::~OffscreenRenderer() {
   if (gl_ == nullptr) return;
-  mjr_freeContext(&gl_->render_context);
+  try {
+    gl_->context->MakeCurrent();  // MuJoCo frees the GL objects of the current context
+    mjr_freeContext(&gl_->render_context);
+  } catch (const std::runtime_error&) {
+    // the context cannot be made current: its GL objects go with it
+  }
   mjv_freeScene(&gl_->scene);
-  OSMesaDestroyContext(gl_->context);
 }
 
 bool OffscreenRenderer::initialized() const { return gl_ != nullptr; }
+
+std::string OffscreenRenderer::GlDescription() {
+  return gl_ == nullptr ? "" : gl_->context->Description();
+}
 
 cv::Mat OffscreenRenderer::Render(mjData* data, int camera_id, int width_px, int height_px,
                                   bool show_tendons) {
@@ -44,16 +52,10 @@ cv::Mat OffscreenRenderer::Render(mjData* data, int camera_id, int width_px, int
                                 std::to_string(camera_id));
   }
 
-  // first frame: create the OSMesa context and MuJoCo's GL resources
+  // first frame: create the GL context (current from here on) and MuJoCo's GL resources
   if (gl_ == nullptr) {
     auto gl = std::make_unique<Gl>();
-    gl->context = OSMesaCreateContextExt(OSMESA_RGBA, 24, 8, 8, nullptr);
-    if (gl->context == nullptr) throw std::runtime_error("OSMesaCreateContextExt failed");
-    gl->window_buffer.resize(static_cast<size_t>(max_w) * max_h * 4);
-    if (!OSMesaMakeCurrent(gl->context, gl->window_buffer.data(), GL_UNSIGNED_BYTE, max_w, max_h)) {
-      OSMesaDestroyContext(gl->context);
-      throw std::runtime_error("OSMesaMakeCurrent failed");
-    }
+    gl->context = GlContext::Create(backend_, max_w, max_h);
     mjv_defaultScene(&gl->scene);
     mjr_defaultContext(&gl->render_context);
     mjv_defaultOption(&gl->option);
@@ -64,8 +66,8 @@ cv::Mat OffscreenRenderer::Render(mjData* data, int camera_id, int width_px, int
     if (gl->render_context.currentBuffer != mjFB_OFFSCREEN) {
       mjr_freeContext(&gl->render_context);
       mjv_freeScene(&gl->scene);
-      OSMesaDestroyContext(gl->context);
-      throw std::runtime_error("MuJoCo offscreen framebuffer not available under OSMesa");
+      throw std::runtime_error("MuJoCo offscreen framebuffer not available under " +
+                               GlBackendName(backend_));
     }
     // speed (DESIGN.md section 8): 34 ms -> 15 ms a 1280x720 frame on llvmpipe
     gl->scene.flags[mjRND_SHADOW] = 0;
@@ -74,6 +76,7 @@ cv::Mat OffscreenRenderer::Render(mjData* data, int camera_id, int width_px, int
     gl->rgb.resize(static_cast<size_t>(max_w) * max_h * 3);
     gl_ = std::move(gl);
   }
+  gl_->context->MakeCurrent();  // another renderer may have made its own current since
 
   // scene from the current kinematics, seen from the fixed camera
   gl_->camera.type = mjCAMERA_FIXED;

@@ -1,20 +1,24 @@
 #pragma once
-// Headless MuJoCo rendering through OSMesa (DESIGN.md section 8): one GL context per process,
-// created lazily on the first frame so runs that never render pay nothing.
+// Headless MuJoCo rendering through OSMesa or EGL (DESIGN.md section 8): one GL context per
+// renderer, created lazily on the first frame so runs that never render pay nothing.
 
 #include <mujoco/mujoco.h>
 
 #include <memory>
 #include <opencv2/core.hpp>
+#include <string>
+
+#include "hpa/sim/gl_backend.h"
 
 namespace hpa::sim {
 
 /// Renders fixed cameras of one mjModel into BGR images; shadows, reflections and skybox off.
-/// Not thread-safe; OSMesa allows one current context per thread, so use one per process.
+/// Not thread-safe; each Render makes its own context current, so renderers may take turns on
+/// one thread. One back end per process (gl_context.h).
 class OffscreenRenderer {
  public:
   /// Keeps a pointer to `model`, which must outlive the renderer; creates no GL state yet.
-  explicit OffscreenRenderer(const mjModel* model);
+  explicit OffscreenRenderer(const mjModel* model, GlBackend backend = GlBackend::kOsMesa);
   ~OffscreenRenderer();
   OffscreenRenderer(const OffscreenRenderer&) = delete;
   OffscreenRenderer& operator=(const OffscreenRenderer&) = delete;
@@ -26,12 +30,16 @@ class OffscreenRenderer {
   cv::Mat Render(mjData* data, int camera_id, int width_px, int height_px,
                  bool show_tendons = true);
 
-  /// True once the OSMesa context exists (after the first Render).
+  /// True once the GL context exists (after the first Render).
   bool initialized() const;
 
+  /// What renders (back end, EGL platform, GL_RENDERER); "" before the first Render.
+  std::string GlDescription();
+
  private:
-  struct Gl;  // OSMesa context, mjvScene, mjrContext (hidden: keeps GL out of this header)
+  struct Gl;  // GL context, mjvScene, mjrContext (hidden: keeps GL out of this header)
   const mjModel* model_;
+  GlBackend backend_;
   std::unique_ptr<Gl> gl_;
 };
 

@@ -166,7 +166,7 @@ World::World(const WorldConfig& config)
   }
   data_ = mj_makeData(model_);
   ApplyWorldParams();
-  renderer_ = std::make_unique<OffscreenRenderer>(model_);
+  renderer_ = std::make_unique<OffscreenRenderer>(model_, config_.gl_backend);
 
   // start hovering 1 m up, payload hanging
   SystemState initial;

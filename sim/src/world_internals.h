@@ -5,6 +5,7 @@
 #include <mujoco/mujoco.h>
 
 #include "hpa/sim/world.h"
+#include "offscreen_renderer.h"
 
 namespace hpa::sim {
 
@@ -14,6 +15,8 @@ struct WorldInternals {
   static const mjModel* Model(const World& world) { return world.model_; }
   /// The simulation data (stepping it directly bypasses motors, sensors and events).
   static mjData* Data(World& world) { return world.data_; }
+  /// The renderer of the World's cameras.
+  static OffscreenRenderer& Renderer(World& world) { return *world.renderer_; }
 };
 
 }  // namespace hpa::sim

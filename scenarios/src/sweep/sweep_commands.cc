@@ -23,7 +23,7 @@ namespace hpa {
 using sweep::Record;
 
 int SweepMain(int argc, char** argv) {
-  std::string sweep_file, out_dir, shard = "1/1";
+  std::string sweep_file, out_dir, shard = "1/1", gl = "osmesa";
   int jobs = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
   bool resume = false, retry_errors = false;
   CLI::App app{
@@ -38,7 +38,9 @@ int SweepMain(int argc, char** argv) {
   app.add_flag("--resume", resume, "continue a sweep in DIR, skipping the runs it recorded");
   app.add_flag("--retry-errors", retry_errors,
                "with --resume: run again the runs recorded as errors (killed, timed out)");
+  AddGlOption(app, &gl);
   if (const auto code = ParseCommandLine(app, argc, argv)) return *code;
+  const sim::GlBackend gl_backend = ParseGlOption(gl);  // every worker renders with it
   int shard_k = 1, shard_n = 1;
   char rest = 0;
   if (std::sscanf(shard.c_str(), "%d/%d%c", &shard_k, &shard_n, &rest) != 2 || shard_n < 1 ||
@@ -118,7 +120,7 @@ int SweepMain(int argc, char** argv) {
     }
     std::fflush(stdout);
   };
-  sweep::RunPool(spec, runs, params, jobs, tmp_dir, record);
+  sweep::RunPool(spec, runs, params, gl_backend, jobs, tmp_dir, record);
   std::fclose(out);
   rmdir(tmp_dir.c_str());
   if (tty) std::printf("\n");

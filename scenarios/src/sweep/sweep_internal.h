@@ -12,6 +12,7 @@
 #include "hpa/models/params.h"
 #include "hpa/scenarios/scenario.h"
 #include "hpa/scenarios/sweep.h"
+#include "hpa/sim/gl_backend.h"
 
 namespace hpa::sweep {
 
@@ -75,11 +76,12 @@ int BinOf(const std::vector<std::pair<double, double>>& bins, double v);
 /// Writes summary.json, summary.md and crash_rate.png from the records of one sweep.
 void WriteSummary(const std::vector<Record>& records, const std::string& dir);
 
-/// Runs `runs` in up to `jobs` forked worker processes (crash isolation, a time limit per run);
-/// `record` gets each run's JSON line as it finishes, with whether it failed.
+/// Runs `runs` in up to `jobs` forked worker processes (crash isolation, a time limit per run),
+/// each rendering through `gl_backend`; `record` gets each run's JSON line as it finishes, with
+/// whether it failed.
 void RunPool(
-    const SweepSpec& spec, const std::vector<SweepRun>& runs, const Params& params, int jobs,
-    const std::string& tmp_dir,
+    const SweepSpec& spec, const std::vector<SweepRun>& runs, const Params& params,
+    sim::GlBackend gl_backend, int jobs, const std::string& tmp_dir,
     const std::function<void(const std::string& line, bool failed, const SweepRun&)>& record);
 
 }  // namespace hpa::sweep

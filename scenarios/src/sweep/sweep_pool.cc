@@ -32,12 +32,15 @@ std::string ControllerOf(const SweepSpec& spec, const SweepRun& run) {
 }
 
 // Runs one sweep run in this (child) process and returns its JSON line.
-std::string RunOne(const SweepSpec& spec, const SweepRun& run, const Params& params) {
+std::string RunOne(const SweepSpec& spec, const SweepRun& run, const Params& params,
+                   sim::GlBackend gl_backend) {
   std::string controller = "?";
   try {
     const Scenario scenario = BuildScenario(spec, run);
     controller = scenario.controller.type;
-    const RunResult result = RunScenario(scenario, params, RunOptions{});
+    RunOptions options;
+    options.gl_backend = gl_backend;
+    const RunResult result = RunScenario(scenario, params, options);
     const std::string metrics = MetricsToJson(result.metrics);
     return RecordLine(spec, run, controller, result.metrics.run_error.value_or(""), metrics);
   } catch (const std::exception& e) {
@@ -57,8 +60,8 @@ bool RecordFailed(const std::string& line) {
 }  // namespace
 
 void RunPool(
-    const SweepSpec& spec, const std::vector<SweepRun>& runs, const Params& params, int jobs,
-    const std::string& tmp_dir,
+    const SweepSpec& spec, const std::vector<SweepRun>& runs, const Params& params,
+    sim::GlBackend gl_backend, int jobs, const std::string& tmp_dir,
     const std::function<void(const std::string& line, bool failed, const SweepRun&)>& record) {
   const pid_t parent_pid = getpid();
   size_t next = 0;
@@ -79,7 +82,7 @@ void RunPool(
         // a worker dies with the sweep (kill -9 of the parent included)
         prctl(PR_SET_PDEATHSIG, SIGKILL);
         if (getppid() != parent_pid) _exit(1);
-        const std::string line = RunOne(spec, run, params);
+        const std::string line = RunOne(spec, run, params, gl_backend);
         const std::string path = tmp_dir + "/" + std::to_string(run.index) + ".json";
         std::ofstream(path) << line;
         _exit(0);

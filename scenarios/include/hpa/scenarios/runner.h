@@ -13,6 +13,7 @@
 #include "hpa/models/params.h"
 #include "hpa/scenarios/metrics.h"
 #include "hpa/scenarios/scenario.h"
+#include "hpa/sim/gl_backend.h"
 
 namespace hpa {
 namespace sim {
@@ -51,6 +52,7 @@ struct RunOptions {
   std::optional<double> stop_at_s;           // stop early (render-frame)
   std::function<void(sim::World&)> at_stop;  // called with the world when the run stops
   std::vector<RunRecorder*> recorders;       // extra observers (not owned)
+  sim::GlBackend gl_backend = sim::GlBackend::kOsMesa;  // GL context of the rendered cameras
 };
 
 /// The rate table a scenario runs with: the defaults, the scenario's camera latency.

@@ -18,6 +18,7 @@
 #include "hpa/models/params.h"
 #include "hpa/models/sensor_types.h"
 #include "hpa/models/state.h"
+#include "hpa/sim/gl_backend.h"
 #include "hpa/sim/sensor_models.h"
 #include "hpa/sim/world_profile.h"
 
@@ -44,6 +45,8 @@ struct WorldConfig {
   SensorNoiseConfig noise;  // IMU and VIO noise
   RateTable rates;          // physics, IMU and VIO rates, VIO latency
   WorldProfile profile;     // realism parts (default: all off, the ideal world)
+  // GL context of the rendered cameras (one back end per process: sim/src/gl_context.h)
+  GlBackend gl_backend = GlBackend::kOsMesa;
 };
 
 /// Contact episodes since Reset (a pair counts once each time it starts touching).
@@ -133,7 +136,8 @@ class World {
   /// arena (|x|, |y| <= 10 m, 0 <= z <= 10 m), non-finite state.
   CrashStatus Crash() const;
 
-  /// Payload camera frame, CV_8UC3 BGR, 1280x720, top row first (first call creates OSMesa).
+  /// Payload camera frame, CV_8UC3 BGR, 1280x720, top row first (first call creates the GL
+  /// context of config.gl_backend).
   cv::Mat RenderPayloadCamera();
   /// Chase camera frame for videos, CV_8UC3 BGR, top row first (at most 1280x720).
   cv::Mat RenderChaseCamera(int width_px, int height_px);
