@@ -12,6 +12,14 @@
 namespace hpa {
 namespace {
 
+// Parameters with the payload camera on the cable's axis (5 cm below the attachment): the
+// hanging payload is at the image centre, which the camera-term tests below take as their origin.
+Params CameraOnCableAxis() {
+  Params params;
+  params.t_BC_B_m = Eigen::Vector3d(0.0, 0.0, -0.05);
+  return params;
+}
+
 std::shared_ptr<Reference> HoverRef(const Params& params) {
   return MakeHoverReference(params, Eigen::Vector3d(0, 0, 1.0));
 }
@@ -179,7 +187,7 @@ TEST(OcpTest, TermJacobiansMatchFiniteDifferences) {
 }
 
 TEST(OcpTest, CameraTransformOfHangingPayload) {
-  const Params params;
+  const Params params = CameraOnCableAxis();
   const Ocp ocp = BuildOcp(params, *HoverRef(params), 0.0, CableMode::kTaut, 1.0);
   const StateVector x = HybridModel(params).HoverState(Eigen::Vector3d(0, 0, 1.5));
   // payload l below the body, camera 0.05 m below the body looking down: p_C = (0, 0, l - 0.05)
@@ -198,7 +206,7 @@ TEST(OcpTest, CameraTransformOfHangingPayload) {
 // (zero quaternion Jacobian), the slack weight applies in slack mode, and the residual is
 // sqrt(pw Q_cam) times the level-camera offset.
 TEST(OcpTest, PerceptionCostHasNoAttitudeLever) {
-  const Params params;
+  const Params params = CameraOnCableAxis();
   const Ocp ocp = BuildOcp(params, *HoverRef(params), 0.0, CableMode::kSlack, 2.0);
   SystemState s;
   s.FromVector(HybridModel(params).HoverState(Eigen::Vector3d(0, 0, 1.5)));
@@ -220,7 +228,7 @@ TEST(OcpTest, PerceptionCostHasNoAttitudeLever) {
 }
 
 TEST(OcpTest, SlackCameraCostHasADeadZone) {
-  const Params params;
+  const Params params = CameraOnCableAxis();
   Ocp ocp = BuildOcp(params, *HoverRef(params), 0.0, CableMode::kSlack, 1.0);
   SystemState s;
   s.FromVector(HybridModel(params).HoverState(Eigen::Vector3d(0, 0, 1.5)));

@@ -5,6 +5,8 @@
 #include <opencv2/imgproc.hpp>
 #include <vector>
 
+#include "hpa/models/camera_model.h"
+
 namespace hpa {
 namespace {
 
@@ -30,7 +32,10 @@ double VisibleOutlineFraction(const Params& params, const Eigen::Matrix2Xd& outl
   if (outline_px.cols() == 0) return 0.0;
   int inside = 0;
   for (int i = 0; i < outline_px.cols(); ++i) {
-    const double u = outline_px(0, i), v = outline_px(1, i);
+    if (outline_px(0, i) < -1e8) continue;  // behind the camera
+    // where the lens puts the ideal outline point in the real image
+    const Eigen::Vector2d real_px = DistortPixel(params, outline_px.col(i));
+    const double u = real_px.x(), v = real_px.y();
     if (u >= 1.0 && u <= params.camera_width_px - 1.0 && v >= 1.0 &&
         v <= params.camera_height_px - 1.0) {
       ++inside;
@@ -86,7 +91,11 @@ PayloadDetection PayloadDetector::Detect(const cv::Mat& bgr, double time_s) cons
   }
 
   // red mask: saturated pixels in the two red hue bands
-  cv::Mat hsv, mask_low, mask_high, mask;
+  // frame-sized buffers are members: reused from call to call, no per-frame allocation
+  cv::Mat& hsv = buffers_.hsv;
+  cv::Mat& mask_low = buffers_.mask_low;
+  cv::Mat& mask_high = buffers_.mask_high;
+  cv::Mat& mask = buffers_.mask;
   cv::cvtColor(bgr, hsv, cv::COLOR_BGR2HSV);
   cv::inRange(hsv, cv::Scalar(0, config_.saturation_min, config_.value_min),
               cv::Scalar(config_.hue_max_low, 255, 255), mask_low);
@@ -112,14 +121,16 @@ PayloadDetection PayloadDetector::Detect(const cv::Mat& bgr, double time_s) cons
 
   // occluders: very dark pixels (the cable seen from a camera next to it is a black wedge);
   // where they touch the blob, its outline is not the sphere's and must not be fitted
-  cv::Mat occluder;
+  cv::Mat& occluder = buffers_.occluder;
   cv::inRange(hsv, cv::Scalar(0, 0, 0), cv::Scalar(180, 255, config_.occluder_value_max), occluder);
   const cv::Rect image_rect(0, 0, width, height);
   const int grow_px = config_.occluder_grow_px;
   const cv::Rect blob_rect = cv::boundingRect(contour);
   const cv::Rect near_blob(blob_rect.x - grow_px, blob_rect.y - grow_px,
                            blob_rect.width + 2 * grow_px, blob_rect.height + 2 * grow_px);
-  cv::Mat occluded_near = cv::Mat::zeros(height, width, CV_8U);
+  cv::Mat& occluded_near = buffers_.occluded_near;
+  occluded_near.create(height, width, CV_8U);
+  occluded_near.setTo(0);
   cv::dilate(occluder(near_blob & image_rect), occluded_near(near_blob & image_rect),
              cv::Mat::ones(2 * grow_px + 1, 2 * grow_px + 1, CV_8U));
 
@@ -136,6 +147,7 @@ PayloadDetection PayloadDetector::Detect(const cv::Mat& bgr, double time_s) cons
       outline.size() < static_cast<size_t>(config_.min_fit_points)) {
     return NotFound(time_s, "partly out of view");
   }
+  // the fit in the real (distorted) image: checks of the blob against the fitted ellipse
   const cv::RotatedRect fit = cv::fitEllipseDirect(outline);
   const double semi_major_px =
       0.5 * std::max(fit.size.width, fit.size.height) + config_.edge_bias_px;
@@ -192,23 +204,53 @@ PayloadDetection PayloadDetector::Detect(const cv::Mat& bgr, double time_s) cons
       static_cast<double>(cv::countNonZero(both)) / std::max(1, cv::countNonZero(either));
   if (iou < config_.min_iou) return NotFound(time_s, "poor ellipse fit");
 
+  // with a distorted lens, the outline is undistorted to the pinhole image (where a sphere's
+  // image is an exact ellipse) and fitted again there
+  Eigen::Vector2d ideal_centre_px = centre_px;
+  double ideal_semi_major_px = semi_major_px, ideal_semi_minor_px = semi_minor_px;
+  Eigen::Vector2d ideal_major_axis = major_axis;
+  if (!params_.camera_distortion.isZero()) {
+    undistorted_.clear();
+    for (const cv::Point2f& p : outline) {
+      // contour points are pixel indices: continuous coordinates are +0.5
+      const Eigen::Vector2d q = UndistortPixel(params_, Eigen::Vector2d(p.x + 0.5, p.y + 0.5));
+      undistorted_.emplace_back(static_cast<float>(q.x() - 0.5), static_cast<float>(q.y() - 0.5));
+    }
+    const cv::RotatedRect ideal = cv::fitEllipseDirect(undistorted_);
+    // the edge bias is a pixel-scale effect: scaled by the lens's local magnification
+    const double magnification =
+        std::max(ideal.size.width, ideal.size.height) / std::max(fit.size.width, fit.size.height);
+    ideal_semi_major_px =
+        0.5 * std::max(ideal.size.width, ideal.size.height) + config_.edge_bias_px * magnification;
+    ideal_semi_minor_px =
+        0.5 * std::min(ideal.size.width, ideal.size.height) + config_.edge_bias_px * magnification;
+    ideal_centre_px = Eigen::Vector2d(ideal.center.x + 0.5, ideal.center.y + 0.5);
+    const double a_rad = ideal.angle * M_PI / 180.0;
+    const Eigen::Vector2d w_axis(std::cos(a_rad), std::sin(a_rad));
+    ideal_major_axis =
+        ideal.size.width >= ideal.size.height ? w_axis : Eigen::Vector2d(-w_axis.y(), w_axis.x());
+    if (!ideal_centre_px.allFinite() || !std::isfinite(ideal_semi_major_px)) {
+      return NotFound(time_s, "poor ellipse fit");
+    }
+  }
+
   // major axis of a sphere's image lies on the line through the principal point
   const Eigen::Vector2d principal_px(0.5 * width, 0.5 * height);
-  const Eigen::Vector2d radial = centre_px - principal_px;
+  const Eigen::Vector2d radial = ideal_centre_px - principal_px;
   const Eigen::Vector2d axis = radial.norm() > config_.min_radial_offset_px
                                    ? Eigen::Vector2d(radial.normalized())
-                                   : major_axis;
-  const Eigen::Vector3d p_CL_C =
-      SphereCentreFromMajorAxis(params_, centre_px + semi_major_px * axis,
-                                centre_px - semi_major_px * axis, params_.payload_radius_m);
+                                   : ideal_major_axis;
+  const Eigen::Vector3d p_CL_C = SphereCentreFromMajorAxis(
+      params_, ideal_centre_px + ideal_semi_major_px * axis,
+      ideal_centre_px - ideal_semi_major_px * axis, params_.payload_radius_m);
   if (!p_CL_C.allFinite()) return NotFound(time_s, "poor ellipse fit");
 
   PayloadDetection detection;
   detection.time_s = time_s;
   detection.found = true;
   detection.p_CL_C = p_CL_C;
-  detection.centre_px = centre_px;
-  detection.radius_px = semi_minor_px;
+  detection.centre_px = ideal_centre_px;
+  detection.radius_px = ideal_semi_minor_px;
   return detection;
 }
 

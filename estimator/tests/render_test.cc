@@ -14,10 +14,10 @@
 #include <string>
 #include <vector>
 
-#include "hpa/sim/analytic_camera.h"
 #include "hpa/estimator/payload_detector.h"
 #include "hpa/models/camera_model.h"
 #include "hpa/models/params.h"
+#include "hpa/sim/analytic_camera.h"
 #include "hpa/sim/world.h"
 #include "models/tests/temp_dir.h"
 
@@ -64,6 +64,11 @@ class RenderedDetectorTest : public ::testing::Test {
   void SetUp() override {
     sim::WorldConfig config;
     config.params = LoadParams(DefaultParamsPath());
+    // the flight profile's camera: lens distortion, PSF, the cable in view, shot and read noise,
+    // and motion blur of a payload swinging at 0.5 m/s across the view
+    config.profile.camera.noise = true;
+    config.profile.camera.analog_gain = 4.0;
+    config.profile.camera.exposure_s = 0.005;
     params_ = config.params;
     world_ = std::make_unique<sim::World>(config);
   }
@@ -76,6 +81,7 @@ class RenderedDetectorTest : public ::testing::Test {
     s.q_WB = q_WB;
     const Eigen::Matrix3d R_WB = q_WB.toRotationMatrix();
     s.p_WL_W = s.p_WQ_W + R_WB * (params_.t_BC_B_m + params_.R_BC * p_CL_C);
+    s.v_WL_W = Eigen::Vector3d(0.3, 0.4, 0.0);
     world_->SetState(s.ToVector(), InputVector::Constant(params_.HoverMotorSpeedRadps()));
     *truth = world_->GetTruth().state;
     return world_->RenderPayloadCamera();
@@ -130,8 +136,8 @@ TEST_F(RenderedDetectorTest, ErrorStatisticsByRegion) {
                       1e3 * d.p_CL_C.y(), 1e3 * d.p_CL_C.z(), d.reason.c_str());
         }
         if (!d.found) {
+          // fully inside the image but lost: the cable near the lens covers the ball
           if (visible >= 1.0) ++lost_visible;
-          EXPECT_LT(visible, 1.0) << d.reason << " at " << true_C.transpose();
           continue;
         }
         // region by where the exact ellipse lies
@@ -177,22 +183,31 @@ TEST_F(RenderedDetectorTest, ErrorStatisticsByRegion) {
   }
   std::printf("fully visible: centre error %.3f +- %.3f px, semi-major error %.3f +- %.3f px\n",
               MeanOf(all_centre), StdOf(all_centre), MeanOf(all_axis), StdOf(all_axis));
-  EXPECT_EQ(lost_visible, 0);
+  // detection rate over fully visible frames: measured 82 of 94 (the 12 lost are covered by the
+  // cable); at least 0.80 (twice the measured loss fails)
+  int fully_visible_found = 0;
+  for (const char* name : {"centre", "off-centre", "near edge"}) {
+    fully_visible_found += static_cast<int>(regions[name].errors.size());
+  }
+  const double detection_rate =
+      static_cast<double>(fully_visible_found) / (fully_visible_found + lost_visible);
+  std::printf("detection rate, fully visible: %.3f (%d lost)\n", detection_rate, lost_visible);
+  EXPECT_GE(detection_rate, 0.80);
   EXPECT_EQ(missed, must_miss);
   ASSERT_TRUE(regions.count("centre") && regions.count("off-centre") && regions.count("near edge"));
-  // bounds ~3x above the measured maxima (0.72 mm lateral, 1.08 mm along z over the fully
-  // visible regions; 1.18 mm partly out of view), so a regression of the fit, of the occluder
-  // handling or of the geometry fails
+  // bounds 2x above the measured maxima (1.81 mm lateral, 4.35 mm along z over the fully
+  // visible regions; 2.50 mm partly out of view), so a regression of the fit, of the occluder
+  // handling, of the undistortion or of the geometry fails
   for (const char* name : {"centre", "off-centre", "near edge"}) {
     const Eigen::Vector3d mx = regions[name].Max();
-    EXPECT_LT(mx.head<2>().maxCoeff(), 0.002) << name;
-    EXPECT_LT(mx.z(), 0.003) << name;
+    EXPECT_LT(mx.head<2>().maxCoeff(), 0.0036) << name;
+    EXPECT_LT(mx.z(), 0.0087) << name;
   }
   if (regions.count("partly out")) {
-    EXPECT_LT(regions["partly out"].Max().maxCoeff(), 0.004);
+    EXPECT_LT(regions["partly out"].Max().maxCoeff(), 0.005);
   }
-  // the analytic camera's noise model is this measurement (measured 0.075 px centre, 0.073 px
-  // semi-major, bias -0.03 px): it must stay within 0.03 px of it
+  // the analytic camera's noise model is this measurement (detection_noise.h): it must stay
+  // within 0.03 px of it
   const CameraNoiseModel model = MeasuredDetectorNoise();
   EXPECT_NEAR(StdOf(all_centre), model.centre_std_px, 0.03);
   EXPECT_NEAR(StdOf(all_axis), model.semi_major_std_px, 0.03);

@@ -20,4 +20,43 @@ bool InsideImage(const Params& params, const Eigen::Vector3d& p_C) {
          px->y() < params.camera_height_px;
 }
 
+Eigen::Vector2d DistortNormalised(const Eigen::Vector4d& k, const Eigen::Vector2d& x_n) {
+  const double x = x_n.x(), y = x_n.y();
+  const double r2 = x * x + y * y;
+  const double radial = 1.0 + k[0] * r2 + k[1] * r2 * r2;
+  return Eigen::Vector2d(x * radial + 2.0 * k[2] * x * y + k[3] * (r2 + 2.0 * x * x),
+                         y * radial + k[2] * (r2 + 2.0 * y * y) + 2.0 * k[3] * x * y);
+}
+
+Eigen::Vector2d UndistortNormalised(const Eigen::Vector4d& k, const Eigen::Vector2d& x_d) {
+  if (k.isZero()) return x_d;
+  // Newton on F(x) = Distort(x) - x_d with a numeric Jacobian: converges in a few steps over
+  // the whole image (plain fixed-point iteration diverges at the corners of a wide lens)
+  Eigen::Vector2d x = x_d;
+  for (int i = 0; i < 30; ++i) {
+    const Eigen::Vector2d f = DistortNormalised(k, x) - x_d;
+    if (f.norm() < 1e-12) break;
+    constexpr double h = 1e-7;
+    Eigen::Matrix2d J;
+    J.col(0) = (DistortNormalised(k, x + Eigen::Vector2d(h, 0.0)) - x_d - f) / h;
+    J.col(1) = (DistortNormalised(k, x + Eigen::Vector2d(0.0, h)) - x_d - f) / h;
+    x -= J.partialPivLu().solve(f);
+  }
+  return x;
+}
+
+Eigen::Vector2d UndistortPixel(const Params& params, const Eigen::Vector2d& distorted_px) {
+  if (params.camera_distortion.isZero()) return distorted_px;
+  const double f_px = params.CameraFocalPx();
+  const Eigen::Vector2d c_px(0.5 * params.camera_width_px, 0.5 * params.camera_height_px);
+  return c_px + f_px * UndistortNormalised(params.camera_distortion, (distorted_px - c_px) / f_px);
+}
+
+Eigen::Vector2d DistortPixel(const Params& params, const Eigen::Vector2d& ideal_px) {
+  if (params.camera_distortion.isZero()) return ideal_px;
+  const double f_px = params.CameraFocalPx();
+  const Eigen::Vector2d c_px(0.5 * params.camera_width_px, 0.5 * params.camera_height_px);
+  return c_px + f_px * DistortNormalised(params.camera_distortion, (ideal_px - c_px) / f_px);
+}
+
 }  // namespace hpa

@@ -56,6 +56,9 @@ Params LoadParams(const std::string& path) {
   p.camera_height_px = static_cast<int>(cam.Integer("height_px", 16, 8192));
   p.camera_fovy_deg = cam.Number("fovy_deg", 1.0, 170.0);
   p.t_BC_B_m = cam.Vector("t_BC_B_m", 3, -5.0, 5.0);
+  if (cam.Has("distortion_k1_k2_p1_p2")) {
+    p.camera_distortion = cam.Vector("distortion_k1_k2_p1_p2", 4, -2.0, 2.0);
+  }
   const YAML::Node r = cam.Node("R_BC");
   const std::string r_expect = "expected a 3x3 rotation matrix as a list of 3 rows";
   if (!r.IsSequence() || r.size() != 3) cam.Fail("R_BC", r_expect);

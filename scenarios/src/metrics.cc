@@ -148,6 +148,7 @@ void ComputeMetrics(const MetricsInputs& in, Metrics* m) {
   m->mpc_solve_ms = ComputeQuantiles(solve_ms);
   m->detector_ms = ComputeQuantiles(in.detector_ms);
   m->render_ms = ComputeQuantiles(in.render_ms);
+  m->image_model_ms = ComputeQuantiles(in.image_model_ms);
 }
 
 void CheckExpectations(const ExpectSpec& e, Metrics* m) {
@@ -218,6 +219,7 @@ std::string MetricsToJson(const Metrics& m) {
                    {"payload_ground", m.contacts_payload_ground},
                    {"quad_ground", m.contacts_quad_ground}};
   o["render_ms"] = quantiles(m.render_ms);
+  o["image_model_ms"] = quantiles(m.image_model_ms);
   o["detector_ms"] = quantiles(m.detector_ms);
   if (!m.estimator.empty()) {
     // the variant, then its health counts (integers as integers) and filter states

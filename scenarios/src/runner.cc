@@ -48,6 +48,7 @@ class LogRecorder final : public RunRecorder {
     inputs_->payload_in_fov_per_frame.push_back(frame.payload_in_image);
     if (frame.frame != nullptr) {
       inputs_->render_ms.push_back(frame.render_ms);
+      inputs_->image_model_ms.push_back(frame.image_model_ms);
       inputs_->detector_ms.push_back(frame.detector_ms);
     }
     if (frame.detected) ++inputs_->detections;
@@ -189,6 +190,7 @@ RunResult RunScenario(const Scenario& scenario, const Params& params, const RunO
   int last_progress_pct = -1;
 
   long tick = 0;
+  cv::Mat rendered;  // the payload camera's frame buffer, reused frame to frame
   try {
     for (; tick <= end_tick; ++tick, clock.Advance()) {
       const double t = tick * sim::World::kPhysicsDt_s;
@@ -219,16 +221,15 @@ RunResult RunScenario(const Scenario& scenario, const Params& params, const RunO
         CameraFrameRecord frame;
         frame.time_s = t;
         frame.payload_in_image = InsideImage(params, p_CL_C);
-        cv::Mat rendered;
         if (!ground_truth) {
           PayloadDetection detection;
           if (render_camera) {
-            const auto r0 = Clock::now();
-            rendered = world.RenderPayloadCamera();
+            world.RenderPayloadCamera(&rendered);
             const auto r1 = Clock::now();
             detection = detector.Detect(rendered, t);
             frame.frame = &rendered;
-            frame.render_ms = Ms(r0, r1);
+            frame.render_ms = world.last_camera_timing().render_ms;
+            frame.image_model_ms = world.last_camera_timing().image_model_ms;
             frame.detector_ms = Ms(r1, Clock::now());
           } else {
             detection = analytic_camera.Measure(p_CL_C, t, camera_rng);

@@ -120,6 +120,23 @@ void ReadWorldProfileSections(const YamlMap& map, sim::WorldProfile* profile) {
         m.Number("accel_noise_density_mps2_rthz", 0.0, 1.0, i.accel_noise_density_mps2_rthz);
     m.RejectUnknownKeys();
   }
+  if (map.Has("camera")) {
+    const YamlMap m = map.Map("camera");
+    sim::CameraImageProfile& c = profile->camera;
+    c.psf_sigma_px = m.Number("psf_sigma_px", 0.0, 5.0, c.psf_sigma_px);
+    c.exposure_s = m.Number("exposure_s", 0.0, 0.03, c.exposure_s);
+    c.motion_blur_subframes =
+        static_cast<int>(m.Integer("motion_blur_subframes", 0, 64, c.motion_blur_subframes));
+    if (c.motion_blur_subframes == 1) {
+      m.Fail("motion_blur_subframes", "0 (fast approximation) or at least 2 sub-frames");
+    }
+    c.noise = m.Bool("noise", c.noise);
+    c.full_well_e = m.Number("full_well_e", 100.0, 1e6, c.full_well_e);
+    c.read_noise_e = m.Number("read_noise_e", 0.0, 100.0, c.read_noise_e);
+    c.analog_gain = m.Number("analog_gain", 1.0, 64.0, c.analog_gain);
+    c.draw_cable = m.Bool("draw_cable", c.draw_cable);
+    m.RejectUnknownKeys();
+  }
 }
 
 sim::WorldProfile LoadWorldProfile(const std::string& name) {

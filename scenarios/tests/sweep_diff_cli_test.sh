@@ -21,8 +21,8 @@ echo "== the deliberate regression is detected"
   || fail "lower perception weight not found worse on payload_in_fov_fraction: $(cat "$out/regression.log")"
 grep -q "controller.perception_weight: 1.0 (A) vs 0.3 (B)" "$out/regression.log" \
   || fail "sweep-diff does not name the setting that differs"
-python3 -c "import json,sys; d=json.load(open(sys.argv[1])); assert d['runs_paired'] == 10, d['runs_paired']" \
-  "$out/regression/diff.json" || fail "expected 10 pairs"
+python3 -c "import json,sys; d=json.load(open(sys.argv[1])); assert d['runs_paired'] == 20, d['runs_paired']" \
+  "$out/regression/diff.json" || fail "expected 20 pairs"
 for f in diff.md diff.json diff.png; do [ -s "$out/regression/$f" ] || fail "no $f written"; done
 
 echo "== a sweep against itself: no difference anywhere"
@@ -30,7 +30,7 @@ echo "== a sweep against itself: no difference anywhere"
 python3 - "$out/same/diff.json" <<'PY' || fail "self comparison is not 'same' everywhere"
 import json, sys
 d = json.load(open(sys.argv[1]))
-assert d["runs_paired"] == 20, d["runs_paired"]
+assert d["runs_paired"] == 40, d["runs_paired"]
 bad = {k: m["verdict"] for k, m in d["metrics"].items() if m["verdict"] != "same" or m["difference"] not in (0, None)}
 assert not bad, bad
 assert "crash_rate" in d["metrics"]
@@ -39,7 +39,7 @@ PY
 echo "== sweeps that do not pair are refused"
 "$hpa" sweep-diff "$out/pw" "$out/pw" --a-where controller.perception_weight=1.0 --out "$out/unpaired" \
   > "$out/unpaired.log" 2>&1
-[ $? -eq 2 ] || fail "10 runs against 20 did not exit 2"
+[ $? -eq 2 ] || fail "20 runs against 40 did not exit 2"
 grep -q "no partner\|do not pair\|same draw, seed" "$out/unpaired.log" || fail "no pairing message: $(cat "$out/unpaired.log")"
 
 [ $failures -eq 0 ] && echo "sweep-diff: all checks passed"

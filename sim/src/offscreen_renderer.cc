@@ -1,5 +1,8 @@
 #include "offscreen_renderer.h"
 
+#include <GL/gl.h>
+
+#include <cstring>
 #include <opencv2/imgproc.hpp>
 #include <stdexcept>
 #include <string>
@@ -15,8 +18,14 @@ struct OffscreenRenderer::Gl {
   mjrContext render_context;
   mjvOption option;
   mjvCamera camera;
-  std::vector<unsigned char> rgb;  // mjr_readPixels output, bottom row first
+  std::vector<unsigned char> rgb;  // mjr_readPixels output, bottom row first (multisampled only)
+  bool pack_invert = false;        // GL_MESA_pack_invert: glReadPixels writes the top row first
 };
+
+namespace {
+// GL_MESA_pack_invert's pixel-store name (GL/glext.h is not needed for one constant).
+constexpr GLenum kGlPackInvertMesa = 0x8758;
+}  // namespace
 
 OffscreenRenderer::OffscreenRenderer(const mjModel* model, GlBackend backend)
     : model_(model), backend_(backend) {}
@@ -40,6 +49,13 @@ std::string OffscreenRenderer::GlDescription() {
 
 cv::Mat OffscreenRenderer::Render(mjData* data, int camera_id, int width_px, int height_px,
                                   bool show_tendons) {
+  cv::Mat bgr;
+  Render(data, camera_id, width_px, height_px, show_tendons, &bgr);
+  return bgr;
+}
+
+void OffscreenRenderer::Render(mjData* data, int camera_id, int width_px, int height_px,
+                               bool show_tendons, cv::Mat* bgr) {
   const int max_w = model_->vis.global.offwidth;
   const int max_h = model_->vis.global.offheight;
   if (width_px <= 0 || height_px <= 0 || width_px > max_w || height_px > max_h) {
@@ -73,7 +89,16 @@ cv::Mat OffscreenRenderer::Render(mjData* data, int camera_id, int width_px, int
     gl->scene.flags[mjRND_SHADOW] = 0;
     gl->scene.flags[mjRND_REFLECTION] = 0;
     gl->scene.flags[mjRND_SKYBOX] = 0;
-    gl->rgb.resize(static_cast<size_t>(max_w) * max_h * 3);
+    // direct read-out calls libOSMesa's GL entry points: only under OSMesa (under EGL the GL
+    // functions belong to whichever driver owns the context; MuJoCo's own read-out is used)
+    if (backend_ == GlBackend::kOsMesa) {
+      const char* extensions = reinterpret_cast<const char*>(glGetString(GL_EXTENSIONS));
+      gl->pack_invert =
+          extensions != nullptr && std::strstr(extensions, "GL_MESA_pack_invert") != nullptr;
+    }
+    if (gl->render_context.offSamples > 0 || !gl->pack_invert) {
+      gl->rgb.resize(static_cast<size_t>(max_w) * max_h * 3);
+    }
     gl_ = std::move(gl);
   }
   gl_->context->MakeCurrent();  // another renderer may have made its own current since
@@ -85,14 +110,23 @@ cv::Mat OffscreenRenderer::Render(mjData* data, int camera_id, int width_px, int
   mjv_updateScene(model_, data, &gl_->option, nullptr, &gl_->camera, mjCAT_ALL, &gl_->scene);
   const mjrRect viewport = {0, 0, width_px, height_px};
   mjr_render(viewport, &gl_->scene, &gl_->render_context);
-  mjr_readPixels(gl_->rgb.data(), nullptr, viewport, &gl_->render_context);
+  bgr->create(height_px, width_px, CV_8UC3);  // no allocation when the size is unchanged
 
-  // GL rows are bottom-up and RGB; OpenCV wants top-down BGR
+  if (gl_->render_context.offSamples == 0 && gl_->pack_invert && bgr->isContinuous()) {
+    // single-sample buffer: read it straight into the image, BGR, top row first
+    mjr_setBuffer(mjFB_OFFSCREEN, &gl_->render_context);  // offscreen FBO bound for reading
+    glPixelStorei(GL_PACK_ALIGNMENT, 1);
+    glPixelStorei(kGlPackInvertMesa, GL_TRUE);
+    glReadPixels(0, 0, width_px, height_px, GL_BGR, GL_UNSIGNED_BYTE, bgr->data);
+    glPixelStorei(kGlPackInvertMesa, GL_FALSE);
+    return;
+  }
+
+  // multisampled buffer (MuJoCo resolves it in mjr_readPixels): rows bottom-up, RGB
+  mjr_readPixels(gl_->rgb.data(), nullptr, viewport, &gl_->render_context);
   const cv::Mat rgb_bottom_up(height_px, width_px, CV_8UC3, gl_->rgb.data());
-  cv::Mat flipped, bgr;
-  cv::flip(rgb_bottom_up, flipped, 0);
-  cv::cvtColor(flipped, bgr, cv::COLOR_RGB2BGR);
-  return bgr;
+  cv::flip(rgb_bottom_up, flip_buffer_, 0);
+  cv::cvtColor(flip_buffer_, *bgr, cv::COLOR_RGB2BGR);
 }
 
 }  // namespace hpa::sim

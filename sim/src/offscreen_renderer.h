@@ -30,6 +30,11 @@ class OffscreenRenderer {
   cv::Mat Render(mjData* data, int camera_id, int width_px, int height_px,
                  bool show_tendons = true);
 
+  /// As Render above, into `bgr` (reallocated only when its size or type differs): with a
+  /// single-sample offscreen buffer the pixels are read straight into it, no copy.
+  void Render(mjData* data, int camera_id, int width_px, int height_px, bool show_tendons,
+              cv::Mat* bgr);
+
   /// True once the GL context exists (after the first Render).
   bool initialized() const;
 
@@ -41,6 +46,7 @@ class OffscreenRenderer {
   const mjModel* model_;
   GlBackend backend_;
   std::unique_ptr<Gl> gl_;
+  cv::Mat flip_buffer_;  // multisampled path only: the bottom-up frame turned top-down
 };
 
 }  // namespace hpa::sim

@@ -3,14 +3,17 @@
 #include <mujoco/mujoco.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <fstream>
 #include <mutex>
+#include <opencv2/imgproc.hpp>
 #include <stdexcept>
 #include <string>
 
 #include "hpa/models/input_error.h"
 #include "hpa/models/rotor_model.h"
+#include "hpa/sim/camera_image_model.h"
 #include "offscreen_renderer.h"
 
 namespace hpa::sim {
@@ -177,6 +180,7 @@ World::World(const WorldConfig& config)
 
 World::~World() {
   renderer_.reset();
+  if (subframe_data_ != nullptr) mj_deleteData(subframe_data_);
   if (data_ != nullptr) mj_deleteData(data_);
   if (model_ != nullptr) mj_deleteModel(model_);
 }
@@ -360,6 +364,7 @@ void World::Reset(const SystemState& initial) {
   gripper_moving_ = false;
   model_->eq_active[ids_.gripper_weld] = 0;
   rng_.seed(config_.seed);
+  payload_frame_index_ = 0;
   imu_.ResetBias();
   vio_.SetDrift(config_.profile.vio, DerivedSeed(config_.seed, 0x76696F));
   imu_queue_.clear();
@@ -706,12 +711,99 @@ void World::CheckCrash() {
 }
 
 cv::Mat World::RenderPayloadCamera() {
-  // The cable leaves the body origin 5 cm above the lens, so drawn it would pass within
-  // millimetres of the camera and fill a wedge of the image over the payload; a real payload
-  // camera sits beside the attachment point, where the cable is a thin line. Not drawn here.
-  return renderer_->Render(data_, ids_.payload_camera, model_->vis.global.offwidth,
-                           model_->vis.global.offheight,
-                           /*show_tendons=*/false);
+  cv::Mat bgr;
+  RenderPayloadCamera(&bgr);
+  return bgr;
+}
+
+Eigen::Vector2d World::PayloadImageMotionPx(cv::Rect* region) const {
+  const Params& p = world_params_;
+  const double f_px =
+      camera_image_ != nullptr ? camera_image_->render_focal_px() : p.CameraFocalPx();
+  const double exposure_s = config_.profile.camera.exposure_s;
+  // camera pose and velocity from the quadrotor's
+  const double* q = data_->xquat + 4 * ids_.quad_body;
+  const Eigen::Matrix3d R_WB =
+      Eigen::Quaterniond(q[0], q[1], q[2], q[3]).normalized().toRotationMatrix();
+  const Eigen::Map<const Eigen::Vector3d> p_WQ_W(data_->xpos + 3 * ids_.quad_body);
+  const Eigen::Map<const Eigen::Vector3d> p_WL_W(data_->xpos + 3 * ids_.payload_body);
+  const double* vq = data_->qvel + ids_.quad_jnt_dof;  // linear (world), angular (body)
+  const double* vl = data_->qvel + ids_.payload_jnt_dof;
+  const Eigen::Vector3d v_WQ_W(vq[0], vq[1], vq[2]), w_B(vq[3], vq[4], vq[5]);
+  const Eigen::Vector3d v_WL_W(vl[0], vl[1], vl[2]);
+  const Eigen::Matrix3d R_WC = R_WB * p.R_BC;
+  const Eigen::Vector3d p_WC_W = p_WQ_W + R_WB * p.t_BC_B_m;
+  const Eigen::Vector3d v_WC_W = v_WQ_W + R_WB * w_B.cross(p.t_BC_B_m);
+  const Eigen::Vector3d w_C = p.R_BC.transpose() * w_B;
+  const Eigen::Vector3d p_CL_C = R_WC.transpose() * (p_WL_W - p_WC_W);
+  // d/dt of p_CL_C: relative velocity seen from the rotating camera
+  const Eigen::Vector3d v_CL_C = R_WC.transpose() * (v_WL_W - v_WC_W) - w_C.cross(p_CL_C);
+  const double z = p_CL_C.z();
+  const double cx = 0.5 * p.camera_width_px, cy = 0.5 * p.camera_height_px;
+  if (region != nullptr) *region = cv::Rect();
+  if (!(z > p.payload_radius_m)) return Eigen::Vector2d::Zero();
+  const Eigen::Vector2d rate_px(f_px * (v_CL_C.x() * z - p_CL_C.x() * v_CL_C.z()) / (z * z),
+                                f_px * (v_CL_C.y() * z - p_CL_C.y() * v_CL_C.z()) / (z * z));
+  if (region != nullptr) {
+    const double r_px =
+        f_px * p.payload_radius_m / std::sqrt(z * z - std::pow(p.payload_radius_m, 2));
+    const double u = cx + f_px * p_CL_C.x() / z, v = cy + f_px * p_CL_C.y() / z;
+    // a sphere off-axis images as an ellipse up to 1 / cos^2 of the ray angle wider: 2 r covers
+    const int half = static_cast<int>(std::ceil(2.0 * r_px)) + 2;
+    *region = cv::Rect(static_cast<int>(u) - half, static_cast<int>(v) - half, 2 * half, 2 * half) &
+              cv::Rect(0, 0, p.camera_width_px, p.camera_height_px);
+  }
+  return rate_px * exposure_s;
+}
+
+void World::RenderPayloadCamera(cv::Mat* bgr) {
+  using Clock = std::chrono::steady_clock;
+  const auto ms = [](Clock::time_point a, Clock::time_point b) {
+    return std::chrono::duration<double, std::milli>(b - a).count();
+  };
+  const CameraImageProfile& profile = config_.profile.camera;
+  if (camera_image_ == nullptr) {
+    camera_image_ = std::make_unique<CameraImageModel>(
+        world_params_, profile, DerivedSeed(config_.seed, 0x63616D657261ULL));
+    // the render is a pinhole image wide enough to cover the distorted sensor
+    model_->cam_fovy[ids_.payload_camera] = camera_image_->render_fovy_deg();
+  }
+  const int w = model_->vis.global.offwidth, h = model_->vis.global.offheight;
+  const uint64_t frame = payload_frame_index_++;
+  const auto t0 = Clock::now();
+  double render_ms = 0.0;
+  if (profile.exposure_s > 0.0 && profile.motion_blur_subframes >= 2) {
+    // reference motion blur: the average of renders at sub-frame times across the exposure,
+    // every body moved with its current velocity (the exposure is centred on now)
+    if (subframe_data_ == nullptr) subframe_data_ = mj_makeData(model_);
+    const int n = profile.motion_blur_subframes;
+    subframe_sum_.create(h, w, CV_32FC3);
+    subframe_sum_.setTo(cv::Scalar::all(0.0));
+    for (int i = 0; i < n; ++i) {
+      const double dt_s = ((i + 0.5) / n - 0.5) * profile.exposure_s;
+      mj_copyData(subframe_data_, model_, data_);
+      mj_integratePos(model_, subframe_data_->qpos, subframe_data_->qvel, dt_s);
+      mj_kinematics(model_, subframe_data_);
+      mj_comPos(model_, subframe_data_);
+      mj_camlight(model_, subframe_data_);
+      mj_tendon(model_, subframe_data_);
+      renderer_->Render(subframe_data_, ids_.payload_camera, w, h, profile.draw_cable, &subframe_);
+      cv::accumulate(subframe_, subframe_sum_);
+    }
+    subframe_sum_.convertTo(pinhole_, CV_8UC3, 1.0 / n);
+    const auto t1 = Clock::now();
+    render_ms = ms(t0, t1);
+    camera_image_->ApplyOptics(pinhole_, frame, bgr);
+  } else {
+    renderer_->Render(data_, ids_.payload_camera, w, h, profile.draw_cable, &pinhole_);
+    const auto t1 = Clock::now();
+    render_ms = ms(t0, t1);
+    cv::Rect region;
+    const Eigen::Vector2d blur_px = PayloadImageMotionPx(&region);
+    camera_image_->Apply(pinhole_, blur_px, region, frame, bgr);
+  }
+  camera_timing_.render_ms = render_ms;
+  camera_timing_.image_model_ms = ms(t0, Clock::now()) - render_ms;
 }
 
 cv::Mat World::RenderChaseCamera(int width_px, int height_px) {

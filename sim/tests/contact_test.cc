@@ -107,7 +107,8 @@ std::unique_ptr<World> ShootIntoRotor(bool contact, double* min_distance_m) {
 
 TEST(ContactTest, PayloadReachingARotorDiskIsARotorStrike) {
   double min_distance_m = 0;
-  const World& world = *ShootIntoRotor(true, &min_distance_m);
+  const std::unique_ptr<World> owned = ShootIntoRotor(true, &min_distance_m);
+  const World& world = *owned;
   EXPECT_TRUE(world.Crash().crashed);
   EXPECT_EQ(world.Crash().reason, "rotor_strike");
   EXPECT_EQ(world.contact_counts().payload_rotor, 1);
@@ -117,7 +118,8 @@ TEST(ContactTest, PayloadReachingARotorDiskIsARotorStrike) {
 
 TEST(ContactTest, IdealWorldLetsThePayloadPassThroughTheVehicle) {
   double min_distance_m = 0;
-  const World& world = *ShootIntoRotor(false, &min_distance_m);
+  const std::unique_ptr<World> owned = ShootIntoRotor(false, &min_distance_m);
+  const World& world = *owned;
   EXPECT_FALSE(world.Crash().crashed);
   EXPECT_EQ(world.contact_counts().payload_rotor, 0);
   EXPECT_LT(world.payload_quad_min_distance_m(), -0.01);

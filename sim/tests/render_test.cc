@@ -24,9 +24,10 @@ cv::Mat RedMask(const cv::Mat& bgr) {
   return low | high;
 }
 
-TEST(RenderTest, PayloadIsARedBlobAtTheImageCentre) {
+TEST(RenderTest, PayloadIsARedBlobWhereTheCameraModelPutsIt) {
   WorldConfig config;
   config.params = LoadParams(DefaultParamsPath());
+  config.profile.camera.draw_cable = false;  // geometry of the ball alone
   World world(config);  // default Reset: hovering at 1 m, payload hanging l below
   const Params& p = world.world_params();
   world.SetMotorSpeedCommand(InputVector::Constant(p.HoverMotorSpeedRadps()));
@@ -55,19 +56,25 @@ TEST(RenderTest, PayloadIsARedBlobAtTheImageCentre) {
   const double u = mo.m10 / mo.m00 + 0.5, v = mo.m01 / mo.m00 + 0.5;
   const double radius_px = std::sqrt(mo.m00 / M_PI);
 
-  // expected: straight below the camera, distance d = l - |t_BC_z| to the sphere's centre;
-  // a sphere's image is (nearly) a disc of radius f R / sqrt(d^2 - R^2)
-  const double d_m = p.cable_length_m + p.t_BC_B_m.z();
+  // expected: straight below the cable's attachment, the camera t_BC beside it; distance d to
+  // the sphere's centre; a sphere's image is (nearly) a disc of radius f R / sqrt(d^2 - R^2),
+  // centred where the camera model and the lens put it
+  SystemState hanging;
+  hanging.p_WQ_W = Eigen::Vector3d(0, 0, 1);
+  hanging.p_WL_W = Eigen::Vector3d(0, 0, 1 - p.cable_length_m);
+  const Eigen::Vector3d p_CL_C = PayloadInCamera_C(p, hanging);
+  const Eigen::Vector2d expected_px = DistortPixel(p, *ProjectToPixels(p, p_CL_C));
+  const double d_m = p_CL_C.norm();
   const double f_px = p.CameraFocalPx();
   const double r_m = p.payload_radius_m;
   const double expected_radius_px = f_px * r_m / std::sqrt(d_m * d_m - r_m * r_m);
   std::printf(
-      "[measured] blob centre (%.1f, %.1f) px (image centre (%.1f, %.1f)), radius %.2f px "
+      "[measured] blob centre (%.1f, %.1f) px (expected (%.1f, %.1f)), radius %.2f px "
       "(f R / d = %.2f px)\n",
-      u, v, 0.5 * frame.cols, 0.5 * frame.rows, radius_px, expected_radius_px);
-  // centre: measured exactly at the image centre -> 0.5 px (a one-pixel shift or flip fails)
-  EXPECT_NEAR(u, 0.5 * frame.cols, 0.5);
-  EXPECT_NEAR(v, 0.5 * frame.rows, 0.5);
+      u, v, expected_px.x(), expected_px.y(), radius_px, expected_radius_px);
+  // centre: 0.5 px (a one-pixel shift or flip fails)
+  EXPECT_NEAR(u, expected_px.x(), 0.5);
+  EXPECT_NEAR(v, expected_px.y(), 0.5);
   // radius: 5 % (the shaded rim darkens below the threshold); measured 41.2 vs 41.9 px (1.6 %)
   EXPECT_NEAR(radius_px, expected_radius_px, 0.05 * expected_radius_px);
   // nothing else in the frame is red
@@ -79,6 +86,7 @@ TEST(RenderTest, PayloadMovesInTheImageAsTheCameraModelSays) {
   // hpa::PayloadInCamera_C + ProjectToPixels (models/camera_model.h) put it
   WorldConfig config;
   config.params = LoadParams(DefaultParamsPath());
+  config.profile.camera.draw_cable = false;  // geometry of the ball alone
   World world(config);
   const Params& p = world.world_params();
   SystemState s;
@@ -94,8 +102,9 @@ TEST(RenderTest, PayloadMovesInTheImageAsTheCameraModelSays) {
   const cv::Moments mo = cv::moments(RedMask(frame), true);
   ASSERT_GT(mo.m00, 100);
   const double u = mo.m10 / mo.m00 + 0.5, v = mo.m01 / mo.m00 + 0.5;  // see the first test
-  const auto px = ProjectToPixels(p, PayloadInCamera_C(p, s));
-  ASSERT_TRUE(px.has_value());
+  const auto ideal_px = ProjectToPixels(p, PayloadInCamera_C(p, s));
+  ASSERT_TRUE(ideal_px.has_value());
+  const std::optional<Eigen::Vector2d> px = DistortPixel(p, *ideal_px);  // through the lens
   std::printf("[measured] offset blob (%.2f, %.2f) px, camera model (%.2f, %.2f) px\n", u, v,
               px->x(), px->y());
   // 3 px: off the axis a sphere images as an ellipse whose centroid lies slightly outward of the

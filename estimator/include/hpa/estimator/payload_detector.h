@@ -4,6 +4,7 @@
 
 #include <Eigen/Core>
 #include <opencv2/core.hpp>
+#include <vector>
 
 #include "hpa/models/params.h"
 #include "hpa/models/sensor_types.h"
@@ -29,8 +30,9 @@ struct PayloadDetectorConfig {
   double edge_bias_px = 0.5;          // contour runs through edge pixel centres: add to axes
 };
 
-/// Pixel-outline fraction of an outline (list of points in continuous pixel coordinates, origin
-/// at the top-left image corner) that lies inside the image with a 1 px margin.
+/// Fraction of an outline (ideal pinhole pixels, continuous coordinates, origin at the top-left
+/// image corner) that the lens (Params::camera_distortion) puts inside the real image with a
+/// 1 px margin.
 double VisibleOutlineFraction(const Params& params, const Eigen::Matrix2Xd& outline_px);
 
 /// Exact image outline of a sphere of radius_m centred at p_CL_C: n points on the tangent cone,
@@ -44,7 +46,9 @@ Eigen::Matrix2Xd SphereOutlinePx(const Params& params, const Eigen::Vector3d& p_
 Eigen::Vector3d SphereCentreFromMajorAxis(const Params& params, const Eigen::Vector2d& end1_px,
                                           const Eigen::Vector2d& end2_px, double radius_m);
 
-/// Red-sphere detector on 1280x720 BGR frames; stateless, deterministic.
+/// Red-sphere detector on 1280x720 BGR frames of a camera with the lens distortion of
+/// Params::camera_distortion; deterministic. The centre and radius it reports are in the ideal
+/// (undistorted, pinhole) image.
 class PayloadDetector {
  public:
   /// Uses the camera intrinsics (focal from fovy, principal point at the image centre) and the
@@ -53,6 +57,7 @@ class PayloadDetector {
 
   /// Detects the payload in one BGR frame captured at time_s. found=false with a reason ("no
   /// payload in view", "too small", "partly out of view", "poor ellipse fit") instead of a guess.
+  /// Not thread-safe: reuses its buffers from call to call.
   PayloadDetection Detect(const cv::Mat& bgr, double time_s) const;
 
   const PayloadDetectorConfig& config() const { return config_; }
@@ -60,6 +65,11 @@ class PayloadDetector {
  private:
   Params params_;
   PayloadDetectorConfig config_;
+  mutable std::vector<cv::Point2f> undistorted_;  // outline in the ideal image, reused
+  struct Buffers {                                // frame-sized working images, reused
+    cv::Mat hsv, mask_low, mask_high, mask, occluder, occluded_near;
+  };
+  mutable Buffers buffers_;
 };
 
 }  // namespace hpa

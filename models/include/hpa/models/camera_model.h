@@ -1,5 +1,6 @@
 #pragma once
-// The payload camera's geometry: body->camera transform and pinhole projection (no distortion).
+// The payload camera's geometry: body->camera transform, pinhole projection, and the lens's
+// radial-tangential distortion (Params::camera_distortion) between ideal and real pixels.
 
 #include <Eigen/Core>
 #include <optional>
@@ -19,5 +20,19 @@ std::optional<Eigen::Vector2d> ProjectToPixels(const Params& params, const Eigen
 
 /// True when the point is in front of the camera and projects inside the image.
 bool InsideImage(const Params& params, const Eigen::Vector3d& p_C);
+
+/// Distorted normalised coordinates of the ideal (pinhole) normalised coordinates x_n:
+/// x_d = x_n (1 + k1 r^2 + k2 r^4) + tangential(p1, p2), r = |x_n| (OpenCV's model).
+Eigen::Vector2d DistortNormalised(const Eigen::Vector4d& k1_k2_p1_p2, const Eigen::Vector2d& x_n);
+
+/// Ideal normalised coordinates whose distorted image is x_d (fixed-point iteration, as
+/// cv::undistortPoints; exact to < 1e-9 inside the lens's monotonic range).
+Eigen::Vector2d UndistortNormalised(const Eigen::Vector4d& k1_k2_p1_p2, const Eigen::Vector2d& x_d);
+
+/// Ideal (pinhole) pixel of a real, distorted pixel (continuous coordinates, origin top-left).
+Eigen::Vector2d UndistortPixel(const Params& params, const Eigen::Vector2d& distorted_px);
+
+/// Real (distorted) pixel of an ideal pinhole pixel (continuous coordinates, origin top-left).
+Eigen::Vector2d DistortPixel(const Params& params, const Eigen::Vector2d& ideal_px);
 
 }  // namespace hpa

@@ -30,7 +30,12 @@ struct Params {
   int camera_width_px = 1280;
   int camera_height_px = 720;
   double camera_fovy_deg = 75.0;
-  Eigen::Vector3d t_BC_B_m{0.0, 0.0, -0.05};                       // camera origin in body  (3)
+  Eigen::Vector3d t_BC_B_m{0.03, 0.0, -0.05};  // camera origin in body  (3)
+  // radial-tangential lens distortion (k1, k2, p1, p2) on normalised coordinates; zero: pinhole
+  // unaligned storage: a 16-byte-aligned member would change Params' alignment for every struct
+  // that embeds it
+  Eigen::Matrix<double, 4, 1, Eigen::DontAlign> camera_distortion =
+      Eigen::Matrix<double, 4, 1, Eigen::DontAlign>::Zero();       // (4)
   Eigen::Matrix3d R_BC = Eigen::Vector3d(1, -1, -1).asDiagonal();  // camera axes in body (3x3)
 
   int vio_width_px = 640;

@@ -63,7 +63,8 @@ struct Metrics {
   int mpc_failures = 0;  // updates with QP failure, non-finite or fallback (capped plans fly)
   double closed_loop_cost = 0.0;         // sum of the controller's plan costs
   Quantiles detector_ms;                 // per rendered frame, detection only
-  Quantiles render_ms;                   // per rendered frame
+  Quantiles render_ms;                   // per rendered frame: pinhole render and read-out
+  Quantiles image_model_ms;              // per rendered frame: blur, distortion, PSF, noise
   std::optional<std::string> run_error;  // the run stopped on an exception (results kept)
   std::string world_profile = "ideal";   // realism profile of the simulated world
   // smallest payload-to-vehicle surface distance over the run (m; negative: they overlapped)
@@ -82,7 +83,7 @@ struct Metrics {
 struct MetricsInputs {
   std::vector<LogRow> rows;
   std::vector<bool> payload_in_fov_per_frame;
-  std::vector<double> detector_ms, render_ms;
+  std::vector<double> detector_ms, render_ms, image_model_ms;
   int detections = 0;
 };
 

@@ -26,7 +26,7 @@ struct CameraFrameRecord {
   bool payload_in_image = false;   // the true payload inside the image
   bool detected = false;           // the detector (or analytic camera) found it
   const cv::Mat* frame = nullptr;  // the rendered frame (nullptr: analytic camera, ground truth)
-  double render_ms = 0.0, detector_ms = 0.0;  // rendered frames only
+  double render_ms = 0.0, image_model_ms = 0.0, detector_ms = 0.0;  // rendered frames only
 };
 
 /// Observes a run: the runner calls its recorders from the lockstep loop (its own log,

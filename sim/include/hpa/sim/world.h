@@ -29,6 +29,7 @@ struct mjData_;
 namespace hpa::sim {
 
 class OffscreenRenderer;
+class CameraImageModel;
 
 /// Perturbations of the simulated world only (the flight code keeps Params): model mismatch.
 struct WorldOverrides {
@@ -70,6 +71,12 @@ struct CrashStatus {
   bool crashed = false;
   double time_s = 0;   // time of the first crash condition
   std::string reason;  // which condition ("ground contact", "tilt > 90 deg", ...)
+};
+
+/// Wall time of one payload-camera frame, by stage.
+struct CameraFrameTiming {
+  double render_ms = 0.0;       // scene update, rasterisation, pixel read-out (all sub-frames)
+  double image_model_ms = 0.0;  // motion blur, distortion, PSF, noise
 };
 
 /// Body selector for disturbances.
@@ -137,8 +144,17 @@ class World {
   CrashStatus Crash() const;
 
   /// Payload camera frame, CV_8UC3 BGR, 1280x720, top row first (first call creates the GL
-  /// context of config.gl_backend).
+  /// context of config.gl_backend):   /// a single-sample pinhole render turned into the sensor's
+  /// image by the profile's camera image model (CameraImageModel: motion blur, distortion, PSF,
+  /// noise).
   cv::Mat RenderPayloadCamera();
+  /// As above, into `bgr` (reallocated only when its size or type differs).
+  void RenderPayloadCamera(cv::Mat* bgr);
+  /// Wall time of the last payload frame's render and of its image model.
+  const CameraFrameTiming& last_camera_timing() const { return camera_timing_; }
+  /// Image motion (render pixels) of the payload's centre over one exposure now, and the
+  /// region of the render the payload covers (for the fast motion-blur approximation).
+  Eigen::Vector2d PayloadImageMotionPx(cv::Rect* region) const;
   /// Chase camera frame for videos, CV_8UC3 BGR, top row first (at most 1280x720).
   cv::Mat RenderChaseCamera(int width_px, int height_px);
 
@@ -232,6 +248,11 @@ class World {
 
   CrashStatus crash_;
   std::unique_ptr<OffscreenRenderer> renderer_;
+  std::unique_ptr<CameraImageModel> camera_image_;  // created with the first payload frame
+  mjData_* subframe_data_ = nullptr;                // kinematics of exposure sub-frames
+  cv::Mat pinhole_, subframe_, subframe_sum_;       // reused frame buffers
+  uint64_t payload_frame_index_ = 0;                // keys the sensor noise of each frame
+  CameraFrameTiming camera_timing_;
 
   // realism profile state
   Eigen::Vector4d rotor_kf_factor_ = Eigen::Vector4d::Ones();  // per-rotor k_f spread  (4)

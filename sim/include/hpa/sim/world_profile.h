@@ -1,8 +1,9 @@
 #pragma once
 // A realism profile of the simulated world: the parts a real flight has and the ideal world
 // leaves out (contact, actuation spread and battery sag, compute and transport latency, model
-// mismatch between the flight code's parameters and the world's). Every part is off in a
-// default-constructed profile (the `ideal` world); models/profiles/flight.yaml switches them on
+// mismatch between the flight code's parameters and the world's, the camera's motion blur and
+// sensor noise). Every part is off in a default-constructed profile (the `ideal` world; the
+// camera's lens PSF stays on); models/profiles/flight.yaml switches them on
 // with the source of every number. The scenario runner and the world read it; flight code
 // never does.
 
@@ -88,6 +89,20 @@ struct ImuProfile {
   double accel_noise_density_mps2_rthz = 0.0;
 };
 
+/// The payload camera's image formation after the pinhole render (CameraImageModel). The lens's
+/// point-spread function is on in every profile: it stands in for the pixel area a single-sample
+/// render does not integrate. Motion blur and sensor noise are parts of the flight profile.
+struct CameraImageProfile {
+  double psf_sigma_px = 0.69;     // Gaussian PSF (lens blur and the pixel's own area), 1 sigma
+  double exposure_s = 0.0;        // exposure time: motion blur over it (0: none)
+  int motion_blur_subframes = 0;  // 0: fast approximation; N >= 2: average of N exact renders
+  bool noise = false;             // shot and read noise
+  double full_well_e = 7079.0;    // electrons at full scale (gain 1)
+  double read_noise_e = 2.9;      // temporal read noise, electrons rms
+  double analog_gain = 1.0;       // full scale = full_well_e / analog_gain electrons
+  bool draw_cable = true;         // the cable is drawn in the payload camera's image
+};
+
 /// The whole profile: its name and its parts.
 struct WorldProfile {
   std::string name = "ideal";  // ideal | flight (the file it came from)
@@ -99,6 +114,7 @@ struct WorldProfile {
   WindProfile wind;
   VioDriftProfile vio;
   ImuProfile imu;
+  CameraImageProfile camera;
 };
 
 }  // namespace hpa::sim

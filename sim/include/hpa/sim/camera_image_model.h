@@ -1,0 +1,60 @@
+#pragma once
+// Image formation of the payload camera after the renderer: the renderer draws an ideal pinhole
+// image with one sample per pixel; this model turns it into what the camera's sensor reads out:
+// motion blur over the exposure, lens distortion (radial-tangential, the calibration in
+// models/params.yaml), the lens point-spread function, and shot and read noise with a gain,
+// quantised to 8 bits. Parameters: WorldProfile::camera (models/profiles/*.yaml).
+
+#include <Eigen/Core>
+#include <cstdint>
+#include <opencv2/core.hpp>
+#include <vector>
+
+#include "hpa/models/params.h"
+#include "hpa/sim/world_profile.h"
+
+namespace hpa::sim {
+
+/// Turns pinhole renders into sensor images. Deterministic: the noise of frame k depends only on
+/// (seed, k); the model owns its buffers and reuses them from frame to frame.
+class CameraImageModel {
+ public:
+  /// Camera intrinsics and distortion from `params`; the profile's optics and sensor; `seed`
+  /// keys the noise.
+  CameraImageModel(const Params& params, const CameraImageProfile& profile, uint64_t seed);
+
+  /// Focal length (px) of the pinhole render the model expects: the sensor's own focal length
+  /// without distortion; with barrel distortion, short enough that the render covers every
+  /// sensor pixel's undistorted ray.
+  double render_focal_px() const { return render_focal_px_; }
+  /// Vertical field of view (deg) of that render at the sensor's size (MuJoCo camera fovy).
+  double render_fovy_deg() const;
+
+  /// Sensor image (CV_8UC3 BGR, the sensor's size) of `pinhole` (a render of the sensor's size
+  /// at render_focal_px). `blur_px` is the image motion (render pixels) over the exposure of the
+  /// region `blur_region` (render pixels; empty: the whole frame): the fast motion-blur
+  /// approximation smears that region along it. `frame_index` keys the noise.
+  void Apply(const cv::Mat& pinhole, const Eigen::Vector2d& blur_px, const cv::Rect& blur_region,
+             uint64_t frame_index, cv::Mat* sensor);
+
+  /// As Apply without motion blur (used after an exact sub-frame average).
+  void ApplyOptics(const cv::Mat& pinhole, uint64_t frame_index, cv::Mat* sensor);
+
+  const CameraImageProfile& profile() const { return profile_; }
+
+ private:
+  void Remap(const cv::Mat& pinhole, cv::Mat* out);
+  void AddNoise(uint64_t frame_index, cv::Mat* image) const;
+
+  Params params_;
+  CameraImageProfile profile_;
+  uint64_t seed_;
+  double render_focal_px_;
+  bool distorted_;
+  cv::Mat map1_, map2_;             // sensor pixel -> render pixel (fixed-point maps for remap)
+  cv::Mat blurred_, remapped_;      // reused frame buffers
+  std::vector<float> noise_sd_dn_;  // noise std (DN) per 8-bit level: shot + read, times gain
+  std::vector<float> unit_normal_;  // table of N(0, 1) samples the noise is drawn from
+};
+
+}  // namespace hpa::sim
