@@ -85,10 +85,44 @@ PayloadDetector::PayloadDetector(const Params& params, const PayloadDetectorConf
     : params_(params), config_(config) {}
 
 PayloadDetection PayloadDetector::Detect(const cv::Mat& bgr, double time_s) const {
+  bool inside = true;
+  return DetectInArea(bgr, cv::Rect(0, 0, params_.camera_width_px, params_.camera_height_px),
+                      time_s, &inside);
+}
+
+std::optional<PayloadDetection> PayloadDetector::DetectInRegion(const cv::Mat& bgr,
+                                                                const cv::Rect& region,
+                                                                double time_s) const {
+  const cv::Rect area = region & cv::Rect(0, 0, params_.camera_width_px, params_.camera_height_px);
+  if (area.width < 8 || area.height < 8) return std::nullopt;
+  bool inside = false;
+  const PayloadDetection d = DetectInArea(bgr, area, time_s, &inside);
+  if (!inside || !d.found) return std::nullopt;
+  return d;
+}
+
+cv::Rect PayloadDetector::RegionAround(const PayloadDetection& last, double margin_px) const {
+  if (!last.found || !last.centre_px.allFinite() || !std::isfinite(last.radius_px)) return {};
+  // the last ideal-image centre, where the lens puts it, and a half size of the ball's radius
+  // (grown for the ellipse of an off-axis ball) plus the motion allowed between frames
+  const Eigen::Vector2d c = DistortPixel(params_, last.centre_px);
+  const double half = 1.5 * last.radius_px + margin_px;
+  if (!c.allFinite() || !(half > 0.0) || half > params_.camera_width_px) return {};
+  const int x0 = static_cast<int>(std::floor(c.x() - half));
+  const int y0 = static_cast<int>(std::floor(c.y() - half));
+  const int size = static_cast<int>(std::ceil(2.0 * half));
+  return cv::Rect(x0, y0, size, size) &
+         cv::Rect(0, 0, params_.camera_width_px, params_.camera_height_px);
+}
+
+PayloadDetection PayloadDetector::DetectInArea(const cv::Mat& bgr, const cv::Rect& area,
+                                               double time_s, bool* inside_area) const {
   const int width = params_.camera_width_px, height = params_.camera_height_px;
+  *inside_area = false;
   if (bgr.empty() || bgr.type() != CV_8UC3 || bgr.cols != width || bgr.rows != height) {
     return NotFound(time_s, "bad frame (expected 8-bit BGR of the camera's size)");
   }
+  const cv::Point origin = area.tl();  // work images cover `area`; their (0, 0) is here
 
   // red mask: saturated pixels in the two red hue bands
   // frame-sized buffers are members: reused from call to call, no per-frame allocation
@@ -96,7 +130,7 @@ PayloadDetection PayloadDetector::Detect(const cv::Mat& bgr, double time_s) cons
   cv::Mat& mask_low = buffers_.mask_low;
   cv::Mat& mask_high = buffers_.mask_high;
   cv::Mat& mask = buffers_.mask;
-  cv::cvtColor(bgr, hsv, cv::COLOR_BGR2HSV);
+  cv::cvtColor(bgr(area), hsv, cv::COLOR_BGR2HSV);
   cv::inRange(hsv, cv::Scalar(0, config_.saturation_min, config_.value_min),
               cv::Scalar(config_.hue_max_low, 255, 255), mask_low);
   cv::inRange(hsv, cv::Scalar(config_.hue_min_high, config_.saturation_min, config_.value_min),
@@ -105,7 +139,7 @@ PayloadDetection PayloadDetector::Detect(const cv::Mat& bgr, double time_s) cons
 
   // largest blob
   std::vector<std::vector<cv::Point>> contours;
-  cv::findContours(mask, contours, cv::RETR_EXTERNAL, cv::CHAIN_APPROX_NONE);
+  cv::findContours(mask, contours, cv::RETR_EXTERNAL, cv::CHAIN_APPROX_NONE, origin);
   if (contours.empty()) return NotFound(time_s, "no payload in view");
   int best = 0;
   double best_area_px2 = -1.0;
@@ -126,12 +160,23 @@ PayloadDetection PayloadDetector::Detect(const cv::Mat& bgr, double time_s) cons
   const cv::Rect image_rect(0, 0, width, height);
   const int grow_px = config_.occluder_grow_px;
   const cv::Rect blob_rect = cv::boundingRect(contour);
+  // a region's result stands only where everything it reads lies inside it, so that it equals
+  // the full frame's: the blob with the occluder growth and the dilation's own reach
+  const int reach_px = 2 * grow_px + 2;
+  const auto inside = [&](const cv::Rect& r) {
+    const cv::Rect need =
+        cv::Rect(r.x - reach_px, r.y - reach_px, r.width + 2 * reach_px, r.height + 2 * reach_px) &
+        image_rect;
+    return (need & area) == need;
+  };
+  if (!inside(blob_rect)) return NotFound(time_s, "payload at the region's edge");
   const cv::Rect near_blob(blob_rect.x - grow_px, blob_rect.y - grow_px,
                            blob_rect.width + 2 * grow_px, blob_rect.height + 2 * grow_px);
+  const cv::Rect near_blob_in = near_blob & image_rect;
   cv::Mat& occluded_near = buffers_.occluded_near;
-  occluded_near.create(height, width, CV_8U);
+  occluded_near.create(area.height, area.width, CV_8U);
   occluded_near.setTo(0);
-  cv::dilate(occluder(near_blob & image_rect), occluded_near(near_blob & image_rect),
+  cv::dilate(occluder(near_blob_in - origin), occluded_near(near_blob_in - origin),
              cv::Mat::ones(2 * grow_px + 1, 2 * grow_px + 1, CV_8U));
 
   // outline points that are neither on the image border nor next to an occluder
@@ -139,7 +184,7 @@ PayloadDetection PayloadDetector::Detect(const cv::Mat& bgr, double time_s) cons
   outline.reserve(contour.size());
   for (const cv::Point& p : contour) {
     if (p.x > 0 && p.y > 0 && p.x < width - 1 && p.y < height - 1 &&
-        occluded_near.at<uint8_t>(p) == 0) {
+        occluded_near.at<uint8_t>(p - origin) == 0) {
       outline.emplace_back(p);
     }
   }
@@ -166,9 +211,11 @@ PayloadDetection PayloadDetector::Detect(const cv::Mat& bgr, double time_s) cons
                                          : Eigen::Vector2d(-width_axis.y(), width_axis.x());
 
   // region where the blob and the fitted ellipse are compared; occluders grown there too
+  if (!inside(fit.boundingRect())) return NotFound(time_s, "payload at the region's edge");
   const cv::Rect roi = (blob_rect | fit.boundingRect()) & image_rect;
   cv::Mat occluded_roi;
-  cv::dilate(occluder(roi), occluded_roi, cv::Mat::ones(2 * grow_px + 1, 2 * grow_px + 1, CV_8U));
+  cv::dilate(occluder(roi - origin), occluded_roi,
+             cv::Mat::ones(2 * grow_px + 1, 2 * grow_px + 1, CV_8U));
 
   // enough of the fitted outline must be seen: inside the image and not behind an occluder
   const int outline_samples = config_.outline_samples;
@@ -245,6 +292,7 @@ PayloadDetection PayloadDetector::Detect(const cv::Mat& bgr, double time_s) cons
       ideal_centre_px - ideal_semi_major_px * axis, params_.payload_radius_m);
   if (!p_CL_C.allFinite()) return NotFound(time_s, "poor ellipse fit");
 
+  *inside_area = true;
   PayloadDetection detection;
   detection.time_s = time_s;
   detection.found = true;

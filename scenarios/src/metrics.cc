@@ -147,6 +147,9 @@ void ComputeMetrics(const MetricsInputs& in, Metrics* m) {
   }
   m->mpc_solve_ms = ComputeQuantiles(solve_ms);
   m->detector_ms = ComputeQuantiles(in.detector_ms);
+  if (!in.render_ms.empty()) {
+    m->camera_region_fraction = static_cast<double>(in.region_frames) / in.render_ms.size();
+  }
   m->render_ms = ComputeQuantiles(in.render_ms);
   m->image_model_ms = ComputeQuantiles(in.image_model_ms);
 }
@@ -221,6 +224,7 @@ std::string MetricsToJson(const Metrics& m) {
   o["render_ms"] = quantiles(m.render_ms);
   o["image_model_ms"] = quantiles(m.image_model_ms);
   o["detector_ms"] = quantiles(m.detector_ms);
+  o["camera_region_fraction"] = opt_num(m.camera_region_fraction);
   if (!m.estimator.empty()) {
     // the variant, then its health counts (integers as integers) and filter states
     Json estimator = {{"variant", m.estimator}};

@@ -58,7 +58,8 @@ Eigen::Vector2d UndistortWarm(const Eigen::Vector4d& k, const Eigen::Vector2d& x
 
 struct Maps {
   double render_focal_px;
-  cv::Mat map1, map2;
+  cv::Mat map1, map2;    // fixed-point maps for cv::remap
+  cv::Mat map_x, map_y;  // the same in float: which render pixels a sensor region reads
 };
 
 // Render focal length and the sensor -> render remap for one camera; cached per calibration.
@@ -104,6 +105,8 @@ const Maps& MapsFor(const Params& params) {
   Maps maps;
   maps.render_focal_px = render_f_px;
   cv::convertMaps(map_x, map_y, maps.map1, maps.map2, CV_16SC2);
+  maps.map_x = map_x;
+  maps.map_y = map_y;
   return cache.emplace(key, std::move(maps)).first->second;
 }
 
@@ -121,6 +124,8 @@ CameraImageModel::CameraImageModel(const Params& params, const CameraImageProfil
     render_focal_px_ = maps.render_focal_px;
     map1_ = maps.map1;  // shared, read-only
     map2_ = maps.map2;
+    map_x_ = maps.map_x;
+    map_y_ = maps.map_y;
   }
   if (profile_.noise) {
     // DN per electron at this gain; variance in DN^2 = g * level + (g * read noise)^2
@@ -138,51 +143,106 @@ double CameraImageModel::render_fovy_deg() const {
   return 2.0 * std::atan(0.5 * params_.camera_height_px / render_focal_px_) * 180.0 / M_PI;
 }
 
-void CameraImageModel::Remap(const cv::Mat& pinhole, cv::Mat* out) {
-  if (!distorted_) {
-    pinhole.copyTo(*out);
-    return;
-  }
-  cv::remap(pinhole, *out, map1_, map2_, cv::INTER_LINEAR, cv::BORDER_REPLICATE);
+int CameraImageModel::PsfRadiusPx() const {
+  // OpenCV's Gaussian kernel for 8-bit images spans round(sigma * 6 + 1) | 1 pixels
+  if (profile_.psf_sigma_px <= 0.0) return 0;
+  return static_cast<int>(std::lround(profile_.psf_sigma_px * 6.0 + 1.0)) / 2 + 1;
 }
 
-void CameraImageModel::AddNoise(uint64_t frame_index, cv::Mat* image) const {
+int CameraImageModel::MotionBlurRadiusPx(const Eigen::Vector2d& blur_px) const {
+  const double length_px = blur_px.norm();
+  if (profile_.exposure_s <= 0.0 || !(length_px >= 0.5)) return 0;
+  return static_cast<int>(std::ceil(0.5 * length_px)) + 1;
+}
+
+cv::Rect CameraImageModel::RenderRegion(const cv::Rect& sensor_region,
+                                        const Eigen::Vector2d& blur_px) const {
+  const cv::Rect frame(0, 0, params_.camera_width_px, params_.camera_height_px);
+  if (sensor_region.area() == 0) return frame;
+  const int psf = PsfRadiusPx();
+  const cv::Rect grown = cv::Rect(sensor_region.x - psf, sensor_region.y - psf,
+                                  sensor_region.width + 2 * psf, sensor_region.height + 2 * psf) &
+                         frame;
+  cv::Rect needed = grown;
+  if (distorted_ && grown.area() > 0) {
+    double min_x, max_x, min_y, max_y;
+    cv::minMaxLoc(map_x_(grown), &min_x, &max_x);
+    cv::minMaxLoc(map_y_(grown), &min_y, &max_y);
+    // bilinear interpolation reads the pixel after the floor
+    needed = cv::Rect(
+        cv::Point(static_cast<int>(std::floor(min_x)) - 1, static_cast<int>(std::floor(min_y)) - 1),
+        cv::Point(static_cast<int>(std::ceil(max_x)) + 2, static_cast<int>(std::ceil(max_y)) + 2));
+  }
+  // the motion-blur kernel reads this far around each pixel
+  const int blur = MotionBlurRadiusPx(blur_px);
+  needed =
+      cv::Rect(needed.x - blur, needed.y - blur, needed.width + 2 * blur, needed.height + 2 * blur);
+  return needed & frame;
+}
+
+void CameraImageModel::Remap(const cv::Mat& pinhole, const cv::Rect& area, cv::Mat* out) {
+  out->create(pinhole.size(), pinhole.type());
+  cv::Mat target = (*out)(area);
+  if (!distorted_) {
+    pinhole(area).copyTo(target);
+    return;
+  }
+  cv::remap(pinhole, target, map1_(area), map2_(area), cv::INTER_LINEAR, cv::BORDER_REPLICATE);
+}
+
+void CameraImageModel::AddNoise(uint64_t frame_index, const cv::Rect& area, cv::Mat* image) const {
   if (!profile_.noise) return;
   const size_t mask = kNoiseTableSize - 1;
   const size_t offset = Mix(seed_ ^ Mix(frame_index)) & mask;
   const float* table = unit_normal_.data();
   const float* sd = noise_sd_dn_.data();
-  const size_t row_values = static_cast<size_t>(image->cols) * image->channels();
-  for (int row = 0; row < image->rows; ++row) {
-    uint8_t* p = image->ptr<uint8_t>(row);
-    size_t index = offset + static_cast<size_t>(row) * row_values;
-    for (size_t i = 0; i < row_values; ++i, ++index) {
+  // each value's noise is keyed by its place in the whole frame: a region gets the frame's noise
+  const size_t channels = static_cast<size_t>(image->channels());
+  const size_t row_values = static_cast<size_t>(image->cols) * channels;
+  const size_t area_values = static_cast<size_t>(area.width) * channels;
+  for (int row = area.y; row < area.y + area.height; ++row) {
+    uint8_t* p = image->ptr<uint8_t>(row) + static_cast<size_t>(area.x) * channels;
+    size_t index = offset + static_cast<size_t>(row) * row_values + area.x * channels;
+    for (size_t i = 0; i < area_values; ++i, ++index) {
       p[i] = cv::saturate_cast<uint8_t>(p[i] + sd[p[i]] * table[index & mask]);
     }
   }
 }
 
-void CameraImageModel::ApplyOptics(const cv::Mat& pinhole, uint64_t frame_index, cv::Mat* sensor) {
-  Remap(pinhole, &remapped_);
+void CameraImageModel::ApplyOptics(const cv::Mat& pinhole, uint64_t frame_index, cv::Mat* sensor,
+                                   const cv::Rect& sensor_region) {
+  const cv::Rect frame(0, 0, pinhole.cols, pinhole.rows);
+  const cv::Rect area = sensor_region.area() > 0 ? (sensor_region & frame) : frame;
+  sensor->create(pinhole.size(), pinhole.type());
+  if (area.area() == 0) return;
+  // the PSF reads this far around each pixel: those pixels are remapped too
+  const int psf = PsfRadiusPx();
+  const cv::Rect grown =
+      cv::Rect(area.x - psf, area.y - psf, area.width + 2 * psf, area.height + 2 * psf) & frame;
+  Remap(pinhole, grown, &remapped_);
+  cv::Mat target = (*sensor)(area);
   if (profile_.psf_sigma_px > 0.0) {
-    cv::GaussianBlur(remapped_, *sensor, cv::Size(0, 0), profile_.psf_sigma_px, 0.0,
+    // on a sub-image OpenCV reads the neighbours from the parent (remapped above) and
+    // replicates only at the frame's own edges: a region equals the whole frame's filtering
+    cv::GaussianBlur(remapped_(area), target, cv::Size(0, 0), profile_.psf_sigma_px, 0.0,
                      cv::BORDER_REPLICATE);
   } else {
-    remapped_.copyTo(*sensor);
+    remapped_(area).copyTo(target);
   }
-  AddNoise(frame_index, sensor);
+  AddNoise(frame_index, area, sensor);
 }
 
 void CameraImageModel::Apply(const cv::Mat& pinhole, const Eigen::Vector2d& blur_px,
-                             const cv::Rect& blur_region, uint64_t frame_index, cv::Mat* sensor) {
-  const double length_px = blur_px.norm();
-  if (profile_.exposure_s <= 0.0 || !(length_px >= 0.5)) {
-    ApplyOptics(pinhole, frame_index, sensor);
+                             const cv::Rect& blur_region, uint64_t frame_index, cv::Mat* sensor,
+                             const cv::Rect& sensor_region) {
+  const int radius = MotionBlurRadiusPx(blur_px);
+  if (radius == 0) {
+    ApplyOptics(pinhole, frame_index, sensor, sensor_region);
     return;
   }
   // fast motion blur: the region (grown by the smear) is convolved with a line kernel along
   // the image motion, centred on the mid-exposure position
-  const int radius = static_cast<int>(std::ceil(0.5 * length_px)) + 1;
+  const double length_px = blur_px.norm();
   cv::Mat kernel = cv::Mat::zeros(2 * radius + 1, 2 * radius + 1, CV_32F);
   const int samples = std::max(8, static_cast<int>(std::ceil(4.0 * length_px)));
   for (int i = 0; i < samples; ++i) {
@@ -201,12 +261,17 @@ void CameraImageModel::Apply(const cv::Mat& pinhole, const Eigen::Vector2d& blur
   region = cv::Rect(region.x - 2 * radius, region.y - 2 * radius, region.width + 4 * radius,
                     region.height + 4 * radius) &
            frame;
-  pinhole.copyTo(blurred_);
+  // only what the optics will read: the render region of the sensor region
+  const cv::Rect source = RenderRegion(sensor_region, Eigen::Vector2d::Zero());
+  blurred_.create(pinhole.size(), pinhole.type());
+  cv::Mat blurred_source = blurred_(source);
+  pinhole(source).copyTo(blurred_source);
+  region &= source;
   if (region.area() > 0) {
-    cv::filter2D(pinhole(region), blurred_(region), -1, kernel, cv::Point(-1, -1), 0.0,
-                 cv::BORDER_REPLICATE);
+    cv::Mat target = blurred_(region);
+    cv::filter2D(pinhole(region), target, -1, kernel, cv::Point(-1, -1), 0.0, cv::BORDER_REPLICATE);
   }
-  ApplyOptics(blurred_, frame_index, sensor);
+  ApplyOptics(blurred_, frame_index, sensor, sensor_region);
 }
 
 }  // namespace hpa::sim

@@ -55,7 +55,7 @@ cv::Mat OffscreenRenderer::Render(mjData* data, int camera_id, int width_px, int
 }
 
 void OffscreenRenderer::Render(mjData* data, int camera_id, int width_px, int height_px,
-                               bool show_tendons, cv::Mat* bgr) {
+                               bool show_tendons, cv::Mat* bgr, const cv::Rect& region) {
   const int max_w = model_->vis.global.offwidth;
   const int max_h = model_->vis.global.offheight;
   if (width_px <= 0 || height_px <= 0 || width_px > max_w || height_px > max_h) {
@@ -108,25 +108,48 @@ void OffscreenRenderer::Render(mjData* data, int camera_id, int width_px, int he
   gl_->camera.fixedcamid = camera_id;
   for (int g = 0; g < mjNGROUP; ++g) gl_->option.tendongroup[g] = show_tendons ? 1 : 0;
   mjv_updateScene(model_, data, &gl_->option, nullptr, &gl_->camera, mjCAT_ALL, &gl_->scene);
-  const mjrRect viewport = {0, 0, width_px, height_px};
-  mjr_render(viewport, &gl_->scene, &gl_->render_context);
   bgr->create(height_px, width_px, CV_8UC3);  // no allocation when the size is unchanged
+  const cv::Rect frame(0, 0, width_px, height_px);
+  const cv::Rect area = region.area() > 0 ? (region & frame) : frame;
+  if (area.area() == 0) return;
+  if (area != frame) {
+    // only `area` of the frame: the frustum narrowed to it, so its pixels are the frame's
+    // (MuJoCo sets left/right from frustum_center and the viewport's aspect ratio)
+    for (int eye = 0; eye < 2; ++eye) {
+      mjvGLCamera& c = gl_->scene.camera[eye];
+      const float span = c.frustum_top - c.frustum_bottom;  // the frame's height at the near plane
+      const float per_px = span / static_cast<float>(height_px);
+      const float top = c.frustum_top - per_px * static_cast<float>(area.y);
+      c.frustum_bottom = top - per_px * static_cast<float>(area.height);
+      c.frustum_top = top;
+      c.frustum_center +=
+          per_px * (static_cast<float>(area.x) + 0.5f * area.width - 0.5f * width_px);
+    }
+  }
+  const mjrRect viewport = {0, 0, area.width, area.height};
+  mjr_render(viewport, &gl_->scene, &gl_->render_context);
+  cv::Mat out = (*bgr)(area);
 
-  if (gl_->render_context.offSamples == 0 && gl_->pack_invert && bgr->isContinuous()) {
+  if (gl_->render_context.offSamples == 0 && gl_->pack_invert) {
     // single-sample buffer: read it straight into the image, BGR, top row first
     mjr_setBuffer(mjFB_OFFSCREEN, &gl_->render_context);  // offscreen FBO bound for reading
     glPixelStorei(GL_PACK_ALIGNMENT, 1);
+    glPixelStorei(GL_PACK_ROW_LENGTH, width_px);  // rows of `area` inside the whole frame
     glPixelStorei(kGlPackInvertMesa, GL_TRUE);
-    glReadPixels(0, 0, width_px, height_px, GL_BGR, GL_UNSIGNED_BYTE, bgr->data);
+    glReadPixels(0, 0, area.width, area.height, GL_BGR, GL_UNSIGNED_BYTE, out.data);
     glPixelStorei(kGlPackInvertMesa, GL_FALSE);
+    glPixelStorei(GL_PACK_ROW_LENGTH, 0);
     return;
   }
 
   // multisampled buffer (MuJoCo resolves it in mjr_readPixels): rows bottom-up, RGB
+  if (gl_->rgb.size() < static_cast<size_t>(area.area()) * 3) {
+    gl_->rgb.resize(static_cast<size_t>(area.area()) * 3);
+  }
   mjr_readPixels(gl_->rgb.data(), nullptr, viewport, &gl_->render_context);
-  const cv::Mat rgb_bottom_up(height_px, width_px, CV_8UC3, gl_->rgb.data());
+  const cv::Mat rgb_bottom_up(area.height, area.width, CV_8UC3, gl_->rgb.data());
   cv::flip(rgb_bottom_up, flip_buffer_, 0);
-  cv::cvtColor(flip_buffer_, *bgr, cv::COLOR_RGB2BGR);
+  cv::cvtColor(flip_buffer_, out, cv::COLOR_RGB2BGR);
 }
 
 }  // namespace hpa::sim

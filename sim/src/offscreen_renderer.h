@@ -31,9 +31,10 @@ class OffscreenRenderer {
                  bool show_tendons = true);
 
   /// As Render above, into `bgr` (reallocated only when its size or type differs): with a
-  /// single-sample offscreen buffer the pixels are read straight into it, no copy.
+  /// single-sample offscreen buffer the pixels are read straight into it, no copy. A non-empty
+  /// `region` renders only that part of the frame (the rest of `bgr` is left as it was).
   void Render(mjData* data, int camera_id, int width_px, int height_px, bool show_tendons,
-              cv::Mat* bgr);
+              cv::Mat* bgr, const cv::Rect& region = cv::Rect());
 
   /// True once the GL context exists (after the first Render).
   bool initialized() const;

@@ -364,7 +364,6 @@ void World::Reset(const SystemState& initial) {
   gripper_moving_ = false;
   model_->eq_active[ids_.gripper_weld] = 0;
   rng_.seed(config_.seed);
-  payload_frame_index_ = 0;
   imu_.ResetBias();
   vio_.SetDrift(config_.profile.vio, DerivedSeed(config_.seed, 0x76696F));
   imu_queue_.clear();
@@ -712,7 +711,7 @@ void World::CheckCrash() {
 
 cv::Mat World::RenderPayloadCamera() {
   cv::Mat bgr;
-  RenderPayloadCamera(&bgr);
+  RenderPayloadCamera(&bgr, cv::Rect());
   return bgr;
 }
 
@@ -756,7 +755,7 @@ Eigen::Vector2d World::PayloadImageMotionPx(cv::Rect* region) const {
   return rate_px * exposure_s;
 }
 
-void World::RenderPayloadCamera(cv::Mat* bgr) {
+void World::RenderPayloadCamera(cv::Mat* bgr, const cv::Rect& region) {
   using Clock = std::chrono::steady_clock;
   const auto ms = [](Clock::time_point a, Clock::time_point b) {
     return std::chrono::duration<double, std::milli>(b - a).count();
@@ -769,7 +768,8 @@ void World::RenderPayloadCamera(cv::Mat* bgr) {
     model_->cam_fovy[ids_.payload_camera] = camera_image_->render_fovy_deg();
   }
   const int w = model_->vis.global.offwidth, h = model_->vis.global.offheight;
-  const uint64_t frame = payload_frame_index_++;
+  // noise keyed by the physics step: a region and the whole frame of one instant agree
+  const uint64_t frame = static_cast<uint64_t>(step_);
   const auto t0 = Clock::now();
   double render_ms = 0.0;
   if (profile.exposure_s > 0.0 && profile.motion_blur_subframes >= 2) {
@@ -795,12 +795,15 @@ void World::RenderPayloadCamera(cv::Mat* bgr) {
     render_ms = ms(t0, t1);
     camera_image_->ApplyOptics(pinhole_, frame, bgr);
   } else {
-    renderer_->Render(data_, ids_.payload_camera, w, h, profile.draw_cable, &pinhole_);
+    cv::Rect blur_region;
+    const Eigen::Vector2d blur_px = PayloadImageMotionPx(&blur_region);
+    const cv::Rect render_region =
+        region.area() > 0 ? camera_image_->RenderRegion(region, blur_px) : cv::Rect();
+    renderer_->Render(data_, ids_.payload_camera, w, h, profile.draw_cable, &pinhole_,
+                      render_region);
     const auto t1 = Clock::now();
     render_ms = ms(t0, t1);
-    cv::Rect region;
-    const Eigen::Vector2d blur_px = PayloadImageMotionPx(&region);
-    camera_image_->Apply(pinhole_, blur_px, region, frame, bgr);
+    camera_image_->Apply(pinhole_, blur_px, blur_region, frame, bgr, region);
   }
   camera_timing_.render_ms = render_ms;
   camera_timing_.image_model_ms = ms(t0, Clock::now()) - render_ms;

@@ -4,6 +4,7 @@
 
 #include <Eigen/Core>
 #include <opencv2/core.hpp>
+#include <optional>
 #include <vector>
 
 #include "hpa/models/params.h"
@@ -60,9 +61,26 @@ class PayloadDetector {
   /// Not thread-safe: reuses its buffers from call to call.
   PayloadDetection Detect(const cv::Mat& bgr, double time_s) const;
 
+  /// Detects the payload reading only `region` of the frame (the rest may be stale): the same
+  /// result as Detect on the whole frame whenever it returns one (the payload being the largest
+  /// red object in view), nullopt when the region cannot decide (nothing found in it, or the
+  /// payload at its edge): then detect on the whole frame.
+  std::optional<PayloadDetection> DetectInRegion(const cv::Mat& bgr, const cv::Rect& region,
+                                                 double time_s) const;
+
+  /// Region of the real image around a previous detection: its centre through the lens, half a
+  /// side of 1.5 ball radii plus margin_px (how far the ball may move between frames); empty
+  /// when `last` found nothing.
+  cv::Rect RegionAround(const PayloadDetection& last, double margin_px) const;
+
   const PayloadDetectorConfig& config() const { return config_; }
 
  private:
+  // Detect reading only `area` of the frame; *inside_area tells whether the result depends on
+  // nothing outside it (always true for the whole frame when found)
+  PayloadDetection DetectInArea(const cv::Mat& bgr, const cv::Rect& area, double time_s,
+                                bool* inside_area) const;
+
   Params params_;
   PayloadDetectorConfig config_;
   mutable std::vector<cv::Point2f> undistorted_;  // outline in the ideal image, reused

@@ -61,12 +61,13 @@ struct Metrics {
   double retaut_peak_body_rate_radps = 0.0;  // highest |w_B| within 0.5 s of a re-taut
   Quantiles mpc_solve_ms;
   int mpc_failures = 0;  // updates with QP failure, non-finite or fallback (capped plans fly)
-  double closed_loop_cost = 0.0;         // sum of the controller's plan costs
-  Quantiles detector_ms;                 // per rendered frame, detection only
-  Quantiles render_ms;                   // per rendered frame: pinhole render and read-out
-  Quantiles image_model_ms;              // per rendered frame: blur, distortion, PSF, noise
-  std::optional<std::string> run_error;  // the run stopped on an exception (results kept)
-  std::string world_profile = "ideal";   // realism profile of the simulated world
+  double closed_loop_cost = 0.0;                 // sum of the controller's plan costs
+  Quantiles detector_ms;                         // per rendered frame, detection only
+  std::optional<double> camera_region_fraction;  // rendered frames done in a region only
+  Quantiles render_ms;                           // per rendered frame: pinhole render and read-out
+  Quantiles image_model_ms;                      // per rendered frame: blur, distortion, PSF, noise
+  std::optional<std::string> run_error;          // the run stopped on an exception (results kept)
+  std::string world_profile = "ideal";           // realism profile of the simulated world
   // smallest payload-to-vehicle surface distance over the run (m; negative: they overlapped)
   double payload_quad_min_distance_m = 0.0;
   // contact episodes: payload-body, payload-rotor, payload-ground, quadrotor-ground
@@ -84,6 +85,7 @@ struct MetricsInputs {
   std::vector<LogRow> rows;
   std::vector<bool> payload_in_fov_per_frame;
   std::vector<double> detector_ms, render_ms, image_model_ms;
+  int region_frames = 0;  // rendered frames served by a region around the last detection
   int detections = 0;
 };
 

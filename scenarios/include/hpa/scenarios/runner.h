@@ -27,6 +27,7 @@ struct CameraFrameRecord {
   bool detected = false;           // the detector (or analytic camera) found it
   const cv::Mat* frame = nullptr;  // the rendered frame (nullptr: analytic camera, ground truth)
   double render_ms = 0.0, image_model_ms = 0.0, detector_ms = 0.0;  // rendered frames only
+  bool region_only = false;  // rendered and detected in a region around the last detection
 };
 
 /// Observes a run: the runner calls its recorders from the lockstep loop (its own log,

@@ -33,24 +33,34 @@ class CameraImageModel {
   /// Sensor image (CV_8UC3 BGR, the sensor's size) of `pinhole` (a render of the sensor's size
   /// at render_focal_px). `blur_px` is the image motion (render pixels) over the exposure of the
   /// region `blur_region` (render pixels; empty: the whole frame): the fast motion-blur
-  /// approximation smears that region along it. `frame_index` keys the noise.
+  /// approximation smears that region along it. `frame_index` keys the noise. A non-empty
+  /// `sensor_region` computes only that part of the sensor image (equal to the whole frame's
+  /// there), reading only RenderRegion(sensor_region, blur_px) of `pinhole`.
   void Apply(const cv::Mat& pinhole, const Eigen::Vector2d& blur_px, const cv::Rect& blur_region,
-             uint64_t frame_index, cv::Mat* sensor);
+             uint64_t frame_index, cv::Mat* sensor, const cv::Rect& sensor_region = cv::Rect());
 
   /// As Apply without motion blur (used after an exact sub-frame average).
-  void ApplyOptics(const cv::Mat& pinhole, uint64_t frame_index, cv::Mat* sensor);
+  void ApplyOptics(const cv::Mat& pinhole, uint64_t frame_index, cv::Mat* sensor,
+                   const cv::Rect& sensor_region = cv::Rect());
+
+  /// The part of the pinhole render that the sensor region (empty: the whole sensor) reads,
+  /// through the PSF, the lens and a motion blur of blur_px.
+  cv::Rect RenderRegion(const cv::Rect& sensor_region, const Eigen::Vector2d& blur_px) const;
 
   const CameraImageProfile& profile() const { return profile_; }
 
  private:
-  void Remap(const cv::Mat& pinhole, cv::Mat* out);
-  void AddNoise(uint64_t frame_index, cv::Mat* image) const;
+  void Remap(const cv::Mat& pinhole, const cv::Rect& area, cv::Mat* out);
+  void AddNoise(uint64_t frame_index, const cv::Rect& area, cv::Mat* image) const;
+  int PsfRadiusPx() const;
+  int MotionBlurRadiusPx(const Eigen::Vector2d& blur_px) const;
 
   Params params_;
   CameraImageProfile profile_;
   uint64_t seed_;
   double render_focal_px_;
   bool distorted_;
+  cv::Mat map_x_, map_y_;           // the same in float (render regions)
   cv::Mat map1_, map2_;             // sensor pixel -> render pixel (fixed-point maps for remap)
   cv::Mat blurred_, remapped_;      // reused frame buffers
   std::vector<float> noise_sd_dn_;  // noise std (DN) per 8-bit level: shot + read, times gain

@@ -148,8 +148,10 @@ class World {
   /// image by the profile's camera image model (CameraImageModel: motion blur, distortion, PSF,
   /// noise).
   cv::Mat RenderPayloadCamera();
-  /// As above, into `bgr` (reallocated only when its size or type differs).
-  void RenderPayloadCamera(cv::Mat* bgr);
+  /// As above, into `bgr` (reallocated only when its size or type differs). A non-empty
+  /// `region` computes only that part of the image, equal to the whole frame's there (the rest
+  /// of `bgr` is left as it was): what a detector reading only a region needs.
+  void RenderPayloadCamera(cv::Mat* bgr, const cv::Rect& region = cv::Rect());
   /// Wall time of the last payload frame's render and of its image model.
   const CameraFrameTiming& last_camera_timing() const { return camera_timing_; }
   /// Image motion (render pixels) of the payload's centre over one exposure now, and the
@@ -251,7 +253,6 @@ class World {
   std::unique_ptr<CameraImageModel> camera_image_;  // created with the first payload frame
   mjData_* subframe_data_ = nullptr;                // kinematics of exposure sub-frames
   cv::Mat pinhole_, subframe_, subframe_sum_;       // reused frame buffers
-  uint64_t payload_frame_index_ = 0;                // keys the sensor noise of each frame
   CameraFrameTiming camera_timing_;
 
   // realism profile state
