@@ -127,6 +127,7 @@ RunResult RunScenario(const Scenario& scenario, const Params& params, const RunO
   world_config.rates = ScenarioRates(scenario);
   world_config.profile = scenario.world;
   world_config.gl_backend = options.gl_backend;
+  world_config.randomize_appearance = scenario.estimation.camera_randomize;
   const RateTable& rates = world_config.rates;
   sim::World world(world_config);
   metrics.world_profile = scenario.world.name;

@@ -194,6 +194,7 @@ Scenario ParseScenario(const YamlMap& root) {
     s.estimation.camera_latency_s = e.Number("camera_latency", 0.0, 0.4, 0.03);
     s.estimation.detector_noise_scale = e.Number("detector_noise_scale", 0.0, 100.0, 1.0);
     s.estimation.slack_tension_cue = e.Bool("slack_tension_cue", true);
+    s.estimation.camera_randomize = e.Bool("camera_randomize", false);
     if (e.Has("estimator")) s.estimation.estimator = e.Choice("estimator", EstimatorNames(), "");
     e.RejectUnknownKeys();
   }

@@ -9,8 +9,16 @@ namespace hpa {
 
 VideoRecorder::VideoRecorder(const std::string& path, double rate_hz, bool slack_events_only)
     : path_(path), rate_hz_(rate_hz), slack_events_only_(slack_events_only) {
-  writer_.open(path, cv::VideoWriter::fourcc('m', 'p', '4', 'v'), rate_hz,
+  // H.264 (plays in browsers and slides, files several times smaller); MPEG-4 part 2 where the
+  // OpenCV build has no H.264 encoder
+  writer_.open(path, cv::VideoWriter::fourcc('a', 'v', 'c', '1'), rate_hz,
                cv::Size(kWidthPx, kHeightPx));
+  codec_ = "avc1";
+  if (!writer_.isOpened()) {
+    writer_.open(path, cv::VideoWriter::fourcc('m', 'p', '4', 'v'), rate_hz,
+                 cv::Size(kWidthPx, kHeightPx));
+    codec_ = "mp4v";
+  }
   if (!writer_.isOpened()) {
     throw InputError(path, "--video", "cannot open an MP4 writer for this file");
   }

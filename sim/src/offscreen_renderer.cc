@@ -41,6 +41,10 @@ OffscreenRenderer::~OffscreenRenderer() {
   mjv_freeScene(&gl_->scene);
 }
 
+void OffscreenRenderer::SetGeomGroupVisible(int group, bool visible) {
+  if (group >= 0 && group < mjNGROUP) geom_group_visible_[group] = visible;
+}
+
 bool OffscreenRenderer::initialized() const { return gl_ != nullptr; }
 
 std::string OffscreenRenderer::GlDescription() {
@@ -106,7 +110,10 @@ void OffscreenRenderer::Render(mjData* data, int camera_id, int width_px, int he
   // scene from the current kinematics, seen from the fixed camera
   gl_->camera.type = mjCAMERA_FIXED;
   gl_->camera.fixedcamid = camera_id;
-  for (int g = 0; g < mjNGROUP; ++g) gl_->option.tendongroup[g] = show_tendons ? 1 : 0;
+  for (int g = 0; g < mjNGROUP; ++g) {
+    gl_->option.tendongroup[g] = show_tendons ? 1 : 0;
+    gl_->option.geomgroup[g] = geom_group_visible_[g] ? 1 : 0;
+  }
   mjv_updateScene(model_, data, &gl_->option, nullptr, &gl_->camera, mjCAT_ALL, &gl_->scene);
   bgr->create(height_px, width_px, CV_8UC3);  // no allocation when the size is unchanged
   const cv::Rect frame(0, 0, width_px, height_px);

@@ -36,6 +36,10 @@ class OffscreenRenderer {
   void Render(mjData* data, int camera_id, int width_px, int height_px, bool show_tendons,
               cv::Mat* bgr, const cv::Rect& region = cv::Rect());
 
+  /// Whether geoms of `group` (0..5) are drawn by the following Render calls (MuJoCo's
+  /// defaults: groups 0-2 drawn, 3-5 not).
+  void SetGeomGroupVisible(int group, bool visible);
+
   /// True once the GL context exists (after the first Render).
   bool initialized() const;
 
@@ -47,7 +51,10 @@ class OffscreenRenderer {
   const mjModel* model_;
   GlBackend backend_;
   std::unique_ptr<Gl> gl_;
-  cv::Mat flip_buffer_;  // multisampled path only: the bottom-up frame turned top-down
+  cv::Mat flip_buffer_;
+  bool geom_group_visible_[6] = {
+      true,  true,  true,
+      false, false, false};  // multisampled path only: the bottom-up frame turned top-down
 };
 
 }  // namespace hpa::sim

@@ -75,6 +75,9 @@ SensorNoiseConfig ImuNoise(const WorldConfig& config) {
 }
 
 // Seeds of the profile's own generators, apart from the sensor noise stream.
+// MJCF geom group of the gripper's visual (drawn in the chase camera while it holds the payload).
+constexpr int kGripperGeomGroup = 3;
+
 uint64_t DerivedSeed(uint64_t seed, uint64_t salt) { return seed * 0x9E3779B97F4A7C15ULL + salt; }
 
 }  // namespace
@@ -169,6 +172,7 @@ World::World(const WorldConfig& config)
   }
   data_ = mj_makeData(model_);
   ApplyWorldParams();
+  if (config_.randomize_appearance) RandomizeAppearance();
   renderer_ = std::make_unique<OffscreenRenderer>(model_, config_.gl_backend);
 
   // start hovering 1 m up, payload hanging
@@ -709,6 +713,37 @@ void World::CheckCrash() {
   }
 }
 
+void World::RandomizeAppearance() {
+  // what the camera sees varies, the physics does not: floor shade and checker scale, and the
+  // lights' strength and direction (no saturated colour: the detector looks for red)
+  std::mt19937_64 rng(DerivedSeed(config_.seed, 0x6C69676874ULL));
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  const int floor_mat = model_->geom_matid[ids_.ground_geom];
+  if (floor_mat >= 0) {
+    const double shade = 0.6 + 0.8 * u(rng);  // darker to brighter grey, a slight warm/cool cast
+    const double cast = 0.08 * (u(rng) - 0.5);
+    model_->mat_rgba[4 * floor_mat + 0] = static_cast<float>(std::min(1.0, shade * (1 + cast)));
+    model_->mat_rgba[4 * floor_mat + 1] = static_cast<float>(std::min(1.0, shade));
+    model_->mat_rgba[4 * floor_mat + 2] = static_cast<float>(std::min(1.0, shade * (1 - cast)));
+    const double repeat = 10.0 + 30.0 * u(rng);  // checker squares 0.25-1 m
+    model_->mat_texrepeat[2 * floor_mat + 0] = static_cast<float>(repeat);
+    model_->mat_texrepeat[2 * floor_mat + 1] = static_cast<float>(repeat);
+  }
+  const double head_diffuse = 0.35 + 0.5 * u(rng), head_ambient = 0.2 + 0.3 * u(rng);
+  for (int k = 0; k < 3; ++k) {
+    model_->vis.headlight.diffuse[k] = static_cast<float>(head_diffuse);
+    model_->vis.headlight.ambient[k] = static_cast<float>(head_ambient);
+  }
+  for (int l = 0; l < model_->nlight; ++l) {
+    const double strength = 0.2 + 0.6 * u(rng);
+    for (int k = 0; k < 3; ++k) model_->light_diffuse[3 * l + k] = static_cast<float>(strength);
+    const double azimuth = 2.0 * M_PI * u(rng), elevation = 0.6 + 0.9 * u(rng);  // rad
+    model_->light_dir[3 * l + 0] = std::cos(azimuth) * std::cos(elevation);
+    model_->light_dir[3 * l + 1] = std::sin(azimuth) * std::cos(elevation);
+    model_->light_dir[3 * l + 2] = -std::sin(elevation);
+  }
+}
+
 cv::Mat World::RenderPayloadCamera() {
   cv::Mat bgr;
   RenderPayloadCamera(&bgr, cv::Rect());
@@ -810,7 +845,11 @@ void World::RenderPayloadCamera(cv::Mat* bgr, const cv::Rect& region) {
 }
 
 cv::Mat World::RenderChaseCamera(int width_px, int height_px) {
-  return renderer_->Render(data_, ids_.chase_camera, width_px, height_px);
+  // the gripper (group 3) while it holds the payload
+  renderer_->SetGeomGroupVisible(kGripperGeomGroup, model_->eq_active[ids_.gripper_weld] != 0);
+  const cv::Mat frame = renderer_->Render(data_, ids_.chase_camera, width_px, height_px);
+  renderer_->SetGeomGroupVisible(kGripperGeomGroup, false);
+  return frame;
 }
 
 }  // namespace hpa::sim

@@ -42,6 +42,7 @@ struct EstimationSpec {
   double camera_latency_s = 0.03;     // capture to detection delivery
   double detector_noise_scale = 1.0;  // analytic camera only: scale on the measured noise
   bool slack_tension_cue = true;      // hybrid estimator: also flag slack from the IMU tension
+  bool camera_randomize = false;      // floor and lighting of the rendered camera vary by seed
   // estimator variant (estimator_registry.h); unset: the one the controller is registered with
   std::optional<std::string> estimator;
 };

@@ -10,7 +10,8 @@
 
 namespace hpa {
 
-/// Writes frames through OpenCV's video writer (mp4v); optionally only around slack events.
+/// Writes frames through OpenCV's video writer (H.264 "avc1", else "mp4v"); optionally only
+/// around slack events.
 class VideoRecorder {
  public:
   static constexpr int kWidthPx = 960;
@@ -36,10 +37,14 @@ class VideoRecorder {
   /// frame is removed rather than left empty).
   int Finish();
 
+  /// The codec the file is written with: "avc1" (H.264) or "mp4v".
+  const std::string& codec() const { return codec_; }
+
  private:
   cv::Mat Compose(const cv::Mat& chase_bgr, const cv::Mat& onboard_bgr, const Hud& hud) const;
 
   std::string path_;
+  std::string codec_;
   cv::VideoWriter writer_;
   double rate_hz_;
   bool slack_events_only_;

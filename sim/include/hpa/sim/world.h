@@ -42,10 +42,11 @@ struct WorldConfig {
   Params params;             // flight parameters (params.yaml)
   WorldOverrides overrides;  // perturb the WORLD only (mass, cable length): model mismatch
   std::string scene_path = std::string(HPA_SOURCE_DIR) + "/models/scene.xml";  // MJCF file
-  uint64_t seed = 1;        // the one generator for all sensor noise
-  SensorNoiseConfig noise;  // IMU and VIO noise
-  RateTable rates;          // physics, IMU and VIO rates, VIO latency
-  WorldProfile profile;     // realism parts (default: all off, the ideal world)
+  uint64_t seed = 1;                  // the one generator for all sensor noise
+  SensorNoiseConfig noise;            // IMU and VIO noise
+  RateTable rates;                    // physics, IMU and VIO rates, VIO latency
+  WorldProfile profile;               // realism parts (default: all off, the ideal world)
+  bool randomize_appearance = false;  // floor shade, texture scale and lights drawn from the seed
   // GL context of the rendered cameras (one back end per process: sim/src/gl_context.h)
   GlBackend gl_backend = GlBackend::kOsMesa;
 };
@@ -209,6 +210,7 @@ class World {
   void CheckCrash();
   void CheckWarnings();
   void DrawMismatch();
+  void RandomizeAppearance();
   void ApplyAerodynamics();
   void UpdateContacts();
   void LatchCrash(const std::string& reason);
