@@ -37,3 +37,8 @@ set_tests_properties(cli.slurm PROPERTIES LABELS "cli;slurm" TIMEOUT 600 RUN_SER
 add_test(NAME cli.sweep_diff
          COMMAND bash ${SCEN}/tests/sweep_diff_cli_test.sh ${HPA_BIN} ${SCEN} ${SCEN_OUT}/sweep_diff)
 set_tests_properties(cli.sweep_diff PROPERTIES LABELS cli TIMEOUT 600)
+
+# The paper's impulse finding over a Monte Carlo sweep: hpa_mpc crashes less than the baseline
+add_test(NAME cli.impulse_finding
+         COMMAND bash ${SCEN}/tests/impulse_finding_test.sh ${HPA_BIN} ${SCEN} ${SCEN_OUT}/impulse_finding)
+set_tests_properties(cli.impulse_finding PROPERTIES LABELS "cli;scenario" TIMEOUT 900)
