@@ -28,19 +28,25 @@ Eigen::Vector2d DistortNormalised(const Eigen::Vector4d& k, const Eigen::Vector2
                          y * radial + k[2] * (r2 + 2.0 * y * y) + 2.0 * k[3] * x * y);
 }
 
-Eigen::Vector2d UndistortNormalised(const Eigen::Vector4d& k, const Eigen::Vector2d& x_d) {
+Eigen::Vector2d UndistortNormalised(const Eigen::Vector4d& k, const Eigen::Vector2d& x_d,
+                                    const Eigen::Vector2d* guess) {
   if (k.isZero()) return x_d;
-  // Newton on F(x) = Distort(x) - x_d with a numeric Jacobian: converges in a few steps over
-  // the whole image (plain fixed-point iteration diverges at the corners of a wide lens)
-  Eigen::Vector2d x = x_d;
+  // Newton on F(x) = Distort(x) - x_d with the model's analytic Jacobian: converges in a few
+  // steps over the whole image (plain fixed-point iteration diverges at the corners of a wide
+  // lens), fewer from a neighbour's solution
+  Eigen::Vector2d x = guess != nullptr ? *guess : x_d;
   for (int i = 0; i < 30; ++i) {
     const Eigen::Vector2d f = DistortNormalised(k, x) - x_d;
-    if (f.norm() < 1e-12) break;
-    constexpr double h = 1e-7;
+    if (f.squaredNorm() < 1e-26) break;
+    const double u = x.x(), v = x.y(), r2 = u * u + v * v;
+    const double radial = 1.0 + k[0] * r2 + k[1] * r2 * r2;
+    const double dradial = 2.0 * k[0] + 4.0 * k[1] * r2;  // d(radial)/du = u * dradial
     Eigen::Matrix2d J;
-    J.col(0) = (DistortNormalised(k, x + Eigen::Vector2d(h, 0.0)) - x_d - f) / h;
-    J.col(1) = (DistortNormalised(k, x + Eigen::Vector2d(0.0, h)) - x_d - f) / h;
-    x -= J.partialPivLu().solve(f);
+    J(0, 0) = radial + u * dradial * u + 2.0 * k[2] * v + 6.0 * k[3] * u;
+    J(0, 1) = u * dradial * v + 2.0 * k[2] * u + 2.0 * k[3] * v;
+    J(1, 0) = v * dradial * u + 2.0 * k[2] * u + 2.0 * k[3] * v;
+    J(1, 1) = radial + v * dradial * v + 6.0 * k[2] * v + 2.0 * k[3] * u;
+    x -= J.inverse() * f;
   }
   return x;
 }

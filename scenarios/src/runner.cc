@@ -237,26 +237,22 @@ RunResult RunScenario(const Scenario& scenario, const Params& params, const RunO
             const cv::Rect region = video_loop < 0
                                         ? detector.RegionAround(last_detection, kRegionMarginPx)
                                         : cv::Rect();
-            std::optional<PayloadDetection> in_region;
-            if (region.area() > 0) {
-              world.RenderPayloadCamera(&rendered, region);
-              frame.render_ms = world.last_camera_timing().render_ms;
-              frame.image_model_ms = world.last_camera_timing().image_model_ms;
-              const auto r1 = Clock::now();
-              in_region = detector.DetectInRegion(rendered, region, t);
-              frame.detector_ms = Ms(r1, Clock::now());
-            }
-            if (in_region) {
-              detection = *in_region;
-              frame.region_only = true;
-            } else {
-              world.RenderPayloadCamera(&rendered);
+            // renders `area` (empty: the whole frame) and detects in it; times add up
+            const auto render_and_detect = [&](const cv::Rect& area) {
+              world.RenderPayloadCamera(&rendered, area);
               frame.render_ms += world.last_camera_timing().render_ms;
               frame.image_model_ms += world.last_camera_timing().image_model_ms;
               const auto r1 = Clock::now();
-              detection = detector.Detect(rendered, t);
+              const std::optional<PayloadDetection> d =
+                  area.area() > 0 ? detector.DetectInRegion(rendered, area, t)
+                                  : std::optional<PayloadDetection>(detector.Detect(rendered, t));
               frame.detector_ms += Ms(r1, Clock::now());
-            }
+              return d;
+            };
+            std::optional<PayloadDetection> in_region;
+            if (region.area() > 0) in_region = render_and_detect(region);
+            frame.region_only = in_region.has_value();
+            detection = in_region ? *in_region : *render_and_detect(cv::Rect());
             last_detection = detection;
             frame.frame = &rendered;
           } else {

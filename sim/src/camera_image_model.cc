@@ -35,27 +35,6 @@ const std::vector<float>& UnitNormalTable() {
   return table;
 }
 
-// Undistorted normalised coordinates of distorted ones, warm-started Newton with the analytic
-// Jacobian of the radial-tangential model (a full-frame map is ~1 M solves).
-Eigen::Vector2d UndistortWarm(const Eigen::Vector4d& k, const Eigen::Vector2d& x_d,
-                              Eigen::Vector2d x) {
-  for (int i = 0; i < 20; ++i) {
-    const double u = x.x(), v = x.y(), r2 = u * u + v * v;
-    const double radial = 1.0 + k[0] * r2 + k[1] * r2 * r2;
-    const double dradial = 2.0 * k[0] + 4.0 * k[1] * r2;  // d radial / d(r2) * 2
-    const Eigen::Vector2d f(u * radial + 2.0 * k[2] * u * v + k[3] * (r2 + 2.0 * u * u) - x_d.x(),
-                            v * radial + k[2] * (r2 + 2.0 * v * v) + 2.0 * k[3] * u * v - x_d.y());
-    if (f.squaredNorm() < 1e-26) break;
-    Eigen::Matrix2d J;
-    J(0, 0) = radial + u * dradial * u + 2.0 * k[2] * v + k[3] * 6.0 * u;
-    J(0, 1) = u * dradial * v + 2.0 * k[2] * u + k[3] * 2.0 * v;
-    J(1, 0) = v * dradial * u + k[2] * 2.0 * u + 2.0 * k[3] * v;
-    J(1, 1) = radial + v * dradial * v + k[2] * 6.0 * v + 2.0 * k[3] * u;
-    x -= J.inverse() * f;
-  }
-  return x;
-}
-
 struct Maps {
   double render_focal_px;
   cv::Mat map1, map2;    // fixed-point maps for cv::remap
@@ -82,7 +61,8 @@ const Maps& MapsFor(const Params& params) {
     Eigen::Vector2d guess((0.5 - cx) / f_px, (row + 0.5 - cy) / f_px);
     for (int col = 0; col < w; ++col) {
       const Eigen::Vector2d x_d((col + 0.5 - cx) / f_px, (row + 0.5 - cy) / f_px);
-      const Eigen::Vector2d x_u = UndistortWarm(k, x_d, col == 0 ? x_d : guess);
+      // warm start from the neighbour: a full-frame map is ~1 M solves
+      const Eigen::Vector2d x_u = UndistortNormalised(k, x_d, col == 0 ? nullptr : &guess);
       guess = x_u;
       undistorted.at<cv::Vec2f>(row, col) =
           cv::Vec2f(static_cast<float>(x_u.x()), static_cast<float>(x_u.y()));

@@ -74,10 +74,10 @@ SensorNoiseConfig ImuNoise(const WorldConfig& config) {
   return noise;
 }
 
-// Seeds of the profile's own generators, apart from the sensor noise stream.
 // MJCF geom group of the gripper's visual (drawn in the chase camera while it holds the payload).
 constexpr int kGripperGeomGroup = 3;
 
+// Seeds of the profile's own generators, apart from the sensor noise stream.
 uint64_t DerivedSeed(uint64_t seed, uint64_t salt) { return seed * 0x9E3779B97F4A7C15ULL + salt; }
 
 }  // namespace
@@ -809,7 +809,8 @@ void World::RenderPayloadCamera(cv::Mat* bgr, const cv::Rect& region) {
   double render_ms = 0.0;
   if (profile.exposure_s > 0.0 && profile.motion_blur_subframes >= 2) {
     // reference motion blur: the average of renders at sub-frame times across the exposure,
-    // every body moved with its current velocity (the exposure is centred on now)
+    // every body moved with its current velocity (the exposure is centred on now); always the
+    // whole frame, which a region request reads its part of
     if (subframe_data_ == nullptr) subframe_data_ = mj_makeData(model_);
     const int n = profile.motion_blur_subframes;
     subframe_sum_.create(h, w, CV_32FC3);
@@ -831,7 +832,8 @@ void World::RenderPayloadCamera(cv::Mat* bgr, const cv::Rect& region) {
     camera_image_->ApplyOptics(pinhole_, frame, bgr);
   } else {
     cv::Rect blur_region;
-    const Eigen::Vector2d blur_px = PayloadImageMotionPx(&blur_region);
+    const Eigen::Vector2d blur_px =
+        profile.exposure_s > 0.0 ? PayloadImageMotionPx(&blur_region) : Eigen::Vector2d::Zero();
     const cv::Rect render_region =
         region.area() > 0 ? camera_image_->RenderRegion(region, blur_px) : cv::Rect();
     renderer_->Render(data_, ids_.payload_camera, w, h, profile.draw_cable, &pinhole_,

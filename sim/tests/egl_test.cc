@@ -19,6 +19,7 @@
 #include "hpa/sim/gl_backend.h"
 #include "hpa/sim/world.h"
 #include "sim/src/world_internals.h"
+#include "swung_payload.h"
 
 namespace hpa::sim {
 namespace {
@@ -70,13 +71,7 @@ ChildResult RunInChild(const std::function<std::string()>& body) {
 // the quadrotor is tilted (render_test.cc's offset case): floor texture, payload and shading.
 void PoseWorld(World& world) {
   const Params& p = world.world_params();
-  SystemState s;
-  s.p_WQ_W = Eigen::Vector3d(0, 0, 1);
-  const Eigen::Vector3d offset(0.1, 0.05, 0);
-  s.p_WL_W = s.p_WQ_W + offset + Eigen::Vector3d(0, 0, -std::sqrt(0.25 - offset.squaredNorm()));
-  s.q_WB = Eigen::AngleAxisd(0.6, Eigen::Vector3d::UnitZ()) *
-           Eigen::AngleAxisd(0.1, Eigen::Vector3d::UnitY()) *
-           Eigen::AngleAxisd(-0.15, Eigen::Vector3d::UnitX());
+  const SystemState s = testing_poses::SwungPayload(/*tilted=*/true);
   world.SetState(s.ToVector(), InputVector::Constant(p.HoverMotorSpeedRadps()));
 }
 

@@ -11,6 +11,7 @@
 #include "hpa/models/camera_model.h"
 #include "hpa/models/params.h"
 #include "hpa/sim/world.h"
+#include "swung_payload.h"
 
 namespace hpa::sim {
 namespace {
@@ -89,13 +90,7 @@ TEST(RenderTest, PayloadMovesInTheImageAsTheCameraModelSays) {
   config.profile.camera.draw_cable = false;  // geometry of the ball alone
   World world(config);
   const Params& p = world.world_params();
-  SystemState s;
-  s.p_WQ_W = Eigen::Vector3d(0, 0, 1);
-  const Eigen::Vector3d offset(0.1, 0.05, 0);
-  s.p_WL_W = s.p_WQ_W + offset + Eigen::Vector3d(0, 0, -std::sqrt(0.25 - offset.squaredNorm()));
-  s.q_WB = Eigen::AngleAxisd(0.6, Eigen::Vector3d::UnitZ()) *
-           Eigen::AngleAxisd(0.1, Eigen::Vector3d::UnitY()) *
-           Eigen::AngleAxisd(-0.15, Eigen::Vector3d::UnitX());
+  const SystemState s = testing_poses::SwungPayload(/*tilted=*/true);
   world.SetState(s.ToVector(), InputVector::Constant(p.HoverMotorSpeedRadps()));
   const cv::Mat frame = world.RenderPayloadCamera();
   cv::imwrite(testing::TempDir() + "/payload_camera_offset.png", frame);
@@ -167,10 +162,7 @@ TEST(RenderTest, FastMotionBlurMatchesSubFrameReference) {
     config.profile.camera.draw_cable = false;  // the ball alone
     World world(config);
     const Params& p = world.world_params();
-    SystemState s;
-    s.p_WQ_W = Eigen::Vector3d(0, 0, 1);
-    const Eigen::Vector3d offset(0.1, 0.05, 0);
-    s.p_WL_W = s.p_WQ_W + offset + Eigen::Vector3d(0, 0, -std::sqrt(0.25 - offset.squaredNorm()));
+    SystemState s = testing_poses::SwungPayload(/*tilted=*/false);
     s.v_WL_W = Eigen::Vector3d(2.0, -1.0, 0.4);  // 2.3 m/s: a whirl after an impulse
     world.SetState(s.ToVector(), InputVector::Constant(p.HoverMotorSpeedRadps()));
     return world.RenderPayloadCamera();
@@ -230,6 +222,8 @@ TEST(RenderTest, RandomizedAppearanceVariesBySeedOnly) {
       same_seed, other_seed, fixed);
   EXPECT_EQ(same_seed, 0.0);
   EXPECT_EQ(fixed, 0.0);  // without randomize the seed changes nothing in a noise-free frame
+  // measured 18.2 levels between seeds 1 and 2; a draw that barely changed the scene (a quarter
+  // of that, about one checker shade step) fails
   EXPECT_GT(other_seed, 5.0);
 }
 

@@ -25,9 +25,10 @@ bool InsideImage(const Params& params, const Eigen::Vector3d& p_C);
 /// x_d = x_n (1 + k1 r^2 + k2 r^4) + tangential(p1, p2), r = |x_n| (OpenCV's model).
 Eigen::Vector2d DistortNormalised(const Eigen::Vector4d& k1_k2_p1_p2, const Eigen::Vector2d& x_n);
 
-/// Ideal normalised coordinates whose distorted image is x_d (fixed-point iteration, as
-/// cv::undistortPoints; exact to < 1e-9 inside the lens's monotonic range).
-Eigen::Vector2d UndistortNormalised(const Eigen::Vector4d& k1_k2_p1_p2, const Eigen::Vector2d& x_d);
+/// Ideal normalised coordinates whose distorted image is x_d (Newton's method from `guess`, or
+/// from x_d when null; exact to < 1e-12 inside the lens's monotonic range).
+Eigen::Vector2d UndistortNormalised(const Eigen::Vector4d& k1_k2_p1_p2, const Eigen::Vector2d& x_d,
+                                    const Eigen::Vector2d* guess = nullptr);
 
 /// Ideal (pinhole) pixel of a real, distorted pixel (continuous coordinates, origin top-left).
 Eigen::Vector2d UndistortPixel(const Params& params, const Eigen::Vector2d& distorted_px);
