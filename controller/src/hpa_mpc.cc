@@ -45,11 +45,17 @@ void HpaMpc::Reset() {
   plan_x_.clear();
 }
 
-Ocp HpaMpc::BuildProblem(const SystemState& state) const {
+Ocp HpaMpc::BuildProblem(const SystemState& state, const std::vector<InputVector>& guess) const {
   const CableMode mode = settings_.hybrid ? state.mode : CableMode::kTaut;
   const double perception = settings_.hybrid ? settings_.perception_weight : 0.0;
   Ocp ocp = BuildOcp(model_, *reference_, state.time_s, mode, perception, settings_.weights);
   SetCameraDeadzone(state, &ocp);
+  if (settings_.hybrid && settings_.predict_retaut && mode == CableMode::kSlack) {
+    // the mode sequence is fixed for the solve: where the warm start meets the guard
+    const int stage =
+        PredictRetautStage(ocp, state.ToVector(), guess.empty() ? WarmStart(state.time_s) : guess);
+    if (stage > 0) ScheduleRetaut(*reference_, state.time_s, stage, &ocp);
+  }
   return ocp;
 }
 
@@ -100,13 +106,13 @@ ControlOutput HpaMpc::Update(const SystemState& state) {
     return finish();
   }
 
-  const Ocp ocp = BuildProblem(state);
+  const std::vector<InputVector> guess = WarmStart(state.time_s);
+  const Ocp ocp = BuildProblem(state, guess);
   // the taut flow holds on the taut manifold only: hpa_mpc projects x0 onto it (jump map);
   // nonhybrid_mpc starts from the state as measured, as the paper's baseline does
   const StateVector x0 = ocp.mode == CableMode::kTaut && settings_.hybrid
                              ? model_->ProjectToTaut(state.ToVector())
                              : state.ToVector();
-  const std::vector<InputVector> guess = WarmStart(state.time_s);
   const bool had_plan = plan_u_.size() == static_cast<size_t>(ocp.horizon_steps);
 
   OcpSolution solution = solver_->Solve(ocp, x0, guess);
@@ -145,6 +151,7 @@ std::unique_ptr<Controller> MakeHpaMpcController(const ControllerConfig& config,
   settings.hybrid = true;
   settings.perception_weight = config.perception_weight;
   settings.solver = config.solver;
+  settings.predict_retaut = config.predict_retaut;
   return std::make_unique<HpaMpc>(params, std::move(reference), settings);
 }
 

@@ -105,7 +105,8 @@ void PerceptionError(const Ocp& ocp, int k, const StateVector& x, const InputVec
     const Eigen::Matrix3d rr = (r_ref * ocp.R_BC).transpose();
     const Eigen::Vector3d d_W = x.segment<3>(I::kPayloadPos) - x.segment<3>(I::kQuadPos);
     const Eigen::Vector3d p_C = rr * (d_W - r_ref * ocp.t_BC_B_m);
-    const double deadzone = ocp.mode == CableMode::kSlack ? w.cam_slack_deadzone_fraction : 0.0;
+    const double deadzone =
+        ocp.StageMode(k) == CableMode::kSlack ? w.cam_slack_deadzone_fraction : 0.0;
     for (int i = 0; i < 2; ++i) {
       if (deadzone <= 0.0) {
         (*r)(i) = sqrt_cam(i) * p_C(i);
@@ -273,13 +274,20 @@ OcpWeights OcpWeights::Tuned() {
   return w;
 }
 
-StateVector Ocp::Step(const StateVector& x, const InputVector& u) const {
-  return model->Step(x, u, mode, stage_dt_s);
+StateVector Ocp::Step(int k, const StateVector& x, const InputVector& u) const {
+  const StateVector x_next = model->Step(x, u, StageMode(k), stage_dt_s);
+  return k + 1 == retaut_stage ? model->ProjectToTaut(x_next) : x_next;
 }
 
-void Ocp::StepJacobians(const StateVector& x, const InputVector& u, StateVector* x_next,
+void Ocp::StepJacobians(int k, const StateVector& x, const InputVector& u, StateVector* x_next,
                         StateMatrix* a, InputMatrix* b) const {
-  model->StepJacobians(x, u, mode, stage_dt_s, x_next, a, b);
+  model->StepJacobians(x, u, StageMode(k), stage_dt_s, x_next, a, b);
+  if (k + 1 != retaut_stage) return;
+  // chain rule through the jump map: d y / d x = J (d F / d x), d y / d u = J (d F / d u)
+  StateMatrix jump;
+  *x_next = model->ProjectToTautJacobian(*x_next, &jump);
+  *a = (jump * *a).eval();
+  *b = (jump * *b).eval();
 }
 
 const std::vector<OcpTerm>& OcpTerms() {
@@ -303,7 +311,7 @@ OcpTermWeight OcpTermStageWeight(const Ocp& ocp, const OcpTerm& term, int k) {
                      ? ocp.weights.terminal_factor
                      : 1.0;
   if (term.scale != nullptr) scale *= term.scale(ocp);
-  return scale * term.weight(ocp.weights, ocp.mode);
+  return scale * term.weight(ocp.weights, ocp.StageMode(k));
 }
 
 void EvaluateOcpTerm(const Ocp& ocp, const OcpTerm& term, int k, const StateVector& x,
@@ -343,6 +351,29 @@ void SetCameraDeadzone(const SystemState& state, Ocp* ocp) {
     ocp->cam_slack_deadzone_m.setConstant(std::numeric_limits<double>::infinity());
   } else {
     ocp->cam_slack_deadzone_m = fraction * depth_m * ocp->camera_tan_half_fov;
+  }
+}
+
+int PredictRetautStage(const Ocp& ocp, const StateVector& x0, const std::vector<InputVector>& u) {
+  if (ocp.mode != CableMode::kSlack) return -1;
+  const double l = ocp.model->params().cable_length_m;
+  StateVector x = x0;
+  for (int k = 0; k < ocp.horizon_steps && k < static_cast<int>(u.size()); ++k) {
+    x = ocp.model->Step(x, u[k], CableMode::kSlack, ocp.stage_dt_s);
+    const Eigen::Vector3d r = x.segment<3>(I::kPayloadPos) - x.segment<3>(I::kQuadPos);
+    const Eigen::Vector3d v_rel = x.segment<3>(I::kPayloadVel) - x.segment<3>(I::kQuadVel);
+    if (r.norm() >= l && v_rel.dot(r) > 0.0) return k + 1;
+  }
+  return -1;
+}
+
+void ScheduleRetaut(const Reference& reference, double t0_s, int stage, Ocp* ocp) {
+  ocp->retaut_stage = stage >= 1 && stage <= ocp->horizon_steps ? stage : -1;
+  const Params& params = ocp->model->params();
+  for (int k = 0; k <= ocp->horizon_steps; ++k) {
+    const ReferencePoint point = reference.At(t0_s + k * ocp->stage_dt_s);
+    ocp->x_ref[k] = StateReference(params, point, ocp->StageMode(k));
+    if (k < ocp->horizon_steps) ocp->u_ref[k] = InputReference(params, point, ocp->StageMode(k));
   }
 }
 
@@ -409,7 +440,7 @@ double OcpCost(const Ocp& ocp, const StateVector& x0, const std::vector<InputVec
   for (int k = 0; k < n; ++k) {
     StageResidual(ocp, k, x, u[k], &r, nullptr, nullptr);
     cost += r.squaredNorm();
-    x = ocp.Step(x, u[k]);
+    x = ocp.Step(k, x, u[k]);
     if (x_traj != nullptr) (*x_traj)[k + 1] = x;
   }
   StageResidual(ocp, n, x, InputVector::Zero(), &r, nullptr, nullptr);
@@ -431,7 +462,7 @@ OcpLinearization LinearizeAlong(const Ocp& ocp, const StateVector& x0,
   for (int k = 0; k < n; ++k) {
     StageResidual(ocp, k, lin.x[k], u[k], &lin.r[k], &lin.r_x[k], &lin.r_u[k]);
     cost += lin.r[k].squaredNorm();
-    ocp.StepJacobians(lin.x[k], u[k], &lin.x[k + 1], &lin.a[k], &lin.b[k]);
+    ocp.StepJacobians(k, lin.x[k], u[k], &lin.x[k + 1], &lin.a[k], &lin.b[k]);
   }
   StageResidual(ocp, n, lin.x[n], InputVector::Zero(), &lin.r[n], &lin.r_x[n], &lin.r_u[n]);
   lin.cost = cost + lin.r[n].squaredNorm();

@@ -181,5 +181,32 @@ TEST(HpaMpcTest, FactoryAndModes) {
   EXPECT_STREQ(ToString(ControlStatus::kNonFinite), "non_finite");
 }
 
+TEST(HpaMpcTest, PredictRetautSchedulesTheGuardOnlyWhenAsked) {
+  const Params params;
+  SystemState s = HoverAt(params, Eigen::Vector3d(0, 0, 1.0));
+  // payload thrown up to 0.3 m below, rising at 0.5 m/s: back at the length within 0.3 s
+  s.p_WL_W = Eigen::Vector3d(0.02, 0.0, 0.7);
+  s.v_WL_W = Eigen::Vector3d(0.0, 0.0, 0.5);
+  s.mode = CableMode::kSlack;
+  MpcSettings settings;
+  HpaMpc paper(params, HoverRef(params), settings);
+  EXPECT_EQ(paper.BuildProblem(s).retaut_stage, -1);  // slack held over the horizon
+  settings.predict_retaut = true;
+  HpaMpc predicting(params, HoverRef(params), settings);
+  const Ocp ocp = predicting.BuildProblem(s);
+  EXPECT_EQ(ocp.retaut_stage, 3);
+  EXPECT_EQ(ocp.StageMode(ocp.horizon_steps), CableMode::kTaut);
+  // the solve runs through the jump and gives a command inside the bounds
+  const ControlOutput out = predicting.Update(s);
+  EXPECT_EQ(out.status, ControlStatus::kSuccess);
+  ExpectInBounds(params, predicting.plan_inputs());
+  // taut, or the baseline: nothing to predict
+  s.mode = CableMode::kTaut;
+  EXPECT_EQ(predicting.BuildProblem(s).retaut_stage, -1);
+  settings.hybrid = false;
+  s.mode = CableMode::kSlack;
+  EXPECT_EQ(HpaMpc(params, HoverRef(params), settings).BuildProblem(s).retaut_stage, -1);
+}
+
 }  // namespace
 }  // namespace hpa

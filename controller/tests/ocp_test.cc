@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <set>
 #include <string>
@@ -305,7 +306,7 @@ TEST(OcpTest, LinearizationIsTheSimulatedTrajectory) {
     StateVector x_next;
     StateMatrix a;
     InputMatrix b;
-    ocp.StepJacobians(x[k], u[k], &x_next, &a, &b);
+    ocp.StepJacobians(k, x[k], u[k], &x_next, &a, &b);
     EXPECT_EQ(lin.a[k], a) << k;
     EXPECT_EQ(lin.b[k], b) << k;
   }
@@ -337,6 +338,108 @@ TEST(OcpTest, CostGradientMatchesFiniteDifferences) {
       // penalties are avoided by construction; 1e-5 relative + 1e-7 absolute
       EXPECT_NEAR(grad(i), fd, 1e-5 * std::abs(fd) + 1e-7) << "mode " << ToString(mode);
     }
+  }
+}
+
+// A slack state whose payload, thrown up, falls back past the cable's length inside the horizon.
+StateVector ThrownUpPayload() {
+  SystemState s;
+  s.p_WQ_W = Eigen::Vector3d(0.0, 0.0, 1.0);
+  s.p_WL_W = Eigen::Vector3d(0.02, 0.0, 1.0 - 0.3);
+  s.v_WL_W = Eigen::Vector3d(0.0, 0.0, 0.5);
+  s.mode = CableMode::kSlack;
+  return s.ToVector();
+}
+
+TEST(OcpTest, RetautPredictedWhereTheSlackRolloutReachesTheCable) {
+  const Params params;
+  const auto ref = HoverRef(params);
+  Ocp ocp = BuildOcp(params, *ref, 0.0, CableMode::kSlack, 1.0);
+  const StateVector x0 = ThrownUpPayload();
+  const std::vector<InputVector> hover(ocp.horizon_steps,
+                                       InputVector::Constant(params.HoverMotorSpeedRadps()));
+  // payload 0.3 m below, rising at 0.5 m/s, in free fall: it is 0.5 m below again after
+  // t = (0.5 + sqrt(0.25 + 2 g 0.2)) / g = 0.26 s (the quadrotor, lighter by the payload at
+  // hover speeds, climbs 4 cm meanwhile), so the guard is reached in stage 3 (0.2-0.3 s)
+  const int stage = PredictRetautStage(ocp, x0, hover);
+  EXPECT_EQ(stage, 3);
+  // a taut problem has no guard
+  EXPECT_EQ(PredictRetautStage(BuildOcp(params, *ref, 0.0, CableMode::kTaut, 1.0), x0, hover), -1);
+  // thrown up at 6 m/s the payload passes the vehicle (the model has no body) and reaches the
+  // length above it: 0.70 m above at 0.2 s, moving away, so stage 2
+  StateVector high = x0;
+  high(StateIndex::kPayloadVel + 2) = 6.0;
+  EXPECT_EQ(PredictRetautStage(ocp, high, hover), 2);
+
+  // the schedule: slack stages before, taut from the guard on, references rebuilt for taut
+  ScheduleRetaut(*ref, 0.0, stage, &ocp);
+  EXPECT_EQ(ocp.StageMode(stage - 1), CableMode::kSlack);
+  EXPECT_EQ(ocp.StageMode(stage), CableMode::kTaut);
+  const Ocp taut = BuildOcp(params, *ref, 0.0, CableMode::kTaut, 1.0);
+  EXPECT_EQ(ocp.u_ref[stage], taut.u_ref[stage]);
+  EXPECT_NE(ocp.u_ref[stage - 1], taut.u_ref[stage - 1]);
+
+  // the rollout meets the jump map at the guard: on the cable after it, no relative velocity
+  // along it (the payload was moving away)
+  std::vector<StateVector> x;
+  OcpCost(ocp, x0, hover, &x);
+  using I = StateIndex;
+  const Eigen::Vector3d r = x[stage].segment<3>(I::kPayloadPos) - x[stage].segment<3>(I::kQuadPos);
+  EXPECT_LE(r.norm(), params.cable_length_m + 1e-12);
+  EXPECT_NEAR(
+      (x[stage].segment<3>(I::kPayloadVel) - x[stage].segment<3>(I::kQuadVel)).dot(r.normalized()),
+      0.0, 1e-12);
+}
+
+TEST(OcpTest, StepJacobiansThroughTheJumpMatchFiniteDifferences) {
+  const Params params;
+  const auto ref = HoverRef(params);
+  Ocp ocp = BuildOcp(params, *ref, 0.0, CableMode::kSlack, 1.0);
+  const StateVector x0 = ThrownUpPayload();
+  const InputVector u = InputVector(1.02, 0.99, 1.01, 0.98) * params.HoverMotorSpeedRadps();
+  // the stage entering the guard, from the state one stage before it
+  ScheduleRetaut(*ref, 0.0, 3, &ocp);
+  StateVector x = x0;
+  for (int k = 0; k < 2; ++k) x = ocp.Step(k, x, u);
+  StateVector x_next;
+  StateMatrix a;
+  InputMatrix b;
+  ocp.StepJacobians(2, x, u, &x_next, &a, &b);
+  EXPECT_LT((x_next - ocp.Step(2, x, u)).norm(), 1e-12);
+  // central differences, h = 1e-6 on x ~ 1 and 1e-3 on u ~ 1e3: measured 6.3e-10 (x) and
+  // 1.1e-12 (u); bounds about 10x above
+  double max_a_error = 0.0, max_b_error = 0.0;
+  for (int i = 0; i < kNx; ++i) {
+    const double h = 1e-6;
+    StateVector xp = x, xm = x;
+    xp(i) += h;
+    xm(i) -= h;
+    const StateVector fd = (ocp.Step(2, xp, u) - ocp.Step(2, xm, u)) / (2 * h);
+    max_a_error = std::max(max_a_error, (a.col(i) - fd).cwiseAbs().maxCoeff());
+  }
+  for (int i = 0; i < kNu; ++i) {
+    const double h = 1e-3;
+    InputVector up = u, um = u;
+    up(i) += h;
+    um(i) -= h;
+    const StateVector fd = (ocp.Step(2, x, up) - ocp.Step(2, x, um)) / (2 * h);
+    max_b_error = std::max(max_b_error, (b.col(i) - fd).cwiseAbs().maxCoeff());
+  }
+  std::printf("stage through the jump vs central differences: max error %.2e (x), %.2e (u)\n",
+              max_a_error, max_b_error);
+  EXPECT_LT(max_a_error, 1e-8);
+  EXPECT_LT(max_b_error, 1e-11);
+  // the cost gradient of the whole scheduled horizon matches finite differences too
+  std::vector<InputVector> us(ocp.horizon_steps, u);
+  Eigen::VectorXd grad;
+  OcpCostAndGradient(ocp, x0, us, &grad);
+  for (int i = 0; i < kNu * ocp.horizon_steps; i += 3) {
+    const double h = 1e-2;
+    std::vector<InputVector> up = us, um = us;
+    up[i / kNu](i % kNu) += h;
+    um[i / kNu](i % kNu) -= h;
+    const double fd = (OcpCost(ocp, x0, up) - OcpCost(ocp, x0, um)) / (2 * h);
+    EXPECT_NEAR(grad(i), fd, 1e-5 * std::abs(fd) + 1e-7) << i;
   }
 }
 

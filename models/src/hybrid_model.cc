@@ -1,7 +1,6 @@
 #include "hpa/models/hybrid_model.h"
 
 #include <algorithm>
-
 #include <unsupported/Eigen/AutoDiff>
 
 #include "hpa/models/rotor_model.h"
@@ -112,6 +111,43 @@ void Unpack(const Eigen::Matrix<AdScalar, kNx, 1>& y, StateVector* value, StateM
   }
 }
 
+// The jump map a cable can give (HybridModel::ProjectToTaut), for any scalar type.
+template <typename T>
+Eigen::Matrix<T, kNx, 1> JumpMap(const Params& p, const Eigen::Matrix<T, kNx, 1>& x) {
+  using I = StateIndex;
+  const double m = p.quad_mass_kg, m_L = p.payload_mass_kg, l = p.cable_length_m;
+  const Vec3<T> p_L = x.template segment<3>(I::kPayloadPos);
+  const Vec3<T> p_Q = x.template segment<3>(I::kQuadPos);
+  const Vec3<T> v_L = x.template segment<3>(I::kPayloadVel);
+  const Vec3<T> v_Q = x.template segment<3>(I::kQuadVel);
+  const Vec3<T> r = p_L - p_Q;
+  const T d = r.norm();
+  const bool degenerate = !(d > T(1e-6));
+  const Vec3<T> xi = degenerate ? Vec3<T>(T(0), T(0), T(-1)) : Vec3<T>(r / d);
+
+  // positions: only as far as the taut band [l - epsilon, l] requires (the mode detector calls
+  // a cable in it taut, and the taut flow's Baumgarte term closes the rest), same centre of mass
+  T d_taut = d;
+  if (d_taut < T(l - p.slack_epsilon_m)) d_taut = T(l - p.slack_epsilon_m);
+  if (d_taut > T(l)) d_taut = T(l);
+  Eigen::Matrix<T, kNx, 1> y = x;
+  if (d_taut != d || degenerate) {
+    const Vec3<T> p_com = (T(m) * p_Q + T(m_L) * p_L) / T(m + m_L);
+    y.template segment<3>(I::kQuadPos) = p_com - T(m_L / (m + m_L)) * d_taut * xi;
+    y.template segment<3>(I::kPayloadPos) = p_com + T(m / (m + m_L)) * d_taut * xi;
+  }
+
+  // velocities: a cable only pulls. A payload moving away along xi is stopped by a perfectly
+  // inelastic collision (momentum kept); an approaching one gets no impulse
+  const T v_rel = (v_L - v_Q).dot(xi);
+  if (v_rel > T(0)) {
+    const T v_c = (T(m) * v_Q.dot(xi) + T(m_L) * v_L.dot(xi)) / T(m + m_L);
+    y.template segment<3>(I::kQuadVel) = v_Q + (v_c - v_Q.dot(xi)) * xi;
+    y.template segment<3>(I::kPayloadVel) = v_L + (v_c - v_L.dot(xi)) * xi;
+  }
+  return y;
+}
+
 }  // namespace
 
 HybridModel::HybridModel(const Params& params)
@@ -145,33 +181,20 @@ void HybridModel::StepJacobians(const StateVector& x, const InputVector& u, Cabl
 }
 
 StateVector HybridModel::ProjectToTaut(const StateVector& x) const {
-  using I = StateIndex;
-  const double m = params_.quad_mass_kg, m_L = params_.payload_mass_kg, l = params_.cable_length_m;
-  const Eigen::Vector3d p_L = x.segment<3>(I::kPayloadPos), p_Q = x.segment<3>(I::kQuadPos);
-  const Eigen::Vector3d v_L = x.segment<3>(I::kPayloadVel), v_Q = x.segment<3>(I::kQuadVel);
-  const Eigen::Vector3d r = p_L - p_Q;
-  const double d = r.norm();
-  const Eigen::Vector3d xi = d > 1e-6 ? Eigen::Vector3d(r / d) : Eigen::Vector3d(0, 0, -1);
+  return JumpMap<double>(params_, x);
+}
 
-  // positions: only as far as the taut band [l - epsilon, l] requires (the mode detector calls
-  // a cable in it taut, and the taut flow's Baumgarte term closes the rest), same centre of mass
-  const double d_taut = std::clamp(d, l - params_.slack_epsilon_m, l);
-  StateVector y = x;
-  if (d_taut != d || d <= 1e-6) {
-    const Eigen::Vector3d p_com = (m * p_Q + m_L * p_L) / (m + m_L);
-    y.segment<3>(I::kQuadPos) = p_com - m_L / (m + m_L) * d_taut * xi;
-    y.segment<3>(I::kPayloadPos) = p_com + m / (m + m_L) * d_taut * xi;
+StateVector HybridModel::ProjectToTautJacobian(const StateVector& x, StateMatrix* jacobian) const {
+  using JumpAd = Eigen::AutoDiffScalar<Eigen::Matrix<double, kNx, 1>>;
+  Eigen::Matrix<JumpAd, kNx, 1> x_ad;
+  for (int i = 0; i < kNx; ++i) x_ad(i) = JumpAd(x(i), kNx, i);
+  const Eigen::Matrix<JumpAd, kNx, 1> y = JumpMap<JumpAd>(params_, x_ad);
+  StateVector value;
+  for (int i = 0; i < kNx; ++i) {
+    value(i) = y(i).value();
+    jacobian->row(i) = y(i).derivatives().transpose();
   }
-
-  // velocities: a cable only pulls. A payload moving away along xi is stopped by a perfectly
-  // inelastic collision (momentum kept); an approaching one gets no impulse
-  const double v_rel_mps = (v_L - v_Q).dot(xi);
-  if (v_rel_mps > 0.0) {
-    const double v_c = (m * v_Q.dot(xi) + m_L * v_L.dot(xi)) / (m + m_L);
-    y.segment<3>(I::kQuadVel) = v_Q + (v_c - v_Q.dot(xi)) * xi;
-    y.segment<3>(I::kPayloadVel) = v_L + (v_c - v_L.dot(xi)) * xi;
-  }
-  return y;
+  return value;
 }
 
 double HybridModel::TautTensionN(const StateVector& x, const InputVector& u) const {

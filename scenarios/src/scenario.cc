@@ -184,6 +184,7 @@ Scenario ParseScenario(const YamlMap& root) {
     s.controller.type = c.Choice("type", ControllerNames(), "hpa_mpc");
     s.controller.perception_weight = c.Number("perception_weight", 0.0, 1e3, 1.0);
     s.controller.solver = c.Choice("solver", OcpSolverNames(), "rti");
+    s.controller.predict_retaut = c.Bool("predict_retaut", false);
     c.RejectUnknownKeys();
   }
   if (root.Has("estimation")) {

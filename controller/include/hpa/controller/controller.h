@@ -19,17 +19,18 @@ const char* ToString(ControlStatus status);
 
 /// One controller update's result; `command` is always safe to fly.
 struct ControlOutput {
-  BodyRateCommand command;                 // body rates and collective thrust for the rate loop
+  BodyRateCommand command;  // body rates and collective thrust for the rate loop
   ControlStatus status = ControlStatus::kSuccess;
-  double solve_time_ms = 0.0;              // wall time of this update
-  double cost = 0.0;                       // optimal-control cost of the plan (0 if not an MPC)
+  double solve_time_ms = 0.0;  // wall time of this update
+  double cost = 0.0;           // optimal-control cost of the plan (0 if not an MPC)
 };
 
 /// Settings of a controller from the scenario's `controller:` block.
 struct ControllerConfig {
-  std::string type = "hpa_mpc";     // hpa_mpc | nonhybrid_mpc | geometric
-  double perception_weight = 1.0;   // scale on the tuned Q_cam; 0 turns L_cam off
-  std::string solver = "rti";       // rti | nlopt (fully converged NMPC solve)
+  std::string type = "hpa_mpc";    // hpa_mpc | nonhybrid_mpc | geometric
+  double perception_weight = 1.0;  // scale on the tuned Q_cam; 0 turns L_cam off
+  std::string solver = "rti";      // rti | nlopt (fully converged NMPC solve)
+  bool predict_retaut = false;     // hpa_mpc: predict the slack-to-taut guard in the horizon
 };
 
 /// A high-level controller running at its own rate (150 Hz for the MPCs).

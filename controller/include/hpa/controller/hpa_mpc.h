@@ -23,6 +23,10 @@ struct MpcSettings {
   int rate_output_stage = 1;    // body rates flown: plan state x[1] (the paper's second stage)
   int thrust_output_stage = 0;  // thrust flown: plan input u[0] (why not u[1]: README)
   double rate_hz = 150.0;       // rate the runner calls Update at
+  // Hybrid only, in slack mode: predict the slack-to-taut guard inside the horizon from the warm
+  // start and switch to the taut model there, through the jump map (PredictRetautStage). false:
+  // slack held over the whole horizon (the paper).
+  bool predict_retaut = false;
 };
 
 /// Model predictive controller over the OCP of ocp.h.
@@ -52,8 +56,10 @@ class HpaMpc : public Controller {
   /// or hover speeds when there is no plan.
   std::vector<InputVector> WarmStart(double t_s) const;
 
-  /// The OCP this controller would solve for `state` (mode and perception per settings).
-  Ocp BuildProblem(const SystemState& state) const;
+  /// The OCP this controller would solve for `state` (mode and perception per settings), with
+  /// the re-taut predicted from x0 under `guess` when settings.predict_retaut (empty guess: the
+  /// warm start at state.time_s).
+  Ocp BuildProblem(const SystemState& state, const std::vector<InputVector>& guess = {}) const;
 
   /// Current plan inputs (empty before the first successful Update).  (N)
   const std::vector<InputVector>& plan_inputs() const { return plan_u_; }

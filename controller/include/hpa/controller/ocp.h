@@ -59,8 +59,12 @@ struct Ocp {
   std::shared_ptr<const HybridModel> model;  // dynamics F and its Jacobians (set by BuildOcp)
   int horizon_steps = kOcpHorizonSteps;      // N
   double stage_dt_s = kOcpStageDtS;          // stage length
-  CableMode mode = CableMode::kTaut;         // held over the horizon
-  double perception_weight = 1.0;            // scale on q_cam (0: L_cam off)
+  CableMode mode = CableMode::kTaut;         // mode at stage 0, held up to retaut_stage
+  // A re-taut predicted inside the horizon (controller.predict_retaut): stages k >= retaut_stage
+  // are taut, and the jump map (HybridModel::ProjectToTaut) is applied to the state entering
+  // stage retaut_stage. -1: `mode` is held over the whole horizon (the paper's form).
+  int retaut_stage = -1;
+  double perception_weight = 1.0;  // scale on q_cam (0: L_cam off)
   OcpWeights weights = OcpWeights::Tuned();
   double u_hover_radps = 1.0;                          // normalisation of the input residual
   InputVector u_min_radps = InputVector::Zero();       // hard bounds  (4)
@@ -74,10 +78,15 @@ struct Ocp {
   // current depth (the predicted free fall would otherwise widen it); infinite = no L_cam
   Eigen::Vector2d cam_slack_deadzone_m = Eigen::Vector2d::Zero();  // (2)
 
-  /// One stage of the dynamics in this problem's mode: x_{k+1} = F(x_k, u_k).
-  StateVector Step(const StateVector& x, const InputVector& u) const;
-  /// F and its Jacobians a = dF/dx (19 x 19), b = dF/du (19 x 4).
-  void StepJacobians(const StateVector& x, const InputVector& u, StateVector* x_next,
+  /// Cable mode of stage k: `mode`, or taut from retaut_stage on.
+  CableMode StageMode(int k) const {
+    return retaut_stage >= 0 && k >= retaut_stage ? CableMode::kTaut : mode;
+  }
+  /// Stage k of the dynamics: x_{k+1} = F_k(x_k, u_k) in StageMode(k), followed by the jump map
+  /// when k + 1 == retaut_stage.
+  StateVector Step(int k, const StateVector& x, const InputVector& u) const;
+  /// F_k and its Jacobians a = dF_k/dx (19 x 19), b = dF_k/du (19 x 4), through the jump map.
+  void StepJacobians(int k, const StateVector& x, const InputVector& u, StateVector* x_next,
                      StateMatrix* a, InputMatrix* b) const;
 };
 
@@ -145,6 +154,15 @@ void EvaluateOcpTerm(const Ocp& ocp, const OcpTerm& term, int k, const StateVect
 /// the payload's depth in the camera; a payload at or above the lens plane (thrown up) cannot
 /// be brought into view by moving, so the slack L_cam is switched off (infinite dead zone).
 void SetCameraDeadzone(const SystemState& state, Ocp* ocp);
+
+/// First stage k (1..N) whose state, simulated from x0 with u in slack mode, has reached the
+/// cable's length with the payload moving away from the quadrotor along the cable (the
+/// slack-to-taut guard); -1 when the guard is not reached inside the horizon or ocp is taut.
+int PredictRetautStage(const Ocp& ocp, const StateVector& x0, const std::vector<InputVector>& u);
+
+/// Schedules a re-taut at `stage` (1..N; -1 clears it): ocp->retaut_stage, and the state and input
+/// references of the stages from `stage` on rebuilt for the taut mode from `reference` at t0_s.
+void ScheduleRetaut(const Reference& reference, double t0_s, int stage, Ocp* ocp);
 
 /// Builds the OCP at time t0_s on `model`: references from `reference` at t0 + k dt, mode,
 /// weights, and bounds and camera transform from model->params().

@@ -46,6 +46,9 @@ class HybridModel {
   /// guard (re-taut, or an estimate off the constraint) before the taut model predicts.
   StateVector ProjectToTaut(const StateVector& x) const;
 
+  /// ProjectToTaut and its exact Jacobian d y / d x (19x19), piecewise as the map is.
+  StateVector ProjectToTautJacobian(const StateVector& x, StateMatrix* jacobian) const;
+
   /// Cable tension (N) that the taut model implies at x under u.
   double TautTensionN(const StateVector& x, const InputVector& u) const;
 
