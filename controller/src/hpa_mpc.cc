@@ -47,10 +47,15 @@ void HpaMpc::Reset() {
 
 Ocp HpaMpc::BuildProblem(const SystemState& state, const std::vector<InputVector>& guess) const {
   const CableMode mode = settings_.hybrid ? state.mode : CableMode::kTaut;
-  const double perception = settings_.hybrid ? settings_.perception_weight : 0.0;
-  Ocp ocp = BuildOcp(model_, *reference_, state.time_s, mode, perception, settings_.weights);
+  // a lost payload (hybrid only: the paper's baseline has no such notion): the quadrotor is
+  // held on its reference, as in slack, and no cost looks at the guessed payload
+  const bool lost = settings_.hybrid && state.payload_lost;
+  const double perception = settings_.hybrid && !lost ? settings_.perception_weight : 0.0;
+  OcpWeights weights = settings_.weights;
+  if (lost) weights.q_load = weights.q_quad;
+  Ocp ocp = BuildOcp(model_, *reference_, state.time_s, mode, perception, weights);
   SetCameraDeadzone(state, &ocp);
-  if (settings_.hybrid && settings_.predict_retaut && mode == CableMode::kSlack) {
+  if (settings_.hybrid && settings_.predict_retaut && mode == CableMode::kSlack && !lost) {
     // the mode sequence is fixed for the solve: where the warm start meets the guard
     const int stage =
         PredictRetautStage(ocp, state.ToVector(), guess.empty() ? WarmStart(state.time_s) : guess);
@@ -110,9 +115,16 @@ ControlOutput HpaMpc::Update(const SystemState& state) {
   const Ocp ocp = BuildProblem(state, guess);
   // the taut flow holds on the taut manifold only: hpa_mpc projects x0 onto it (jump map);
   // nonhybrid_mpc starts from the state as measured, as the paper's baseline does
-  const StateVector x0 = ocp.mode == CableMode::kTaut && settings_.hybrid
-                             ? model_->ProjectToTaut(state.ToVector())
-                             : state.ToVector();
+  StateVector x0 = ocp.mode == CableMode::kTaut && settings_.hybrid
+                       ? model_->ProjectToTaut(state.ToVector())
+                       : state.ToVector();
+  if (ocp.mode == CableMode::kTaut && settings_.hybrid && state.payload_lost) {
+    // a lost payload on a taut cable: what is still known is that it hangs on the cable; the
+    // taut model predicts with it at rest below the quadrotor
+    x0.segment<3>(StateIndex::kPayloadPos) =
+        state.p_WQ_W - Eigen::Vector3d(0, 0, params_.cable_length_m);
+    x0.segment<3>(StateIndex::kPayloadVel) = state.v_WQ_W;
+  }
   const bool had_plan = plan_u_.size() == static_cast<size_t>(ocp.horizon_steps);
 
   OcpSolution solution = solver_->Solve(ocp, x0, guess);

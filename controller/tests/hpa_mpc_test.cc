@@ -208,5 +208,29 @@ TEST(HpaMpcTest, PredictRetautSchedulesTheGuardOnlyWhenAsked) {
   EXPECT_EQ(HpaMpc(params, HoverRef(params), settings).BuildProblem(s).retaut_stage, -1);
 }
 
+TEST(HpaMpcTest, LostPayloadHoldsTheQuadrotorWithNoPayloadCost) {
+  const Params params;
+  SystemState s = HoverAt(params, Eigen::Vector3d(0, 0, 1.0));
+  s.p_WL_W += Eigen::Vector3d(0.4, 0.0, 0.3);  // a guess far off the cable
+  s.payload_lost = true;
+  HpaMpc mpc(params, HoverRef(params), MpcSettings());
+  const Ocp ocp = mpc.BuildProblem(s);
+  EXPECT_EQ(ocp.perception_weight, 0.0);
+  EXPECT_EQ(ocp.weights.q_load, OcpWeights::Tuned().q_quad);  // payload entries zero
+  // the command is the one for the payload hanging below the hovering quadrotor: hover
+  const ControlOutput out = mpc.Update(s);
+  s.p_WL_W = s.p_WQ_W - Eigen::Vector3d(0, 0, params.cable_length_m);
+  HpaMpc hanging(params, HoverRef(params), MpcSettings());
+  const ControlOutput reference = hanging.Update(s);
+  EXPECT_EQ(out.command.thrust_N, reference.command.thrust_N);
+  EXPECT_EQ(out.command.w_B_radps, reference.command.w_B_radps);
+  // the baseline has no notion of a lost payload: its problem does not change
+  MpcSettings baseline;
+  baseline.hybrid = false;
+  s.p_WL_W += Eigen::Vector3d(0.4, 0.0, 0.3);
+  EXPECT_EQ(HpaMpc(params, HoverRef(params), baseline).BuildProblem(s).weights.q_load,
+            OcpWeights::Tuned().q_load);
+}
+
 }  // namespace
 }  // namespace hpa

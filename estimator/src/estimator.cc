@@ -33,7 +33,8 @@ class CableEstimator final : public Estimator {
         tension_cue_(params, config.tension_cue,
                      InitialMode(hybrid, params, initial) == CableMode::kSlack),
         thrust_N_(params.HoverThrustN()),
-        mode_(InitialMode(hybrid, params, initial)) {
+        mode_(InitialMode(hybrid, params, initial)),
+        initial_time_s_(initial.time_s) {
     Matrix6d tracker_cov = Matrix6d::Zero();
     tracker_cov.diagonal() << Eigen::Vector3d::Constant(config.initial_payload_position_var_m2),
         Eigen::Vector3d::Constant(config.initial_payload_velocity_var_m2ps2);
@@ -47,6 +48,17 @@ class CableEstimator final : public Estimator {
       cable_.Predict(imu.time_s, thrust_N_, quad_.state().q_WB.toRotationMatrix());
     }
     if (hybrid_ && config_.tension_cue.enabled) UpdateTensionCue(imu);
+    if (hybrid_ && mode_ == CableMode::kSlack && !tracker_hit_vehicle_) {
+      // free fall through the vehicle: the payload has hit it, the prediction no longer holds
+      const QuadFilterState& quad = quad_.state();
+      Eigen::Vector3d p_WL_W, v_WL_W;
+      tracker_.PredictTo(imu.time_s, &p_WL_W, &v_WL_W);
+      const Eigen::Vector3d p_BL_B =
+          quad.q_WB.toRotationMatrix().transpose() * (p_WL_W - quad.p_WB_W);
+      const Eigen::Array3d reach_B = params_.body_half_size_m.array() + params_.payload_radius_m +
+                                     config_.payload_hit_margin_m;
+      tracker_hit_vehicle_ = (p_BL_B.cwiseAbs().array() < reach_B).all();
+    }
   }
 
   void OnVio(const VioSample& vio) override { quad_.UpdateVio(vio); }
@@ -70,6 +82,9 @@ class CableEstimator final : public Estimator {
       payload_visible_ = false;
       return;
     }
+    seen_ = true;
+    last_seen_time_s_ = detection.time_s;
+    tracker_hit_vehicle_ = false;
     // body-frame payload position and its covariance
     const Eigen::Vector3d p_BL_B = params_.t_BC_B_m + params_.R_BC * detection.p_CL_C;
     const Eigen::Matrix3d cov_B =
@@ -158,6 +173,8 @@ class CableEstimator final : public Estimator {
     out.w_B = quad.w_B_radps;
     out.mode = hybrid_ ? mode_ : CableMode::kTaut;
     out.payload_visible = payload_visible_;
+    const double unseen_s = time_s - (seen_ ? last_seen_time_s_ : initial_time_s_);
+    out.payload_lost = unseen_s > config_.payload_lost_after_s;
     const double measured_age_s = time_s - measured_time_s_;
     if (!hybrid_ && taut_payload_ == TautPayload::kMeasured && has_measured_ &&
         measured_age_s <= config_.measured_payload_max_age_s) {
@@ -170,6 +187,7 @@ class CableEstimator final : public Estimator {
       out.v_WL_W = out.v_WQ_W + params_.cable_length_m * cable_.xi_dot_W();
     } else {
       tracker_.PredictTo(time_s, &out.p_WL_W, &out.v_WL_W);
+      out.payload_lost = out.payload_lost || tracker_hit_vehicle_;
       // the cable cannot stretch: between the true re-taut and its detection, free fall would
       // carry the payload past the sphere |x_L - x_Q| = l; hold it on the sphere instead
       const Eigen::Vector3d d = out.p_WL_W - out.p_WQ_W;
@@ -275,10 +293,15 @@ class CableEstimator final : public Estimator {
   ModeDetector mode_detector_;
   PayloadTracker tracker_;
   TensionCue tension_cue_;
-  double thrust_N_;                  // last commanded collective thrust
-  CableMode mode_;                   // estimated mode (always taut when !hybrid)
-  bool payload_visible_ = true;      // last camera frame had a detection
-  bool has_last_detection_ = false;  // for the slack-entry velocity
+  double thrust_N_;                   // last commanded collective thrust
+  CableMode mode_;                    // estimated mode (always taut when !hybrid)
+  bool payload_visible_ = true;       // last camera frame had a detection
+  bool seen_ = false;                 // a detection has been taken since start
+  double last_seen_time_s_ = 0.0;     // capture time of the newest detection taken
+  double initial_time_s_ = 0.0;       // start time (the initial state counts as seen)
+  bool tracker_hit_vehicle_ = false;  // the slack prediction ran into the vehicle since the
+                                      // last detection
+  bool has_last_detection_ = false;   // for the slack-entry velocity
   Eigen::Vector3d last_p_WL_W_ = Eigen::Vector3d::Zero();  // previous detection, world  (3)
   double last_detection_time_s_ = 0.0;                     // its capture time
   int detections_lost_ = 0;                                // health counters (EstimatorHealth)

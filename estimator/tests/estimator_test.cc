@@ -8,11 +8,11 @@
 #include <map>
 #include <random>
 
-#include "hpa/sim/analytic_camera.h"
 #include "hpa/estimator/estimator_registry.h"
 #include "hpa/models/camera_model.h"
 #include "hpa/models/hybrid_model.h"
 #include "hpa/models/rotor_model.h"
+#include "hpa/sim/analytic_camera.h"
 
 namespace hpa {
 namespace {
@@ -253,6 +253,49 @@ TEST(EstimatorTest, AlwaysTautVariantPassesTheMeasuredPayload) {
   // low-pass lag), bound 1.5x; projected on the cable it is off by 212 mm, bound 2/3 of that
   EXPECT_LT(measured.any_slack_payload_rmse_m, 0.081);
   EXPECT_GT(projected.any_slack_payload_rmse_m, 0.14);
+}
+
+TEST(EstimatorTest, SaysSoWhenItHasLostThePayload) {
+  const Params p;
+  const AnalyticCamera camera(p);
+  std::mt19937_64 rng(3);
+  // hovering, taut: the payload is known while detections come, lost 0.2 s after the last one
+  SystemState hover;
+  hover.p_WQ_W = Eigen::Vector3d(0, 0, 1.5);
+  hover.p_WL_W = hover.p_WQ_W - Eigen::Vector3d(0, 0, p.cable_length_m);
+  std::unique_ptr<Estimator> estimator = MakeEstimator("hybrid", EstimatorConfig{}, p, hover);
+  ImuSample imu;
+  imu.accel_B_mps2 = Eigen::Vector3d(0, 0, p.gravity_mps2);
+  for (int k = 1; k <= 250; ++k) {  // 0.5 s at 500 Hz, frames at 30 Hz until 0.102 s
+    imu.time_s = 0.002 * k;
+    estimator->OnImu(imu);
+    if (k % 17 == 0 && k <= 51) {
+      estimator->OnPayloadDetection(camera.Measure(PayloadInCamera_C(p, hover), imu.time_s, rng));
+    }
+  }
+  const double last_frame_s = 0.002 * 51;
+  EXPECT_FALSE(estimator->Estimate(last_frame_s + 0.19).payload_lost);
+  EXPECT_TRUE(estimator->Estimate(last_frame_s + 0.21).payload_lost);
+  // a detection brings it back
+  estimator->OnPayloadDetection(camera.Measure(PayloadInCamera_C(p, hover), 0.5, rng));
+  EXPECT_FALSE(estimator->Estimate(0.5).payload_lost);
+
+  // slack, the payload 0.2 m below and thrown up at 3 m/s: its free fall reaches the body box
+  // (half height 0.03 m + radius 0.04 m + margin 0.01 m) after (0.2 - 0.08) / ~3 = 0.04 s; a
+  // payload cannot pass through the vehicle, so the prediction is a guess from then on
+  SystemState thrown = hover;
+  thrown.p_WL_W = hover.p_WQ_W - Eigen::Vector3d(0, 0, 0.2);
+  thrown.v_WL_W = Eigen::Vector3d(0, 0, 3.0);
+  estimator = MakeEstimator("hybrid", EstimatorConfig{}, p, thrown);
+  ASSERT_EQ(estimator->Estimate(0.0).mode, CableMode::kSlack);
+  double lost_at_s = -1.0;
+  for (int k = 1; k <= 50 && lost_at_s < 0; ++k) {
+    imu.time_s = 0.002 * k;
+    estimator->OnImu(imu);
+    if (estimator->Estimate(imu.time_s).payload_lost) lost_at_s = imu.time_s;
+  }
+  // 0.12 m at 3 m/s less gravity's 4.6 mm: 0.042 s, the first IMU sample past it
+  EXPECT_NEAR(lost_at_s, 0.042, 0.002 + 1e-9);
 }
 
 TEST(EstimatorTest, NonFiniteInputsDoNotCorruptTheEstimate) {

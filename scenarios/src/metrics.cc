@@ -85,6 +85,11 @@ void ComputeMetrics(const MetricsInputs& in, Metrics* m) {
     if (r.truth.mode == r.estimate.mode) ++mode_agree;
     m->closed_loop_cost += r.cost;
   }
+  m->payload_lost_time_s = 0.0;
+  for (size_t i = 1; i < rows.size(); ++i) {
+    if (rows[i].estimate.payload_lost)
+      m->payload_lost_time_s += rows[i].time_s - rows[i - 1].time_s;
+  }
   if (!rows.empty()) {
     m->quad_rmse_m = (quad_sq / rows.size()).cwiseSqrt();
     m->mode_accuracy = static_cast<double>(mode_agree) / rows.size();
@@ -207,6 +212,7 @@ std::string MetricsToJson(const Metrics& m) {
                                     {"max", opt_num(m.slack_detection_latency_max_s)},
                                     {"missed", m.slack_events_missed}};
   o["payload_in_fov_fraction"] = m.camera_frames > 0 ? num(m.payload_in_fov_fraction) : Json();
+  o["payload_lost_time_s"] = measured(num(m.payload_lost_time_s));
   o["camera_frames"] = m.camera_frames;
   o["detections"] = m.detections;
   o["retaut"] = {{"count", m.retaut_count},

@@ -4,13 +4,13 @@
 
 #include <memory>
 
-#include "hpa/estimator/detection_noise.h"
 #include "hpa/estimator/cable_ekf.h"
+#include "hpa/estimator/detection_noise.h"
 #include "hpa/estimator/estimator_health.h"
 #include "hpa/estimator/mode_detector.h"
-#include "hpa/estimator/tension_cue.h"
 #include "hpa/estimator/payload_tracker.h"
 #include "hpa/estimator/quad_filter.h"
+#include "hpa/estimator/tension_cue.h"
 #include "hpa/models/params.h"
 #include "hpa/models/sensor_types.h"
 #include "hpa/models/state.h"
@@ -42,6 +42,14 @@ struct EstimatorConfig {
   double measured_velocity_time_constant_s = 0.1;  // low-pass on the detections' finite difference
   double measured_velocity_max_gap_s = 0.1;  // longer gaps between detections: no new difference
   double measured_payload_max_age_s = 0.2;   // older detection: fall back to x_Q + l xi
+  // the payload is reported lost (SystemState::payload_lost) when no detection has been taken
+  // for this long: six frames at 30 Hz, three times the longest run of frames the cable hides
+  // the payload for in the detector's test set
+  double payload_lost_after_s = 0.2;
+  // while slack, the payload is also lost when the free-fall prediction comes within the
+  // vehicle's collision box grown by the payload radius and this margin: the payload has hit
+  // the vehicle and free fall no longer holds
+  double payload_hit_margin_m = 0.01;
 };
 
 /// Full onboard estimator: quadrotor filter (IMU + VIO), cable EKF, mode detector.

@@ -40,10 +40,13 @@ struct SystemState {
   Eigen::Vector3d w_B = Eigen::Vector3d::Zero();             // body rate, body frame  (3)
   CableMode mode = CableMode::kTaut;                         // cable mode (estimated or true)
   bool payload_visible = true;  // payload seen in the last camera frame (false: predicted)
+  // the estimator has lost the payload: its payload state is a guess, not a tracked estimate
+  // (no detection for a while, or the free-fall prediction ran into the vehicle); truth: false
+  bool payload_lost = false;
 
   /// Packs into the 19-vector layout of StateIndex.
   StateVector ToVector() const;
-  /// Unpacks a 19-vector (normalises the quaternion); keeps time, mode and visibility.
+  /// Unpacks a 19-vector (normalises the quaternion); keeps time, mode, visibility and lost flag.
   void FromVector(const StateVector& x);
   /// True when every number is finite.
   bool AllFinite() const;

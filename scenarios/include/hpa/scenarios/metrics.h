@@ -55,6 +55,7 @@ struct Metrics {
   std::optional<double> slack_detection_latency_mean_s, slack_detection_latency_max_s;
   int slack_events = 0, slack_events_missed = 0;
   double payload_in_fov_fraction = 1.0;  // share of camera frames with the payload centre in view
+  double payload_lost_time_s = 0.0;      // time the estimator reported the payload lost
   int camera_frames = 0, detections = 0;
   int retaut_count = 0;
   double retaut_quad_vz_min_mps = 0.0;       // lowest quad z velocity within 0.5 s of a re-taut
