@@ -126,6 +126,9 @@ std::vector<ExpectKey> BuildTable() {
   t.push_back(Min("retaut_quad_vz_min", "retaut.quad_vz_min_mps", "m/s",
                   "lowest quadrotor z velocity within 0.5 s of a re-taut, at least", -kBig, kBig,
                   [](const Metrics& m) { return m.retaut_quad_vz_min_mps; }));
+  t.push_back(Max("retaut_peak_body_rate_max", "retaut.peak_body_rate_radps", "rad/s",
+                  "highest body rate within 0.5 s of a re-taut, at most", kBig,
+                  [](const Metrics& m) { return m.retaut_peak_body_rate_radps; }));
   t.push_back(Min("payload_quad_min_distance_min", "payload_quad_min_distance_m", "m",
                   "smallest payload-to-vehicle surface distance, at least (< 0: overlap)", -kBig,
                   kBig, [](const Metrics& m) { return m.payload_quad_min_distance_m; }));

@@ -43,8 +43,8 @@ struct EstimatorConfig {
   double measured_velocity_max_gap_s = 0.1;  // longer gaps between detections: no new difference
   double measured_payload_max_age_s = 0.2;   // older detection: fall back to x_Q + l xi
   // the payload is reported lost (SystemState::payload_lost) when no detection has been taken
-  // for this long: six frames at 30 Hz, three times the longest run of frames the cable hides
-  // the payload for in the detector's test set
+  // for this long. Ours, not tuned: six frames at 30 Hz, well past the single frames lost when
+  // the cable crosses the ball
   double payload_lost_after_s = 0.2;
   // while slack, the payload is also lost when the free-fall prediction comes within the
   // vehicle's collision box grown by the payload radius and this margin: the payload has hit

@@ -1,0 +1,132 @@
+#!/usr/bin/env bash
+# The paper's comparison on the same seeds, four controllers: hpa_mpc as the paper has it,
+# hpa_mpc with the re-taut predicted in the horizon (controller.predict_retaut), and the
+# non-hybrid baseline with the paper's estimator (always_taut: the payload as measured) and with
+# the sphere projection (always_taut_projected). Writes DIR/comparison.md (the README's table):
+#   - line_impulse and hover_gripper_pull, rendered camera, seeds 1-3: median and range of the
+#     quadrotor deviation, re-taut v_z and peak body rate, payload in view, crashes;
+#   - the impulse sweep (scenarios/sweeps/impulse_crash_rate.yaml, analytic camera) with
+#     RUNS draws per controller: crashes with Wilson 95 % intervals, medians of the re-taut
+#     figures over the runs that did not crash.
+# A developer tool (about 10 min with RUNS=200 on 2 cores), not a CI step.
+#   ci/paper_comparison.sh DIR [RUNS]
+set -euo pipefail
+cd "$(dirname "$0")/.."
+out=${1:?usage: ci/paper_comparison.sh DIR [RUNS]}
+runs=${2:-200}
+hpa=${HPA_BUILD_DIR:-build}/bin/hpa
+mkdir -p "$out"
+
+# name, then the arguments that make the controller
+arms=(
+  "hpa_mpc|--controller hpa_mpc"
+  "hpa_mpc+predict_retaut|--controller hpa_mpc --set controller.predict_retaut=true"
+  "nonhybrid_mpc|--controller nonhybrid_mpc"
+  "nonhybrid_mpc+projected|--controller nonhybrid_mpc --set estimation.estimator=always_taut_projected"
+)
+sweep_vary=(
+  "hpa_mpc|controller.type: {list: [hpa_mpc]}"
+  "hpa_mpc+predict_retaut|controller.type: {list: [hpa_mpc]}\n  controller.predict_retaut: {list: [true]}"
+  "nonhybrid_mpc|controller.type: {list: [nonhybrid_mpc]}"
+  "nonhybrid_mpc+projected|controller.type: {list: [nonhybrid_mpc]}\n  estimation.estimator: {list: [always_taut_projected]}"
+)
+
+echo "== scenarios, rendered camera, seeds 1-3"
+for scenario in line_impulse hover_gripper_pull; do
+  for arm in "${arms[@]}"; do
+    name=${arm%%|*}
+    args=${arm#*|}
+    for seed in 1 2 3; do
+      dir="$out/runs/$scenario/$name/seed$seed"
+      mkdir -p "$(dirname "$dir")"
+      # a run that misses its expect bounds exits 1 and still writes its metrics
+      # shellcheck disable=SC2086
+      "$hpa" run "scenarios/$scenario.yaml" --seed "$seed" $args --out "$dir" --quiet \
+        > "$dir.log" 2>&1 || true
+      [ -f "$dir/metrics.json" ] || { echo "no metrics for $dir:"; cat "$dir.log"; exit 1; }
+      echo "$scenario $name seed $seed done"
+    done
+  done
+done
+
+echo "== impulse sweep, $runs draws per controller"
+for arm in "${sweep_vary[@]}"; do
+  name=${arm%%|*}
+  vary=${arm#*|}
+  yaml="$out/sweeps/$name.yaml"
+  mkdir -p "$out/sweeps"
+  sed -e "s|^base: ../line_impulse.yaml|base: $PWD/scenarios/line_impulse.yaml|" \
+      -e "s|^runs: .*|runs: $runs|" \
+      -e "s|^  controller.type: .*|  $vary|" scenarios/sweeps/impulse_crash_rate.yaml \
+    | sed 's/\\n/\n/g' > "$yaml"
+  rm -rf "$out/sweeps/$name"
+  "$hpa" sweep "$yaml" --out "$out/sweeps/$name" --jobs "$(nproc)" > "$out/sweeps/$name.log" 2>&1 \
+    || { echo "sweep $name failed:"; tail -5 "$out/sweeps/$name.log"; exit 1; }
+  echo "sweep $name done"
+done
+
+python3 - "$out" "$runs" <<'PY'
+import json, math, os, statistics, sys
+out, runs = sys.argv[1], int(sys.argv[2])
+arms = ["hpa_mpc", "hpa_mpc+predict_retaut", "nonhybrid_mpc", "nonhybrid_mpc+projected"]
+
+def wilson(k, n, z=1.96):
+    if n == 0:
+        return (0.0, 1.0)
+    p = k / n
+    d = 1 + z * z / n
+    c = (p + z * z / (2 * n)) / d
+    h = z * math.sqrt(p * (1 - p) / n + z * z / (4 * n * n)) / d
+    return (max(0.0, c - h), min(1.0, c + h))
+
+def spread(values, fmt="{:.3f}"):
+    values = [v for v in values if v is not None]
+    if not values:
+        return "-"
+    return (fmt.format(statistics.median(values)) + " (" + fmt.format(min(values)) + " to "
+            + fmt.format(max(values)) + ")")
+
+lines = ["## Scenarios (rendered camera, flight profile, seeds 1-3: median (min to max))", ""]
+for scenario in ["line_impulse", "hover_gripper_pull"]:
+    lines += [f"### {scenario}", "",
+              "| controller | crashes | quad deviation max [m] | re-taut v_z min [m/s] "
+              "| re-taut peak body rate [rad/s] | payload in view |",
+              "|---|---|---|---|---|---|"]
+    for arm in arms:
+        ms = []
+        for seed in (1, 2, 3):
+            path = os.path.join(out, "runs", scenario, arm, f"seed{seed}", "metrics.json")
+            if os.path.exists(path):
+                ms.append(json.load(open(path)))
+        retaut = [m["retaut"] for m in ms if m["retaut"]["count"] > 0]
+        lines.append(
+            f"| {arm} | {sum(m['crashed'] for m in ms)} of {len(ms)} "
+            f"| {spread([m['quad_position_deviation_max_m'] for m in ms])} "
+            f"| {spread([r['quad_vz_min_mps'] for r in retaut], '{:.2f}')} "
+            f"| {spread([r['peak_body_rate_radps'] for r in retaut], '{:.2f}')} "
+            f"| {spread([m['payload_in_fov_fraction'] for m in ms])} |")
+    lines.append("")
+
+lines += [f"## Impulse sweep ({runs} draws of 0.1-2.5 N s per controller, same draws, analytic "
+          "camera, flight profile)", "",
+          "| controller | crashes (Wilson 95 %) | crashes, impulse < 1.5 N s | re-taut v_z min, "
+          "median [m/s] | re-taut peak body rate, median [rad/s] | quad deviation, median [m] |",
+          "|---|---|---|---|---|---|"]
+for arm in arms:
+    rows = [json.loads(l) for l in open(os.path.join(out, "sweeps", arm, "runs.jsonl"))]
+    ms = [r["metrics"] for r in rows if r["status"] == "ok"]
+    k = sum(m["crashed"] for m in ms)
+    lo, hi = wilson(k, len(ms))
+    low = [r["metrics"] for r in rows if r["status"] == "ok"
+           and r["values"]["events.0.impulse.2"] < 1.5]
+    kl = sum(m["crashed"] for m in low)
+    lol, hil = wilson(kl, len(low))
+    ok = [m for m in ms if not m["crashed"] and m["retaut"]["count"] > 0]
+    lines.append(
+        f"| {arm} | {k} of {len(ms)} [{lo:.3f}, {hi:.3f}] | {kl} of {len(low)} [{lol:.3f}, {hil:.3f}] "
+        f"| {statistics.median(m['retaut']['quad_vz_min_mps'] for m in ok):.2f} "
+        f"| {statistics.median(m['retaut']['peak_body_rate_radps'] for m in ok):.2f} "
+        f"| {statistics.median(m['quad_position_deviation_max_m'] for m in ms):.3f} |")
+open(os.path.join(out, "comparison.md"), "w").write("\n".join(lines) + "\n")
+print("\n".join(lines))
+PY
