@@ -78,8 +78,8 @@ Px4TorqueScale Px4RateController::TorqueScale(const Params& params) {
 }
 
 Px4Allocation Px4RateController::AllocateAirmodeDisabled(const Params& params,
-                                                          const Eigen::Vector3d& torque,
-                                                          double thrust, double yaw_headroom) {
+                                                         const Eigen::Vector3d& torque,
+                                                         double thrust, double yaw_headroom) {
   const Px4TorqueScale scale = TorqueScale(params);
   const Eigen::Matrix<double, 4, 3> mix = NormalisedMix(params, scale);
   const Eigen::Vector4d thrust_vec = Eigen::Vector4d::Ones();
@@ -159,9 +159,9 @@ InputVector Px4RateController::Update(const BodyRateCommand& cmd,
   // gyro: low-passed rate; derivative of the raw rate, low-passed on its own (PX4's
   // VehicleAngularVelocity differentiates before the rate's low-pass)
   const Eigen::Vector3d rate = gyro_filter_.Apply(gyro_B_radps);
-  const Eigen::Vector3d accel_raw =
-      has_prev_ ? Eigen::Vector3d((gyro_B_radps - gyro_prev_radps_) / dt_s)
-                : Eigen::Vector3d::Zero();
+  const Eigen::Vector3d accel_raw = has_prev_
+                                        ? Eigen::Vector3d((gyro_B_radps - gyro_prev_radps_) / dt_s)
+                                        : Eigen::Vector3d::Zero();
   gyro_prev_radps_ = gyro_B_radps;
   has_prev_ = true;
   const Eigen::Vector3d accel = dgyro_filter_.Apply(accel_raw);

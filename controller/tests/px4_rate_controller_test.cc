@@ -17,9 +17,8 @@ namespace {
 constexpr double kDtS = 0.001;  // 1 kHz
 
 double ThrustRangeN(const Params& p) {
-  return p.k_f_N_per_radps2 *
-         (p.motor_speed_max_radps * p.motor_speed_max_radps -
-          p.motor_speed_min_radps * p.motor_speed_min_radps);
+  return p.k_f_N_per_radps2 * (p.motor_speed_max_radps * p.motor_speed_max_radps -
+                               p.motor_speed_min_radps * p.motor_speed_min_radps);
 }
 
 TEST(Px4RateControllerTest, TorqueScaleIsPx4sNormalisationInClosedForm) {
@@ -85,8 +84,8 @@ TEST(Px4RateControllerTest, DerivativeActsOnTheFilteredGyroDerivative) {
   // the vehicle starts rolling at 0.5 rad/s; the command stays zero
   const Eigen::Vector3d gyro(0.5, 0, 0);
   c.Update(cmd, gyro);
-  ButterworthLowPass rate_f(px4.rate_hz, px4.gyro_cutoff_hz), accel_f(px4.rate_hz,
-                                                                      px4.dgyro_cutoff_hz);
+  ButterworthLowPass rate_f(px4.rate_hz, px4.gyro_cutoff_hz),
+      accel_f(px4.rate_hz, px4.dgyro_cutoff_hz);
   rate_f.Apply(Eigen::Vector3d::Zero());
   accel_f.Apply(Eigen::Vector3d::Zero());
   const double rate = rate_f.Apply(gyro)(0);

@@ -402,6 +402,7 @@ RunResult RunScenario(const Scenario& scenario, const Params& params, const RunO
   metrics.contacts_payload_rotor = contacts.payload_rotor;
   metrics.contacts_payload_ground = contacts.payload_ground;
   metrics.contacts_quad_ground = contacts.quad_ground;
+  metrics.contacts_payload_gripper = contacts.payload_gripper;
   ComputeMetrics(inputs, &metrics);
   result.rows = std::move(inputs.rows);
   CheckExpectations(scenario.expect, &metrics);

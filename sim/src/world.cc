@@ -624,7 +624,8 @@ void World::Step() {
       GyroSample g;
       g.time_s = t_k - (rate_gyro_steps_ - 1) * kPhysicsDt_s;
       g.gyro_B_radps = rate_gyro_sum_radps_ / rate_gyro_steps_ + imu_.gyro_bias_B_radps();
-      for (int i = 0; i < 3; ++i) g.gyro_B_radps(i) += rate_gyro_sigma_radps_ * unit(rate_gyro_rng_);
+      for (int i = 0; i < 3; ++i)
+        g.gyro_B_radps(i) += rate_gyro_sigma_radps_ * unit(rate_gyro_rng_);
       rate_gyro_ = g;
       rate_gyro_sum_radps_.setZero();
       rate_gyro_sum_count_ = 0;

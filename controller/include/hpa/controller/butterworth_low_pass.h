@@ -25,10 +25,10 @@ class ButterworthLowPass {
  private:
   bool pass_through_ = true;
   bool initialised_ = false;
-  double b0_ = 1.0, b1_ = 0.0, b2_ = 0.0;                      // numerator
-  double a1_ = 0.0, a2_ = 0.0;                                 // denominator (a0 = 1)
-  Eigen::Vector3d delay1_ = Eigen::Vector3d::Zero();           // direct form II state w[n-1]  (3)
-  Eigen::Vector3d delay2_ = Eigen::Vector3d::Zero();           // direct form II state w[n-2]  (3)
+  double b0_ = 1.0, b1_ = 0.0, b2_ = 0.0;             // numerator
+  double a1_ = 0.0, a2_ = 0.0;                        // denominator (a0 = 1)
+  Eigen::Vector3d delay1_ = Eigen::Vector3d::Zero();  // direct form II state w[n-1]  (3)
+  Eigen::Vector3d delay2_ = Eigen::Vector3d::Zero();  // direct form II state w[n-2]  (3)
 };
 
 }  // namespace hpa

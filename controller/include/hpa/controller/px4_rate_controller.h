@@ -28,16 +28,16 @@ namespace hpa {
 
 /// PX4 rate-loop parameters (PX4 names in the comments; defaults are PX4's defaults).
 struct Px4RateParams {
-  double rate_hz = 1000.0;  // loop and gyro rate (PX4 runs it on each gyro sample), Hz
-  Eigen::Vector3d p{0.15, 0.15, 0.2};      // MC_ROLLRATE_P, MC_PITCHRATE_P, MC_YAWRATE_P: 1/(rad/s)
-  Eigen::Vector3d i{0.2, 0.2, 0.1};        // MC_*RATE_I: normalised torque per rad of error  (3)
-  Eigen::Vector3d d{0.003, 0.003, 0.0};    // MC_*RATE_D: normalised torque per rad/s^2  (3)
-  Eigen::Vector3d k{1.0, 1.0, 1.0};        // MC_*RATE_K: scales P, I and D  (3)
+  double rate_hz = 1000.0;               // loop and gyro rate (PX4 runs it on each gyro sample), Hz
+  Eigen::Vector3d p{0.15, 0.15, 0.2};    // MC_ROLLRATE_P, MC_PITCHRATE_P, MC_YAWRATE_P: 1/(rad/s)
+  Eigen::Vector3d i{0.2, 0.2, 0.1};      // MC_*RATE_I: normalised torque per rad of error  (3)
+  Eigen::Vector3d d{0.003, 0.003, 0.0};  // MC_*RATE_D: normalised torque per rad/s^2  (3)
+  Eigen::Vector3d k{1.0, 1.0, 1.0};      // MC_*RATE_K: scales P, I and D  (3)
   Eigen::Vector3d integrator_limit{0.3, 0.3, 0.3};  // MC_RR_INT_LIM, MC_PR_INT_LIM, MC_YR_INT_LIM
-  double gyro_cutoff_hz = 30.0;        // IMU_GYRO_CUTOFF: 2nd-order Butterworth on the gyro
-  double dgyro_cutoff_hz = 30.0;       // IMU_DGYRO_CUTOFF: 2nd-order Butterworth on d(gyro)/dt
-  double yaw_torque_cutoff_hz = 2.0;   // MC_YAW_TQ_CUTOFF: first-order low-pass on yaw torque
-  double yaw_headroom = 0.15;          // mixYaw: yaw may push actuators 15 % past their maximum
+  double gyro_cutoff_hz = 30.0;       // IMU_GYRO_CUTOFF: 2nd-order Butterworth on the gyro
+  double dgyro_cutoff_hz = 30.0;      // IMU_DGYRO_CUTOFF: 2nd-order Butterworth on d(gyro)/dt
+  double yaw_torque_cutoff_hz = 2.0;  // MC_YAW_TQ_CUTOFF: first-order low-pass on yaw torque
+  double yaw_headroom = 0.15;         // mixYaw: yaw may push actuators 15 % past their maximum
 };
 
 /// Physical size of a unit normalised command: N m per unit roll, pitch, yaw torque and N per
@@ -52,8 +52,8 @@ struct Px4RateStatus {
   bool input_valid = true;  // false: a non-finite input was rejected, the safe output sent
   Eigen::Vector3d torque_sp = Eigen::Vector3d::Zero();         // normalised torque demand  (3)
   Eigen::Vector3d torque_allocated = Eigen::Vector3d::Zero();  // what the rotors give  (3)
-  double thrust_sp = 0.0;          // normalised collective thrust demand
-  double thrust_allocated = 0.0;   // normalised collective thrust the rotors give
+  double thrust_sp = 0.0;         // normalised collective thrust demand
+  double thrust_allocated = 0.0;  // normalised collective thrust the rotors give
   Eigen::Vector3d integral = Eigen::Vector3d::Zero();  // integrator, normalised torque  (3)
   Eigen::Matrix<bool, 3, 1> saturated_positive = Eigen::Matrix<bool, 3, 1>::Constant(false);
   Eigen::Matrix<bool, 3, 1> saturated_negative = Eigen::Matrix<bool, 3, 1>::Constant(false);
@@ -61,7 +61,7 @@ struct Px4RateStatus {
 
 /// Result of the airmode-disabled allocation.
 struct Px4Allocation {
-  Eigen::Vector4d u = Eigen::Vector4d::Zero();  // normalised rotor thrusts in [0, 1]  (4)
+  Eigen::Vector4d u = Eigen::Vector4d::Zero();       // normalised rotor thrusts in [0, 1]  (4)
   Eigen::Vector3d torque = Eigen::Vector3d::Zero();  // normalised torque they give  (3)
   double thrust = 0.0;                               // normalised collective thrust they give
 };

@@ -53,10 +53,10 @@ struct WorldConfig {
 
 /// Contact episodes since Reset (a pair counts once each time it starts touching).
 struct ContactCounts {
-  int payload_body = 0;    // payload against the quadrotor's body box
-  int payload_rotor = 0;   // payload against a rotor disk (a crash: rotor_strike)
-  int payload_ground = 0;  // payload against the ground
-  int quad_ground = 0;     // quadrotor against the ground (a crash)
+  int payload_body = 0;     // payload against the quadrotor's body box
+  int payload_rotor = 0;    // payload against a rotor disk (a crash: rotor_strike)
+  int payload_ground = 0;   // payload against the ground
+  int quad_ground = 0;      // quadrotor against the ground (a crash)
   int payload_gripper = 0;  // payload against the gripper rod while not held (flight contact)
 };
 

@@ -2,9 +2,9 @@
 // A realism profile of the simulated world: the parts a real flight has and the ideal world
 // leaves out (contact, actuation spread and battery sag, compute and transport latency, model
 // mismatch between the flight code's parameters and the world's, the camera's motion blur and
-// sensor noise, PX4's rate loop on its own gyro). Every part is off in a default-constructed profile (the `ideal` world; the
-// camera's lens PSF stays on); models/profiles/flight.yaml switches them on
-// with the source of every number. The scenario runner and the world read it; flight code
+// sensor noise, PX4's rate loop on its own gyro). Every part is off in a default-constructed
+// profile (the `ideal` world; the camera's lens PSF stays on); models/profiles/flight.yaml switches
+// them on with the source of every number. The scenario runner and the world read it; flight code
 // never does.
 
 #include <array>
@@ -111,15 +111,15 @@ struct CameraImageProfile {
 /// torque per rad/s, rad and rad/s^2).
 struct RateLoopProfile {
   bool px4 = false;
-  double rate_hz = 1000.0;                                  // loop and its gyro's sample rate
-  std::array<double, 3> p{0.15, 0.15, 0.2};                 // MC_*RATE_P (roll, pitch, yaw)
-  std::array<double, 3> i{0.2, 0.2, 0.1};                   // MC_*RATE_I
-  std::array<double, 3> d{0.003, 0.003, 0.0};               // MC_*RATE_D
-  std::array<double, 3> k{1.0, 1.0, 1.0};                   // MC_*RATE_K
-  std::array<double, 3> integrator_limit{0.3, 0.3, 0.3};    // MC_RR/PR/YR_INT_LIM
-  double gyro_cutoff_hz = 30.0;                             // IMU_GYRO_CUTOFF
-  double dgyro_cutoff_hz = 30.0;                            // IMU_DGYRO_CUTOFF
-  double yaw_torque_cutoff_hz = 2.0;                        // MC_YAW_TQ_CUTOFF
+  double rate_hz = 1000.0;                                // loop and its gyro's sample rate
+  std::array<double, 3> p{0.15, 0.15, 0.2};               // MC_*RATE_P (roll, pitch, yaw)
+  std::array<double, 3> i{0.2, 0.2, 0.1};                 // MC_*RATE_I
+  std::array<double, 3> d{0.003, 0.003, 0.0};             // MC_*RATE_D
+  std::array<double, 3> k{1.0, 1.0, 1.0};                 // MC_*RATE_K
+  std::array<double, 3> integrator_limit{0.3, 0.3, 0.3};  // MC_RR/PR/YR_INT_LIM
+  double gyro_cutoff_hz = 30.0;                           // IMU_GYRO_CUTOFF
+  double dgyro_cutoff_hz = 30.0;                          // IMU_DGYRO_CUTOFF
+  double yaw_torque_cutoff_hz = 2.0;                      // MC_YAW_TQ_CUTOFF
 };
 
 /// The whole profile: its name and its parts.
