@@ -226,7 +226,8 @@ std::string MetricsToJson(const Metrics& m) {
   o["contacts"] = {{"payload_body", m.contacts_payload_body},
                    {"payload_rotor", m.contacts_payload_rotor},
                    {"payload_ground", m.contacts_payload_ground},
-                   {"quad_ground", m.contacts_quad_ground}};
+                   {"quad_ground", m.contacts_quad_ground},
+                   {"payload_gripper", m.contacts_payload_gripper}};
   o["render_ms"] = quantiles(m.render_ms);
   o["image_model_ms"] = quantiles(m.image_model_ms);
   o["detector_ms"] = quantiles(m.detector_ms);

@@ -10,6 +10,7 @@
 #include <random>
 
 #include "hpa/controller/body_rate_controller.h"
+#include "hpa/controller/px4_rate_controller.h"
 #include "hpa/estimator/estimator.h"
 #include "hpa/estimator/estimator_registry.h"
 #include "hpa/estimator/payload_detector.h"
@@ -88,6 +89,22 @@ class VideoTickRecorder final : public RunRecorder {
   bool rendered_camera_ = false;  // the detector renders every camera frame
 };
 
+// The PX4 rate loop's parameters from the world profile's rate_loop section.
+Px4RateParams Px4ParamsOf(const sim::RateLoopProfile& r) {
+  const auto v = [](const std::array<double, 3>& a) { return Eigen::Vector3d(a[0], a[1], a[2]); };
+  Px4RateParams p;
+  p.rate_hz = r.rate_hz;
+  p.p = v(r.p);
+  p.i = v(r.i);
+  p.d = v(r.d);
+  p.k = v(r.k);
+  p.integrator_limit = v(r.integrator_limit);
+  p.gyro_cutoff_hz = r.gyro_cutoff_hz;
+  p.dgyro_cutoff_hz = r.dgyro_cutoff_hz;
+  p.yaw_torque_cutoff_hz = r.yaw_torque_cutoff_hz;
+  return p;
+}
+
 }  // namespace
 
 namespace {
@@ -141,6 +158,11 @@ RunResult RunScenario(const Scenario& scenario, const Params& params, const RunO
   world.Reset(InitialState(*reference, world.world_params()));
   std::unique_ptr<Controller> controller = MakeController(scenario.controller, params, reference);
   BodyRateController rate_controller(params);
+  // the profile may fly PX4's rate loop instead, on the world's rate gyro
+  std::unique_ptr<Px4RateController> px4_rate;
+  if (scenario.world.rate_loop.px4) {
+    px4_rate = std::make_unique<Px4RateController>(params, Px4ParamsOf(scenario.world.rate_loop));
+  }
   EstimatorConfig estimator_config;
   estimator_config.tension_cue.enabled = scenario.estimation.slack_tension_cue;
   std::unique_ptr<Estimator> estimator = MakeEstimator(EstimatorOf(scenario), estimator_config,
@@ -173,7 +195,7 @@ RunResult RunScenario(const Scenario& scenario, const Params& params, const RunO
   LockstepClock clock(rates.physics_hz);
   const int camera_loop = clock.AddLoop("camera", rates.camera.rate_hz);
   const int control_loop = clock.AddLoop("control", controller->RateHz());
-  const int rate_loop = clock.AddLoop("rate", rates.imu.rate_hz);
+  const int rate_loop = px4_rate ? -1 : clock.AddLoop("rate", rates.imu.rate_hz);
   const int video_loop = video ? clock.AddLoop("video", rates.video.rate_hz) : -1;
   const double rate_loop_dt_s = 1.0 / rates.imu.rate_hz;
   size_t next_event = 0;
@@ -214,7 +236,7 @@ RunResult RunScenario(const Scenario& scenario, const Params& params, const RunO
       clock.BeginTick();
       const bool camera_due = clock.Fires(camera_loop);
       const bool control_due = clock.Fires(control_loop);
-      const bool rate_due = clock.Fires(rate_loop);
+      const bool rate_due = rate_loop >= 0 && clock.Fires(rate_loop);
       const bool video_due = video_loop >= 0 && clock.Fires(video_loop);
       const bool need_state = control_due || rate_due || video_due || delayed_estimate;
       sim::Truth truth;
@@ -308,8 +330,14 @@ RunResult RunScenario(const Scenario& scenario, const Params& params, const RunO
 
       while (auto arrived = commands_in_flight.PopReady(t)) control = *arrived;
 
-      // body-rate loop
-      if (rate_due) {
+      // body-rate loop: PX4's runs on each new sample of its gyro (none yet at the first tick:
+      // the motors keep the world's initial hover command)
+      if (px4_rate) {
+        if (const std::optional<GyroSample> gyro = world.TakeRateGyro()) {
+          world.SetMotorSpeedCommand(px4_rate->Update(control.command, gyro->gyro_B_radps));
+          if (!ground_truth) estimator->OnThrustCommand(control.command.thrust_N);
+        }
+      } else if (rate_due) {
         const InputVector w_cmd =
             rate_controller.Update(control.command, state.w_B, rate_loop_dt_s);
         world.SetMotorSpeedCommand(w_cmd);
@@ -374,6 +402,7 @@ RunResult RunScenario(const Scenario& scenario, const Params& params, const RunO
   metrics.contacts_payload_rotor = contacts.payload_rotor;
   metrics.contacts_payload_ground = contacts.payload_ground;
   metrics.contacts_quad_ground = contacts.quad_ground;
+  metrics.contacts_payload_gripper = contacts.payload_gripper;
   ComputeMetrics(inputs, &metrics);
   result.rows = std::move(inputs.rows);
   CheckExpectations(scenario.expect, &metrics);

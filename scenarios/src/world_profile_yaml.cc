@@ -1,5 +1,6 @@
 #include "hpa/scenarios/world_profile_yaml.h"
 
+#include <cmath>
 #include <map>
 #include <mutex>
 
@@ -135,6 +136,32 @@ void ReadWorldProfileSections(const YamlMap& map, sim::WorldProfile* profile) {
     c.read_noise_e = m.Number("read_noise_e", 0.0, 100.0, c.read_noise_e);
     c.analog_gain = m.Number("analog_gain", 1.0, 64.0, c.analog_gain);
     c.draw_cable = m.Bool("draw_cable", c.draw_cable);
+    m.RejectUnknownKeys();
+  }
+  if (map.Has("rate_loop")) {
+    const YamlMap m = map.Map("rate_loop");
+    sim::RateLoopProfile& r = profile->rate_loop;
+    r.px4 = m.Bool("px4", r.px4);
+    // the gyro is sampled on the physics clock (1 kHz): a whole number of steps per sample
+    r.rate_hz = m.Number("rate_hz", 50.0, 1000.0, r.rate_hz);
+    const double steps = 1000.0 / r.rate_hz;
+    if (std::abs(steps - std::round(steps)) > 1e-9) {
+      m.Fail("rate_hz", "a rate that divides the 1000 Hz physics rate (1000, 500, 250, ...)");
+    }
+    // ranges: PX4's parameter declarations (@min/@max; no @max given: a generous bound)
+    const auto read3 = [&m](const char* key, double min, double max, std::array<double, 3>* v) {
+      if (!m.Has(key)) return;
+      const Eigen::VectorXd x = m.Vector(key, 3, min, max);
+      for (int k = 0; k < 3; ++k) (*v)[k] = x(k);
+    };
+    read3("p", 0.0, 0.6, &r.p);
+    read3("i", 0.0, 5.0, &r.i);
+    read3("d", 0.0, 0.05, &r.d);
+    read3("k", 0.01, 5.0, &r.k);
+    read3("integrator_limit", 0.0, 1.0, &r.integrator_limit);
+    r.gyro_cutoff_hz = m.Number("gyro_cutoff_hz", 0.0, 1000.0, r.gyro_cutoff_hz);
+    r.dgyro_cutoff_hz = m.Number("dgyro_cutoff_hz", 0.0, 1000.0, r.dgyro_cutoff_hz);
+    r.yaw_torque_cutoff_hz = m.Number("yaw_torque_cutoff_hz", 0.0, 10.0, r.yaw_torque_cutoff_hz);
     m.RejectUnknownKeys();
   }
 }

@@ -139,6 +139,40 @@ TEST(WorldProfileTest, BadProfilesAndKeysAreNamed) {
               {"world.contact.enabled"});
 }
 
+TEST(WorldProfileTest, TheFlightProfileFliesPx4sRateLoopWithPx4sDefaults) {
+  const Scenario flight = LoadScenario(Write("flight.yaml", kMinimal));
+  const sim::RateLoopProfile& r = flight.world.rate_loop;
+  EXPECT_TRUE(r.px4);
+  EXPECT_EQ(r.rate_hz, 1000.0);
+  EXPECT_EQ(r.p, (std::array<double, 3>{0.15, 0.15, 0.2}));
+  EXPECT_EQ(r.i, (std::array<double, 3>{0.2, 0.2, 0.1}));
+  EXPECT_EQ(r.d, (std::array<double, 3>{0.003, 0.003, 0.0}));
+  EXPECT_EQ(r.integrator_limit, (std::array<double, 3>{0.3, 0.3, 0.3}));
+  EXPECT_EQ(r.gyro_cutoff_hz, 30.0);
+  EXPECT_EQ(r.dgyro_cutoff_hz, 30.0);
+  EXPECT_EQ(r.yaw_torque_cutoff_hz, 2.0);
+  // the ideal world keeps the project's own loop
+  const Scenario ideal = LoadScenario(Write("ideal.yaml", kMinimal), {{"world.profile", "ideal"}});
+  EXPECT_FALSE(ideal.world.rate_loop.px4);
+  // one number overridden, the rest kept
+  const Scenario s =
+      LoadScenario(Write("override.yaml", kMinimal), {{"world.rate_loop.gyro_cutoff_hz", "80"}});
+  EXPECT_EQ(s.world.rate_loop.gyro_cutoff_hz, 80.0);
+  EXPECT_EQ(s.world.rate_loop.dgyro_cutoff_hz, 30.0);
+}
+
+TEST(WorldProfileTest, BadRateLoopKeysAndValuesAreNamed) {
+  const std::string w = std::string(kMinimal) + "world: {rate_loop: ";
+  ExpectError(w + "{px4: true, gain: 1}}\n", {"world.rate_loop.gain"});
+  ExpectError(w + "{rate_hz: 2000}}\n", {"world.rate_loop.rate_hz"});
+  ExpectError(w + "{rate_hz: 300}}\n", {"world.rate_loop.rate_hz", "divides"});
+  ExpectError(w + "{p: [0.15, 0.15]}}\n", {"world.rate_loop.p"});
+  ExpectError(w + "{p: [0.15, 0.15, 0.9]}}\n", {"world.rate_loop.p"});
+  ExpectError(w + "{integrator_limit: [0.3, -0.1, 0.3]}}\n", {"world.rate_loop.integrator_limit"});
+  ExpectError(w + "{yaw_torque_cutoff_hz: 50}}\n", {"world.rate_loop.yaw_torque_cutoff_hz"});
+  ExpectError(w + "{px4: yes please}}\n", {"world.rate_loop.px4"});
+}
+
 }  // namespace
 }  // namespace hpa
 

@@ -97,6 +97,17 @@ World::World(const WorldConfig& config)
     throw InputError("", "rates.imu", "the IMU rate must divide the physics rate");
   }
   imu_steps_ = static_cast<int>(std::lround(imu_steps));
+  // the rate loop's own gyro (PX4 rate loop): the IMU's part at the loop's rate
+  if (config.profile.rate_loop.px4) {
+    const double steps = config.rates.physics_hz / config.profile.rate_loop.rate_hz;
+    if (!(steps >= 1.0) || std::abs(steps - std::round(steps)) > 1e-9) {
+      throw InputError("", "world.rate_loop.rate_hz", "the rate must divide the physics rate");
+    }
+    rate_gyro_steps_ = static_cast<int>(std::lround(steps));
+    // discrete white noise of the same density at this rate: sigma = density / sqrt(period)
+    rate_gyro_sigma_radps_ = ImuNoise(config).gyro_noise_density_radps_rthz /
+                             std::sqrt(1.0 / config.profile.rate_loop.rate_hz);
+  }
   InstallWarningHandler();
   const std::string& file = config_.scene_path;
 
@@ -148,6 +159,7 @@ World::World(const WorldConfig& config)
     ids_.payload_geom = RequireId(model_, file, mjOBJ_GEOM, "payload_sphere", "geom");
     ids_.quad_box_geom = RequireId(model_, file, mjOBJ_GEOM, "quadrotor_box", "geom");
     ids_.ground_geom = RequireId(model_, file, mjOBJ_GEOM, "ground", "geom");
+    ids_.gripper_geom = mj_name2id(model_, mjOBJ_GEOM, "gripper_visual");
   } catch (...) {
     mj_deleteModel(model_);
     throw;
@@ -331,8 +343,36 @@ double World::PayloadQuadDistance() const {
   return d - radius_m;
 }
 
+void World::UpdateGripperContact() {
+  if (ids_.gripper_geom < 0 || !config_.profile.contact.enabled) return;
+  // The rod stands for the hand: while it holds the payload the weld alone acts (no contact
+  // fights it); when it lets go the hand opens and withdraws, so the rod turns solid only once
+  // the payload is clear of it. From then on it stops the payload (contype 4) and the
+  // quadrotor's body (contype 2), which is a crash.
+  if (gripper_active()) {
+    gripper_solid_ = false;
+  } else if (!gripper_solid_) {
+    gripper_solid_ = PayloadGripperDistance() > 0.0;
+  }
+  model_->geom_contype[ids_.gripper_geom] = 0;
+  model_->geom_conaffinity[ids_.gripper_geom] = gripper_solid_ ? (2 | 4) : 0;
+}
+
+double World::PayloadGripperDistance() const {
+  // payload sphere against the rod's capsule (axis along its frame's z, half-length size[1])
+  const int g = ids_.gripper_geom;
+  const Eigen::Map<const Eigen::Vector3d> c(data_->geom_xpos + 3 * g);
+  const Eigen::Vector3d axis(data_->geom_xmat[9 * g + 2], data_->geom_xmat[9 * g + 5],
+                             data_->geom_xmat[9 * g + 8]);
+  const double half_length_m = model_->geom_size[3 * g + 1];
+  const double radius_m = model_->geom_size[3 * g + 0];
+  const Eigen::Map<const Eigen::Vector3d> p(data_->qpos + ids_.payload_jnt_qpos);
+  const double s = std::clamp((p - c).dot(axis), -half_length_m, half_length_m);
+  return (p - (c + s * axis)).norm() - radius_m - world_params_.payload_radius_m;
+}
+
 void World::UpdateContacts() {
-  bool now[4] = {false, false, false, false};  // the ContactCounts fields, in order
+  bool now[5] = {false, false, false, false, false};  // the ContactCounts fields, in order
   bool rotor_strike = false;
   for (int i = 0; i < data_->ncon; ++i) {
     const mjContact& c = data_->contact[i];
@@ -341,14 +381,16 @@ void World::UpdateContacts() {
         if (b == ids_.quad_box_geom) now[0] = true;
         for (int r = 0; r < 4; ++r) rotor_strike |= b == ids_.rotor_disc_geom[r];
         if (b == ids_.ground_geom) now[2] = true;
+        if (b == ids_.gripper_geom) now[4] = true;
       }
       if (a == ids_.ground_geom && model_->geom_bodyid[b] == ids_.quad_body) now[3] = true;
     }
   }
   now[1] = rotor_strike;
-  int* counts[4] = {&contact_counts_.payload_body, &contact_counts_.payload_rotor,
-                    &contact_counts_.payload_ground, &contact_counts_.quad_ground};
-  for (int k = 0; k < 4; ++k) {
+  int* counts[5] = {&contact_counts_.payload_body, &contact_counts_.payload_rotor,
+                    &contact_counts_.payload_ground, &contact_counts_.quad_ground,
+                    &contact_counts_.payload_gripper};
+  for (int k = 0; k < 5; ++k) {
     if (now[k] && !touching_[k]) ++*counts[k];
     touching_[k] = now[k];
   }
@@ -387,6 +429,10 @@ void World::Reset(const SystemState& initial) {
   imu_sum_w_B_radps_.setZero();
   imu_sum_specific_force_B_mps2_.setZero();
   imu_sum_count_ = 0;
+  rate_gyro_rng_.seed(DerivedSeed(config_.seed, 0x726174656779ULL));
+  rate_gyro_sum_radps_.setZero();
+  rate_gyro_sum_count_ = 0;
+  rate_gyro_.reset();
   sensor_clock_ = LockstepClock(config_.rates.physics_hz);
   vio_loop_ = sensor_clock_.AddLoop("vio", config_.rates.vio.rate_hz, TickRounding::kAtOrAfter);
   crash_ = CrashStatus{};
@@ -397,6 +443,8 @@ void World::Reset(const SystemState& initial) {
   const double w_hover = world_params_.HoverMotorSpeedRadps();
   SetState(initial.ToVector(), InputVector::Constant(w_hover));
   payload_quad_min_distance_m_ = PayloadQuadDistance();
+  gripper_solid_ = false;
+  UpdateGripperContact();
 }
 
 void World::SetState(const StateVector& x, const InputVector& motor_speed_radps) {
@@ -568,9 +616,25 @@ void World::Step() {
     constexpr size_t kMaxQueued = 1000;  // 2 s of samples if the caller never takes them
     if (imu_queue_.size() > kMaxQueued) imu_queue_.pop_front();
   }
+  if (rate_gyro_steps_ > 0) {
+    // the rate loop's gyro: the same averaging over its own period, the IMU's current bias
+    rate_gyro_sum_radps_ += before.w_B;
+    if (++rate_gyro_sum_count_ == rate_gyro_steps_) {
+      std::normal_distribution<double> unit(0.0, 1.0);
+      GyroSample g;
+      g.time_s = t_k - (rate_gyro_steps_ - 1) * kPhysicsDt_s;
+      g.gyro_B_radps = rate_gyro_sum_radps_ / rate_gyro_steps_ + imu_.gyro_bias_B_radps();
+      for (int i = 0; i < 3; ++i)
+        g.gyro_B_radps(i) += rate_gyro_sigma_radps_ * unit(rate_gyro_rng_);
+      rate_gyro_ = g;
+      rate_gyro_sum_radps_.setZero();
+      rate_gyro_sum_count_ = 0;
+    }
+  }
   if (vio_due) vio_.Capture(t_k, before.p_WQ_W, before.q_WB, before.v_WQ_W);
   sensor_clock_.Advance();
   UpdateContacts();
+  UpdateGripperContact();
   CheckCrash();
 }
 
@@ -613,6 +677,12 @@ std::optional<ImuSample> World::TakeImu() {
   return s;
 }
 
+std::optional<GyroSample> World::TakeRateGyro() {
+  std::optional<GyroSample> g = rate_gyro_;
+  rate_gyro_.reset();
+  return g;
+}
+
 std::optional<VioSample> World::TakeVio() { return vio_.Take(time_s()); }
 
 void World::ApplyImpulse(Body body, const Eigen::Vector3d& impulse_W_Ns, double duration_s) {
@@ -638,6 +708,7 @@ void World::GripperGrab() {
   for (int i = 0; i < 4; ++i) data_->mocap_quat[4 * ids_.gripper_mocap + i] = qpos[3 + i];
   gripper_moving_ = false;
   model_->eq_active[ids_.gripper_weld] = 1;
+  UpdateGripperContact();
 }
 
 void World::GripperMove(const Eigen::Vector3d& to_W_m, double duration_s) {

@@ -289,5 +289,49 @@ TEST(WorldParamsTest, NonDefaultParamsReachTheModel) {
   EXPECT_NEAR(std::abs(m->cam_quat[4 * cam]), 1.0, 1e-12);
 }
 
+TEST(WorldTest, RateGyroSamplesAtTheRateLoopsRateOnlyWhenPx4Flies) {
+  // off (the default profile): never a sample
+  World off(DefaultConfig());
+  off.Step();
+  EXPECT_FALSE(off.TakeRateGyro().has_value());
+
+  WorldConfig c = DefaultConfig();
+  c.profile.rate_loop.px4 = true;
+  c.profile.rate_loop.rate_hz = 1000.0;
+  World world(c);
+  SystemState s;
+  s.p_WQ_W = Eigen::Vector3d(0, 0, 1.0);
+  s.p_WL_W = Eigen::Vector3d(0, 0, 0.5);
+  s.w_B = Eigen::Vector3d(0.3, -0.2, 0.1);
+  world.Reset(s);
+  // one sample per 1 ms step, the newest only; its error is the noise plus the IMU's bias
+  const SensorNoiseConfig noise;
+  const double sigma = noise.gyro_noise_density_radps_rthz * std::sqrt(1000.0);
+  double sum_sq = 0.0;
+  int n = 0;
+  for (int k = 0; k < 2000; ++k) {
+    const Eigen::Vector3d w_true = world.GetTruth().state.w_B;
+    world.Step();
+    const std::optional<GyroSample> g = world.TakeRateGyro();
+    ASSERT_TRUE(g.has_value());
+    EXPECT_NEAR(g->time_s, k * World::kPhysicsDt_s, 1e-12);
+    EXPECT_FALSE(world.TakeRateGyro().has_value());
+    sum_sq += (g->gyro_B_radps - w_true).squaredNorm();
+    n += 3;
+  }
+  // rms error: the white noise (the bias walks far less in 2 s); 6000 draws put the sample std
+  // within 3 % of sigma at 3-sigma (1 / sqrt(2 n)), 10 % allowed for the bias
+  EXPECT_NEAR(std::sqrt(sum_sq / n), sigma, 0.1 * sigma);
+
+  // 500 Hz: every other step
+  c.profile.rate_loop.rate_hz = 500.0;
+  World half(c);
+  half.Reset(s);
+  half.Step();
+  EXPECT_FALSE(half.TakeRateGyro().has_value());
+  half.Step();
+  EXPECT_TRUE(half.TakeRateGyro().has_value());
+}
+
 }  // namespace
 }  // namespace hpa::sim

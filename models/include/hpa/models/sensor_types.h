@@ -14,6 +14,13 @@ struct ImuSample {
   Eigen::Vector3d accel_B_mps2 = Eigen::Vector3d::Zero();  // specific force R^T (a + g e3)  (3)
 };
 
+/// One gyro sample for the body-rate loop (its own output data rate): body rate with noise and
+/// bias, stamped with the start of the interval it averages.
+struct GyroSample {
+  double time_s = 0.0;
+  Eigen::Vector3d gyro_B_radps = Eigen::Vector3d::Zero();  // body rate + bias + noise  (3)
+};
+
 /// One VIO pose (30 Hz), stamped with the time it was measured (it arrives later).
 struct VioSample {
   double time_s = 0.0;                                       // capture time

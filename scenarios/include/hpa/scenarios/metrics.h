@@ -71,9 +71,10 @@ struct Metrics {
   std::string world_profile = "ideal";           // realism profile of the simulated world
   // smallest payload-to-vehicle surface distance over the run (m; negative: they overlapped)
   double payload_quad_min_distance_m = 0.0;
-  // contact episodes: payload-body, payload-rotor, payload-ground, quadrotor-ground
+  // contact episodes: payload-body, payload-rotor, payload-ground, quadrotor-ground,
+  // payload-gripper rod (while the gripper does not hold it)
   int contacts_payload_body = 0, contacts_payload_rotor = 0, contacts_payload_ground = 0,
-      contacts_quad_ground = 0;
+      contacts_quad_ground = 0, contacts_payload_gripper = 0;
   // estimator variant flown ("" with ground truth) and its published health counts at the end
   std::string estimator;
   std::vector<std::pair<std::string, double>> estimator_health;

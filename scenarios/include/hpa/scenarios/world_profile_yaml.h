@@ -18,9 +18,10 @@ const std::vector<std::string>& WorldProfileNames();
 /// file and key for an unknown name or a bad file.
 sim::WorldProfile LoadWorldProfile(const std::string& name);
 
-/// Reads the profile sections present in `map` (contact, actuation, latency, mismatch) over
-/// `profile`: a key that is absent keeps the profile's value. Unknown keys inside a section are
-/// InputErrors; the caller rejects unknown keys of `map` itself.
+/// Reads the profile sections present in `map` (contact, actuation, latency, mismatch, aero,
+/// wind, vio, imu, camera, rate_loop) over `profile`: a key that is absent keeps the profile's
+/// value. Unknown keys inside a section are InputErrors; the caller rejects unknown keys of `map`
+/// itself.
 void ReadWorldProfileSections(const YamlMap& map, sim::WorldProfile* profile);
 
 }  // namespace hpa

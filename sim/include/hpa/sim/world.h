@@ -53,10 +53,11 @@ struct WorldConfig {
 
 /// Contact episodes since Reset (a pair counts once each time it starts touching).
 struct ContactCounts {
-  int payload_body = 0;    // payload against the quadrotor's body box
-  int payload_rotor = 0;   // payload against a rotor disk (a crash: rotor_strike)
-  int payload_ground = 0;  // payload against the ground
-  int quad_ground = 0;     // quadrotor against the ground (a crash)
+  int payload_body = 0;     // payload against the quadrotor's body box
+  int payload_rotor = 0;    // payload against a rotor disk (a crash: rotor_strike)
+  int payload_ground = 0;   // payload against the ground
+  int quad_ground = 0;      // quadrotor against the ground (a crash)
+  int payload_gripper = 0;  // payload against the gripper rod while not held (flight contact)
 };
 
 /// Ground truth at the current time.
@@ -119,6 +120,12 @@ class World {
   Truth GetTruth() const;
   /// Oldest undelivered IMU sample (a new one every 2 ms), if any.
   std::optional<ImuSample> TakeImu();
+  /// Newest gyro sample for the body-rate loop since the last call, if any (a new one every
+  /// physics_hz / profile.rate_loop.rate_hz steps when the profile's rate loop is PX4's; never
+  /// otherwise). The same part as the IMU (its noise density, its gyro bias), sampled at the
+  /// loop's rate; its white noise comes from a generator of its own, so the IMU's stream is the
+  /// same with and without it.
+  std::optional<GyroSample> TakeRateGyro();
   /// Oldest VIO sample whose latency has elapsed (30 Hz capture), if any.
   std::optional<VioSample> TakeVio();
 
@@ -194,6 +201,7 @@ class World {
     int cable_tendon, tension_sensor_adr, payload_camera, chase_camera;
     int rotor_actuator[4];
     int payload_geom, quad_box_geom, ground_geom;
+    int gripper_geom;  // the gripper's rod (-1: the scene has none)
     int rotor_disc_geom[4];
   };
   struct TimedForce {
@@ -213,6 +221,8 @@ class World {
   void RandomizeAppearance();
   void ApplyAerodynamics();
   void UpdateContacts();
+  void UpdateGripperContact();
+  double PayloadGripperDistance() const;
   void LatchCrash(const std::string& reason);
   // specific force R^T (a + g e3) from qacc (time t_k) in the attitude q_WB of that same time
   Eigen::Vector3d QuadSpecificForce_B(const Eigen::Quaterniond& q_WB) const;
@@ -227,6 +237,13 @@ class World {
   Eigen::Vector3d imu_sum_specific_force_B_mps2_ = Eigen::Vector3d::Zero();  // (3)
   int imu_sum_count_ = 0;  // physics steps summed into the next IMU sample
   int imu_steps_ = 2;      // physics steps per IMU sample (rates.physics_hz / rates.imu.rate_hz)
+  // the rate loop's gyro (PX4 profile): its own sample rate and white-noise generator
+  int rate_gyro_steps_ = 0;  // physics steps per sample (0: no rate gyro)
+  int rate_gyro_sum_count_ = 0;
+  Eigen::Vector3d rate_gyro_sum_radps_ = Eigen::Vector3d::Zero();  // (3)
+  double rate_gyro_sigma_radps_ = 0.0;                             // white noise per sample
+  std::mt19937_64 rate_gyro_rng_;
+  std::optional<GyroSample> rate_gyro_;
   double t0_s_ = 0.0;
   int64_t step_ = 0;
   std::vector<int> warning_count_;  // per MuJoCo warning kind (mjNWARNING)
@@ -268,7 +285,8 @@ class World {
   int64_t event_wind_end_step_ = 0;                             // applied while step < this
   Eigen::Vector3d aero_quad_W_N_ = Eigen::Vector3d::Zero();     // last drag on the quad  (3)
   Eigen::Vector3d aero_payload_W_N_ = Eigen::Vector3d::Zero();  // last drag on the payload  (3)
-  bool touching_[4] = {false, false, false, false};             // ContactCounts fields, last step
+  bool touching_[5] = {false, false, false, false, false};      // ContactCounts fields, last step
+  bool gripper_solid_ = false;  // the gripper's rod collides (flight contact, not holding, clear)
 };
 
 }  // namespace hpa::sim

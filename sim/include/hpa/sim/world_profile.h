@@ -2,19 +2,21 @@
 // A realism profile of the simulated world: the parts a real flight has and the ideal world
 // leaves out (contact, actuation spread and battery sag, compute and transport latency, model
 // mismatch between the flight code's parameters and the world's, the camera's motion blur and
-// sensor noise). Every part is off in a default-constructed profile (the `ideal` world; the
-// camera's lens PSF stays on); models/profiles/flight.yaml switches them on
-// with the source of every number. The scenario runner and the world read it; flight code
+// sensor noise, PX4's rate loop on its own gyro). Every part is off in a default-constructed
+// profile (the `ideal` world; the camera's lens PSF stays on); models/profiles/flight.yaml switches
+// them on with the source of every number. The scenario runner and the world read it; flight code
 // never does.
 
+#include <array>
 #include <string>
 
 namespace hpa::sim {
 
-/// Contact between payload and vehicle (body box and rotor disks). Payload against the ground
-/// and the quadrotor against the ground collide in every profile.
+/// Contact between payload and vehicle (body box and rotor disks), and of both with the gripper
+/// while it does not hold the payload. Payload against the ground and the quadrotor against the
+/// ground collide in every profile.
 struct ContactProfile {
-  bool enabled = false;  // payload collides with the body and the rotor disks
+  bool enabled = false;  // payload collides with the body, the rotor disks and a free gripper
 };
 
 /// Per-vehicle actuation imperfections: coefficients drawn once per seed, battery sag in time.
@@ -103,6 +105,23 @@ struct CameraImageProfile {
   bool draw_cable = true;         // the cable is drawn in the payload camera's image
 };
 
+/// The body-rate loop the flight code runs: the project's own loop on the estimated body rate at
+/// the IMU rate (px4 false), or PX4's rate controller and control allocation on a gyro sampled at
+/// the loop's rate (hpa::Px4RateController; the numbers are PX4's parameters, in its normalised
+/// torque per rad/s, rad and rad/s^2).
+struct RateLoopProfile {
+  bool px4 = false;
+  double rate_hz = 1000.0;                                // loop and its gyro's sample rate
+  std::array<double, 3> p{0.15, 0.15, 0.2};               // MC_*RATE_P (roll, pitch, yaw)
+  std::array<double, 3> i{0.2, 0.2, 0.1};                 // MC_*RATE_I
+  std::array<double, 3> d{0.003, 0.003, 0.0};             // MC_*RATE_D
+  std::array<double, 3> k{1.0, 1.0, 1.0};                 // MC_*RATE_K
+  std::array<double, 3> integrator_limit{0.3, 0.3, 0.3};  // MC_RR/PR/YR_INT_LIM
+  double gyro_cutoff_hz = 30.0;                           // IMU_GYRO_CUTOFF
+  double dgyro_cutoff_hz = 30.0;                          // IMU_DGYRO_CUTOFF
+  double yaw_torque_cutoff_hz = 2.0;                      // MC_YAW_TQ_CUTOFF
+};
+
 /// The whole profile: its name and its parts.
 struct WorldProfile {
   std::string name = "ideal";  // ideal | flight (the file it came from)
@@ -115,6 +134,7 @@ struct WorldProfile {
   VioDriftProfile vio;
   ImuProfile imu;
   CameraImageProfile camera;
+  RateLoopProfile rate_loop;
 };
 
 }  // namespace hpa::sim
