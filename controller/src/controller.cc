@@ -29,6 +29,8 @@ const char* ToString(ControlStatus status) {
       return "non_finite";
     case ControlStatus::kFallback:
       return "fallback";
+    case ControlStatus::kRecovery:
+      return "recovery";
   }
   return "unknown";
 }

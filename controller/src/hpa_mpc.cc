@@ -111,6 +111,18 @@ ControlOutput HpaMpc::Update(const SystemState& state) {
     return finish();
   }
 
+  // tumbling faster than the stage model resolves (a 0.1 s stage of piecewise-constant rotor
+  // speeds turns a plan at this rate through more than a radian, so its stage-1 body rate is no
+  // command): stop the rotation at hover thrust, the recovery a rate loop can fly, and plan
+  // afresh once the rate is back in range
+  if (settings_.recovery_body_rate_radps > 0.0 &&
+      state.w_B.norm() > settings_.recovery_body_rate_radps) {
+    Reset();
+    out.status = ControlStatus::kRecovery;
+    out.command = hover;
+    return finish();
+  }
+
   const std::vector<InputVector> guess = WarmStart(state.time_s);
   const Ocp ocp = BuildProblem(state, guess);
   // the taut flow holds on the taut manifold only: hpa_mpc projects x0 onto it (jump map);

@@ -232,5 +232,27 @@ TEST(HpaMpcTest, LostPayloadHoldsTheQuadrotorWithNoPayloadCost) {
             OcpWeights::Tuned().q_load);
 }
 
+TEST(HpaMpcTest, TumbleRecoveryStopsTheRotationInsteadOfFlyingAPlan) {
+  const Params params;
+  HpaMpc mpc(params, HoverRef(params), MpcSettings());
+  SystemState s = HoverAt(params, Eigen::Vector3d(0, 0, 1.0));
+  ASSERT_EQ(mpc.Update(s).status, ControlStatus::kSuccess);
+  ASSERT_FALSE(mpc.plan_inputs().empty());
+  // knocked into a 12 rad/s tumble (above the 10 rad/s the stage model resolves)
+  s.w_B = Eigen::Vector3d(-9.0, -8.0, 0.0);
+  const ControlOutput out = mpc.Update(s);
+  EXPECT_EQ(out.status, ControlStatus::kRecovery);
+  EXPECT_EQ(out.command.w_B_radps, Eigen::Vector3d::Zero());
+  EXPECT_EQ(out.command.thrust_N, params.HoverThrustN());
+  EXPECT_TRUE(mpc.plan_inputs().empty());  // planned afresh once back in range
+  s.w_B = Eigen::Vector3d(-6.0, -5.0, 0.0);
+  EXPECT_EQ(mpc.Update(s).status, ControlStatus::kSuccess);
+  // 0 switches it off
+  MpcSettings off;
+  off.recovery_body_rate_radps = 0.0;
+  s.w_B = Eigen::Vector3d(-9.0, -8.0, 0.0);
+  EXPECT_NE(HpaMpc(params, HoverRef(params), off).Update(s).status, ControlStatus::kRecovery);
+}
+
 }  // namespace
 }  // namespace hpa

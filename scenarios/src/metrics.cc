@@ -145,8 +145,10 @@ void ComputeMetrics(const MetricsInputs& in, Metrics* m) {
   m->mpc_failures = 0;
   for (const LogRow& r : rows) {
     solve_ms.push_back(r.solve_time_ms);
-    // a plan stopped at its iteration cap is flown: only real failures count
-    if (r.status != ControlStatus::kSuccess && r.status != ControlStatus::kMaxIterations) {
+    // a plan stopped at its iteration cap is flown, a tumble recovery is by design: only real
+    // failures count
+    if (r.status != ControlStatus::kSuccess && r.status != ControlStatus::kMaxIterations &&
+        r.status != ControlStatus::kRecovery) {
       ++m->mpc_failures;
     }
   }

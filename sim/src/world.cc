@@ -349,7 +349,8 @@ void World::UpdateGripperContact() {
   // fights it); when it lets go the hand opens and withdraws, so the rod turns solid only once
   // the payload is clear of it. From then on it stops the payload (contype 4) and the
   // quadrotor's body (contype 2), which is a crash.
-  if (gripper_active()) {
+  // A gripper no event has used in this run (grab or move) is not there at all (no hand).
+  if (gripper_active() || !gripper_used_) {
     gripper_solid_ = false;
   } else if (!gripper_solid_) {
     gripper_solid_ = PayloadGripperDistance() > 0.0;
@@ -444,6 +445,7 @@ void World::Reset(const SystemState& initial) {
   SetState(initial.ToVector(), InputVector::Constant(w_hover));
   payload_quad_min_distance_m_ = PayloadQuadDistance();
   gripper_solid_ = false;
+  gripper_used_ = false;
   UpdateGripperContact();
 }
 
@@ -708,6 +710,7 @@ void World::GripperGrab() {
   for (int i = 0; i < 4; ++i) data_->mocap_quat[4 * ids_.gripper_mocap + i] = qpos[3 + i];
   gripper_moving_ = false;
   model_->eq_active[ids_.gripper_weld] = 1;
+  gripper_used_ = true;
   UpdateGripperContact();
 }
 
@@ -720,6 +723,8 @@ void World::GripperMove(const Eigen::Vector3d& to_W_m, double duration_s) {
   gripper_start_step_ = step_;
   gripper_end_step_ = step_ + std::max<int64_t>(1, std::llround(duration_s / kPhysicsDt_s));
   gripper_moving_ = true;
+  gripper_used_ = true;
+  UpdateGripperContact();
 }
 
 void World::GripperRelease() {

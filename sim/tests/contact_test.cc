@@ -159,6 +159,23 @@ TEST(ContactTest, PayloadFallingOnAFreeGripperStrikesItsRod) {
   EXPECT_EQ(world->Crash().reason.find("gripper"), std::string::npos) << world->Crash().reason;
 }
 
+// A gripper no event has used is not in the world: the rod at the scene's default place (top
+// surface at 0.475 m, under (0, 0, 0.5)) does not stop a payload dropped onto it.
+TEST(ContactTest, UnusedGripperIsNotThere) {
+  World world(ContactConfig(true));
+  const double r = world.world_params().payload_radius_m;
+  PlaceOnGround(&world, Eigen::Vector3d(0.0, 0, 0.475 + r + 0.1));
+  double min_z_m = 1.0;
+  for (int k = 0; k < 400; ++k) {
+    world.Step();
+    min_z_m = std::min(min_z_m, world.GetTruth().state.p_WL_W.z());
+  }
+  // fell through the rod's place (top surface 0.475 m) until the cable to the grounded
+  // quadrotor held it
+  EXPECT_LT(min_z_m, 0.3);
+  EXPECT_EQ(world.contact_counts().payload_gripper, 0);
+}
+
 TEST(ContactTest, IdealWorldLetsThePayloadPassThroughTheGripper) {
   double min_z_m = 0.0;
   const std::unique_ptr<World> world = DropOnGripperRod(false, &min_z_m);

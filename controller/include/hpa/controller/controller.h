@@ -12,7 +12,14 @@
 namespace hpa {
 
 /// What happened in one controller update (acados-style status codes).
-enum class ControlStatus { kSuccess, kMaxIterations, kQpFailure, kNonFinite, kFallback };
+enum class ControlStatus {
+  kSuccess,
+  kMaxIterations,
+  kQpFailure,
+  kNonFinite,
+  kFallback,
+  kRecovery,  // tumbling: a safe recovery command instead of a plan (not a failure)
+};
 
 /// Name of a status for logs.
 const char* ToString(ControlStatus status);

@@ -27,6 +27,10 @@ struct MpcSettings {
   // start and switch to the taut model there, through the jump map (PredictRetautStage). false:
   // slack held over the whole horizon (the paper).
   bool predict_retaut = false;
+  // Above this body rate (norm) the controller flies the tumble recovery (zero body rate at
+  // hover thrust) instead of a plan: one 0.1 s stage then turns the vehicle by more than a radian,
+  // which the stage model cannot resolve. Both MPCs. 0 = never.
+  double recovery_body_rate_radps = 10.0;
 };
 
 /// Model predictive controller over the OCP of ocp.h.
@@ -45,7 +49,8 @@ class HpaMpc : public Controller {
   HpaMpc& operator=(HpaMpc&&) noexcept = default;
 
   /// One solve of the solver named by settings.solver, warm-started from the previous plan; always
-  /// a safe command: non-finite state -> kNonFinite + level hover command; solver failure ->
+  /// a safe command: non-finite state -> kNonFinite + level hover command; body rate above
+  /// settings.recovery_body_rate_radps -> kRecovery + zero rate at hover thrust; solver failure ->
   /// previous plan shifted (kQpFailure), or hover (kFallback) when there is no usable plan.
   ControlOutput Update(const SystemState& state) override;
   /// Rate the runner calls Update at (MpcSettings::rate_hz).

@@ -287,6 +287,7 @@ class World {
   Eigen::Vector3d aero_payload_W_N_ = Eigen::Vector3d::Zero();  // last drag on the payload  (3)
   bool touching_[5] = {false, false, false, false, false};      // ContactCounts fields, last step
   bool gripper_solid_ = false;  // the gripper's rod collides (flight contact, not holding, clear)
+  bool gripper_used_ = false;   // an event has grabbed with or moved the gripper in this run
 };
 
 }  // namespace hpa::sim
