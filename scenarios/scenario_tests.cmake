@@ -42,3 +42,7 @@ set_tests_properties(cli.sweep_diff PROPERTIES LABELS cli TIMEOUT 600)
 add_test(NAME cli.impulse_finding
          COMMAND bash ${SCEN}/tests/impulse_finding_test.sh ${HPA_BIN} ${SCEN} ${SCEN_OUT}/impulse_finding)
 set_tests_properties(cli.impulse_finding PROPERTIES LABELS "cli;scenario" TIMEOUT 900)
+
+add_test(NAME cli.retaut_finding
+         COMMAND bash ${SCEN}/tests/retaut_finding_test.sh ${HPA_BIN} ${SCEN} ${SCEN_OUT}/retaut_finding)
+set_tests_properties(cli.retaut_finding PROPERTIES LABELS "cli;scenario" TIMEOUT 600)
