@@ -99,12 +99,8 @@ FilterStatus CableEkf::Predict(double time_s, double thrust_N, const Eigen::Matr
   return FilterStatus::kOk;
 }
 
-FilterStatus CableEkf::Update(double capture_time_s, const Eigen::Vector3d& p_BL_B,
-                              const Eigen::Matrix3d& R_WB, const Eigen::Matrix3d& cov_B_m2) {
-  if (!std::isfinite(capture_time_s) || !p_BL_B.allFinite() || !R_WB.allFinite() ||
-      !cov_B_m2.allFinite()) {
-    return Refused(FilterStatus::kNonFinite);
-  }
+template <typename Fuse>
+FilterStatus CableEkf::FuseAtCaptureTime(double capture_time_s, const Fuse& fuse) {
   // latest kept entry at or before the capture time
   auto it = std::upper_bound(history_.begin(), history_.end(), capture_time_s,
                              [](double t, const Entry& e) { return t < e.time_s; });
@@ -112,17 +108,8 @@ FilterStatus CableEkf::Update(double capture_time_s, const Eigen::Vector3d& p_BL
   const size_t k = static_cast<size_t>(std::distance(history_.begin(), it)) - 1;
   CableVector x = history_[k].x;
   CableMatrix covariance = history_[k].covariance;
-
-  // h(x) = R^T l xi, H = [R^T l, 0]
-  const double l_m = params_.cable_length_m;
-  const Eigen::Vector3d r = p_BL_B - R_WB.transpose() * l_m * x.head<3>();
-  Eigen::Matrix<double, 3, 6> H = Eigen::Matrix<double, 3, 6>::Zero();
-  H.block<3, 3>(0, 0) = R_WB.transpose() * l_m;
-  const GatedUpdateResult<6> update =
-      GatedKalmanUpdate<6, 3>(r, H, cov_B_m2, config_.gate, GainProduct::kHP,
-                              &consecutive_rejections_, &covariance, &counts_);
-  if (update.status != FilterStatus::kOk) return update.status;
-  x += update.dx;
+  const FilterStatus status = fuse(&x, &covariance);
+  if (status != FilterStatus::kOk) return status;
   ProjectToConstraint(&x);
   history_[k].x = x;
   history_[k].covariance = covariance;
@@ -137,6 +124,52 @@ FilterStatus CableEkf::Update(double capture_time_s, const Eigen::Vector3d& p_BL
   x_ = x;
   covariance_ = covariance;
   return FilterStatus::kOk;
+}
+
+FilterStatus CableEkf::Update(double capture_time_s, const Eigen::Vector3d& p_BL_B,
+                              const Eigen::Matrix3d& R_WB, const Eigen::Matrix3d& cov_B_m2) {
+  if (!std::isfinite(capture_time_s) || !p_BL_B.allFinite() || !R_WB.allFinite() ||
+      !cov_B_m2.allFinite()) {
+    return Refused(FilterStatus::kNonFinite);
+  }
+  return FuseAtCaptureTime(capture_time_s, [&](CableVector* x, CableMatrix* covariance) {
+    // h(x) = R^T l xi, H = [R^T l, 0]
+    const double l_m = params_.cable_length_m;
+    const Eigen::Vector3d r = p_BL_B - R_WB.transpose() * l_m * x->head<3>();
+    Eigen::Matrix<double, 3, 6> H = Eigen::Matrix<double, 3, 6>::Zero();
+    H.block<3, 3>(0, 0) = R_WB.transpose() * l_m;
+    const GatedUpdateResult<6> update =
+        GatedKalmanUpdate<6, 3>(r, H, cov_B_m2, config_.gate, GainProduct::kHP,
+                                &consecutive_rejections_, covariance, &counts_);
+    if (update.status == FilterStatus::kOk) *x += update.dx;
+    return update.status;
+  });
+}
+
+FilterStatus CableEkf::UpdateVelocity(double capture_time_s, const Eigen::Vector3d& v_BL_B,
+                                      const Eigen::Matrix3d& R_WB, const Eigen::Vector3d& w_B_radps,
+                                      const Eigen::Matrix3d& cov_B) {
+  if (!std::isfinite(capture_time_s) || !v_BL_B.allFinite() || !R_WB.allFinite() ||
+      !w_B_radps.allFinite() || !cov_B.allFinite()) {
+    return Refused(FilterStatus::kNonFinite);
+  }
+  return FuseAtCaptureTime(capture_time_s, [&](CableVector* x, CableMatrix* covariance) {
+    // h(x) = l (R^T xi_dot - w x R^T xi), H = [-l [w]x R^T, l R^T]
+    const double l_m = params_.cable_length_m;
+    const Eigen::Matrix3d Rt = R_WB.transpose();
+    Eigen::Matrix3d w_cross;
+    w_cross << 0, -w_B_radps.z(), w_B_radps.y(), w_B_radps.z(), 0, -w_B_radps.x(), -w_B_radps.y(),
+        w_B_radps.x(), 0;
+    const Eigen::Vector3d xi_B = Rt * x->head<3>();
+    const Eigen::Vector3d r = v_BL_B - l_m * (Rt * x->tail<3>() - w_B_radps.cross(xi_B));
+    Eigen::Matrix<double, 3, 6> H;
+    H << -l_m * w_cross * Rt, l_m * Rt;
+    const GatedUpdateResult<6> update =
+        GatedKalmanUpdate<6, 3>(r, H, cov_B, config_.gate, GainProduct::kHP,
+                                &consecutive_rejections_, covariance, &counts_);
+    if (update.status == FilterStatus::kOk) *x += update.dx;
+    return update.status;
+  });
 }
 
 }  // namespace hpa

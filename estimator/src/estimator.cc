@@ -115,9 +115,11 @@ class CableEstimator final : public Estimator {
     mode_ = geometric == CableMode::kSlack || tension_slack ? CableMode::kSlack : CableMode::kTaut;
     const bool had_last = has_last_detection_;
     const Eigen::Vector3d last_p_WL_W = last_p_WL_W_;
+    const Eigen::Vector3d last_p_BL_B = last_p_BL_B_;
     const double last_time_s = last_detection_time_s_;
     has_last_detection_ = true;
     last_p_WL_W_ = p_WL_W;
+    last_p_BL_B_ = p_BL_B;
     last_detection_time_s_ = detection.time_s;
     const Eigen::Matrix3d cov_W =
         R_WB * cov_B * R_WB.transpose() + quad_.covariance().block<3, 3>(0, 0);
@@ -156,7 +158,24 @@ class CableEstimator final : public Estimator {
           Eigen::Vector3d::Constant(std::pow(config_.retaut_xi_dot_std_per_s, 2));
       cable_.Reset(quad_.state().time_s, xi, xi_dot, cov);
       ++retaut_restarts_;
+      velocity_row_pending_ = config_.retaut_velocity_row;
+      restart_time_s_ = quad_.state().time_s;
       return;
+    }
+    if (velocity_row_pending_) {
+      // the rate of the body-frame payload position between the restart's detection and this
+      // one, at the middle of their gap; the restart is at the time the restart's detection
+      // arrived, later than its capture, so no earlier than that
+      velocity_row_pending_ = false;
+      const double gap_s = detection.time_s - last_time_s;
+      const double fuse_time_s = std::max(detection.time_s - 0.5 * gap_s, restart_time_s_);
+      if (had_last && gap_s > config_.slack_entry_min_detection_gap_s &&
+          gap_s < config_.slack_entry_max_detection_gap_s) {
+        const QuadFilterState quad_mid = quad_.StateAt(fuse_time_s).value_or(quad_then);
+        cable_.UpdateVelocity(fuse_time_s, (p_BL_B - last_p_BL_B) / gap_s,
+                              quad_mid.q_WB.toRotationMatrix(), quad_mid.w_B_radps,
+                              2.0 * cov_B / (gap_s * gap_s));
+      }
     }
     cable_.Update(detection.time_s, p_BL_B, R_WB, cov_B);
   }
@@ -303,8 +322,11 @@ class CableEstimator final : public Estimator {
                                       // last detection
   bool has_last_detection_ = false;   // for the slack-entry velocity
   Eigen::Vector3d last_p_WL_W_ = Eigen::Vector3d::Zero();  // previous detection, world  (3)
-  double last_detection_time_s_ = 0.0;                     // its capture time
-  int detections_lost_ = 0;                                // health counters (EstimatorHealth)
+  Eigen::Vector3d last_p_BL_B_ = Eigen::Vector3d::Zero();  // the same in its body frame  (3)
+  bool velocity_row_pending_ = false;   // re-taut restart: the next detection fuses the velocity
+  double restart_time_s_ = 0.0;         // time of the cable EKF's last re-taut restart
+  double last_detection_time_s_ = 0.0;  // its capture time
+  int detections_lost_ = 0;             // health counters (EstimatorHealth)
   int detections_non_finite_ = 0;
   int thrust_commands_non_finite_ = 0;
   int slack_entries_ = 0;

@@ -44,6 +44,14 @@ class CableEkf {
   FilterStatus Update(double capture_time_s, const Eigen::Vector3d& p_BL_B,
                       const Eigen::Matrix3d& R_WB, const Eigen::Matrix3d& cov_B_m2);
 
+  /// Fuses the paper's velocity row, Z_2 = l (R^T xi_dot - w_B x R^T xi) = v_BL_B (the rate of
+  /// the body-frame payload position as the body sees it), at capture_time_s
+  /// (e.g. a finite difference of two detections, at the middle of their gap) with covariance
+  /// cov_B (3x3).
+  FilterStatus UpdateVelocity(double capture_time_s, const Eigen::Vector3d& v_BL_B,
+                              const Eigen::Matrix3d& R_WB, const Eigen::Vector3d& w_B_radps,
+                              const Eigen::Matrix3d& cov_B);
+
   /// Restarts at (xi_W, xi_dot_W) with covariance `covariance` (e.g. at a slack-to-taut switch).
   void Reset(double time_s, const Eigen::Vector3d& xi_W, const Eigen::Vector3d& xi_dot_W,
              const CableMatrix& covariance);
@@ -71,6 +79,10 @@ class CableEkf {
   FilterStatus Refused(FilterStatus status);
   void Propagate(double dt_s, double thrust_N, const Eigen::Matrix3d& R_WB, CableVector* x,
                  CableMatrix* covariance) const;
+  // Rewinds to the capture time, applies `fuse` (x, covariance -> status) there and re-propagates
+  // the stored inputs; kTooOld when the capture time is before the history.
+  template <typename Fuse>
+  FilterStatus FuseAtCaptureTime(double capture_time_s, const Fuse& fuse);
 
   Params params_;
   CableEkfConfig config_;

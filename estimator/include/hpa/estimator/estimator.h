@@ -37,7 +37,11 @@ struct EstimatorConfig {
   // re-taut: the cable EKF restarts on the measured direction with this std, per axis
   double retaut_xi_std = 0.03;           // unit-vector components
   double retaut_xi_dot_std_per_s = 1.0;  // cable direction rate
-  double max_extrapolation_s = 0.05;     // Estimate() ahead of the last IMU sample, at most
+  // the cable EKF's velocity row (the paper's Z second row): on the first detection after a
+  // re-taut restart, the finite difference with the restart's detection, fused at the middle of
+  // their gap (later detections would count a fused one twice); false: position row only
+  bool retaut_velocity_row = true;
+  double max_extrapolation_s = 0.05;  // Estimate() ahead of the last IMU sample, at most
   // always_taut (the paper's baseline): the payload state as measured, not projected on the cable
   double measured_velocity_time_constant_s = 0.1;  // low-pass on the detections' finite difference
   double measured_velocity_max_gap_s = 0.1;  // longer gaps between detections: no new difference
