@@ -1,5 +1,6 @@
 #include "hpa/controller/hpa_mpc.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <stdexcept>
@@ -111,15 +112,30 @@ ControlOutput HpaMpc::Update(const SystemState& state) {
     return finish();
   }
 
-  // tumbling faster than the stage model resolves (a 0.1 s stage of piecewise-constant rotor
-  // speeds turns a plan at this rate through more than a radian, so its stage-1 body rate is no
-  // command): stop the rotation at hover thrust, the recovery a rate loop can fly, and plan
-  // afresh once the rate is back in range
-  if (settings_.recovery_body_rate_radps > 0.0 &&
-      state.w_B.norm() > settings_.recovery_body_rate_radps) {
+  // Outside the envelope the plan can be flown in, recover attitude first and plan afresh after:
+  // - tumbling faster than the stage model resolves (a 0.1 s stage of piecewise-constant rotor
+  //   speeds turns a plan at this rate through more than a radian, so its stage-1 body rate is
+  //   no command);
+  // - tilted beyond the recovery tilt: a plan there cuts collective thrust, and a rate loop
+  //   without airmode (PX4's default) then has no moment left to level the vehicle.
+  // The recovery is PX4's attitude loop toward level (body rate = MC_ROLL_P x the tilt error,
+  // yaw left alone) at hover thrust, which leaves the rotors the moment to fly it.
+  const Eigen::Vector3d z_B_W = state.q_WB * Eigen::Vector3d::UnitZ();
+  const double tilt_rad = std::acos(std::clamp(z_B_W.z(), -1.0, 1.0));
+  const bool tumbling = settings_.recovery_body_rate_radps > 0.0 &&
+                        state.w_B.norm() > settings_.recovery_body_rate_radps;
+  const bool tipped = settings_.recovery_tilt_rad > 0.0 && tilt_rad > settings_.recovery_tilt_rad;
+  if (tumbling || tipped) {
     Reset();
     out.status = ControlStatus::kRecovery;
     out.command = hover;
+    // rotation taking body z to world z, in the body frame: axis (z_B x e3) in world
+    const Eigen::Vector3d axis_W = z_B_W.cross(Eigen::Vector3d::UnitZ());
+    if (axis_W.norm() > 1e-9) {
+      const Eigen::Vector3d error_B = state.q_WB.conjugate() * (axis_W.normalized() * tilt_rad);
+      out.command.w_B_radps = settings_.recovery_attitude_gain_per_s * error_B;
+      out.command.w_B_radps.z() = 0.0;
+    }
     return finish();
   }
 

@@ -250,6 +250,19 @@ TEST(HpaMpcTest, TumbleRecoveryStopsTheRotationInsteadOfFlyingAPlan) {
   EXPECT_TRUE(mpc.plan_inputs().empty());  // planned afresh once back in range
   s.w_B = Eigen::Vector3d(-6.0, -5.0, 0.0);
   EXPECT_EQ(mpc.Update(s).status, ControlStatus::kSuccess);
+  // tipped 80 deg about body x with no rotation: PX4's attitude gain toward level, -6.5 x 1.40
+  // rad about x, at hover thrust
+  s.w_B.setZero();
+  s.q_WB = Eigen::AngleAxisd(80.0 * M_PI / 180.0, Eigen::Vector3d::UnitX());
+  const ControlOutput level = mpc.Update(s);
+  EXPECT_EQ(level.status, ControlStatus::kRecovery);
+  EXPECT_NEAR(level.command.w_B_radps.x(), -6.5 * 80.0 * M_PI / 180.0, 1e-9);
+  EXPECT_NEAR(level.command.w_B_radps.y(), 0.0, 1e-9);
+  EXPECT_EQ(level.command.w_B_radps.z(), 0.0);
+  EXPECT_EQ(level.command.thrust_N, params.HoverThrustN());
+  s.q_WB = Eigen::AngleAxisd(60.0 * M_PI / 180.0, Eigen::Vector3d::UnitX());  // inside: a plan
+  EXPECT_NE(mpc.Update(s).status, ControlStatus::kRecovery);
+  s.q_WB.setIdentity();
   // 0 switches it off
   MpcSettings off;
   off.recovery_body_rate_radps = 0.0;

@@ -4,13 +4,16 @@
 # of 0.1-2.5 N s), hpa_mpc's crash rate is not above the non-hybrid baseline's: its Wilson 95 %
 # interval does not lie above the baseline's, and the paired comparison (hpa sweep-diff, exact
 # McNemar) does not find it worse.
-# Measured on this sweep: hpa_mpc 2 of 40 crashes, nonhybrid_mpc 1 of 40 (both: the payload
-# striking the body at 20-23 m/s tumbles the vehicle within 0.12 s). The paper's ordering (the
-# baseline crashing more) does not show: with 100 draws (ci/paper_comparison.sh) 7 against 3.
-# Regression bounds: hpa_mpc at most 3 crashes (a count this small moves in steps of 1 of 40,
-# so the median quadrotor deviation carries the tight bound) and a median deviation at most
-# 1.3 x the measured 0.270 m. Paired, hpa_mpc meets the re-taut faster than the baseline here
-# (v_z -0.26 m/s, p < 0.001) where the paper reports it slower: README, "paper comparison".
+# Measured on this sweep: hpa_mpc 3 of 40 crashes, nonhybrid_mpc 1 of 40 (McNemar p = 0.5);
+# two of hpa_mpc's are the payload striking the body at 20-23 m/s, which tumbles the vehicle
+# within 0.12 s. The paper's ordering (the baseline crashing more) does not show: with 100 draws
+# (ci/paper_comparison.sh) 5 against 2. Crash counts this small are chaotic (a change moving no
+# shipped scenario by 0.1 % moved hpa_mpc between 2 and 4 of 40).
+# Regression bounds: hpa_mpc at most 4 crashes (one more than measured: a count this small moves
+# in steps of 1 of 40, so the median quadrotor deviation carries the tight bound) and a median
+# deviation at most 1.3 x the measured 0.267 m. Paired, hpa_mpc meets the re-taut faster than the
+# baseline here (v_z -0.11 m/s, p = 0.03) where the paper reports it slower: README, "paper
+# comparison".
 set -u
 hpa="$1"; scen="$2"; out="$3"
 rm -rf "$out"; mkdir -p "$out"
@@ -43,11 +46,11 @@ base_lo, base_hi = wilson(crashes["nonhybrid_mpc"], 40)
 print(f"Wilson 95 %: hpa_mpc [{hpa_lo:.3f}, {hpa_hi:.3f}], nonhybrid_mpc [{base_lo:.3f}, {base_hi:.3f}]")
 assert hpa_lo <= base_hi, "hpa_mpc's crash rate interval lies above the baseline's"
 assert diff["metrics"]["crash_rate"]["verdict"] != "worse", diff["metrics"]["crash_rate"]
-assert crashes["hpa_mpc"] <= 3, f"hpa_mpc crashed {crashes['hpa_mpc']} times (measured 2)"
+assert crashes["hpa_mpc"] <= 4, f"hpa_mpc crashed {crashes['hpa_mpc']} times (measured 3)"
 deviation = statistics.median(json.loads(l)["metrics"]["quad_position_deviation_max_m"]
                               for l in open(sys.argv[3]) if '"hpa_mpc"' in l
                               and json.loads(l)["controller"] == "hpa_mpc")
-print(f"hpa_mpc median quadrotor deviation {deviation:.3f} m (measured 0.270)")
-assert deviation <= 1.3 * 0.270, deviation
+print(f"hpa_mpc median quadrotor deviation {deviation:.3f} m (measured 0.267)")
+assert deviation <= 1.3 * 0.267, deviation
 PY
 echo "impulse finding: holds"

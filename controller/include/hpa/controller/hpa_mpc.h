@@ -27,10 +27,15 @@ struct MpcSettings {
   // start and switch to the taut model there, through the jump map (PredictRetautStage). false:
   // slack held over the whole horizon (the paper).
   bool predict_retaut = false;
-  // Above this body rate (norm) the controller flies the tumble recovery (zero body rate at
-  // hover thrust) instead of a plan: one 0.1 s stage then turns the vehicle by more than a radian,
-  // which the stage model cannot resolve. Both MPCs. 0 = never.
+  // Recovery instead of a plan (both MPCs), status kRecovery: above this body rate (norm) one
+  // 0.1 s stage turns the vehicle by more than a radian, which the stage model cannot resolve;
+  // 0 = never.
   double recovery_body_rate_radps = 10.0;
+  // ... or above this tilt. Ours: 1.5 x PX4's MPC_TILTMAX_AIR default (45 deg), the most PX4's
+  // own position loop commands; 0 = never
+  double recovery_tilt_rad = 67.5 * M_PI / 180.0;
+  // the recovery's attitude gain: PX4's MC_ROLL_P / MC_PITCH_P default, 1/s
+  double recovery_attitude_gain_per_s = 6.5;
 };
 
 /// Model predictive controller over the OCP of ocp.h.
@@ -49,8 +54,8 @@ class HpaMpc : public Controller {
   HpaMpc& operator=(HpaMpc&&) noexcept = default;
 
   /// One solve of the solver named by settings.solver, warm-started from the previous plan; always
-  /// a safe command: non-finite state -> kNonFinite + level hover command; body rate above
-  /// settings.recovery_body_rate_radps -> kRecovery + zero rate at hover thrust; solver failure ->
+  /// a safe command: non-finite state -> kNonFinite + level hover command; body rate or tilt
+  /// beyond the recovery settings -> kRecovery, a level-out at hover thrust; solver failure ->
   /// previous plan shifted (kQpFailure), or hover (kFallback) when there is no usable plan.
   ControlOutput Update(const SystemState& state) override;
   /// Rate the runner calls Update at (MpcSettings::rate_hz).
