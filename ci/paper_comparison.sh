@@ -8,7 +8,7 @@
 #   - the impulse sweep (scenarios/sweeps/impulse_crash_rate.yaml, analytic camera) with
 #     RUNS draws per controller: crashes with Wilson 95 % intervals, medians of the re-taut
 #     figures over the runs that did not crash.
-# A developer tool (about 10 min with RUNS=200 on 2 cores), not a CI step.
+# A developer tool (about 5 min with RUNS=100 on 2 cores), not a CI step.
 #   ci/paper_comparison.sh DIR [RUNS]
 set -euo pipefail
 cd "$(dirname "$0")/.."
