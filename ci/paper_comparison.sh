@@ -6,8 +6,8 @@
 #   - line_impulse and hover_gripper_pull, rendered camera, seeds 1-3: median and range of the
 #     quadrotor deviation, re-taut v_z and peak body rate, payload in view, crashes;
 #   - the impulse sweep (scenarios/sweeps/impulse_crash_rate.yaml, analytic camera) with
-#     RUNS draws per controller: crashes with Wilson 95 % intervals, medians of the re-taut
-#     figures over the runs that did not crash.
+#     RUNS draws per controller: crashes with the sweep summary's Wilson 95 % intervals, medians
+#     of the re-taut figures over the runs that did not crash.
 # A developer tool (about 5 min with RUNS=100 on 2 cores), not a CI step.
 #   ci/paper_comparison.sh DIR [RUNS]
 set -euo pipefail
@@ -66,18 +66,9 @@ for arm in "${sweep_vary[@]}"; do
 done
 
 python3 - "$out" "$runs" <<'PY'
-import json, math, os, statistics, sys
+import json, os, statistics, sys
 out, runs = sys.argv[1], int(sys.argv[2])
 arms = ["hpa_mpc", "hpa_mpc+predict_retaut", "nonhybrid_mpc", "nonhybrid_mpc+projected"]
-
-def wilson(k, n, z=1.96):
-    if n == 0:
-        return (0.0, 1.0)
-    p = k / n
-    d = 1 + z * z / n
-    c = (p + z * z / (2 * n)) / d
-    h = z * math.sqrt(p * (1 - p) / n + z * z / (4 * n * n)) / d
-    return (max(0.0, c - h), min(1.0, c + h))
 
 def spread(values, fmt="{:.3f}"):
     values = [v for v in values if v is not None]
@@ -113,20 +104,21 @@ lines += [f"## Impulse sweep ({runs} draws of 0.1-2.5 N s per controller, same d
           "median [m/s] | re-taut peak body rate, median [rad/s] | quad deviation, median [m] |",
           "|---|---|---|---|---|---|"]
 for arm in arms:
+    # totals, the Wilson interval and the deviation median from the sweep's own summary
+    summary = json.load(open(os.path.join(out, "sweeps", arm, "summary.json")))
+    (total,) = summary["controllers"].values()
+    lo, hi = total["crash_rate_ci95"]
     rows = [json.loads(l) for l in open(os.path.join(out, "sweeps", arm, "runs.jsonl"))]
-    ms = [r["metrics"] for r in rows if r["status"] == "ok"]
-    k = sum(m["crashed"] for m in ms)
-    lo, hi = wilson(k, len(ms))
     low = [r["metrics"] for r in rows if r["status"] == "ok"
            and r["values"]["events.0.impulse.2"] < 1.5]
-    kl = sum(m["crashed"] for m in low)
-    lol, hil = wilson(kl, len(low))
-    ok = [m for m in ms if not m["crashed"] and m["retaut"]["count"] > 0]
+    ok = [r["metrics"] for r in rows if r["status"] == "ok" and not r["metrics"]["crashed"]
+          and r["metrics"]["retaut"]["count"] > 0]
     lines.append(
-        f"| {arm} | {k} of {len(ms)} [{lo:.3f}, {hi:.3f}] | {kl} of {len(low)} [{lol:.3f}, {hil:.3f}] "
+        f"| {arm} | {total['crashes']} of {total['runs']} [{lo:.3f}, {hi:.3f}] "
+        f"| {sum(m['crashed'] for m in low)} of {len(low)} "
         f"| {statistics.median(m['retaut']['quad_vz_min_mps'] for m in ok):.2f} "
         f"| {statistics.median(m['retaut']['peak_body_rate_radps'] for m in ok):.2f} "
-        f"| {statistics.median(m['quad_position_deviation_max_m'] for m in ms):.3f} |")
+        f"| {total['quad_deviation_max_m']['median']:.3f} |")
 open(os.path.join(out, "comparison.md"), "w").write("\n".join(lines) + "\n")
 print("\n".join(lines))
 PY

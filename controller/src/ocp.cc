@@ -1,5 +1,6 @@
 #include "hpa/controller/ocp.h"
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <limits>
@@ -368,9 +369,14 @@ int PredictRetautStage(const Ocp& ocp, const StateVector& x0, const std::vector<
 }
 
 void ScheduleRetaut(const Reference& reference, double t0_s, int stage, Ocp* ocp) {
+  const int previous = ocp->retaut_stage;
   ocp->retaut_stage = stage >= 1 && stage <= ocp->horizon_steps ? stage : -1;
+  // only the stages the old or the new schedule makes taut change their references
+  int first = ocp->horizon_steps + 1;
+  if (previous >= 1) first = std::min(first, previous);
+  if (ocp->retaut_stage >= 1) first = std::min(first, ocp->retaut_stage);
   const Params& params = ocp->model->params();
-  for (int k = 0; k <= ocp->horizon_steps; ++k) {
+  for (int k = first; k <= ocp->horizon_steps; ++k) {
     const ReferencePoint point = reference.At(t0_s + k * ocp->stage_dt_s);
     ocp->x_ref[k] = StateReference(params, point, ocp->StageMode(k));
     if (k < ocp->horizon_steps) ocp->u_ref[k] = InputReference(params, point, ocp->StageMode(k));

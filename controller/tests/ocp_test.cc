@@ -9,6 +9,7 @@
 #include <cstdio>
 #include <set>
 #include <string>
+#include <utility>
 
 namespace hpa {
 namespace {
@@ -313,6 +314,24 @@ TEST(OcpTest, LinearizationIsTheSimulatedTrajectory) {
   EXPECT_TRUE(lin.r_u.back().isZero(0.0));
 }
 
+// The adjoint gradient of the cost against central differences on every third input (h = 1e-2
+// rad/s on ~1e3 rad/s inputs): truncation h^2 f''' ~ 1e-4 * 1e-6 relative, and the callers' states
+// avoid the soft penalties' kinks; 1e-5 relative + 1e-7 absolute.
+void ExpectGradientMatchesCentralDifferences(const Ocp& ocp, const StateVector& x0,
+                                             const std::vector<InputVector>& u) {
+  Eigen::VectorXd grad;
+  OcpCostAndGradient(ocp, x0, u, &grad);
+  for (int i = 0; i < kNu * ocp.horizon_steps; i += 3) {
+    const double h = 1e-2;
+    std::vector<InputVector> up = u, um = u;
+    up[i / kNu](i % kNu) += h;
+    um[i / kNu](i % kNu) -= h;
+    const double fd = (OcpCost(ocp, x0, up) - OcpCost(ocp, x0, um)) / (2 * h);
+    EXPECT_NEAR(grad(i), fd, 1e-5 * std::abs(fd) + 1e-7)
+        << "input " << i << ", mode " << ToString(ocp.mode) << ", re-taut " << ocp.retaut_stage;
+  }
+}
+
 TEST(OcpTest, CostGradientMatchesFiniteDifferences) {
   const Params params;
   LissajousSpec spec;
@@ -326,19 +345,30 @@ TEST(OcpTest, CostGradientMatchesFiniteDifferences) {
     for (int k = 0; k < ocp.horizon_steps; ++k) {
       u[k] = params.HoverMotorSpeedRadps() * InputVector(1.0 + 0.01 * k, 0.98, 1.02, 1.0);
     }
-    Eigen::VectorXd grad;
-    OcpCostAndGradient(ocp, x0, u, &grad);
-    for (int i = 0; i < kNu * ocp.horizon_steps; i += 3) {
-      const double h = 1e-2;  // rad/s on ~1e3 rad/s inputs
-      std::vector<InputVector> up = u, um = u;
-      up[i / kNu](i % kNu) += h;
-      um[i / kNu](i % kNu) -= h;
-      const double fd = (OcpCost(ocp, x0, up) - OcpCost(ocp, x0, um)) / (2 * h);
-      // central-difference truncation h^2 f''' ~ 1e-4 * 1e-6 relative; kinks of the soft
-      // penalties are avoided by construction; 1e-5 relative + 1e-7 absolute
-      EXPECT_NEAR(grad(i), fd, 1e-5 * std::abs(fd) + 1e-7) << "mode " << ToString(mode);
-    }
+    ExpectGradientMatchesCentralDifferences(ocp, x0, u);
   }
+}
+
+// Largest entry of |a - dF/dx| and of |b - dF/du| with F's central differences (h = 1e-6 on the
+// state, 1e-3 on rotor speeds of ~1e3 rad/s).
+template <typename F>
+std::pair<double, double> MaxCentralDifferenceError(const F& f, const StateVector& x,
+                                                    const InputVector& u, const StateMatrix& a,
+                                                    const InputMatrix& b) {
+  double a_error = 0.0, b_error = 0.0;
+  for (int i = 0; i < kNx; ++i) {
+    StateVector xp = x, xm = x;
+    xp(i) += 1e-6;
+    xm(i) -= 1e-6;
+    a_error = std::max(a_error, (a.col(i) - (f(xp, u) - f(xm, u)) / 2e-6).cwiseAbs().maxCoeff());
+  }
+  for (int i = 0; i < kNu; ++i) {
+    InputVector up = u, um = u;
+    up(i) += 1e-3;
+    um(i) -= 1e-3;
+    b_error = std::max(b_error, (b.col(i) - (f(x, up) - f(x, um)) / 2e-3).cwiseAbs().maxCoeff());
+  }
+  return {a_error, b_error};
 }
 
 // A slack state whose payload, thrown up, falls back past the cable's length inside the horizon.
@@ -378,6 +408,15 @@ TEST(OcpTest, RetautPredictedWhereTheSlackRolloutReachesTheCable) {
   const Ocp taut = BuildOcp(params, *ref, 0.0, CableMode::kTaut, 1.0);
   EXPECT_EQ(ocp.u_ref[stage], taut.u_ref[stage]);
   EXPECT_NE(ocp.u_ref[stage - 1], taut.u_ref[stage - 1]);
+  // moved one stage later, then cleared: the references are the slack problem's again
+  const Ocp slack = BuildOcp(params, *ref, 0.0, CableMode::kSlack, 1.0);
+  Ocp moved = ocp;
+  ScheduleRetaut(*ref, 0.0, stage + 1, &moved);
+  EXPECT_EQ(moved.u_ref[stage], slack.u_ref[stage]);
+  EXPECT_EQ(moved.x_ref[stage + 1], taut.x_ref[stage + 1]);
+  ScheduleRetaut(*ref, 0.0, -1, &moved);
+  EXPECT_EQ(moved.retaut_stage, -1);
+  for (int k = 0; k <= moved.horizon_steps; ++k) EXPECT_EQ(moved.x_ref[k], slack.x_ref[k]) << k;
 
   // the rollout meets the jump map at the guard: on the cable after it, no relative velocity
   // along it (the payload was moving away)
@@ -408,39 +447,16 @@ TEST(OcpTest, StepJacobiansThroughTheJumpMatchFiniteDifferences) {
   EXPECT_LT((x_next - ocp.Step(2, x, u)).norm(), 1e-12);
   // central differences, h = 1e-6 on x ~ 1 and 1e-3 on u ~ 1e3: measured 6.3e-10 (x) and
   // 1.1e-12 (u); bounds about 10x above
-  double max_a_error = 0.0, max_b_error = 0.0;
-  for (int i = 0; i < kNx; ++i) {
-    const double h = 1e-6;
-    StateVector xp = x, xm = x;
-    xp(i) += h;
-    xm(i) -= h;
-    const StateVector fd = (ocp.Step(2, xp, u) - ocp.Step(2, xm, u)) / (2 * h);
-    max_a_error = std::max(max_a_error, (a.col(i) - fd).cwiseAbs().maxCoeff());
-  }
-  for (int i = 0; i < kNu; ++i) {
-    const double h = 1e-3;
-    InputVector up = u, um = u;
-    up(i) += h;
-    um(i) -= h;
-    const StateVector fd = (ocp.Step(2, x, up) - ocp.Step(2, x, um)) / (2 * h);
-    max_b_error = std::max(max_b_error, (b.col(i) - fd).cwiseAbs().maxCoeff());
-  }
+  const auto step = [&ocp](const StateVector& xi, const InputVector& ui) {
+    return ocp.Step(2, xi, ui);
+  };
+  const auto [max_a_error, max_b_error] = MaxCentralDifferenceError(step, x, u, a, b);
   std::printf("stage through the jump vs central differences: max error %.2e (x), %.2e (u)\n",
               max_a_error, max_b_error);
   EXPECT_LT(max_a_error, 1e-8);
   EXPECT_LT(max_b_error, 1e-11);
   // the cost gradient of the whole scheduled horizon matches finite differences too
-  std::vector<InputVector> us(ocp.horizon_steps, u);
-  Eigen::VectorXd grad;
-  OcpCostAndGradient(ocp, x0, us, &grad);
-  for (int i = 0; i < kNu * ocp.horizon_steps; i += 3) {
-    const double h = 1e-2;
-    std::vector<InputVector> up = us, um = us;
-    up[i / kNu](i % kNu) += h;
-    um[i / kNu](i % kNu) -= h;
-    const double fd = (OcpCost(ocp, x0, up) - OcpCost(ocp, x0, um)) / (2 * h);
-    EXPECT_NEAR(grad(i), fd, 1e-5 * std::abs(fd) + 1e-7) << i;
-  }
+  ExpectGradientMatchesCentralDifferences(ocp, x0, std::vector<InputVector>(ocp.horizon_steps, u));
 }
 
 }  // namespace

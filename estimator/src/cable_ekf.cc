@@ -6,6 +6,7 @@
 #include <cmath>
 
 #include "gated_update.h"
+#include "so3.h"
 
 namespace hpa {
 namespace {
@@ -157,13 +158,10 @@ FilterStatus CableEkf::UpdateVelocity(double capture_time_s, const Eigen::Vector
     // h(x) = l (R^T xi_dot - w x R^T xi), H = [-l [w]x R^T, l R^T]
     const double l_m = params_.cable_length_m;
     const Eigen::Matrix3d Rt = R_WB.transpose();
-    Eigen::Matrix3d w_cross;
-    w_cross << 0, -w_B_radps.z(), w_B_radps.y(), w_B_radps.z(), 0, -w_B_radps.x(), -w_B_radps.y(),
-        w_B_radps.x(), 0;
     const Eigen::Vector3d xi_B = Rt * x->head<3>();
     const Eigen::Vector3d r = v_BL_B - l_m * (Rt * x->tail<3>() - w_B_radps.cross(xi_B));
     Eigen::Matrix<double, 3, 6> H;
-    H << -l_m * w_cross * Rt, l_m * Rt;
+    H << -l_m * Skew(w_B_radps) * Rt, l_m * Rt;
     const GatedUpdateResult<6> update =
         GatedKalmanUpdate<6, 3>(r, H, cov_B, config_.gate, GainProduct::kHP,
                                 &consecutive_rejections_, covariance, &counts_);
