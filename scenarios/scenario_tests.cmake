@@ -8,7 +8,7 @@ foreach(file
     hover lissajous_T5 lissajous_T4 lissajous_T3_5 lissajous_T5_wind hover_gripper_pull line_impulse
     person_moves_payload person_moves_payload_no_perception
     ci/hover_gripper_pull_nonhybrid ci/line_impulse_nonhybrid ci/lissajous_T5_onboard
-    ci/hover_hpa_mpc_truth ci/gripper_pull_truth ci/impulse_top_contact)
+    ci/hover_hpa_mpc_truth ci/gripper_pull_truth ci/impulse_top_contact ci/wind_impulse_chaotic)
   string(REPLACE "/" "_" name ${file})
   add_test(NAME scenario.${name}
            COMMAND ${HPA_BIN} run ${SCEN}/${file}.yaml --out ${SCEN_OUT}/${name} --quiet)
@@ -19,6 +19,12 @@ endforeach()
 # Change indication: the metrics just written by the scenario tests against scenarios/ci/golden.json
 add_test(NAME cli.golden COMMAND ${HPA_BIN} golden --from ${SCEN_OUT} --quiet)
 set_tests_properties(cli.golden PROPERTIES LABELS cli FIXTURES_REQUIRED scenario_metrics)
+
+# Observing a run never changes it: --video, --video-slack-events and --plots give the same metrics
+add_test(NAME cli.observation_invariance
+         COMMAND bash ${SCEN}/tests/observation_invariance_test.sh ${HPA_BIN} ${SCEN}
+                 ${SCEN_OUT}/observation_invariance)
+set_tests_properties(cli.observation_invariance PROPERTIES LABELS "cli;scenario" TIMEOUT 600)
 
 # CLI contracts: exit codes, error messages, determinism, render-frame, sweeps
 add_test(NAME cli.contract

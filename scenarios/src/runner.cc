@@ -64,29 +64,26 @@ class LogRecorder final : public RunRecorder {
   MetricsInputs* inputs_;
 };
 
+// Records the video from its own renders: the chase camera and a whole onboard frame at each
+// video tick. It never reads or changes what the loop's camera path uses (its region, its
+// frames), so a run with a video is the run without one.
 class VideoTickRecorder final : public RunRecorder {
  public:
   VideoTickRecorder(const std::string& path, double rate_hz, bool slack_events_only)
       : video_(path, rate_hz, slack_events_only) {}
-  void OnCameraFrame(const CameraFrameRecord& frame) override {
-    if (frame.frame != nullptr) onboard_ = *frame.frame;
-  }
   void OnVideoTick(sim::World& world, const LogRow& now, const cv::Mat& onboard) override {
     (void)onboard;
-    // the onboard inset: the detector's latest frame, else rendered for the video
-    if (onboard_.empty() || !rendered_camera_) onboard_ = world.RenderPayloadCamera();
+    world.RenderPayloadCamera(&onboard_, cv::Rect());
     VideoRecorder::Hud hud{now.time_s, now.truth.mode, now.estimate.mode, now.command.thrust_N,
                            now.cable_tension_N};
     video_.AddFrame(world.RenderChaseCamera(VideoRecorder::kWidthPx, VideoRecorder::kHeightPx),
                     onboard_, hud);
   }
-  void set_rendered_camera(bool rendered) { rendered_camera_ = rendered; }
   void Finish() { video_.Finish(); }
 
  private:
   VideoRecorder video_;
-  cv::Mat onboard_;
-  bool rendered_camera_ = false;  // the detector renders every camera frame
+  cv::Mat onboard_;  // the whole onboard frame of the latest video tick
 };
 
 // The PX4 rate loop's parameters from the world profile's rate_loop section.
@@ -184,7 +181,6 @@ RunResult RunScenario(const Scenario& scenario, const Params& params, const RunO
   if (!options.video_path.empty()) {
     video = std::make_unique<VideoTickRecorder>(options.video_path, rates.video.rate_hz,
                                                 options.video_slack_events_only);
-    video->set_rendered_camera(!ground_truth && render_camera);
     recorders.push_back(video.get());
   }
   recorders.insert(recorders.end(), options.recorders.begin(), options.recorders.end());
@@ -255,10 +251,8 @@ RunResult RunScenario(const Scenario& scenario, const Params& params, const RunO
           if (render_camera) {
             // the region around the last detection first; the whole frame when the region
             // cannot decide (DetectInRegion's result equals the whole frame's when it gives one).
-            // Videos show the whole onboard frame: no regions then.
-            const cv::Rect region = video_loop < 0
-                                        ? detector.RegionAround(last_detection, kRegionMarginPx)
-                                        : cv::Rect();
+            // Recorders never change this path: a video renders frames of its own.
+            const cv::Rect region = detector.RegionAround(last_detection, kRegionMarginPx);
             // renders `area` (empty: the whole frame) and detects in it; times add up
             const auto render_and_detect = [&](const cv::Rect& area) {
               world.RenderPayloadCamera(&rendered, area);

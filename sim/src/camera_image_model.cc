@@ -15,6 +15,9 @@ namespace {
 
 constexpr size_t kNoiseTableSize = size_t{1} << 22;  // > one frame's 2.76 M channel samples
 
+// Narrowest band over which the fast motion blur fades into the unblurred image (px).
+constexpr int kMinBlurFadePx = 16;
+
 // SplitMix64: a well-mixed 64-bit hash of (seed, frame) for the noise table offset.
 uint64_t Mix(uint64_t x) {
   x += 0x9E3779B97F4A7C15ull;
@@ -237,19 +240,44 @@ void CameraImageModel::Apply(const cv::Mat& pinhole, const Eigen::Vector2d& blur
   }
   kernel /= cv::sum(kernel)[0];
   const cv::Rect frame(0, 0, pinhole.cols, pinhole.rows);
-  cv::Rect region = blur_region.area() > 0 ? blur_region : frame;
-  region = cv::Rect(region.x - 2 * radius, region.y - 2 * radius, region.width + 4 * radius,
-                    region.height + 4 * radius) &
-           frame;
+  // the smear is full over the payload's image and its own smear (the core) and fades out
+  // linearly over a band around it: the background meets the unblurred image without a seam.
+  // The weights depend only on the whole frame's geometry, so a region equals the whole frame.
+  const bool whole = blur_region.area() == 0;
+  const cv::Rect core =
+      whole ? frame
+            : cv::Rect(blur_region.x - radius, blur_region.y - radius,
+                       blur_region.width + 2 * radius, blur_region.height + 2 * radius);
+  const int fade_px = std::max(kMinBlurFadePx, 4 * radius);
+  const cv::Rect outer = whole ? frame
+                               : cv::Rect(core.x - fade_px, core.y - fade_px,
+                                          core.width + 2 * fade_px, core.height + 2 * fade_px);
   // only what the optics will read: the render region of the sensor region
   const cv::Rect source = RenderRegion(sensor_region, Eigen::Vector2d::Zero());
   blurred_.create(pinhole.size(), pinhole.type());
   cv::Mat blurred_source = blurred_(source);
   pinhole(source).copyTo(blurred_source);
-  region &= source;
+  const cv::Rect region = outer & frame & source;
   if (region.area() > 0) {
     cv::Mat target = blurred_(region);
     cv::filter2D(pinhole(region), target, -1, kernel, cv::Point(-1, -1), 0.0, cv::BORDER_REPLICATE);
+    if (!whole) {
+      const int channels = pinhole.channels();
+      for (int row = region.y; row < region.y + region.height; ++row) {
+        const int dy = std::max({core.y - row, row - (core.y + core.height - 1), 0});
+        const uint8_t* sharp = pinhole.ptr<uint8_t>(row);
+        uint8_t* out = blurred_.ptr<uint8_t>(row);
+        for (int col = region.x; col < region.x + region.width; ++col) {
+          const int dx = std::max({core.x - col, col - (core.x + core.width - 1), 0});
+          const int d = std::max(dx, dy);  // pixels outside the core
+          if (d == 0) continue;
+          const float w = std::max(0.0f, 1.0f - static_cast<float>(d) / (fade_px + 1));
+          for (int c = col * channels; c < (col + 1) * channels; ++c) {
+            out[c] = cv::saturate_cast<uint8_t>(w * out[c] + (1.0f - w) * sharp[c]);
+          }
+        }
+      }
+    }
   }
   ApplyOptics(blurred_, frame_index, sensor, sensor_region);
 }

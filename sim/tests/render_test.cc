@@ -10,6 +10,7 @@
 
 #include "hpa/models/camera_model.h"
 #include "hpa/models/params.h"
+#include "hpa/sim/camera_image_model.h"
 #include "hpa/sim/world.h"
 #include "swung_payload.h"
 
@@ -199,6 +200,51 @@ TEST(RenderTest, FastMotionBlurMatchesSubFrameReference) {
 }
 
 // estimation.camera_randomize: floor and lights drawn from the seed, the same seed the same frame.
+// The fast motion blur fades into the unblurred background: on a textured frame smeared around a
+// box, the per-column difference from the unblurred image falls off without a step where the
+// smeared area ends (a hard seam there is a step as large as the smear's whole effect).
+TEST(RenderTest, FastMotionBlurLeavesNoSeam) {
+  Params params = LoadParams(DefaultParamsPath());
+  params.camera_distortion.setZero();  // sensor columns are render columns
+  CameraImageProfile profile;
+  profile.psf_sigma_px = 0.0;
+  profile.exposure_s = 0.005;
+  CameraImageModel model(params, profile, 1);
+  // a checkerboard of 6 px squares: every smear along x changes it
+  cv::Mat pinhole(params.camera_height_px, params.camera_width_px, CV_8UC3);
+  for (int row = 0; row < pinhole.rows; ++row) {
+    for (int col = 0; col < pinhole.cols; ++col) {
+      const uint8_t level = ((row / 6 + col / 6) % 2) != 0 ? 200 : 40;
+      pinhole.at<cv::Vec3b>(row, col) = cv::Vec3b(level, level, level);
+    }
+  }
+  const cv::Rect box(600, 300, 60, 60);
+  cv::Mat sharp, smeared;
+  model.Apply(pinhole, Eigen::Vector2d::Zero(), cv::Rect(), 0, &sharp);
+  model.Apply(pinhole, Eigen::Vector2d(20.0, 0.0), box, 0, &smeared);
+  cv::Mat diff;
+  cv::absdiff(smeared, sharp, diff);
+  // mean difference per column over the box's rows, from the box's centre out to the right
+  std::vector<double> per_column;
+  for (int col = box.x + box.width / 2; col < box.x + box.width + 120; ++col) {
+    per_column.push_back(cv::mean(diff(cv::Rect(col, box.y, 1, box.height)))[0]);
+  }
+  double largest_step = 0.0;
+  for (size_t i = 1; i < per_column.size(); ++i) {
+    largest_step = std::max(largest_step, std::abs(per_column[i] - per_column[i - 1]));
+  }
+  const double inside = per_column.front();
+  std::printf("[measured] smear effect inside %.1f levels, largest column-to-column step %.2f\n",
+              inside, largest_step);
+  // the smear must act inside (a checkerboard smeared 20 px loses most of its contrast), fade
+  // to nothing outside, and never step by more than a fifth of its effect between two columns.
+  // Measured: effect 84 levels, largest step 10 (the checkerboard's own ripple under the smear);
+  // the hard-edged smear stepped by its whole effect where it ended
+  EXPECT_GT(inside, 40.0);
+  EXPECT_LT(per_column.back(), 0.5);
+  EXPECT_LT(largest_step, 0.2 * inside);
+}
+
 TEST(RenderTest, RandomizedAppearanceVariesBySeedOnly) {
   const auto frame = [](uint64_t seed, bool randomize) {
     WorldConfig config;
