@@ -8,7 +8,8 @@ foreach(file
     hover lissajous_T5 lissajous_T4 lissajous_T3_5 lissajous_T5_wind hover_gripper_pull line_impulse
     person_moves_payload person_moves_payload_no_perception
     ci/hover_gripper_pull_nonhybrid ci/line_impulse_nonhybrid ci/lissajous_T5_onboard
-    ci/hover_hpa_mpc_truth ci/gripper_pull_truth ci/impulse_top_contact ci/wind_impulse_chaotic)
+    ci/hover_hpa_mpc_truth ci/gripper_pull_truth ci/impulse_top_contact ci/wind_impulse_chaotic
+    ci/impulse_draw73)
   string(REPLACE "/" "_" name ${file})
   add_test(NAME scenario.${name}
            COMMAND ${HPA_BIN} run ${SCEN}/${file}.yaml --out ${SCEN_OUT}/${name} --quiet)

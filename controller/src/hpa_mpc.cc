@@ -62,6 +62,11 @@ Ocp HpaMpc::BuildProblem(const SystemState& state, const std::vector<InputVector
         PredictRetautStage(ocp, state.ToVector(), guess.empty() ? WarmStart(state.time_s) : guess);
     if (stage > 0) ScheduleRetaut(*reference_, state.time_s, stage, &ocp);
   }
+  // the slack camera term per stage, from that stage's predicted payload
+  if (perception > 0.0 && mode == CableMode::kSlack) {
+    SetCameraDeadzonesAlong(state.ToVector(), guess.empty() ? WarmStart(state.time_s) : guess,
+                            &ocp);
+  }
   return ocp;
 }
 

@@ -12,6 +12,25 @@ namespace {
 using I = StateIndex;
 constexpr double kCamMinDepthM = 0.12;  // slack L_cam off nearer the lens plane (thrown payload)
 
+// The payload's offset from the quadrotor d = x_L - x_Q as L_cam sees it at stage k. In a slack
+// stage the free-fall prediction cannot take the payload beyond the cable's length l: a payload
+// predicted outside the cable's sphere is seen on it, in the direction of its predicted offset
+// (x_Q + l d / |d|, where the cable stops and swings it). Without this the held free fall puts
+// the payload metres below and beside the vehicle after a second, and L_cam chases that point.
+// When d_d is not null it receives d(seen) / d(d) (3 x 3).
+Eigen::Vector3d SeenPayloadOffset(const Ocp& ocp, int k, const Eigen::Vector3d& d_W,
+                                  Eigen::Matrix3d* d_d) {
+  const double l = ocp.model->params().cable_length_m;
+  const double n = d_W.norm();
+  if (ocp.StageMode(k) != CableMode::kSlack || !(n > l)) {
+    if (d_d != nullptr) d_d->setIdentity();
+    return d_W;
+  }
+  const Eigen::Vector3d e = d_W / n;
+  if (d_d != nullptr) *d_d = (l / n) * (Eigen::Matrix3d::Identity() - e * e.transpose());
+  return l * e;
+}
+
 // Rotation matrix of a (unit) quaternion w, x, y, z, for any scalar type.
 template <typename T>
 Eigen::Matrix<T, 3, 3> RotationOf(const T& w, const T& x, const T& y, const T& z) {
@@ -99,46 +118,52 @@ void PerceptionError(const Ocp& ocp, int k, const StateVector& x, const InputVec
                      const OcpTermWeight& sqrt_cam, OcpTermResidual* r, OcpTermStateJacobian* r_x,
                      OcpTermInputJacobian*) {
   const OcpWeights& w = ocp.weights;
+  Eigen::Matrix3d d_d;  // d(seen offset) / d(x_L - x_Q)
+  const Eigen::Vector3d d_W =
+      SeenPayloadOffset(ocp, k, x.segment<3>(I::kPayloadPos) - x.segment<3>(I::kQuadPos), &d_d);
   if (w.cam_at_reference_attitude) {
-    // camera at the reference attitude: p_C is affine in x_L - x_Q, no attitude lever
+    // camera at the reference attitude: p_C is affine in the seen offset, no attitude lever
     const Eigen::Vector4d q_ref = StageStateReference(ocp, k).segment<4>(I::kQuat);
     const Eigen::Matrix3d r_ref = RotationOf<double>(q_ref(0), q_ref(1), q_ref(2), q_ref(3));
     const Eigen::Matrix3d rr = (r_ref * ocp.R_BC).transpose();
-    const Eigen::Vector3d d_W = x.segment<3>(I::kPayloadPos) - x.segment<3>(I::kQuadPos);
     const Eigen::Vector3d p_C = rr * (d_W - r_ref * ocp.t_BC_B_m);
+    const Eigen::Matrix3d p_d = rr * d_d;  // d p_C / d x_L = -d p_C / d x_Q
     const double deadzone =
         ocp.StageMode(k) == CableMode::kSlack ? w.cam_slack_deadzone_fraction : 0.0;
     for (int i = 0; i < 2; ++i) {
+      const double slope = sqrt_cam(i);  // d r_i / d p_i, with or without the dead zone
       if (deadzone <= 0.0) {
         (*r)(i) = sqrt_cam(i) * p_C(i);
       } else {
         // dead zone: r_i = sqrt(q) (p_i - sign(p_i) d_i) where |p_i| > d_i, else 0
-        const double excess = std::abs(p_C(i)) - ocp.cam_slack_deadzone_m(i);
+        const double excess = std::abs(p_C(i)) - ocp.CamSlackDeadzone(k)(i);
         if (!(excess > 0.0)) continue;
         const double sign = p_C(i) > 0.0 ? 1.0 : -1.0;
         (*r)(i) = sqrt_cam(i) * sign * excess;
       }
       if (r_x != nullptr) {
-        r_x->block<1, 3>(i, I::kPayloadPos) = sqrt_cam(i) * rr.row(i);
-        r_x->block<1, 3>(i, I::kQuadPos) = -sqrt_cam(i) * rr.row(i);
+        r_x->block<1, 3>(i, I::kPayloadPos) = slope * p_d.row(i);
+        r_x->block<1, 3>(i, I::kQuadPos) = -slope * p_d.row(i);
       }
     }
     return;
   }
-  // camera at the state's attitude (the paper's literal L_cam)
-  const Eigen::Vector3d d_W = x.segment<3>(I::kPayloadPos) - x.segment<3>(I::kQuadPos);
+  // camera at the state's attitude (the paper's literal L_cam); off where the payload is at the
+  // lens plane
+  if (ocp.StageMode(k) == CableMode::kSlack && !std::isfinite(ocp.CamSlackDeadzone(k)(0))) return;
   using Ad = Eigen::AutoDiffScalar<Eigen::Vector4d>;
   Eigen::Matrix<Ad, 4, 1> q_ad;
   for (int i = 0; i < 4; ++i) q_ad(i) = Ad(x(I::kQuat + i), 4, i);
   const Eigen::Matrix<Ad, 3, 1> p_C = CameraPoint<Ad>(ocp, d_W, q_ad);
-  // d p_C / d x_L = (R R_BC)^T, d p_C / d x_Q = -(R R_BC)^T
+  // d p_C / d x_L = (R R_BC)^T d_d, d p_C / d x_Q = -(R R_BC)^T d_d
   const Eigen::Vector4d q = x.segment<4>(I::kQuat);
   const Eigen::Matrix3d rr = (RotationOf<double>(q(0), q(1), q(2), q(3)) * ocp.R_BC).transpose();
+  const Eigen::Matrix3d p_d = rr * d_d;
   for (int i = 0; i < 2; ++i) {
     (*r)(i) = sqrt_cam(i) * p_C(i).value();
     if (r_x != nullptr) {
-      r_x->block<1, 3>(i, I::kPayloadPos) = sqrt_cam(i) * rr.row(i);
-      r_x->block<1, 3>(i, I::kQuadPos) = -sqrt_cam(i) * rr.row(i);
+      r_x->block<1, 3>(i, I::kPayloadPos) = sqrt_cam(i) * p_d.row(i);
+      r_x->block<1, 3>(i, I::kQuadPos) = -sqrt_cam(i) * p_d.row(i);
       r_x->block<1, 4>(i, I::kQuat) = sqrt_cam(i) * p_C(i).derivatives().transpose();
     }
   }
@@ -355,6 +380,25 @@ void SetCameraDeadzone(const SystemState& state, Ocp* ocp) {
   }
 }
 
+void SetCameraDeadzonesAlong(const StateVector& x0, const std::vector<InputVector>& u, Ocp* ocp) {
+  ocp->cam_slack_deadzone_stage_m.clear();
+  if (ocp->mode != CableMode::kSlack) return;
+  const int n = ocp->horizon_steps;
+  const double fraction = ocp->weights.cam_slack_deadzone_fraction;
+  const Eigen::Vector2d off = Eigen::Vector2d::Constant(std::numeric_limits<double>::infinity());
+  ocp->cam_slack_deadzone_stage_m.assign(n + 1, off);
+  ocp->cam_slack_deadzone_stage_m[0] = ocp->cam_slack_deadzone_m;
+  StateVector x = x0;
+  for (int k = 0; k < n && k < static_cast<int>(u.size()); ++k) {
+    x = ocp->Step(k, x, u[k]);
+    if (ocp->StageMode(k + 1) != CableMode::kSlack) continue;  // a scheduled re-taut
+    const double depth_m = CostPayloadInCamera(*ocp, k + 1, x).z();
+    if (depth_m >= kCamMinDepthM) {
+      ocp->cam_slack_deadzone_stage_m[k + 1] = fraction * depth_m * ocp->camera_tan_half_fov;
+    }
+  }
+}
+
 int PredictRetautStage(const Ocp& ocp, const StateVector& x0, const std::vector<InputVector>& u) {
   if (ocp.mode != CableMode::kSlack) return -1;
   const double l = ocp.model->params().cable_length_m;
@@ -422,9 +466,13 @@ Eigen::Vector3d PayloadInCamera(const Ocp& ocp, const StateVector& x) {
 }
 
 Eigen::Vector3d CostPayloadInCamera(const Ocp& ocp, int k, const StateVector& x) {
-  if (!ocp.weights.cam_at_reference_attitude) return PayloadInCamera(ocp, x);
   StateVector x_cam = x;
-  x_cam.segment<4>(I::kQuat) = StageStateReference(ocp, k).segment<4>(I::kQuat);
+  x_cam.segment<3>(I::kPayloadPos) =
+      x.segment<3>(I::kQuadPos) +
+      SeenPayloadOffset(ocp, k, x.segment<3>(I::kPayloadPos) - x.segment<3>(I::kQuadPos), nullptr);
+  if (ocp.weights.cam_at_reference_attitude) {
+    x_cam.segment<4>(I::kQuat) = StageStateReference(ocp, k).segment<4>(I::kQuat);
+  }
   return PayloadInCamera(ocp, x_cam);
 }
 

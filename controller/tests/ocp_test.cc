@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <set>
 #include <string>
@@ -124,7 +125,8 @@ TEST(OcpTest, PerceptionTermIsZeroWeightedAtZeroPerceptionWeight) {
 
 // Each term's Jacobians against central differences of its own residual, by name, in both
 // modes, at a stage and at the terminal, with every term active: payload off the image centre
-// (beyond the slack dead zone), 50 deg tilt (limit 45), body rates 7 and -6.5 rad/s (limit 6).
+// (beyond the slack dead zone, and beyond the cable's length: the slack L_cam sees it on the
+// cable's sphere), 50 deg tilt (limit 45), body rates 7 and -6.5 rad/s (limit 6).
 // Also the paper's L_cam at the state's attitude (automatic differentiation in the quaternion).
 TEST(OcpTest, TermJacobiansMatchFiniteDifferences) {
   const Params params;
@@ -260,6 +262,52 @@ TEST(OcpTest, SlackCameraCostHasADeadZone) {
   SetCameraDeadzone(s, &ocp);
   StageResidual(ocp, 1, s.ToVector(), ocp.u_ref[1], &r, &r_x, &r_u);
   EXPECT_EQ(r.segment<2>(kCamRow).norm(), 0.0);
+}
+
+// The slack camera term follows each stage's predicted payload: a payload thrown down fast
+// passes the cable's length inside the horizon. L_cam sees every stage's payload no further than
+// the cable's sphere (in the direction of the free fall), and sizes each stage's dead zone from
+// that payload's own depth, not from the current one.
+TEST(OcpTest, SlackCameraTermSeesEachStagesPayloadOnTheCablesSphere) {
+  const Params params = CameraOnCableAxis();
+  Ocp ocp = BuildOcp(params, *HoverRef(params), 0.0, CableMode::kSlack, 1.0);
+  SystemState s;
+  s.FromVector(HybridModel(params).HoverState(Eigen::Vector3d(0, 0, 1.5)));
+  s.p_WL_W = s.p_WQ_W + Eigen::Vector3d(0.05, 0.0, -0.3);
+  s.v_WL_W = Eigen::Vector3d(0.4, 0.0, -1.0);  // past the cable's length at stage 2
+  SetCameraDeadzone(s, &ocp);
+  const std::vector<InputVector> u(ocp.horizon_steps, ocp.u_ref[0]);
+  SetCameraDeadzonesAlong(s.ToVector(), u, &ocp);
+  ASSERT_EQ(ocp.cam_slack_deadzone_stage_m.size(), static_cast<size_t>(ocp.horizon_steps + 1));
+  EXPECT_TRUE(ocp.CamSlackDeadzone(0).isApprox(ocp.cam_slack_deadzone_m, 1e-12));
+  std::vector<StateVector> x;
+  OcpCost(ocp, s.ToVector(), u, &x);
+  const double l = params.cable_length_m;
+  int beyond = 0;
+  for (int k = 1; k <= ocp.horizon_steps; ++k) {
+    const Eigen::Vector3d d_W =
+        x[k].segment<3>(StateIndex::kPayloadPos) - x[k].segment<3>(StateIndex::kQuadPos);
+    beyond += d_W.norm() > l ? 1 : 0;
+    // the payload L_cam sees: on the sphere in the free fall's direction once beyond it
+    StateVector seen = x[k];
+    seen.segment<3>(StateIndex::kPayloadPos) =
+        x[k].segment<3>(StateIndex::kQuadPos) + std::min(1.0, l / d_W.norm()) * d_W;
+    StateVector seen_level = seen;  // at the stage's reference attitude (level hover)
+    seen_level.segment<4>(StateIndex::kQuat) = ocp.x_ref[k].segment<4>(StateIndex::kQuat);
+    const Eigen::Vector3d p_C = CostPayloadInCamera(ocp, k, x[k]);
+    EXPECT_TRUE(p_C.isApprox(PayloadInCamera(ocp, seen_level), 1e-12)) << "stage " << k;
+    EXPECT_LE(p_C.norm(), l + 0.1) << "stage " << k;  // camera 5 cm below the attachment
+    EXPECT_TRUE(ocp.CamSlackDeadzone(k).isApprox(
+        ocp.weights.cam_slack_deadzone_fraction * p_C.z() * ocp.camera_tan_half_fov, 1e-12))
+        << "stage " << k;
+  }
+  // the fall passes the cable's length after a few of the 10 stages: both kinds are covered
+  EXPECT_GE(beyond, 5);
+  EXPECT_LE(beyond, 9);
+  // taut problems have no per-stage slack dead zone
+  Ocp taut = BuildOcp(params, *HoverRef(params), 0.0, CableMode::kTaut, 1.0);
+  SetCameraDeadzonesAlong(s.ToVector(), u, &taut);
+  EXPECT_TRUE(taut.cam_slack_deadzone_stage_m.empty());
 }
 
 TEST(OcpTest, SoftLimitsArePenalisedOnlyBeyondTheirBounds) {

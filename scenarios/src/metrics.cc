@@ -71,6 +71,7 @@ void ComputeMetrics(const MetricsInputs& in, Metrics* m) {
 
   // tracking errors, speeds and mode agreement
   Eigen::Vector3d payload_sq = Eigen::Vector3d::Zero(), quad_sq = Eigen::Vector3d::Zero();
+  Eigen::Vector3d payload_est_sq = Eigen::Vector3d::Zero();
   int payload_n = 0, mode_agree = 0;
   m->payload_rmse_over = slack.empty() ? "whole_run" : "taut_time";
   for (const LogRow& r : rows) {
@@ -79,6 +80,7 @@ void ComputeMetrics(const MetricsInputs& in, Metrics* m) {
     m->quad_position_deviation_max_m = std::max(m->quad_position_deviation_max_m, e_Q.norm());
     if ((slack.empty() || !in_slack(r.time_s)) && r.time_s >= m->payload_rmse_from_s - 1e-9) {
       payload_sq += (r.truth.p_WL_W - r.reference.p_WL_W).cwiseAbs2();
+      payload_est_sq += (r.estimate.p_WL_W - r.reference.p_WL_W).cwiseAbs2();
       ++payload_n;
     }
     m->payload_max_speed_mps = std::max(m->payload_max_speed_mps, r.truth.v_WL_W.norm());
@@ -94,7 +96,10 @@ void ComputeMetrics(const MetricsInputs& in, Metrics* m) {
     m->quad_rmse_m = (quad_sq / rows.size()).cwiseSqrt();
     m->mode_accuracy = static_cast<double>(mode_agree) / rows.size();
   }
-  if (payload_n > 0) m->payload_rmse_m = (payload_sq / payload_n).cwiseSqrt();
+  if (payload_n > 0) {
+    m->payload_rmse_m = (payload_sq / payload_n).cwiseSqrt();
+    m->payload_rmse_est_m = (payload_est_sq / payload_n).cwiseSqrt();
+  }
 
   // slack time, detection latency and re-taut impact
   m->slack_time_s = 0.0;
@@ -202,6 +207,7 @@ std::string MetricsToJson(const Metrics& m) {
   const bool controlled = m.control_steps > 0;
   const auto measured = [&](const Json& v) { return controlled ? v : Json(); };
   o["payload_rmse_m"] = measured(vec(m.payload_rmse_m));
+  o["payload_rmse_est_m"] = measured(vec(m.payload_rmse_est_m));
   o["payload_rmse_over"] = m.payload_rmse_over;
   o["payload_rmse_from_s"] = num(m.payload_rmse_from_s);
   o["quad_rmse_m"] = measured(vec(m.quad_rmse_m));

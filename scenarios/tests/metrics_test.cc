@@ -30,6 +30,26 @@ std::vector<LogRow> Rows(const Eigen::Vector3d& error) {
   return rows;
 }
 
+// The estimate-based payload RMSE (the paper's Table I basis: no external ground truth) uses the
+// estimate in place of the truth over the same samples: taut time, from payload_rmse_from_s.
+TEST(MetricsTest, PayloadRmseOfTheEstimateOverTheSameSamples) {
+  MetricsInputs in;
+  in.rows = Rows(Eigen::Vector3d(0.01, -0.02, 0.03));
+  for (LogRow& r : in.rows) {
+    r.estimate.p_WL_W = r.reference.p_WL_W + Eigen::Vector3d(-0.04, 0.0, 0.05);
+    if (r.time_s < 1.0) r.estimate.p_WL_W.x() += 1.0;  // before payload_rmse_from_s: not counted
+    if (r.time_s >= 2.0 && r.time_s < 3.0) r.estimate.p_WL_W.z() += 1.0;  // slack: not counted
+  }
+  Metrics m;
+  m.payload_rmse_from_s = 1.0;
+  ComputeMetrics(in, &m);
+  EXPECT_NEAR(m.payload_rmse_est_m.x(), 0.04, 1e-12);
+  EXPECT_NEAR(m.payload_rmse_est_m.y(), 0.0, 1e-12);
+  EXPECT_NEAR(m.payload_rmse_est_m.z(), 0.05, 1e-12);
+  EXPECT_NEAR(m.payload_rmse_m.y(), 0.02, 1e-12);  // the truth-based figure is unchanged
+  EXPECT_NE(MetricsToJson(m).find("\"payload_rmse_est_m\""), std::string::npos);
+}
+
 TEST(MetricsTest, PayloadRmseOnlyOverTautTimeWhenSlack) {
   MetricsInputs in;
   in.rows = Rows(Eigen::Vector3d(0.01, -0.02, 0.03));

@@ -9,6 +9,7 @@
 // solvers; tilt and body-rate limits are SOFT: one-sided penalties w max(0, h(x))^2.
 
 #include <Eigen/Core>
+#include <algorithm>
 #include <memory>
 #include <string_view>
 #include <vector>
@@ -77,6 +78,16 @@ struct Ocp {
   // slack L_cam dead zone in metres of camera x, y, fixed for the solve from the payload's
   // current depth (the predicted free fall would otherwise widen it); infinite = no L_cam
   Eigen::Vector2d cam_slack_deadzone_m = Eigen::Vector2d::Zero();  // (2)
+  // the same per stage 0..N (N+1), from each stage's predicted payload (SetCameraDeadzonesAlong);
+  // empty: cam_slack_deadzone_m at every stage
+  std::vector<Eigen::Vector2d> cam_slack_deadzone_stage_m;
+
+  /// Slack L_cam dead zone (m, camera x, y) at stage k; infinite: no L_cam at that stage.
+  const Eigen::Vector2d& CamSlackDeadzone(int k) const {
+    return cam_slack_deadzone_stage_m.empty() ? cam_slack_deadzone_m
+                                              : cam_slack_deadzone_stage_m[std::min<size_t>(
+                                                    k, cam_slack_deadzone_stage_m.size() - 1)];
+  }
 
   /// Cable mode of stage k: `mode`, or taut from retaut_stage on.
   CableMode StageMode(int k) const {
@@ -155,6 +166,13 @@ void EvaluateOcpTerm(const Ocp& ocp, const OcpTerm& term, int k, const StateVect
 /// be brought into view by moving, so the slack L_cam is switched off (infinite dead zone).
 void SetCameraDeadzone(const SystemState& state, Ocp* ocp);
 
+/// Sets ocp->cam_slack_deadzone_stage_m along the plan u from x0 (slack mode only; taut clears
+/// it): stage 0 keeps cam_slack_deadzone_m, stage k the dead zone of the depth of its own
+/// predicted payload as L_cam sees it (on the cable's sphere, see CostPayloadInCamera); where
+/// that payload is nearer the lens plane than the minimum depth, the slack L_cam is off
+/// (infinite dead zone). Fixed for the solve.
+void SetCameraDeadzonesAlong(const StateVector& x0, const std::vector<InputVector>& u, Ocp* ocp);
+
 /// First stage k (1..N) whose state, simulated from x0 with u in slack mode, has reached the
 /// cable's length with the payload moving away from the quadrotor along the cable (the
 /// slack-to-taut guard); -1 when the guard is not reached inside the horizon or ocp is taut.
@@ -185,7 +203,9 @@ InputVector InputReference(const Params& params, const ReferencePoint& point, Ca
 Eigen::Vector3d PayloadInCamera(const Ocp& ocp, const StateVector& x);
 
 /// The p_C that L_cam penalises at stage k: PayloadInCamera, with R the reference attitude of
-/// stage k when weights.cam_at_reference_attitude (the default), else the state's.
+/// stage k when weights.cam_at_reference_attitude (the default), else the state's. In a slack
+/// stage a predicted payload beyond the cable's length l is taken on the cable's sphere in its
+/// direction (x_Q + l (x_L - x_Q) / |x_L - x_Q|): the free fall cannot carry it further.
 Eigen::Vector3d CostPayloadInCamera(const Ocp& ocp, int k, const StateVector& x);
 
 // --- evaluating the problem ------------------------------------------------------------------

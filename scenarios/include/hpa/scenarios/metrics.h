@@ -45,6 +45,9 @@ struct Metrics {
   // RMSE against the reference, per axis. Payload: over taut time only when the run had slack
   // intervals (payload_rmse_over = "taut_time"), else over the whole run ("whole_run").
   Eigen::Vector3d payload_rmse_m = Eigen::Vector3d::Zero();
+  // the same with the onboard estimate in place of the truth (same samples): what a flight with
+  // no external ground truth can report, the basis of the paper's Table I
+  Eigen::Vector3d payload_rmse_est_m = Eigen::Vector3d::Zero();
   std::string payload_rmse_over = "whole_run";
   double payload_rmse_from_s = 0.0;  // payload RMSE from this time on (a reference's ramp end)
   Eigen::Vector3d quad_rmse_m = Eigen::Vector3d::Zero();
