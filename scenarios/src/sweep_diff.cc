@@ -41,6 +41,9 @@ struct MetricDef {
   bool higher_is_better;
   bool binary;  // a rate: 0/1 per run, compared with McNemar
   std::function<std::optional<double>(const Run&)> read;
+  double min_effect;  // smallest difference that matters, in the metric's unit
+  std::string unit;
+  bool timing = false;  // measures the machine: no verdict between builds unless asked
 };
 
 std::optional<double> Number(const Json& j) {
@@ -61,36 +64,85 @@ std::function<std::optional<double>(const Run&)> Field(
   };
 }
 
+// The retaut block's figures exist only for runs that had a re-taut.
+std::optional<double> RetautField(const Json& m, const char* key) {
+  const Json& retaut = m["retaut"];
+  if (!retaut.is_object() || retaut.value("count", 0) <= 0) return std::nullopt;
+  return Number(retaut[key]);
+}
+
+// A run that had slack events and missed one (never estimated slack during it).
+std::optional<double> MissedSlackEvent(const Run& r) {
+  if (!r.ok || r.metrics.is_null()) return std::nullopt;
+  const Json& latency = r.metrics["slack_detection_latency_s"];
+  if (!latency.is_object()) return std::nullopt;
+  return latency.value("missed", 0) > 0 ? 1.0 : 0.0;
+}
+
+// Every compared metric with the smallest effect that matters (a rate: 5 percentage points; a
+// position: 5 mm to 1 cm; a vertical speed 0.05 m/s; a latency one 150 Hz control period).
 const std::vector<MetricDef>& MetricDefs() {
   static const std::vector<MetricDef> defs = {
       {"crash_rate", false, true,
-       [](const Run& r) -> std::optional<double> { return Crashed(r) ? 1.0 : 0.0; }},
+       [](const Run& r) -> std::optional<double> { return Crashed(r) ? 1.0 : 0.0; }, 0.05,
+       "fraction"},
       {"expect_failure_rate", false, true,
        [](const Run& r) -> std::optional<double> {
          if (!r.ok || r.metrics.is_null()) return 1.0;
          return r.metrics["expect"].value("passed", true) ? 0.0 : 1.0;
-       }},
+       },
+       0.05, "fraction"},
+      {"slack_event_missed_rate", false, true, &MissedSlackEvent, 0.05, "fraction"},
       {"payload_rmse_norm_m", false, false, Field([](const Json& m) -> std::optional<double> {
          const Json& v = m["payload_rmse_m"];
          if (!v.is_array() || v.size() != 3 || !v[0].is_number()) return std::nullopt;
          return std::hypot(v[0].get<double>(), v[1].get<double>(), v[2].get<double>());
-       })},
+       }),
+       0.005, "m"},
       {"quad_position_deviation_max_m", false, false,
-       Field([](const Json& m) { return Number(m["quad_position_deviation_max_m"]); })},
+       Field([](const Json& m) { return Number(m["quad_position_deviation_max_m"]); }), 0.01, "m"},
       {"payload_in_fov_fraction", true, false,
-       Field([](const Json& m) { return Number(m["payload_in_fov_fraction"]); })},
+       Field([](const Json& m) { return Number(m["payload_in_fov_fraction"]); }), 0.01, "fraction"},
       {"mode_accuracy", true, false,
-       Field([](const Json& m) { return Number(m["mode_accuracy"]); })},
+       Field([](const Json& m) { return Number(m["mode_accuracy"]); }), 0.01, "fraction"},
       {"retaut_quad_vz_min_mps", true, false,
-       Field([](const Json& m) { return Number(m["retaut"]["quad_vz_min_mps"]); })},
+       Field([](const Json& m) { return RetautField(m, "quad_vz_min_mps"); }), 0.05, "m/s"},
       {"retaut_peak_body_rate_radps", false, false,
-       Field([](const Json& m) { return Number(m["retaut"]["peak_body_rate_radps"]); })},
+       Field([](const Json& m) { return RetautField(m, "peak_body_rate_radps"); }), 0.2, "rad/s"},
       {"slack_detection_latency_max_s", false, false,
-       Field([](const Json& m) { return Number(m["slack_detection_latency_s"]["max"]); })},
+       Field([](const Json& m) { return Number(m["slack_detection_latency_s"]["max"]); }),
+       1.0 / 150.0, "s"},
       {"mpc_solve_median_ms", false, false,
-       Field([](const Json& m) { return Number(m["mpc_solve_ms"]["median"]); })},
+       Field([](const Json& m) { return Number(m["mpc_solve_ms"]["median"]); }), 0.02, "ms", true},
   };
   return defs;
+}
+
+// Whether two varied values are the same: numerically when both are numbers (1 == 1.0 ==
+// 1e0), else as exact text.
+bool SameValue(const std::string& a, const std::string& b) {
+  const auto number = [](const std::string& text) -> std::optional<double> {
+    if (text.empty()) return std::nullopt;
+    char* end = nullptr;
+    const double v = std::strtod(text.c_str(), &end);
+    if (end != text.c_str() + text.size() || !std::isfinite(v)) return std::nullopt;
+    return v;
+  };
+  const auto x = number(a), y = number(b);
+  if (x && y) return *x == *y;
+  return a == b;
+}
+
+// Smallest two-sided p-value an exact sign-flip test can reach with n informative pairs.
+double SmallestAttainableP(int n) { return n <= 0 ? 1.0 : std::min(1.0, 2.0 / std::pow(2.0, n)); }
+
+// Upper end of the Wilson 95 % interval of a proportion k of n.
+double WilsonUpper(int k, int n) {
+  if (n <= 0) return 1.0;
+  const double z = 1.959963984540054, p = static_cast<double>(k) / n;
+  const double centre = p + z * z / (2.0 * n);
+  const double half = z * std::sqrt(p * (1.0 - p) / n + z * z / (4.0 * n * n));
+  return std::min(1.0, (centre + half) / (1.0 + z * z / n));
 }
 
 std::vector<Run> ReadRuns(const std::string& dir, const std::string& where) {
@@ -125,14 +177,37 @@ std::vector<Run> ReadRuns(const std::string& dir, const std::string& where) {
     }
     r.ok = j.value("status", "") == "ok";
     r.metrics = j.contains("metrics") ? j["metrics"] : Json();
-    if (!filter_key.empty()) {
-      const auto it = r.values.find(filter_key);
-      if (it == r.values.end() || it->second != filter_value) continue;
-    }
     runs.push_back(std::move(r));
   }
-  if (runs.empty()) throw InputError(path, where, "no runs (after the filter)");
-  return runs;
+  if (runs.empty()) throw InputError(path, "", "no runs recorded");
+  if (filter_key.empty()) return runs;
+  // the filter: numeric values match numerically; the error lists what there is
+  std::vector<Run> kept;
+  std::set<std::string> present;
+  for (Run& r : runs) {
+    const auto it = r.values.find(filter_key);
+    if (it == r.values.end()) continue;
+    present.insert(it->second);
+    if (SameValue(it->second, filter_value)) kept.push_back(std::move(r));
+  }
+  if (kept.empty()) {
+    std::string listed;
+    if (present.empty()) {
+      std::set<std::string> keys;
+      for (const Run& r : runs) {
+        for (const auto& [k, v] : r.values) keys.insert(k);
+      }
+      for (const std::string& k : keys) listed += (listed.empty() ? "" : ", ") + k;
+      throw InputError(path, where,
+                       "'" + filter_key + "' is not a varied key of this sweep; varied keys: " +
+                           (listed.empty() ? "none" : listed));
+    }
+    for (const std::string& v : present) listed += (listed.empty() ? "" : ", ") + v;
+    throw InputError(
+        path, where,
+        "no run has " + filter_key + " = " + filter_value + "; values present: " + listed);
+  }
+  return kept;
 }
 
 // Keys whose set of values differs between A and B: the setting being compared.
@@ -188,7 +263,15 @@ void WriteOutputs(const SweepDiff& diff, const SweepDiffOptions& options) {
                             {"ci95", {NumberOrNull(m.ci95.first), NumberOrNull(m.ci95.second)}},
                             {"p_value", NumberOrNull(m.p_value)},
                             {"higher_is_better", m.higher_is_better},
-                            {"verdict", m.verdict}};
+                            {"min_effect", m.min_effect},
+                            {"unit", m.unit},
+                            {"timing", m.timing},
+                            {"pairs_dropped",
+                             {{"crashed", m.dropped_crashed},
+                              {"defined_in_one_run", m.dropped_one_side},
+                              {"defined_in_neither", m.dropped_both}}},
+                            {"verdict", m.verdict},
+                            {"reason", m.reason}};
   }
   sweep::WriteFileChecked(options.out_dir + "/diff.json", j.dump(1) + "\n");
 
@@ -199,23 +282,36 @@ void WriteOutputs(const SweepDiff& diff, const SweepDiffOptions& options) {
      << "\n";
   for (const std::string& d : diff.differs) md << "- " << d << "\n";
   md << "\nDifference = B - A over the pairs where both runs define the metric (continuous "
-        "metrics: runs that did not crash). 95 % interval: paired bootstrap of the mean. "
-        "p: Wilcoxon signed-rank (continuous) or exact McNemar (rates). Verdict at p < 0.05.\n\n"
-     << "| metric | pairs | A | B | B - A | 95 % CI | p | verdict |\n"
-     << "|---|---|---|---|---|---|---|---|\n";
-  for (const MetricDiff& m : diff.metrics) {
-    md << "| " << m.name << (m.higher_is_better ? " (higher is better)" : "") << " | " << m.pairs
-       << " | " << Fixed(m.a) << " | " << Fixed(m.b) << " | " << Fixed(m.difference) << " | ["
-       << Fixed(m.ci95.first) << ", " << Fixed(m.ci95.second) << "] | " << Fixed(m.p_value, 3)
-       << " | **" << m.verdict << "** |\n";
-  }
+        "metrics: runs that did not crash; the pairs left out are counted). 95 % interval: "
+        "paired bootstrap of the mean. p: Wilcoxon signed-rank (continuous) or exact McNemar "
+        "(rates). Verdict: better / worse when p < 0.05 and the interval excludes zero on the "
+        "same side; no difference shown when the data bound |B - A| within the metric's minimum "
+        "effect (rates: the Wilson bound of the discordant share); otherwise inconclusive, with "
+        "the reason. A missed slack event counts in slack_event_missed_rate.\n\n";
+  const auto table = [&](bool timing) {
+    md << "| metric | min effect | pairs (left out: crash / one run / none) | A | B | B - A | "
+          "95 % CI | p | verdict |\n"
+       << "|---|---|---|---|---|---|---|---|---|\n";
+    for (const MetricDiff& m : diff.metrics) {
+      if (m.timing != timing) continue;
+      md << "| " << m.name << (m.higher_is_better ? " (higher is better)" : "") << " | "
+         << Fixed(m.min_effect, 3) << " " << m.unit << " | " << m.pairs << " (" << m.dropped_crashed
+         << " / " << m.dropped_one_side << " / " << m.dropped_both << ") | " << Fixed(m.a) << " | "
+         << Fixed(m.b) << " | " << Fixed(m.difference) << " | [" << Fixed(m.ci95.first) << ", "
+         << Fixed(m.ci95.second) << "] | " << Fixed(m.p_value, 3) << " | **" << m.verdict << "**"
+         << (m.reason.empty() ? "" : ": " + m.reason) << " |\n";
+    }
+  };
+  table(false);
+  md << "\n## Timing (measures the machine; not compared unless --verdict-timing)\n\n";
+  table(true);
 
   sweep::WriteFileChecked(options.out_dir + "/diff.md", md.str());
 
   // one small panel per compared metric: the difference with its interval against zero
   std::vector<const MetricDiff*> compared;
   for (const MetricDiff& m : diff.metrics) {
-    if (m.pairs > 0) compared.push_back(&m);
+    if (m.pairs > 0 && m.verdict != "not compared") compared.push_back(&m);
   }
   const int cols = 3, w = 420, h = 260;
   const int rows = std::max(1, (static_cast<int>(compared.size()) + cols - 1) / cols);
@@ -381,12 +477,27 @@ SweepDiff CompareSweeps(const SweepDiffOptions& options) {
     MetricDiff m;
     m.name = def.name;
     m.higher_is_better = def.higher_is_better;
+    m.binary = def.binary;
+    m.min_effect = def.min_effect;
+    m.unit = def.unit;
+    m.timing = def.timing;
     std::vector<double> d;
     double sum_a = 0.0, sum_b = 0.0;
     int a_only = 0, b_only = 0;
     for (const auto& [ra, rb] : pairs) {
       const auto x = def.read(*ra), y = def.read(*rb);
-      if (!x || !y || !std::isfinite(*x) || !std::isfinite(*y)) continue;
+      if (!x || !y || !std::isfinite(*x) || !std::isfinite(*y)) {
+        // say why the pair does not count: a crash, or the metric undefined on one side only
+        // (e.g. one run had a re-taut, the other none) or on both
+        if (!def.binary && (Crashed(*ra) || Crashed(*rb))) {
+          ++m.dropped_crashed;
+        } else if (x.has_value() != y.has_value()) {
+          ++m.dropped_one_side;
+        } else {
+          ++m.dropped_both;
+        }
+        continue;
+      }
       d.push_back(*y - *x);
       sum_a += *x;
       sum_b += *y;
@@ -398,7 +509,8 @@ SweepDiff CompareSweeps(const SweepDiffOptions& options) {
       m.a = m.b = m.difference = std::nan("");
       m.ci95 = {std::nan(""), std::nan("")};
       m.p_value = std::nan("");
-      m.verdict = "same";
+      m.verdict = "inconclusive";
+      m.reason = "no pair in which both runs define it";
       diff.metrics.push_back(m);
       continue;
     }
@@ -407,8 +519,34 @@ SweepDiff CompareSweeps(const SweepDiffOptions& options) {
     m.difference = m.b - m.a;
     m.ci95 = BootstrapMeanCi(d);
     m.p_value = def.binary ? McNemarPValue(a_only, b_only) : SignedRankPValue(d);
-    if (m.p_value < 0.05 && m.difference != 0.0) {
+    // what the data could show: the test's smallest attainable p over all pairs, and the
+    // difference's bound (rates: the Wilson bound of the discordant share, which limits |B - A|;
+    // continuous: the bootstrap interval)
+    const double attainable_p = SmallestAttainableP(m.pairs);
+    const double bound = def.binary ? WilsonUpper(a_only + b_only, m.pairs)
+                                    : std::max(std::fabs(m.ci95.first), std::fabs(m.ci95.second));
+    const bool test_says = m.p_value < 0.05 && m.difference != 0.0;
+    const bool interval_says = m.ci95.first > 0.0 || m.ci95.second < 0.0;
+    if (def.timing && !options.verdict_timing) {
+      m.verdict = "not compared";
+      m.reason = "timing measures the machine; --verdict-timing to compare";
+    } else if (test_says && (def.binary || interval_says)) {
       m.verdict = (m.difference > 0) == m.higher_is_better ? "better" : "worse";
+    } else if (attainable_p >= 0.05) {
+      m.verdict = "inconclusive";
+      m.reason = std::to_string(m.pairs) + " pairs: the test cannot reach p < 0.05 (smallest p " +
+                 Fixed(attainable_p, 3) + ")";
+    } else if (test_says != interval_says && !def.binary) {
+      m.verdict = "inconclusive";
+      m.reason = "the interval and the test disagree";
+    } else if (bound <= def.min_effect) {
+      m.verdict = "no difference shown";
+      m.reason = "|B - A| <= " + Fixed(bound, 3) + " " + def.unit + ", within the minimum effect " +
+                 Fixed(def.min_effect, 3) + " " + def.unit;
+    } else {
+      m.verdict = "inconclusive";
+      m.reason = "cannot exclude a difference of " + Fixed(def.min_effect, 3) + " " + def.unit +
+                 " (bound " + Fixed(bound, 3) + ")";
     }
     diff.metrics.push_back(m);
   }
@@ -420,16 +558,24 @@ int SweepDiffMain(int argc, char** argv) {
   CLI::App app{
       "Paired comparison of two sweep outputs (B against A): per metric the mean difference "
       "B - A, its 95 % bootstrap interval, a p-value (Wilcoxon signed-rank; exact McNemar for "
-      "crash and expect-failure rates) and a verdict better / worse / same at 95 %. Writes "
-      "DIR/diff.json, DIR/diff.md and DIR/diff.png. Runs pair by draw, seed and drawn values; "
-      "the setting that differs is named.",
+      "rates) and a verdict: better / worse (p < 0.05 and the interval on the same side of "
+      "zero), no difference shown (|B - A| bounded within the metric's minimum effect) or "
+      "inconclusive (with the reason: too few pairs, test and interval disagree, or the minimum "
+      "effect cannot be excluded). Timing metrics are listed apart and not compared unless "
+      "--verdict-timing. Writes DIR/diff.json, DIR/diff.md and DIR/diff.png. Runs pair by draw, "
+      "seed and drawn values; the setting that differs is named.",
       "hpa sweep-diff"};
   app.add_option("A", options.a_dir, "sweep output folder (runs.jsonl), the reference")->required();
   app.add_option("B", options.b_dir, "sweep output folder compared against A")->required();
   app.add_option("--out", options.out_dir, "output folder")->required();
   app.add_option("--a-where", options.a_where,
-                 "KEY=VALUE: only A's runs with this varied value (e.g. controller.type=hpa_mpc)");
-  app.add_option("--b-where", options.b_where, "KEY=VALUE: only B's runs with this value");
+                 "KEY=VALUE: only A's runs with this varied value (e.g. controller.type=hpa_mpc; "
+                 "numbers match numerically)");
+  app.add_option("--b-where", options.b_where,
+                 "KEY=VALUE: only B's runs with this value (numbers match numerically: 1 = 1.0)");
+  app.add_flag("--verdict-timing", options.verdict_timing,
+               "also give timing metrics (solve time) a verdict: only for runs on one quiet "
+               "machine");
   if (const auto code = ParseCommandLine(app, argc, argv)) return *code;
   const SweepDiff diff = CompareSweeps(options);
   WriteOutputs(diff, options);
@@ -438,12 +584,12 @@ int SweepDiffMain(int argc, char** argv) {
   std::cout << "\n";
   for (const MetricDiff& m : diff.metrics) {
     if (m.pairs == 0) {
-      std::printf("  %-30s -      no pair in which both runs define it\n", m.name.c_str());
+      std::printf("  %-30s %-19s (%s)\n", m.name.c_str(), m.verdict.c_str(), m.reason.c_str());
       continue;
     }
-    std::printf("  %-30s %-6s B - A = %+.4g  [%+.4g, %+.4g]  p = %.3g  (%d pairs)\n",
+    std::printf("  %-30s %-19s B - A = %+.4g  [%+.4g, %+.4g]  p = %.3g  (%d pairs)%s%s\n",
                 m.name.c_str(), m.verdict.c_str(), m.difference, m.ci95.first, m.ci95.second,
-                m.p_value, m.pairs);
+                m.p_value, m.pairs, m.reason.empty() ? "" : ": ", m.reason.c_str());
   }
   std::cout << "wrote " << options.out_dir << "/diff.md, diff.json, diff.png\n";
   return 0;

@@ -1,7 +1,9 @@
 #!/usr/bin/env bash
-# hpa sweep-diff end to end: a deliberate regression (perception weight 1.0 -> 0.3 on
-# person_moves_payload) is found worse on payload_in_fov_fraction; a sweep compared with itself
-# shows no difference on any metric; sweeps that do not pair are refused with exit 2.
+# hpa sweep-diff end to end: a deliberate regression (the slack tension cue off on
+# hover_gripper_pull) is found worse on slack_detection_latency_max_s and mode_accuracy; a sweep
+# compared with itself
+# is never better or worse on any metric and its timing is not compared; numeric grid values
+# match numerically; sweeps that do not pair are refused with exit 2.
 # usage: sweep_diff_cli_test.sh HPA_BIN SCENARIOS_DIR OUT_DIR
 set -uo pipefail
 hpa=$1; scen=$2; out=$3
@@ -14,27 +16,47 @@ verdict() { python3 -c "import json,sys; print(json.load(open(sys.argv[1]))['met
   > "$out/pw.log" 2>&1 || fail "sweep failed: $(tail -3 "$out/pw.log")"
 
 echo "== the deliberate regression is detected"
-"$hpa" sweep-diff "$out/pw" "$out/pw" --a-where controller.perception_weight=1.0 \
-  --b-where controller.perception_weight=0.3 --out "$out/regression" > "$out/regression.log" 2>&1 \
+"$hpa" sweep "$scen/sweeps/tension_cue_regression.yaml" --out "$out/tc" --jobs 2 \
+  > "$out/tc.log" 2>&1 || fail "sweep failed: $(tail -3 "$out/tc.log")"
+"$hpa" sweep-diff "$out/tc" "$out/tc" --a-where estimation.slack_tension_cue=true \
+  --b-where estimation.slack_tension_cue=false --out "$out/regression" > "$out/regression.log" 2>&1 \
   || fail "sweep-diff failed: $(cat "$out/regression.log")"
-[ "$(verdict "$out/regression/diff.json" payload_in_fov_fraction)" = worse ] \
-  || fail "lower perception weight not found worse on payload_in_fov_fraction: $(cat "$out/regression.log")"
-grep -q "controller.perception_weight: 1.0 (A) vs 0.3 (B)" "$out/regression.log" \
+for metric in slack_detection_latency_max_s mode_accuracy; do
+  [ "$(verdict "$out/regression/diff.json" $metric)" = worse ] \
+    || fail "the paper's detector alone not found worse on $metric: $(cat "$out/regression.log")"
+done
+grep -q "estimation.slack_tension_cue: true (A) vs false (B)" "$out/regression.log" \
   || fail "sweep-diff does not name the setting that differs"
-python3 -c "import json,sys; d=json.load(open(sys.argv[1])); assert d['runs_paired'] == 20, d['runs_paired']" \
-  "$out/regression/diff.json" || fail "expected 20 pairs"
+python3 -c "import json,sys; d=json.load(open(sys.argv[1])); assert d['runs_paired'] == 10, d['runs_paired']" \
+  "$out/regression/diff.json" || fail "expected 10 pairs"
 for f in diff.md diff.json diff.png; do [ -s "$out/regression/$f" ] || fail "no $f written"; done
 
-echo "== a sweep against itself: no difference anywhere"
+echo "== grid values match numerically: weight 1 finds the runs written 1.0"
+"$hpa" sweep-diff "$out/pw" "$out/pw" --a-where controller.perception_weight=1 \
+  --b-where controller.perception_weight=0.3 --out "$out/numeric" > "$out/numeric.log" 2>&1 \
+  || fail "sweep-diff with a numeric filter failed: $(cat "$out/numeric.log")"
+grep -q "controller.perception_weight: 1.0 (A) vs 0.3 (B)" "$out/numeric.log" \
+  || fail "sweep-diff does not name the setting that differs"
+
+echo "== a sweep against itself: never better or worse, timing not compared"
 "$hpa" sweep-diff "$out/pw" "$out/pw" --out "$out/same" > "$out/same.log" 2>&1 || fail "self diff failed"
-python3 - "$out/same/diff.json" <<'PY' || fail "self comparison is not 'same' everywhere"
+python3 - "$out/same/diff.json" <<'PY' || fail "self comparison gave a verdict"
 import json, sys
 d = json.load(open(sys.argv[1]))
 assert d["runs_paired"] == 40, d["runs_paired"]
-bad = {k: m["verdict"] for k, m in d["metrics"].items() if m["verdict"] != "same" or m["difference"] not in (0, None)}
+bad = {k: m["verdict"] for k, m in d["metrics"].items()
+       if m["verdict"] in ("better", "worse", "same") or m["difference"] not in (0, None)}
 assert not bad, bad
+assert d["metrics"]["mpc_solve_median_ms"]["verdict"] == "not compared", d["metrics"]["mpc_solve_median_ms"]
+assert d["metrics"]["quad_position_deviation_max_m"]["verdict"] == "no difference shown"
 assert "crash_rate" in d["metrics"]
 PY
+
+echo "== a value no run has: the values present are listed"
+"$hpa" sweep-diff "$out/pw" "$out/pw" --a-where controller.perception_weight=0.5 --out "$out/none" \
+  > "$out/none.log" 2>&1
+[ $? -eq 2 ] || fail "a value no run has did not exit 2"
+grep -q "values present: 0.3, 1.0" "$out/none.log" || fail "values present not listed: $(cat "$out/none.log")"
 
 echo "== sweeps that do not pair are refused"
 "$hpa" sweep-diff "$out/pw" "$out/pw" --a-where controller.perception_weight=1.0 --out "$out/unpaired" \

@@ -6,6 +6,13 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <random>
+#include <string>
+
+#include "hpa/models/input_error.h"
+#include "models/tests/temp_dir.h"
 
 namespace hpa {
 namespace {
@@ -45,6 +52,200 @@ TEST(SweepDiffTest, BootstrapIntervalCoversTheMeanAndIsDeterministic) {
   const auto zero = BootstrapMeanCi({0, 0, 0});
   EXPECT_EQ(zero.first, 0.0);
   EXPECT_EQ(zero.second, 0.0);
+}
+
+// --- the verdicts of CompareSweeps on written runs.jsonl files ------------------------------
+
+// One run's record as `hpa sweep` writes it, with the metrics sweep-diff reads.
+struct FakeRun {
+  int draw = 0;
+  double weight = 1.0;       // the varied value (controller.perception_weight)
+  double deviation_m = 0.1;  // quad_position_deviation_max_m
+  double in_view = 1.0;      // payload_in_fov_fraction
+  double solve_ms = 0.2;     // mpc_solve_ms.median
+  bool crashed = false;
+  int slack_missed = 0;  // slack_detection_latency_s.missed
+  int retauts = 1;       // retaut.count
+};
+
+// Writes `runs` as DIR/runs.jsonl (DIR under the test's temporary folder) and returns DIR.
+std::string WriteSweep(const std::string& name, const std::vector<FakeRun>& runs) {
+  const std::string dir = TestTempDir() + name;
+  mkdir(dir.c_str(), 0755);
+  std::ofstream out(dir + "/runs.jsonl");
+  for (const FakeRun& r : runs) {
+    nlohmann::json m = {
+        {"crashed", r.crashed},
+        {"payload_rmse_m", {0.01, 0.01, 0.01}},
+        {"quad_position_deviation_max_m", r.deviation_m},
+        {"payload_in_fov_fraction", r.in_view},
+        {"mode_accuracy", 0.99},
+        {"retaut",
+         {{"count", r.retauts}, {"quad_vz_min_mps", -0.3}, {"peak_body_rate_radps", 1.0}}},
+        {"slack_detection_latency_s",
+         {{"mean", 0.02},
+          {"max", r.slack_missed > 0 ? nlohmann::json() : nlohmann::json(0.03)},
+          {"missed", r.slack_missed}}},
+        {"mpc_solve_ms", {{"median", r.solve_ms}}},
+        {"expect", {{"passed", true}}}};
+    nlohmann::json j = {{"sweep", "fake.yaml"},
+                        {"run", r.draw},
+                        {"draw", r.draw},
+                        {"seed", 1000 + r.draw},
+                        {"values", {{"controller.perception_weight", r.weight}}},
+                        {"status", "ok"},
+                        {"metrics", m}};
+    out << j.dump() << "\n";
+  }
+  return dir;
+}
+
+// n runs with deviations, views and solve times drawn from `seed` (machine-noise-like timing).
+std::vector<FakeRun> RandomRuns(int n, unsigned seed, double weight = 1.0) {
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> noise(0.0, 1.0);
+  std::vector<FakeRun> runs(n);
+  for (int i = 0; i < n; ++i) {
+    runs[i].draw = i;
+    runs[i].weight = weight;
+    runs[i].deviation_m = 0.1 + 0.02 * noise(rng);
+    runs[i].in_view = std::min(1.0, 0.97 + 0.01 * noise(rng));
+    runs[i].solve_ms = 0.2 + 0.05 * noise(rng);
+  }
+  return runs;
+}
+
+const MetricDiff& Find(const SweepDiff& diff, const std::string& name) {
+  for (const MetricDiff& m : diff.metrics) {
+    if (m.name == name) return m;
+  }
+  throw std::runtime_error("no metric " + name);
+}
+
+// A sweep against itself: nothing better or worse; the timing metric not compared at all; 40
+// pairs bound every difference at zero, within each minimum effect, except the rates, whose
+// Wilson bound with no discordant pair of 40 is 0.088 (above 0.05): inconclusive.
+TEST(SweepDiffVerdictTest, IdenticalSweepsShowNoDifferenceAndDoNotCompareTiming) {
+  const std::string dir = WriteSweep("a", RandomRuns(40, 1));
+  SweepDiffOptions options;
+  options.a_dir = options.b_dir = dir;
+  const SweepDiff diff = CompareSweeps(options);
+  for (const MetricDiff& m : diff.metrics) {
+    EXPECT_NE(m.verdict, "better") << m.name;
+    EXPECT_NE(m.verdict, "worse") << m.name;
+  }
+  EXPECT_EQ(Find(diff, "mpc_solve_median_ms").verdict, "not compared");
+  EXPECT_EQ(Find(diff, "quad_position_deviation_max_m").verdict, "no difference shown");
+  EXPECT_EQ(Find(diff, "crash_rate").verdict, "inconclusive");
+  // 200 pairs bound a rate difference below 0.05 (Wilson 0.019)
+  const std::string big = WriteSweep("big", RandomRuns(200, 2));
+  options.a_dir = options.b_dir = big;
+  EXPECT_EQ(Find(CompareSweeps(options), "crash_rate").verdict, "no difference shown");
+}
+
+// Two sweeps on a noisy machine: their solve times differ by noise alone; that is never a
+// verdict between builds unless asked.
+TEST(SweepDiffVerdictTest, TimingIsReportedApart) {
+  std::vector<FakeRun> b = RandomRuns(40, 1);
+  for (FakeRun& r : b) r.solve_ms *= 1.3;  // a busier machine
+  SweepDiffOptions options;
+  options.a_dir = WriteSweep("a", RandomRuns(40, 1));
+  options.b_dir = WriteSweep("b", b);
+  EXPECT_EQ(Find(CompareSweeps(options), "mpc_solve_median_ms").verdict, "not compared");
+  options.verdict_timing = true;
+  EXPECT_EQ(Find(CompareSweeps(options), "mpc_solve_median_ms").verdict, "worse");
+}
+
+// Four pairs cannot show anything (the exact signed-rank p is at least 2 / 2^4 = 0.125), even
+// when B is worse in every pair.
+TEST(SweepDiffVerdictTest, FourPairsAreInconclusive) {
+  std::vector<FakeRun> a = RandomRuns(4, 3), b = a;
+  for (FakeRun& r : b) r.deviation_m += 0.1;
+  SweepDiffOptions options;
+  options.a_dir = WriteSweep("a", a);
+  options.b_dir = WriteSweep("b", b);
+  const MetricDiff& m = Find(CompareSweeps(options), "quad_position_deviation_max_m");
+  EXPECT_EQ(m.verdict, "inconclusive");
+  EXPECT_NE(m.reason.find("cannot reach p < 0.05"), std::string::npos) << m.reason;
+  // six pairs can: 2 / 2^6 = 0.031
+  a = RandomRuns(6, 3);
+  b = a;
+  for (FakeRun& r : b) r.deviation_m += 0.1;
+  options.a_dir = WriteSweep("a6", a);
+  options.b_dir = WriteSweep("b6", b);
+  EXPECT_EQ(Find(CompareSweeps(options), "quad_position_deviation_max_m").verdict, "worse");
+}
+
+// The verdict never contradicts the interval: over many random comparisons, "no difference
+// shown" only with an interval that holds zero and lies within the minimum effect, "better" /
+// "worse" (continuous) only with an interval on the verdict's side of zero.
+TEST(SweepDiffVerdictTest, VerdictAgreesWithTheInterval) {
+  int verdicts_checked = 0;
+  for (unsigned seed = 0; seed < 30; ++seed) {
+    std::vector<FakeRun> a = RandomRuns(12, 100 + seed), b = RandomRuns(12, 200 + seed);
+    for (size_t i = 0; i < a.size(); ++i) b[i].deviation_m = a[i].deviation_m + 0.004 * (seed % 5);
+    SweepDiffOptions options;
+    options.a_dir = WriteSweep("a" + std::to_string(seed), a);
+    options.b_dir = WriteSweep("b" + std::to_string(seed), b);
+    for (const MetricDiff& m : CompareSweeps(options).metrics) {
+      if (m.binary || m.pairs == 0) continue;
+      ++verdicts_checked;
+      if (m.verdict == "no difference shown") {
+        EXPECT_LE(m.ci95.first, 0.0) << m.name;
+        EXPECT_GE(m.ci95.second, 0.0) << m.name;
+        EXPECT_LE(std::max(-m.ci95.first, m.ci95.second), m.min_effect) << m.name;
+      } else if (m.verdict == "better" || m.verdict == "worse") {
+        EXPECT_TRUE(m.ci95.first > 0.0 || m.ci95.second < 0.0) << m.name;
+      }
+    }
+  }
+  EXPECT_GT(verdicts_checked, 100);
+}
+
+// A run that misses a slack event is a failure of that run, not a pair left out: B misses
+// events in 8 of 30 runs where A missed none.
+TEST(SweepDiffVerdictTest, MissedSlackEventsCountAsFailures) {
+  std::vector<FakeRun> a = RandomRuns(30, 4), b = a;
+  for (int i = 0; i < 8; ++i) b[i].slack_missed = 1;
+  for (int i = 0; i < 3; ++i) b[20 + i].retauts = 0;  // no re-taut in three B runs
+  SweepDiffOptions options;
+  options.a_dir = WriteSweep("a", a);
+  options.b_dir = WriteSweep("b", b);
+  const SweepDiff diff = CompareSweeps(options);
+  EXPECT_EQ(Find(diff, "slack_event_missed_rate").verdict, "worse");  // McNemar p = 2 / 2^8
+  EXPECT_EQ(Find(diff, "slack_detection_latency_max_s").dropped_one_side, 8);
+  EXPECT_EQ(Find(diff, "retaut_quad_vz_min_mps").dropped_one_side, 3);
+  EXPECT_EQ(Find(diff, "retaut_quad_vz_min_mps").pairs, 27);
+}
+
+// --a-where matches numbers numerically (1 finds the runs written 1.0); a value no run has is
+// refused with the values that are there.
+TEST(SweepDiffVerdictTest, WhereMatchesNumbersAndListsTheValuesPresent) {
+  std::vector<FakeRun> runs = RandomRuns(10, 5, 1.0), low = RandomRuns(10, 5, 0.3);
+  runs.insert(runs.end(), low.begin(), low.end());
+  const std::string dir = WriteSweep("grid", runs);
+  SweepDiffOptions options;
+  options.a_dir = options.b_dir = dir;
+  options.a_where = "controller.perception_weight=1";
+  options.b_where = "controller.perception_weight=3e-1";
+  EXPECT_EQ(CompareSweeps(options).runs_paired, 10);
+  options.b_where = "controller.perception_weight=2";
+  try {
+    CompareSweeps(options);
+    FAIL() << "a value no run has was accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("values present: 0.3, 1.0"), std::string::npos)
+        << e.what();
+  }
+  options.b_where = "controller.gain=2";
+  try {
+    CompareSweeps(options);
+    FAIL() << "a key that is not varied was accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("varied keys: controller.perception_weight"),
+              std::string::npos)
+        << e.what();
+  }
 }
 
 }  // namespace

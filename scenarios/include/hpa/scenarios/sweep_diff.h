@@ -21,22 +21,37 @@ double SignedRankPValue(const std::vector<double>& differences);
 std::pair<double, double> BootstrapMeanCi(const std::vector<double>& differences,
                                           int resamples = 4000);
 
-/// One metric's comparison.
+/// One metric's comparison. Verdicts (B relative to A): "better" / "worse" when the test gives
+/// p < 0.05 and (continuous metrics) the 95 % interval excludes zero on the same side; "no
+/// difference shown" when the data bound |B - A| within the metric's minimum effect; else
+/// "inconclusive" (too few pairs for the test to reach p < 0.05, the interval and the test
+/// disagree, or a difference of the minimum effect cannot be excluded); "not compared" for
+/// timing metrics unless asked.
 struct MetricDiff {
   std::string name;
   bool higher_is_better = false;
+  bool binary = false;      // a rate (0/1 per run), compared with McNemar
+  bool timing = false;      // measures the machine, not the controller
+  double min_effect = 0.0;  // smallest difference that matters, in `unit`
+  std::string unit;
   int pairs = 0;                         // pairs in which both runs have the metric
+  int dropped_crashed = 0;               // pairs left out: a run crashed (continuous metrics)
+  int dropped_one_side = 0;              // pairs left out: defined in one run only
+  int dropped_both = 0;                  // pairs left out: defined in neither run
   double a = 0.0, b = 0.0;               // means over those pairs
   double difference = 0.0;               // mean of b - a
   std::pair<double, double> ci95{0, 0};  // of the difference
   double p_value = 1.0;
-  std::string verdict = "same";  // better | worse | same (B relative to A, at 95 %)
+  std::string verdict = "inconclusive";  // better | worse | no difference shown | inconclusive
+                                         // | not compared
+  std::string reason;                    // why the verdict is not better / worse
 };
 
 /// What `hpa sweep-diff` compares.
 struct SweepDiffOptions {
   std::string a_dir, b_dir, out_dir;
   std::string a_where, b_where;  // optional KEY=VALUE filters on the runs' varied values
+  bool verdict_timing = false;   // give timing metrics a verdict too (same machine, quiet)
 };
 
 /// The comparison of two loaded sweep outputs.
