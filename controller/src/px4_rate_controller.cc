@@ -153,6 +153,7 @@ InputVector Px4RateController::Update(const BodyRateCommand& cmd,
         AllocateAirmodeDisabled(params_, Eigen::Vector3d::Zero(), hover, px4_.yaw_headroom);
     status_.thrust_sp = hover;
     status_.thrust_allocated = a.thrust;
+    status_.thrust_allocated_N = f_min_total_N + a.thrust * scale_.thrust_N;
     return RotorSpeeds(params_, a.u);
   }
 
@@ -212,6 +213,8 @@ InputVector Px4RateController::Update(const BodyRateCommand& cmd,
   status_.torque_allocated = a.torque;
   status_.thrust_sp = thrust;
   status_.thrust_allocated = a.thrust;
+  status_.thrust_allocated_N = f_min_total_N + a.thrust * scale_.thrust_N;
+  status_.saturated = thrust - a.thrust > 1e-6 || unallocated.squaredNorm() >= 1e-6;
   status_.integral = integral_;
   status_.saturated_positive = sat_pos_;
   status_.saturated_negative = sat_neg_;

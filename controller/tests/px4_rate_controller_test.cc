@@ -47,6 +47,25 @@ TEST(Px4RateControllerTest, HoverCommandGivesHoverSpeeds) {
   EXPECT_TRUE(c.status().input_valid);
 }
 
+// The status says what thrust the allocation made: the hover command unsaturated and made as
+// asked; a command of twice the rotors' total lowered to what they give, flagged saturated; the
+// figure equals the collective thrust of the rotor speeds sent.
+TEST(Px4RateControllerTest, StatusGivesTheAllocatedThrustAndSaturation) {
+  const Params p;
+  Px4RateController c(p, Px4RateParams());
+  BodyRateCommand cmd;
+  cmd.thrust_N = p.HoverThrustN();
+  InputVector w = c.Update(cmd, Eigen::Vector3d::Zero());
+  EXPECT_FALSE(c.status().saturated);
+  EXPECT_NEAR(c.status().thrust_allocated_N, p.HoverThrustN(), 1e-9);
+  EXPECT_NEAR(c.status().thrust_allocated_N, p.k_f_N_per_radps2 * w.squaredNorm(), 1e-9);
+  cmd.thrust_N = 2.0 * 4.0 * p.k_f_N_per_radps2 * std::pow(p.motor_speed_max_radps, 2);
+  w = c.Update(cmd, Eigen::Vector3d::Zero());
+  EXPECT_TRUE(c.status().saturated);
+  EXPECT_NEAR(c.status().thrust_allocated_N, p.k_f_N_per_radps2 * w.squaredNorm(), 1e-9);
+  EXPECT_LT(c.status().thrust_allocated_N, 0.51 * cmd.thrust_N);
+}
+
 TEST(Px4RateControllerTest, ProportionalTorqueSignsPerAxis) {
   const Params p;
   const Px4RateParams px4;

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <deque>
 
 #include "estimator_variants.h"
 
@@ -63,7 +64,7 @@ class CableEstimator final : public Estimator {
 
   void OnVio(const VioSample& vio) override { quad_.UpdateVio(vio); }
 
-  void OnThrustCommand(double thrust_N) override {
+  void OnAllocatedThrust(double thrust_N) override {
     if (std::isfinite(thrust_N)) {
       thrust_N_ = thrust_N;
     } else {
@@ -177,7 +178,36 @@ class CableEstimator final : public Estimator {
                               2.0 * cov_B / (gap_s * gap_s));
       }
     }
-    cable_.Update(detection.time_s, p_BL_B, R_WB, cov_B);
+    // a run of rejected detections that agree with each other: the filter has diverged (e.g.
+    // on a thrust it was wrongly told), not the camera; restart it from the detections rather
+    // than lock them out or fuse one into a filter that is sure of the wrong state
+    const Eigen::Vector3d xi_detected_W = (R_WB * p_BL_B).normalized();
+    if (cable_.consecutive_rejections() >= cable_.config().gate.max_consecutive_rejections &&
+        RejectedRunAgrees(xi_detected_W)) {
+      const double gap_s = detection.time_s - rejected_times_s_.back();
+      const Eigen::Vector3d xi_dot_W =
+          gap_s > 0.0 ? Eigen::Vector3d((xi_detected_W - rejected_xi_W_.back()) / gap_s)
+                      : Eigen::Vector3d::Zero();
+      CableMatrix cov = CableMatrix::Zero();
+      cov.diagonal() << Eigen::Vector3d::Constant(std::pow(config_.retaut_xi_std, 2)),
+          Eigen::Vector3d::Constant(std::pow(config_.retaut_xi_dot_std_per_s, 2));
+      cable_.Reset(quad_.state().time_s, xi_detected_W, xi_dot_W, cov);
+      rejected_xi_W_.clear();
+      rejected_times_s_.clear();
+      ++cable_reinitialisations_;
+      return;
+    }
+    if (cable_.Update(detection.time_s, p_BL_B, R_WB, cov_B) == FilterStatus::kRejected) {
+      rejected_xi_W_.push_back(xi_detected_W);
+      rejected_times_s_.push_back(detection.time_s);
+      if (rejected_xi_W_.size() > 3) {
+        rejected_xi_W_.pop_front();
+        rejected_times_s_.pop_front();
+      }
+    } else {
+      rejected_xi_W_.clear();
+      rejected_times_s_.clear();
+    }
   }
 
   SystemState Estimate(double time_s) const override {
@@ -231,12 +261,27 @@ class CableEstimator final : public Estimator {
     health.slack_entries = slack_entries_;
     health.slack_entries_by_tension = slack_entries_by_tension_;
     health.retaut_restarts = retaut_restarts_;
+    health.cable_reinitialisations = cable_reinitialisations_;
     health.slack = hybrid_ && mode_ == CableMode::kSlack;
     health.filtered_cable_length_m = mode_detector_.filtered_length_m();
     return health;
   }
 
  private:
+  // Whether the rejected run and `xi_W` agree with each other: a smooth swing (successive
+  // directions within kAgreeRad, about a 10 rad/s swing between 30 Hz frames), not outliers.
+  bool RejectedRunAgrees(const Eigen::Vector3d& xi_W) const {
+    constexpr double kAgreeRad = 0.35;
+    if (rejected_xi_W_.empty()) return false;
+    Eigen::Vector3d previous = rejected_xi_W_.front();
+    for (size_t i = 1; i <= rejected_xi_W_.size(); ++i) {
+      const Eigen::Vector3d& next = i < rejected_xi_W_.size() ? rejected_xi_W_[i] : xi_W;
+      if (std::acos(std::clamp(previous.dot(next), -1.0, 1.0)) > kAgreeRad) return false;
+      previous = next;
+    }
+    return true;
+  }
+
   // Feeds the tension cue; a taut-to-slack switch it flags starts the payload tracker from the
   // cable EKF's payload state at once (the next detection is up to a frame away).
   void UpdateTensionCue(const ImuSample& imu) {
@@ -312,7 +357,7 @@ class CableEstimator final : public Estimator {
   ModeDetector mode_detector_;
   PayloadTracker tracker_;
   TensionCue tension_cue_;
-  double thrust_N_;                   // last commanded collective thrust
+  double thrust_N_;                   // last allocated collective thrust
   CableMode mode_;                    // estimated mode (always taut when !hybrid)
   bool payload_visible_ = true;       // last camera frame had a detection
   bool seen_ = false;                 // a detection has been taken since start
@@ -333,6 +378,10 @@ class CableEstimator final : public Estimator {
   int slack_entries_by_tension_ = 0;
   bool tension_entry_pending_ = false;  // slack flagged by tension, no detection since
   int retaut_restarts_ = 0;
+  int cable_reinitialisations_ = 0;
+  // directions (world) and capture times of the detections the cable EKF rejected in a row
+  std::deque<Eigen::Vector3d> rejected_xi_W_;
+  std::deque<double> rejected_times_s_;
 };
 
 }  // namespace

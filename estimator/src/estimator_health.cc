@@ -26,6 +26,7 @@ std::vector<std::pair<std::string, double>> EstimatorHealth::Fields() const {
                                {"slack_entries", slack_entries},
                                {"slack_entries_by_tension", slack_entries_by_tension},
                                {"retaut_restarts", retaut_restarts},
+                               {"cable_reinitialisations", cable_reinitialisations},
                                {"slack", slack ? 1.0 : 0.0},
                                {"filtered_cable_length_m", filtered_cable_length_m}});
   return fields;

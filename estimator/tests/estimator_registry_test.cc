@@ -17,7 +17,7 @@ class HoldEstimator final : public Estimator {
   void OnImu(const ImuSample&) override {}
   void OnVio(const VioSample&) override {}
   void OnPayloadDetection(const PayloadDetection&) override {}
-  void OnThrustCommand(double) override {}
+  void OnAllocatedThrust(double) override {}
   SystemState Estimate(double time_s) const override {
     SystemState out = initial_;
     out.time_s = time_s;

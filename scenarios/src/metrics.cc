@@ -87,6 +87,9 @@ void ComputeMetrics(const MetricsInputs& in, Metrics* m) {
     if (r.truth.mode == r.estimate.mode) ++mode_agree;
     m->closed_loop_cost += r.cost;
   }
+  m->mixer_saturated_fraction =
+      in.rate_loop_steps > 0 ? static_cast<double>(in.mixer_saturated_steps) / in.rate_loop_steps
+                             : 0.0;
   m->payload_lost_time_s = 0.0;
   for (size_t i = 1; i < rows.size(); ++i) {
     if (rows[i].estimate.payload_lost)
@@ -221,6 +224,7 @@ std::string MetricsToJson(const Metrics& m) {
                                     {"missed", m.slack_events_missed}};
   o["payload_in_fov_fraction"] = m.camera_frames > 0 ? num(m.payload_in_fov_fraction) : Json();
   o["payload_lost_time_s"] = measured(num(m.payload_lost_time_s));
+  o["mixer_saturated_fraction"] = measured(num(m.mixer_saturated_fraction));
   o["camera_frames"] = m.camera_frames;
   o["detections"] = m.detections;
   o["retaut"] = {{"count", m.retaut_count},
@@ -283,7 +287,7 @@ void WriteLogCsv(const std::string& path, const std::vector<LogRow>& rows) {
   header_state("est_");
   out << ",ref_pL_x,ref_pL_y,ref_pL_z,ref_pQ_x,ref_pQ_y,ref_pQ_z"
       << ",cmd_w_x,cmd_w_y,cmd_w_z,cmd_thrust_N,status,solve_ms,cost,tension_N,gripper"
-      << ",est_rejected_updates,est_resets\n";
+      << ",est_rejected_updates,est_resets,mixer_saturated\n";
   out << std::setprecision(7);
   for (const LogRow& r : rows) {
     out << r.time_s;
@@ -299,7 +303,7 @@ void WriteLogCsv(const std::string& path, const std::vector<LogRow>& rows) {
         << r.command.w_B_radps.z() << "," << r.command.thrust_N << "," << ToString(r.status) << ","
         << r.solve_time_ms << "," << r.cost << "," << r.cable_tension_N << ","
         << (r.gripper_active ? 1 : 0) << "," << r.estimator_rejected_updates << ","
-        << r.estimator_resets << "\n";
+        << r.estimator_resets << "," << (r.mixer_saturated ? 1 : 0) << "\n";
   }
   out.flush();
   if (!out) throw std::runtime_error("cannot write " + path + " (disk full?)");

@@ -216,6 +216,7 @@ RunResult RunScenario(const Scenario& scenario, const Params& params, const RunO
   long tick = 0;
   cv::Mat rendered;                 // the payload camera's frame buffer, reused frame to frame
   PayloadDetection last_detection;  // the region of the next frame is around it
+  bool mixer_saturated = false;     // the rate loop's last allocation fell short
   try {
     for (; tick <= end_tick; ++tick, clock.Advance()) {
       const double t = tick * sim::World::kPhysicsDt_s;
@@ -314,6 +315,7 @@ RunResult RunScenario(const Scenario& scenario, const Params& params, const RunO
         row.cost = computed.cost;
         row.cable_tension_N = truth.cable_tension_N;
         row.gripper_active = world.gripper_active();
+        row.mixer_saturated = mixer_saturated;
         if (!ground_truth) {
           const EstimatorHealth health = estimator->Health();
           row.estimator_rejected_updates = health.RejectedUpdates();
@@ -326,16 +328,25 @@ RunResult RunScenario(const Scenario& scenario, const Params& params, const RunO
 
       // body-rate loop: PX4's runs on each new sample of its gyro (none yet at the first tick:
       // the motors keep the world's initial hover command)
+      // the estimator is told the thrust the allocation made (a saturated mixer lowers it)
       if (px4_rate) {
         if (const std::optional<GyroSample> gyro = world.TakeRateGyro()) {
           world.SetMotorSpeedCommand(px4_rate->Update(control.command, gyro->gyro_B_radps));
-          if (!ground_truth) estimator->OnThrustCommand(control.command.thrust_N);
+          const Px4RateStatus& mixer = px4_rate->status();
+          if (!ground_truth) estimator->OnAllocatedThrust(mixer.thrust_allocated_N);
+          ++inputs.rate_loop_steps;
+          inputs.mixer_saturated_steps += mixer.saturated ? 1 : 0;
+          mixer_saturated = mixer.saturated;
         }
       } else if (rate_due) {
         const InputVector w_cmd =
             rate_controller.Update(control.command, state.w_B, rate_loop_dt_s);
         world.SetMotorSpeedCommand(w_cmd);
-        if (!ground_truth) estimator->OnThrustCommand(control.command.thrust_N);
+        const double allocated_N = params.k_f_N_per_radps2 * w_cmd.squaredNorm();
+        if (!ground_truth) estimator->OnAllocatedThrust(allocated_N);
+        ++inputs.rate_loop_steps;
+        mixer_saturated = allocated_N < control.command.thrust_N - 1e-6;
+        inputs.mixer_saturated_steps += mixer_saturated ? 1 : 0;
       }
 
       // video frame

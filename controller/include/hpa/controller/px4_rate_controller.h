@@ -52,8 +52,10 @@ struct Px4RateStatus {
   bool input_valid = true;  // false: a non-finite input was rejected, the safe output sent
   Eigen::Vector3d torque_sp = Eigen::Vector3d::Zero();         // normalised torque demand  (3)
   Eigen::Vector3d torque_allocated = Eigen::Vector3d::Zero();  // what the rotors give  (3)
-  double thrust_sp = 0.0;         // normalised collective thrust demand
-  double thrust_allocated = 0.0;  // normalised collective thrust the rotors give
+  double thrust_sp = 0.0;           // normalised collective thrust demand
+  double thrust_allocated = 0.0;    // normalised collective thrust the rotors give
+  double thrust_allocated_N = 0.0;  // the same in N (what the flight code knows it makes)
+  bool saturated = false;           // the allocation gave less thrust or torque than demanded
   Eigen::Vector3d integral = Eigen::Vector3d::Zero();  // integrator, normalised torque  (3)
   Eigen::Matrix<bool, 3, 1> saturated_positive = Eigen::Matrix<bool, 3, 1>::Constant(false);
   Eigen::Matrix<bool, 3, 1> saturated_negative = Eigen::Matrix<bool, 3, 1>::Constant(false);

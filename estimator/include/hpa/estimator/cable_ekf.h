@@ -62,6 +62,10 @@ class CableEkf {
   double time_s() const { return time_s_; }
   /// Counts of refused predictions and of accepted, rejected and forced updates.
   const FilterCounts& counts() const { return counts_; }
+  /// Detection gate rejections in a row so far (the gate forces an accept at its maximum).
+  int consecutive_rejections() const { return consecutive_rejections_; }
+  /// The configuration the filter runs with.
+  const CableEkfConfig& config() const { return config_; }
 
   /// Continuous-time derivative of [xi, xi_dot] (the paper's process model).
   static CableVector Derivative(const CableVector& x, const Eigen::Vector3d& force_W_N,

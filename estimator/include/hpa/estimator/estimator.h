@@ -66,8 +66,10 @@ class Estimator {
   virtual void OnVio(const VioSample& vio) = 0;
   /// Camera frame result at 30 Hz (detector or analytic camera), stamped at capture.
   virtual void OnPayloadDetection(const PayloadDetection& detection) = 0;
-  /// Collective thrust command (N) sent to the vehicle, for the cable EKF's process model.
-  virtual void OnThrustCommand(double thrust_N) = 0;
+  /// Collective thrust (N) the rate loop's allocation produced (PX4 publishes it: after a
+  /// saturated mixer has lowered it, not the MPC's command), for the cable EKF's process model
+  /// and the tension cue.
+  virtual void OnAllocatedThrust(double thrust_N) = 0;
   /// Current estimate at time_s (mode included).
   virtual SystemState Estimate(double time_s) const = 0;
   /// Counts of what the filters did with their inputs since start, and the mode state.

@@ -22,6 +22,7 @@ struct EstimatorHealth {
   int slack_entries = 0;                 // taut-to-slack switches (payload tracker restarted)
   int slack_entries_by_tension = 0;      // of them, flagged first by the tension cue
   int retaut_restarts = 0;               // slack-to-taut switches (cable EKF restarted)
+  int cable_reinitialisations = 0;       // cable EKF restarted from detections it kept rejecting
   bool slack = false;                    // current estimated mode
   double filtered_cable_length_m = 0.0;  // the mode detector's low-passed cable length
 

@@ -24,6 +24,7 @@ struct LogRow {
   double cost = 0.0;
   double cable_tension_N = 0.0;  // true tension (MuJoCo tendon-limit force)
   bool gripper_active = false;
+  bool mixer_saturated = false;        // the rate loop's last allocation gave less than demanded
   int estimator_rejected_updates = 0;  // gated-out measurements so far (0 with ground truth)
   int estimator_resets = 0;            // forced accepts after runs of rejections so far
 };
@@ -57,8 +58,9 @@ struct Metrics {
   double mode_accuracy = 1.0;  // share of control steps with est mode = true mode
   std::optional<double> slack_detection_latency_mean_s, slack_detection_latency_max_s;
   int slack_events = 0, slack_events_missed = 0;
-  double payload_in_fov_fraction = 1.0;  // share of camera frames with the payload centre in view
-  double payload_lost_time_s = 0.0;      // time the estimator reported the payload lost
+  double payload_in_fov_fraction = 1.0;   // share of camera frames with the payload centre in view
+  double payload_lost_time_s = 0.0;       // time the estimator reported the payload lost
+  double mixer_saturated_fraction = 0.0;  // share of rate-loop allocations that fell short
   int camera_frames = 0, detections = 0;
   int retaut_count = 0;
   double retaut_quad_vz_min_mps = 0.0;       // lowest quad z velocity within 0.5 s of a re-taut
@@ -92,6 +94,8 @@ struct MetricsInputs {
   std::vector<double> detector_ms, render_ms, image_model_ms;
   int region_frames = 0;  // rendered frames served by a region around the last detection
   int detections = 0;
+  int rate_loop_steps = 0;        // allocations made by the rate loop
+  int mixer_saturated_steps = 0;  // of which fell short of the demanded thrust or torque
 };
 
 /// Computes every metric from the log (crash fields and timing are filled by the runner).
