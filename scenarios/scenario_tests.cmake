@@ -27,6 +27,13 @@ add_test(NAME cli.observation_invariance
                  ${SCEN_OUT}/observation_invariance)
 set_tests_properties(cli.observation_invariance PROPERTIES LABELS "cli;scenario" TIMEOUT 600)
 
+# Hostile input: signals to a sweep, shard overflow, list-index spellings, multi-document and
+# tagged YAML, messages, killed runs, golden's refusals, FIFOs and devices, unwritable outputs
+add_test(NAME cli.hostile_input
+         COMMAND bash ${SCEN}/tests/hostile_input_test.sh ${HPA_BIN} ${SCEN}
+                 ${SCEN_OUT}/hostile_input)
+set_tests_properties(cli.hostile_input PROPERTIES LABELS cli TIMEOUT 600)
+
 # CLI contracts: exit codes, error messages, determinism, render-frame, sweeps
 add_test(NAME cli.contract
          COMMAND bash ${SCEN}/tests/cli_contract_test.sh ${HPA_BIN} ${SCEN} ${SCEN_OUT}/cli)

@@ -13,6 +13,6 @@ std::string Compose(const std::string& file, const std::string& key, const std::
 }  // namespace
 
 InputError::InputError(const std::string& file, const std::string& key, const std::string& what)
-    : std::runtime_error(Compose(file, key, what)), file_(file), key_(key) {}
+    : std::runtime_error(Compose(file, key, what)), file_(file), key_(key), detail_(what) {}
 
 }  // namespace hpa

@@ -10,15 +10,25 @@
 namespace hpa {
 namespace {
 
+// Numbers in messages: whole numbers in full (a seed bound of 4294967295, not 4.29497e+09),
+// others with the digits that tell them apart.
 std::string Range(double min, double max) {
   std::ostringstream out;
+  out.precision(15);
   out << "[" << min << ", " << max << "]";
   return out.str();
 }
 
-// A quoted scalar ('5', "true") is a string: yaml-cpp would still convert it to a number or a
-// bool. Plain scalars carry the non-specific tag "?", quoted ones "!" (nodes built in code: "").
-bool Quoted(const YAML::Node& n) { return n.IsScalar() && n.Tag() == "!"; }
+// A quoted scalar ('5', "true") or a tagged one (!!str 2, !foo 1) is a string: yaml-cpp would
+// still convert it to a number or a bool. Plain scalars carry the non-specific tag "?", quoted
+// ones "!", tagged ones their tag (nodes built in code: "").
+bool Quoted(const YAML::Node& n) { return n.IsScalar() && !n.Tag().empty() && n.Tag() != "?"; }
+
+// Why a scalar that is not plain is refused where a number or a bool is expected.
+std::string NotPlain(const YAML::Node& n) {
+  if (n.Tag() == "!") return ", got a quoted string (remove the quotes)";
+  return ", got a scalar tagged '" + n.Tag() + "' (write a plain value, no tag)";
+}
 
 }  // namespace
 
@@ -49,7 +59,14 @@ YAML::Node LoadYamlFile(const std::string& file) {
   std::ifstream in(file);
   if (!in) throw InputError(file, "", "cannot open file");
   try {
-    return YAML::Load(in);
+    // one document: a second ('---') would be ignored silently by YAML::Load
+    const std::vector<YAML::Node> documents = YAML::LoadAll(in);
+    if (documents.size() > 1) {
+      throw InputError(file, "",
+                       "holds " + std::to_string(documents.size()) +
+                           " YAML documents (separated by '---'); expected one");
+    }
+    return documents.empty() ? YAML::Node() : documents.front();
   } catch (const YAML::Exception& e) {
     throw InputError(file, "", std::string("malformed YAML: ") + e.what());
   } catch (const std::ios_base::failure& e) {
@@ -71,9 +88,13 @@ void YamlMap::Fail(const std::string& key, const std::string& what) const {
   throw InputError(file_, KeyPath(key), what);
 }
 
-bool YamlMap::Has(const std::string& key) const { return static_cast<bool>(node_[key]); }
+bool YamlMap::Has(const std::string& key) const {
+  asked_.insert(key);
+  return static_cast<bool>(node_[key]);
+}
 
 YAML::Node YamlMap::Get(const std::string& key) const {
+  asked_.insert(key);
   YAML::Node n = node_[key];
   if (!n) Fail(key, "missing required key");
   read_.insert(key);
@@ -87,11 +108,11 @@ double YamlMap::Number(const std::string& key, double min, double max) const {
     if (!n.IsScalar() || Quoted(n)) throw YAML::Exception(YAML::Mark(), "");
     v = n.as<double>();
   } catch (const YAML::Exception&) {
-    Fail(key, "expected a number in " + Range(min, max) +
-                  (Quoted(n) ? ", got a quoted string (remove the quotes)" : ""));
+    Fail(key, "expected a number in " + Range(min, max) + (Quoted(n) ? NotPlain(n) : ""));
   }
   if (!std::isfinite(v) || v < min || v > max) {
     std::ostringstream out;
+    out.precision(15);
     out << "value " << v << " out of range, expected a number in " << Range(min, max);
     Fail(key, out.str());
   }
@@ -119,8 +140,7 @@ bool YamlMap::Bool(const std::string& key, bool fallback) const {
     if (Quoted(n)) throw YAML::Exception(YAML::Mark(), "");
     return n.as<bool>();
   } catch (const YAML::Exception&) {
-    Fail(key, std::string("expected true or false") +
-                  (Quoted(n) ? ", got a quoted string (remove the quotes)" : ""));
+    Fail(key, std::string("expected true or false") + (Quoted(n) ? NotPlain(n) : ""));
   }
 }
 
@@ -174,7 +194,10 @@ YAML::Node YamlMap::Node(const std::string& key) const { return Get(key); }
 void YamlMap::RejectUnknownKeys() const {
   for (const auto& kv : node_) {
     const std::string key = kv.first.Scalar();
-    if (read_.count(key) == 0) Fail(key, "unknown key");
+    if (read_.count(key) != 0) continue;
+    std::string valid;
+    for (const std::string& k : asked_) valid += (valid.empty() ? "" : ", ") + k;
+    Fail(key, "unknown key" + (valid.empty() ? std::string() : "; valid keys here: " + valid));
   }
 }
 

@@ -37,11 +37,22 @@ Json StripTiming(Json metrics) {
 }
 
 std::string ReadText(const std::string& path, const std::string& what) {
-  std::ifstream in(path);
-  if (!in) throw InputError(path, "", "cannot read " + what);
-  std::stringstream text;
-  text << in.rdbuf();
-  return text.str();
+  return ReadInputFile(path, what);
+}
+
+// A tolerance entry {"rel": r, "abs": a}, both finite numbers >= 0 (either may be left out).
+void CheckTolerance(const Json& entry, const std::string& file, const std::string& key) {
+  if (!entry.is_object()) {
+    throw InputError(file, key, "expected {\"rel\": number, \"abs\": number}, got " + entry.dump());
+  }
+  for (const auto& [name, value] : entry.items()) {
+    if (name != "rel" && name != "abs") {
+      throw InputError(file, key + "." + name, "unknown key; a tolerance has rel and abs");
+    }
+    if (!value.is_number() || !std::isfinite(value.get<double>()) || value.get<double>() < 0) {
+      throw InputError(file, key + "." + name, "expected a number >= 0, got " + value.dump());
+    }
+  }
 }
 
 Json ParseJson(const std::string& text, const std::string& file) {
@@ -155,11 +166,37 @@ int RunGolden(const GoldenOptions& options) {
   const std::string path =
       options.golden_path.empty() ? kScenariosDir + "/ci/golden.json" : options.golden_path;
   Json golden = ParseJson(ReadText(path, "the golden file"), path);
-  if (!golden.contains("tolerances") || !golden["tolerances"].contains("default")) {
+  if (!golden.is_object()) throw InputError(path, "", "expected a JSON object");
+  if (!golden.contains("tolerances") || !golden["tolerances"].is_object() ||
+      !golden["tolerances"].contains("default")) {
     throw InputError(path, "tolerances.default", "missing: {\"rel\": ..., \"abs\": ...}");
   }
-  if (options.update && options.reason.empty()) {
-    throw InputError("--reason", "", "an update needs a one-line reason");
+  CheckTolerance(golden["tolerances"]["default"], path, "tolerances.default");
+  if (golden["tolerances"].contains("keys")) {
+    const Json& keys = golden["tolerances"]["keys"];
+    if (!keys.is_object()) {
+      throw InputError(path, "tolerances.keys", "expected a map from metric key to tolerance");
+    }
+    for (const auto& [key, entry] : keys.items()) {
+      CheckTolerance(entry, path, "tolerances.keys." + key);
+    }
+  }
+  if (!golden.contains("scenarios")) {
+    if (!options.update) {
+      throw InputError(path, "scenarios",
+                       "missing: the map of scenario name to metrics (hpa golden --update "
+                       "--reason \"...\" writes it)");
+    }
+    golden["scenarios"] = Json::object();
+  }
+  if (!golden["scenarios"].is_object()) {
+    throw InputError(path, "scenarios",
+                     std::string("expected a map of scenario name to metrics, got a JSON ") +
+                         golden["scenarios"].type_name());
+  }
+  const bool blank_reason = options.reason.find_first_not_of(" \t\r\n") == std::string::npos;
+  if (options.update && blank_reason) {
+    throw InputError("--reason", "", "an update needs a one-line reason (not blank)");
   }
   const Params params = LoadParams(std::string(HPA_SOURCE_DIR) + "/models/params.yaml");
   const std::vector<std::string> names = GoldenScenarioNames();
@@ -169,6 +206,20 @@ int RunGolden(const GoldenOptions& options) {
   for (const std::string& name : names) {
     if (!options.quiet) std::cerr << "golden: " << name << " ..." << std::flush;
     const Json now = StripTiming(CurrentMetrics(name, options, params));
+    if (options.update) {
+      // golden holds finished runs that met their bounds, never an aborted or failing one
+      const bool aborted = now.contains("run_error") && !now["run_error"].is_null();
+      const bool failed = now.contains("expect") && now["expect"].is_object() &&
+                          !now["expect"].value("passed", true);
+      if (aborted || failed) {
+        throw InputError(name, "",
+                         aborted ? "the run was aborted (" + now["run_error"].dump() +
+                                       "): not recorded as golden"
+                                 : "the run failed its expect bounds (" +
+                                       now["expect"].value("failed", Json::array()).dump() +
+                                       "): not recorded as golden; fix the scenario or its bounds");
+      }
+    }
     updated[name] = now;
     if (!golden["scenarios"].contains(name)) {
       if (!options.quiet) std::cerr << " not in the golden file\n";
@@ -198,7 +249,7 @@ int RunGolden(const GoldenOptions& options) {
     golden["reason"] = options.reason;
     std::ofstream out(path);
     out << golden.dump(1) << "\n";
-    if (!out.flush()) throw std::runtime_error("cannot write " + path);
+    if (!out.flush()) throw OutputError(path, "disk full?");
     std::cout << "golden: wrote " << names.size() << " scenarios to " << path
               << " (commit it with the reason: " << options.reason << ")\n";
     return 0;

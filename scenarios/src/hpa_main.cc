@@ -28,6 +28,7 @@
 #include "hpa/scenarios/runner.h"
 #include "hpa/scenarios/sweep.h"
 #include "hpa/scenarios/sweep_diff.h"
+#include "hpa/scenarios/video_recorder.h"
 #include "hpa/sim/world.h"
 #include "scenarios/src/cli_parse.h"
 
@@ -38,6 +39,7 @@ constexpr int kExitOk = 0;
 constexpr int kExitExpectFailed = 1;
 constexpr int kExitBadInput = 2;
 constexpr int kExitInternal = 3;
+constexpr int kExitCannotWrite = 4;
 
 const char* kUsage =
     R"(hpa: software-in-the-loop simulator for HPA-MPC (quadrotor + cable-suspended payload)
@@ -78,7 +80,8 @@ usage:
   hpa --help                 this text; hpa COMMAND --help: the command's options
 
 exit codes: 0 ok and every `expect` bound holds; 1 an expectation failed (or an unexpected
-crash); 2 bad input (file, key, value; the message names them); 3 internal error.
+crash); 2 bad input (file, key, value; the message names them); 3 internal error; 4 an output
+could not be written (disk full, no permission); 130 / 143 a sweep stopped by SIGINT / SIGTERM.
 )";
 
 // The usage text plus the registered controllers and estimator variants (from their registries).
@@ -154,11 +157,26 @@ Params LoadParamsOf(const ScenarioOptions& o) {
 
 // Writes a whole file; a write that does not reach the file (a full disk) is an error.
 void WriteText(const std::string& path, const std::string& text) {
-  std::ofstream out(path);
-  if (!out) throw InputError(path, "", "cannot write file");
-  out << text;
-  out.flush();
-  if (!out) throw std::runtime_error("cannot write " + path + " (disk full?)");
+  // written whole under a temporary name, then renamed: a reader never sees half a file
+  const std::string partial = path + ".partial";
+  {
+    std::ofstream out(partial);
+    if (!out) throw OutputError(path, std::strerror(errno));
+    out << text;
+    out.flush();
+    if (!out) throw OutputError(path, "disk full?");
+  }
+  if (std::rename(partial.c_str(), path.c_str()) != 0)
+    throw OutputError(path, std::strerror(errno));
+}
+
+// Removes the outputs a previous run left in `dir`, so a run that is killed leaves nothing
+// that looks complete (metrics.json appears last, whole, when the run has finished).
+void RemoveStaleOutputs(const std::string& dir) {
+  for (const char* name :
+       {"metrics.json", "log.csv", "tracking.png", "xy_path.png", "retaut.png"}) {
+    std::remove((dir + "/" + name).c_str());
+  }
 }
 
 // Says where the video went; a slack-events video of a run without slack is not written, and
@@ -214,6 +232,7 @@ int Run(int argc, char** argv) {
   }
   if (out_dir.empty()) out_dir = "out/" + scenario.name;
   MakeOutputDir(out_dir);
+  RemoveStaleOutputs(out_dir);
 
   RunOptions options;
   options.progress = !o.quiet;
@@ -223,9 +242,14 @@ int Run(int argc, char** argv) {
   if (options.video_slack_events_only && options.video_path.empty()) {
     options.video_path = out_dir + "/slack_events.mp4";
   }
+  if (!options.video_path.empty()) CheckVideoPath(options.video_path);
   const RunResult result = RunScenario(scenario, params, options);
+  // the log first, the metrics last: a complete metrics.json means a finished run
+  WriteLogCsv(out_dir + "/log.csv.partial", result.rows);
+  if (std::rename((out_dir + "/log.csv.partial").c_str(), (out_dir + "/log.csv").c_str()) != 0) {
+    throw OutputError(out_dir + "/log.csv", std::strerror(errno));
+  }
   WriteText(out_dir + "/metrics.json", MetricsToJson(result.metrics));
-  WriteLogCsv(out_dir + "/log.csv", result.rows);
   if (plots) {
     for (const std::string& png : WriteRunPlots(result, params, out_dir)) {
       if (!o.quiet) std::printf("  plot %s\n", png.c_str());
@@ -415,7 +439,7 @@ int RenderFrame(int argc, char** argv) {
                  result.metrics.run_error->c_str());
     return kExitInternal;
   }
-  if (!written) throw InputError(out, "--out", "cannot write the PNG (path or extension)");
+  if (!written) throw OutputError(out, "the PNG could not be written (does its folder exist?)");
   if (result.metrics.crashed) {
     std::printf("note: the vehicle crashed at t = %.3f s (%s); the frame is from then\n",
                 frame_time_s, result.metrics.crash_reason.value_or("").c_str());
@@ -448,6 +472,9 @@ int HpaMain(int argc, char** argv) {
   } catch (const InputError& e) {
     std::fprintf(stderr, "hpa: error: %s\n", e.what());
     return kExitBadInput;
+  } catch (const OutputError& e) {
+    std::fprintf(stderr, "hpa: error: %s\n", e.what());
+    return kExitCannotWrite;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "hpa: internal error: %s\n", e.what());
     return kExitInternal;

@@ -3,8 +3,10 @@
 #include <sys/stat.h>
 
 #include <algorithm>
+#include <cerrno>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <fstream>
 #include <iomanip>
 #include <nlohmann/json.hpp>
@@ -267,13 +269,13 @@ void MakeOutputDir(const std::string& dir) {
   }
   struct stat st;
   if (stat(dir.c_str(), &st) != 0 || !S_ISDIR(st.st_mode)) {
-    throw InputError(dir, "--out", "cannot create the output directory");
+    throw OutputError(dir, "cannot create the output folder (--out)");
   }
 }
 
 void WriteLogCsv(const std::string& path, const std::vector<LogRow>& rows) {
   std::ofstream out(path);
-  if (!out) throw InputError(path, "", "cannot write file");
+  if (!out) throw OutputError(path, std::strerror(errno));
   auto header_state = [&](const std::string& p) {
     for (const char* n :
          {"pL_x", "pL_y", "pL_z", "vL_x", "vL_y", "vL_z", "pQ_x", "pQ_y", "pQ_z", "vQ_x", "vQ_y",
@@ -306,7 +308,7 @@ void WriteLogCsv(const std::string& path, const std::vector<LogRow>& rows) {
         << r.estimator_resets << "," << (r.mixer_saturated ? 1 : 0) << "\n";
   }
   out.flush();
-  if (!out) throw std::runtime_error("cannot write " + path + " (disk full?)");
+  if (!out) throw OutputError(path, "disk full?");
 }
 
 }  // namespace hpa

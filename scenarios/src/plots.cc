@@ -21,7 +21,7 @@ std::vector<double> Column(const std::vector<LogRow>& rows, F f) {
 }
 
 void Save(const std::string& path, const cv::Mat& image) {
-  if (!cv::imwrite(path, image)) throw InputError(path, "", "cannot write the PNG");
+  if (!cv::imwrite(path, image)) throw OutputError(path, "the PNG could not be written");
 }
 
 void ShadeSlack(PlotPanel* panel, const std::vector<LogRow>& rows) {
@@ -191,7 +191,7 @@ void WriteComparisonPlot(const std::vector<RunResult>& results, const Params& pa
     if (k == 0) legend.emplace_back("slack (shaded per run)", cv::Scalar(0, 200, 255));
     p.Legend(legend);
   }
-  if (!cv::imwrite(png, fig)) throw InputError(png, "", "cannot write the PNG");
+  if (!cv::imwrite(png, fig)) throw OutputError(png, "the PNG could not be written");
 }
 
 }  // namespace hpa

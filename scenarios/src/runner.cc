@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <deque>
 #include <random>
+#include <sstream>
 
 #include "hpa/controller/body_rate_controller.h"
 #include "hpa/controller/px4_rate_controller.h"
@@ -15,6 +16,7 @@
 #include "hpa/estimator/estimator_registry.h"
 #include "hpa/estimator/payload_detector.h"
 #include "hpa/models/camera_model.h"
+#include "hpa/models/input_error.h"
 #include "hpa/scenarios/video_recorder.h"
 #include "hpa/sim/analytic_camera.h"
 #include "hpa/sim/world.h"
@@ -42,6 +44,23 @@ SystemState InitialState(const Reference& reference, const Params& params) {
   s.p_WQ_W = r.p_WL_W + Eigen::Vector3d(0, 0, params.cable_length_m);
   s.mode = CableMode::kTaut;
   return s;
+}
+
+// A reference that puts the payload into the ground cannot be flown: refused before the run,
+// naming the first time it does (every 10 ms of the run).
+void CheckReferenceAboveGround(const Reference& reference, double duration_s,
+                               const Params& params) {
+  for (double t_s = 0.0; t_s <= duration_s + 1e-9; t_s += 0.01) {
+    const ReferencePoint r = reference.At(t_s);
+    if (!(r.p_WL_W.z() >= params.payload_radius_m)) {
+      std::ostringstream what;
+      what.precision(4);
+      what << "the payload reference is " << r.p_WL_W.z() << " m high at t = " << t_s
+           << " s: below the ground (the payload's radius, " << params.payload_radius_m
+           << " m, is the lowest it can be)";
+      throw InputError("", "reference", what.str());
+    }
+  }
 }
 
 // The runner's own recorders: log rows and metrics inputs, and the video.
@@ -110,6 +129,8 @@ volatile std::sig_atomic_t g_stop_signal = 0;  // set from a signal handler
 
 void RequestStop(int signal_number) { g_stop_signal = signal_number; }
 
+int StopRequested() { return g_stop_signal; }
+
 RateTable ScenarioRates(const Scenario& scenario) {
   RateTable rates;
   rates.camera.latency_s = scenario.estimation.camera_latency_s;
@@ -152,6 +173,7 @@ RunResult RunScenario(const Scenario& scenario, const Params& params, const RunO
   // flight code: reference, controller, rate loop, estimator (flight params only); the world
   // starts from its own parameters (mismatch draw and overrides)
   const std::shared_ptr<const Reference> reference = MakeReference(scenario, params);
+  CheckReferenceAboveGround(*reference, scenario.duration_s, params);
   world.Reset(InitialState(*reference, world.world_params()));
   std::unique_ptr<Controller> controller = MakeController(scenario.controller, params, reference);
   BodyRateController rate_controller(params);

@@ -91,14 +91,32 @@ bool IsNumber(const std::string& s, double* v = nullptr) {
   return true;
 }
 
+// A list index written the one way it can be: 0, 1, 2, ... (no sign, point, exponent or leading
+// zero), so one list element cannot be varied under two spellings.
+bool ListIndex(const std::string& s, double* v) {
+  if (s.empty() || s.size() > 9 || s.find_first_not_of("0123456789") != std::string::npos ||
+      (s.size() > 1 && s[0] == '0')) {
+    return false;
+  }
+  *v = std::stod(s);
+  return true;
+}
+
 // The YAML text of a set value ("0.5", "[0, 0, 1]", "hpa_mpc") as a node; malformed YAML is bad
 // input naming where the value came from and its key.
 YAML::Node ParseValue(const std::string& value, const std::string& path, const std::string& file) {
+  std::vector<YAML::Node> documents;
   try {
-    return YAML::Load(value);
+    documents = YAML::LoadAll(value);
   } catch (const YAML::Exception& e) {
     throw InputError(file, path, "malformed value '" + value + "': " + e.msg);
   }
+  if (documents.size() != 1) {
+    throw InputError(file, path,
+                     "value '" + value + "' holds " + std::to_string(documents.size()) +
+                         " YAML documents; expected one");
+  }
+  return documents.front();
 }
 
 // Sets a dotted path in a YAML tree to a value; throws InputError if the path does not exist
@@ -118,10 +136,10 @@ void SetDottedPath(YAML::Node root, const std::string& path, const std::string& 
     YAML::Node next;
     if (cur.IsSequence()) {
       double idx;
-      if (!IsNumber(parts[i], &idx) || idx < 0 || idx >= cur.size() || idx != std::floor(idx)) {
+      if (!ListIndex(parts[i], &idx) || idx >= cur.size()) {
         throw InputError(file, path,
                          "'" + walked + "' is not an index of the list (size " +
-                             std::to_string(cur.size()) + ")");
+                             std::to_string(cur.size()) + "; indices are written 0, 1, 2, ...)");
       }
       next = cur[static_cast<size_t>(idx)];
     } else if (cur.IsMap()) {
@@ -143,8 +161,10 @@ void SetDottedPath(YAML::Node root, const std::string& path, const std::string& 
   const std::string& last = parts.back();
   if (parent.IsSequence()) {
     double idx;
-    if (!IsNumber(last, &idx) || idx < 0 || idx >= parent.size()) {
-      throw InputError(file, path, "'" + last + "' is not an index of the list");
+    if (!ListIndex(last, &idx) || idx >= parent.size()) {
+      throw InputError(file, path,
+                       "'" + last + "' is not an index of the list (size " +
+                           std::to_string(parent.size()) + "; indices are written 0, 1, 2, ...)");
     }
     parent[static_cast<size_t>(idx)] = ParseValue(value, path, file);
   } else if (parent.IsMap() || parent.IsNull()) {
@@ -236,7 +256,18 @@ Scenario LoadScenario(const std::string& path, const std::vector<ScenarioSet>& s
   YAML::Node root = LoadYamlFile(path);
   if (!root.IsMap()) throw InputError(path, "", "expected a YAML map at the top level");
   for (const ScenarioSet& set : sets) SetDottedPath(root, set.first, set.second, origin);
-  return ParseScenario(YamlMap(root, path, ""));
+  try {
+    return ParseScenario(YamlMap(root, path, ""));
+  } catch (const InputError& e) {
+    // a bad value that came from --set: name the argument, not the file it did not come from
+    for (auto it = sets.rbegin(); it != sets.rend(); ++it) {
+      const std::string& key = it->first;
+      if (e.key() == key || e.key().rfind(key + ".", 0) == 0 || key.rfind(e.key() + ".", 0) == 0) {
+        throw InputError("--set " + key + "=" + it->second, e.key(), e.detail());
+      }
+    }
+    throw;
+  }
 }
 
 ScenarioSet ParseSetArgument(const std::string& text) {

@@ -147,6 +147,7 @@ double WilsonUpper(int k, int n) {
 
 std::vector<Run> ReadRuns(const std::string& dir, const std::string& where) {
   const std::string path = dir + "/runs.jsonl";
+  CheckInputFile(path, "a sweep's runs.jsonl");
   std::ifstream in(path);
   if (!in) throw InputError(path, "", "cannot read (not a sweep output folder?)");
   std::string filter_key, filter_value;
@@ -333,7 +334,7 @@ void WriteOutputs(const SweepDiff& diff, const SweepDiffOptions& options) {
     p.ErrorBars({0.0}, {m.difference}, {m.ci95.first}, {m.ci95.second}, colour);
   }
   if (!cv::imwrite(options.out_dir + "/diff.png", fig)) {
-    throw std::runtime_error("cannot write " + options.out_dir + "/diff.png");
+    throw OutputError(options.out_dir + "/diff.png", "the PNG could not be written");
   }
 }
 

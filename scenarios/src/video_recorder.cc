@@ -1,14 +1,45 @@
 #include "hpa/scenarios/video_recorder.h"
 
+#include <unistd.h>
+
+#include <cctype>
 #include <cstdio>
+#include <filesystem>
 #include <opencv2/imgproc.hpp>
 
 #include "hpa/models/input_error.h"
 
 namespace hpa {
 
+void CheckVideoPath(const std::string& path) {
+  namespace fs = std::filesystem;
+  const fs::path file(path);
+  std::string extension = file.extension().string();
+  for (char& c : extension) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  if (extension != ".mp4") {
+    throw InputError(path, "--video",
+                     "the extension is the problem: expected a file name ending in .mp4, got '" +
+                         file.extension().string() + "'");
+  }
+  const fs::path folder = file.has_parent_path() ? file.parent_path() : fs::path(".");
+  std::error_code ec;
+  if (!fs::is_directory(folder, ec)) {
+    throw InputError(
+        path, "--video",
+        "the folder is the problem: '" + folder.string() + "' is not a folder that exists");
+  }
+  if (access(folder.c_str(), W_OK) != 0) {
+    throw InputError(path, "--video",
+                     "the folder is the problem: '" + folder.string() + "' is not writable");
+  }
+  if (fs::is_directory(file, ec)) {
+    throw InputError(path, "--video", "a folder of that name is in the way");
+  }
+}
+
 VideoRecorder::VideoRecorder(const std::string& path, double rate_hz, bool slack_events_only)
     : path_(path), rate_hz_(rate_hz), slack_events_only_(slack_events_only) {
+  CheckVideoPath(path);
   // H.264 (plays in browsers and slides, files several times smaller); MPEG-4 part 2 where the
   // OpenCV build has no H.264 encoder
   writer_.open(path, cv::VideoWriter::fourcc('a', 'v', 'c', '1'), rate_hz,
@@ -20,7 +51,7 @@ VideoRecorder::VideoRecorder(const std::string& path, double rate_hz, bool slack
     codec_ = "mp4v";
   }
   if (!writer_.isOpened()) {
-    throw InputError(path, "--video", "cannot open an MP4 writer for this file");
+    throw OutputError(path, "no MP4 writer could open it (the folder and the .mp4 name are fine)");
   }
 }
 

@@ -117,9 +117,9 @@ events:
   - {at: 0.1, type: impulse, body: quadrotor, impulse: [0, 0, -30]}
 YAML
 expect_exit 1 "crashed .* does not expect a crash" run "$out/crash.yaml" --out "$out/crash" --quiet
-# a full disk is an error, never exit 0
-mkdir -p "$out/full_disk" && ln -sf /dev/full "$out/full_disk/metrics.json"
-expect_exit 3 "cannot write" run "$out/crash.yaml" --set duration=0.2 --out "$out/full_disk" --quiet
+# a full disk is an error, never exit 0: exit 4, an output that could not be written
+mkdir -p "$out/full_disk" && ln -sf /dev/full "$out/full_disk/metrics.json.partial"
+expect_exit 4 "cannot write" run "$out/crash.yaml" --set duration=0.1 --out "$out/full_disk" --quiet
 expect_exit 2 "render-frame|PNG" render-frame "$scen/hover.yaml" --at 0.1 --out "$out/frame.jpg"
 printf 'base: %s/hover.yaml\nruns: 2\nvary:\n  seed: {uniform: [1, 9]}\n' "$scen" > "$out/seed_sweep.yaml"
 expect_exit 2 "seed cannot be varied" sweep "$out/seed_sweep.yaml" --out "$out/seed_sweep"
@@ -149,7 +149,7 @@ expect_exit 2 "not a regular file" run "$out" --out "$out/x"
 expect_exit 2 "not a regular file" run "$base" --params "$out" --out "$out/x"
 expect_exit 2 "not a regular file" sweep "$out" --out "$out/dir_sweep"
 expect_exit 2 "--set: key 'duration': malformed value" run "$base" --set 'duration=[1' --out "$out/x"
-expect_exit 2 "base.yaml: key 'duration': expected a number" run "$base" --set 'duration={a: 1}' --out "$out/x"
+expect_exit 2 "--set duration=\{a: 1\}: key 'duration': expected a number" run "$base" --set 'duration={a: 1}' --out "$out/x"
 printf '? [a, b]\n: 1\nname: t\nduration: 1.0\n' > "$out/complex_key.yaml"
 expect_exit 2 "complex_key.yaml.*plain name" run "$out/complex_key.yaml" --out "$out/x"
 printf 'base: %s\nruns: 2\nvary:\n  duration: {list: [1, [2]]}\n' "$base" > "$out/list_sweep.yaml"

@@ -182,13 +182,13 @@ echo "== a full disk fails the sweep (exit 3), never exit 0"
 (trap '' XFSZ; ulimit -f 4; exec "$hpa" sweep "$out/tiny.yaml" --out "$out/full_jsonl" --jobs 1) \
   > "$out/full_jsonl.log" 2>&1
 status=$?
-[ "$status" -eq 3 ] || fail "runs.jsonl write past the limit: exit $status, expected 3"
+[ "$status" -eq 4 ] || fail "runs.jsonl write past the limit: exit $status, expected 4"
 grep -q "cannot append" "$out/full_jsonl.log" || fail "the failed append is not named: $(tail -2 "$out/full_jsonl.log")"
 # summary.json on /dev/full (ENOSPC)
 mkdir -p "$out/full_summary" && ln -s /dev/full "$out/full_summary/summary.json"
 "$hpa" sweep "$out/tiny.yaml" --out "$out/full_summary" > "$out/full_summary.log" 2>&1
 status=$?
-[ "$status" -eq 3 ] || fail "summary.json on /dev/full: exit $status, expected 3"
+[ "$status" -eq 4 ] || fail "summary.json on /dev/full: exit $status, expected 4"
 grep -q "cannot write.*summary.json" "$out/full_summary.log" || fail "the failed summary write is not named"
 # a runs.jsonl that is not a regular file (a device, a folder) is refused before anything runs
 mkdir -p "$out/dev_jsonl" && ln -s /dev/full "$out/dev_jsonl/runs.jsonl"

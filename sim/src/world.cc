@@ -764,6 +764,22 @@ void World::CheckCrash() {
   const SystemState& s = t.state;
   if (!s.AllFinite()) return LatchCrash("non-finite state");
 
+  // the payload lying on the ground is ground: the body striking it is a crash
+  bool payload_on_ground = false, body_on_payload = false;
+  for (int i = 0; i < data_->ncon; ++i) {
+    const mjContact& c = data_->contact[i];
+    const auto is = [&](int geom_a, int geom_b) {
+      return (c.geom1 == geom_a && c.geom2 == geom_b) || (c.geom1 == geom_b && c.geom2 == geom_a);
+    };
+    payload_on_ground |= is(ids_.payload_geom, ids_.ground_geom);
+    const int b1 = model_->geom_bodyid[c.geom1], b2 = model_->geom_bodyid[c.geom2];
+    body_on_payload |= (c.geom1 == ids_.payload_geom && b2 == ids_.quad_body) ||
+                       (c.geom2 == ids_.payload_geom && b1 == ids_.quad_body);
+  }
+  if (payload_on_ground && body_on_payload) {
+    return LatchCrash("quadrotor contact with the payload lying on the ground");
+  }
+
   // any contact of the quadrotor body (ground or an obstacle)
   for (int i = 0; i < data_->ncon; ++i) {
     const mjContact& c = data_->contact[i];

@@ -41,11 +41,27 @@ int SweepMain(int argc, char** argv) {
   AddGlOption(app, &gl);
   if (const auto code = ParseCommandLine(app, argc, argv)) return *code;
   const sim::GlBackend gl_backend = ParseGlOption(gl);  // every worker renders with it
+  // K/N as whole numbers in range (digits only: no sign, no overflow past kMaxShards)
+  constexpr long kMaxShards = 1000000;
   int shard_k = 1, shard_n = 1;
-  char rest = 0;
-  if (std::sscanf(shard.c_str(), "%d/%d%c", &shard_k, &shard_n, &rest) != 2 || shard_n < 1 ||
-      shard_k < 1 || shard_k > shard_n) {
-    throw InputError("", "--shard", "expected K/N with 1 <= K <= N, got '" + shard + "'");
+  {
+    const size_t slash = shard.find('/');
+    const auto whole = [&](const std::string& text) -> long {
+      if (text.empty() || text.size() > 7 ||
+          text.find_first_not_of("0123456789") != std::string::npos) {
+        return -1;
+      }
+      return std::stol(text);
+    };
+    const long k = slash == std::string::npos ? -1 : whole(shard.substr(0, slash));
+    const long n = slash == std::string::npos ? -1 : whole(shard.substr(slash + 1));
+    if (k < 1 || n < 1 || k > n || n > kMaxShards) {
+      throw InputError("", "--shard",
+                       "expected K/N with 1 <= K <= N <= " + std::to_string(kMaxShards) +
+                           " (whole numbers), got '" + shard + "'");
+    }
+    shard_k = static_cast<int>(k);
+    shard_n = static_cast<int>(n);
   }
   if (retry_errors && !resume) {
     throw InputError("", "--retry-errors", "only with --resume (it re-runs recorded errors)");
@@ -90,7 +106,7 @@ int SweepMain(int argc, char** argv) {
   const std::string tmp_dir = out_dir + "/.running";
   MakeOutputDir(tmp_dir);
   FILE* out = std::fopen(jsonl.c_str(), "a");
-  if (!out) throw InputError(jsonl, "", "cannot append to the results file");
+  if (!out) throw OutputError(jsonl, "cannot append to the results file");
 
   std::printf("sweep %s: %zu runs in all, shard %d/%d: %zu to run (%zu already done), %d jobs\n",
               spec.file.c_str(), all_runs.size(), shard_k, shard_n, runs.size(), done.size(), jobs);
@@ -102,7 +118,7 @@ int SweepMain(int argc, char** argv) {
   const auto start = Clock::now();
   auto record = [&](const std::string& line, bool failed, const SweepRun& run) {
     if (std::fprintf(out, "%s\n", line.c_str()) < 0 || std::fflush(out) != 0) {
-      throw std::runtime_error("cannot append to " + jsonl + ": " + std::strerror(errno));
+      throw OutputError(jsonl, std::string("cannot append: ") + std::strerror(errno));
     }
     fsync(fileno(out));
     ++finished;
@@ -120,9 +136,16 @@ int SweepMain(int argc, char** argv) {
     }
     std::fflush(stdout);
   };
-  sweep::RunPool(spec, runs, params, gl_backend, jobs, tmp_dir, record);
+  const int stopped_by = sweep::RunPool(spec, runs, params, gl_backend, jobs, tmp_dir, record);
   std::fclose(out);
   rmdir(tmp_dir.c_str());
+  if (stopped_by != 0) {
+    std::printf(
+        "%ssweep stopped by signal %d (%s): %zu runs recorded in %s, the rest not started "
+        "or killed unrecorded; continue with --resume\n",
+        tty ? "\n" : "", stopped_by, strsignal(stopped_by), finished, jsonl.c_str());
+    return 128 + stopped_by;
+  }
   if (tty) std::printf("\n");
   const double wall_s = std::chrono::duration<double>(Clock::now() - start).count();
   std::printf(
@@ -177,7 +200,7 @@ int MergeMain(int argc, char** argv) {
   // replaced in one rename: a folder that is also one of the inputs is read before it is written
   sweep::WriteFileChecked(out_dir + "/runs.jsonl.tmp", merged);
   if (std::rename((out_dir + "/runs.jsonl.tmp").c_str(), (out_dir + "/runs.jsonl").c_str()) != 0) {
-    throw std::runtime_error("cannot write " + out_dir + "/runs.jsonl: " + std::strerror(errno));
+    throw OutputError(out_dir + "/runs.jsonl", std::strerror(errno));
   }
   sweep::WriteSummary(records, out_dir);
   std::printf(

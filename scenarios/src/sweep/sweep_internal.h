@@ -78,8 +78,10 @@ void WriteSummary(const std::vector<Record>& records, const std::string& dir);
 
 /// Runs `runs` in up to `jobs` forked worker processes (crash isolation, a time limit per run),
 /// each rendering through `gl_backend`; `record` gets each run's JSON line as it finishes, with
-/// whether it failed.
-void RunPool(
+/// whether it failed. A stop request (SIGINT / SIGTERM: StopRequested) kills the running workers,
+/// records nothing for them or for the runs not started, and returns the signal; 0 when every
+/// run finished.
+int RunPool(
     const SweepSpec& spec, const std::vector<SweepRun>& runs, const Params& params,
     sim::GlBackend gl_backend, int jobs, const std::string& tmp_dir,
     const std::function<void(const std::string& line, bool failed, const SweepRun&)>& record);

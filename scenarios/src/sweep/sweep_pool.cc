@@ -59,7 +59,7 @@ bool RecordFailed(const std::string& line) {
 
 }  // namespace
 
-void RunPool(
+int RunPool(
     const SweepSpec& spec, const std::vector<SweepRun>& runs, const Params& params,
     sim::GlBackend gl_backend, int jobs, const std::string& tmp_dir,
     const std::function<void(const std::string& line, bool failed, const SweepRun&)>& record) {
@@ -71,7 +71,19 @@ void RunPool(
     Clock::time_point start;
   };
   std::vector<Child> children;
+  // a stop: the workers die with their runs unrecorded (resume runs them again)
+  const auto stop = [&]() {
+    for (const Child& child : children) kill(child.pid, SIGKILL);
+    for (const Child& child : children) {
+      int status = 0;
+      waitpid(child.pid, &status, 0);
+      std::remove((tmp_dir + "/" + std::to_string(runs[child.run].index) + ".json").c_str());
+    }
+    children.clear();
+    return StopRequested();
+  };
   while (next < runs.size() || !children.empty()) {
+    if (StopRequested() != 0) return stop();
     // start workers up to --jobs
     while (next < runs.size() && static_cast<int>(children.size()) < jobs) {
       const SweepRun& run = runs[next];
@@ -93,6 +105,7 @@ void RunPool(
     // collect finished, crashed or timed-out workers
     bool progressed = false;
     for (size_t c = 0; c < children.size();) {
+      if (StopRequested() != 0) return stop();
       int status = 0;
       const SweepRun& run = runs[children[c].run];
       const pid_t r = waitpid(children[c].pid, &status, WNOHANG);
@@ -129,6 +142,7 @@ void RunPool(
     }
     if (!progressed) std::this_thread::sleep_for(std::chrono::milliseconds(20));
   }
+  return 0;
 }
 
 }  // namespace hpa::sweep

@@ -12,6 +12,7 @@
 #include <nlohmann/json.hpp>
 
 #include "hpa/models/input_error.h"
+#include "scenarios/src/cli_parse.h"
 #include "scenarios/src/sweep/sweep_internal.h"
 
 namespace hpa::sweep {
@@ -61,7 +62,7 @@ void WriteFileChecked(const std::string& path, const std::string& text) {
   std::ofstream out(path, std::ios::trunc);
   out << text;
   out.flush();
-  if (!out) throw std::runtime_error("cannot write " + path + ": " + std::strerror(errno));
+  if (!out) throw OutputError(path, std::strerror(errno));
 }
 
 int DropErrorRecords(const std::string& jsonl) {
@@ -94,6 +95,7 @@ int DropErrorRecords(const std::string& jsonl) {
 
 std::vector<Record> ReadRecords(const std::string& path) {
   std::vector<Record> out;
+  if (access(path.c_str(), F_OK) == 0) CheckInputFile(path, "a sweep's runs.jsonl");
   std::ifstream in(path);
   std::string line;
   int line_no = 0;

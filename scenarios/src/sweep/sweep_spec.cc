@@ -10,6 +10,7 @@
 
 #include "hpa/models/input_error.h"
 #include "hpa/models/yaml_reader.h"
+#include "scenarios/src/cli_parse.h"
 #include "scenarios/src/sweep/sweep_internal.h"
 
 namespace hpa {
@@ -51,6 +52,7 @@ uint64_t SplitMix64(uint64_t x) {
 }
 
 std::string ReadFile(const std::string& path) {
+  CheckInputFile(path, "a YAML file");
   std::ifstream in(path);
   if (!in) throw InputError(path, "", "cannot open file");
   return std::string(std::istreambuf_iterator<char>(in), {});

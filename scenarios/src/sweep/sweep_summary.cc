@@ -10,6 +10,7 @@
 #include <set>
 #include <sstream>
 
+#include "hpa/models/input_error.h"
 #include "hpa/scenarios/metrics.h"
 #include "hpa/scenarios/plot_canvas.h"
 #include "scenarios/src/sweep/sweep_internal.h"
@@ -237,7 +238,7 @@ void WriteSummary(const std::vector<Record>& records, const std::string& dir) {
     }
     p.Legend(legend);
     if (!cv::imwrite(dir + "/crash_rate.png", fig)) {
-      throw std::runtime_error("cannot write " + dir + "/crash_rate.png");
+      throw OutputError(dir + "/crash_rate.png", "the PNG could not be written");
     }
   }
 }

@@ -69,6 +69,9 @@ struct RunResult {
 /// has computed, with run_error naming the signal (SIGTERM / SIGINT handlers call this).
 void RequestStop(int signal_number);
 
+/// The signal a stop was requested with (RequestStop), or 0.
+int StopRequested();
+
 /// Runs a scenario to its end (or to a crash, or stop_at_s) and computes its metrics and the
 /// expect check. Throws InputError for bad input found while setting up (MJCF, params).
 RunResult RunScenario(const Scenario& scenario, const Params& params, const RunOptions& options);

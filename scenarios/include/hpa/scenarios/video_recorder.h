@@ -12,6 +12,10 @@ namespace hpa {
 
 /// Writes frames through OpenCV's video writer (H.264 "avc1", else "mp4v"); optionally only
 /// around slack events.
+/// Checks a --video path before a run starts: a .mp4 name in a folder that exists and can be
+/// written; throws InputError saying whether the folder or the extension is the problem.
+void CheckVideoPath(const std::string& path);
+
 class VideoRecorder {
  public:
   static constexpr int kWidthPx = 960;

@@ -64,6 +64,7 @@ class YamlMap {
   std::string file_;
   std::string path_;
   mutable std::set<std::string> read_;
+  mutable std::set<std::string> asked_;  // every key looked up (Has or Get): the valid ones
 };
 
 }  // namespace hpa

@@ -1,0 +1,171 @@
+#!/usr/bin/env bash
+# Hostile input to `hpa`, one check per case: each gets a clear message naming what was wrong
+# and the documented exit code, or a safe result, and never loses results already computed.
+# usage: hostile_input_test.sh HPA_BIN SCENARIOS_DIR OUT_DIR
+set -uo pipefail
+hpa=$1; scen=$(cd "$2" && pwd); out=$3
+rm -rf "$out"; mkdir -p "$out"
+failures=0
+fail() { echo "FAIL: $*"; failures=$((failures + 1)); }
+
+# expect_exit CODE PATTERN ARGS...: hpa ARGS exits CODE and its output matches PATTERN (ERE)
+expect_exit() {
+  local code=$1 pattern=$2; shift 2
+  local text status
+  text=$(timeout 60 "$hpa" "$@" 2>&1); status=$?
+  [ "$status" -eq "$code" ] || fail "hpa $* exited $status, expected $code: $text"
+  echo "$text" | grep -Eq -- "$pattern" || fail "hpa $* output lacks /$pattern/: $text"
+}
+
+# a short ground-truth hover and a sweep of it (seconds each)
+base="$out/base.yaml"
+cat > "$base" <<'YAML'
+name: base
+duration: 1.0
+seed: 1
+controller: {type: geometric}
+estimation: {ground_truth: true, camera: analytic}
+reference: {type: hover, payload_position: [0, 0, 0.7]}
+YAML
+sweep="$out/sweep.yaml"
+cat > "$sweep" <<YAML
+base: $base
+runs: 80
+seed: 3
+vary:
+  world.payload_mass: {uniform: [0.09, 0.11]}
+  duration: {list: [3.0]}
+YAML
+
+echo "== SIGTERM / SIGINT stop a sweep at once, record nothing unstarted, exit 143 / 130"
+for sig in TERM INT; do
+  dir="$out/signal_$sig"
+  "$hpa" sweep "$sweep" --out "$dir" --jobs 2 > "$dir.log" 2>&1 &
+  pid=$!
+  for _ in $(seq 1 200); do [ -s "$dir/runs.jsonl" ] && break; sleep 0.05; done
+  kill -"$sig" "$pid"
+  start=$(date +%s.%N)
+  wait "$pid"; status=$?
+  took=$(echo "$(date +%s.%N) - $start" | bc)
+  want=$([ "$sig" = TERM ] && echo 143 || echo 130)
+  [ "$status" -eq "$want" ] || fail "SIG$sig: exit $status, expected $want: $(tail -2 "$dir.log")"
+  echo "$took < 3" | bc -l | grep -q 1 || fail "SIG$sig: took $took s to stop"
+  errors=$(grep -c '"status":"error"\|"status": "error"' "$dir/runs.jsonl")
+  [ "$errors" -eq 0 ] || fail "SIG$sig: $errors error records written for runs that never ran"
+  recorded=$(wc -l < "$dir/runs.jsonl")
+  [ "$recorded" -lt 80 ] || fail "SIG$sig: the sweep was not stopped ($recorded runs recorded)"
+  "$hpa" sweep "$sweep" --out "$dir" --jobs 2 --resume > "$dir.resume.log" 2>&1 \
+    || fail "SIG$sig: --resume failed: $(tail -2 "$dir.resume.log")"
+  ok=$(grep -c '"status":"ok"\|"status": "ok"' "$dir/runs.jsonl")
+  [ "$ok" -eq 80 ] || fail "SIG$sig: --resume left $ok of 80 runs done"
+done
+
+echo "== a shard spec that overflows is refused"
+expect_exit 2 "shard.*1 <= K <= N" sweep "$sweep" --out "$out/shard" --shard 4294967297/4294967297
+
+echo "== one list element under two spellings is refused"
+cat > "$out/spelling.yaml" <<YAML
+base: $scen/line_impulse.yaml
+runs: 2
+seed: 3
+vary:
+  events.0.impulse.2: {uniform: [0.1, 0.2]}
+  events.0.impulse.02: {uniform: [0.3, 0.4]}
+YAML
+expect_exit 2 "'02' is not an index" sweep "$out/spelling.yaml" --out "$out/spelling"
+expect_exit 2 "'02' is not an index" run "$scen/line_impulse.yaml" --set events.0.impulse.02=0.3 \
+  --out "$out/x"
+
+echo "== multi-document YAML and tagged scalars are refused"
+{ cat "$base"; printf -- '---\nname: second\n'; } > "$out/two_docs.yaml"
+expect_exit 2 "two_docs.yaml: holds 2 YAML documents" run "$out/two_docs.yaml" --out "$out/x"
+expect_exit 2 "holds 2 YAML documents" run "$base" --set "duration=1
+---
+2" --out "$out/x"
+sed 's/^duration: 1.0/duration: !!str 2/' "$base" > "$out/tag_str.yaml"
+expect_exit 2 "key 'duration'.*tagged" run "$out/tag_str.yaml" --out "$out/x"
+sed 's/^duration: 1.0/duration: !foo 1/' "$base" > "$out/tag_foo.yaml"
+expect_exit 2 "key 'duration'.*tagged '!foo'" run "$out/tag_foo.yaml" --out "$out/x"
+
+echo "== messages: whole-number bounds, the --set argument, the valid keys, the --video problem"
+sed 's/^seed: 1/seed: 4294967295.5/' "$base" > "$out/seed.yaml"
+expect_exit 2 "value 4294967295.5 out of range.*\[0, 4294967295\]" run "$out/seed.yaml" --out "$out/x"
+expect_exit 2 "^hpa: error: --set duration=-1: key 'duration'" run "$base" --set duration=-1 --out "$out/x"
+printf 'name: t\nduration: 1.0\nseeed: 2\n' > "$out/typo.yaml"
+expect_exit 2 "unknown key; valid keys here: .*duration.*seed" run "$out/typo.yaml" --out "$out/x"
+expect_exit 2 "the folder is the problem" run "$base" --out "$out/x" --video "$out/no_such_folder/v.mp4"
+expect_exit 2 "the extension is the problem" run "$base" --out "$out/x" --video "$out/v.avi"
+
+echo "== a payload reference below the ground is refused"
+expect_exit 2 "reference.*below the ground" run "$base" --set "reference.payload_position=[0, 0, -0.3]" \
+  --out "$out/x"
+
+echo "== the quadrotor slammed onto the payload lying on the ground is a crash"
+cat > "$out/slam.yaml" <<'YAML'
+name: slam
+duration: 2.0
+seed: 1
+controller: {type: hpa_mpc}
+estimation: {ground_truth: true, camera: analytic}
+reference: {type: hover, payload_position: [0, 0, 0.05]}
+events:
+  - {at: 1.0, type: impulse, body: quadrotor, impulse: [0, 0, -12.0]}
+YAML
+expect_exit 1 "crashed \(quadrotor contact with the payload lying on the ground" run "$out/slam.yaml" \
+  --out "$out/slam"
+
+echo "== a run killed with -9 leaves no complete-looking metrics.json"
+"$hpa" run "$base" --out "$out/killed" --quiet || fail "first run failed"
+[ -s "$out/killed/metrics.json" ] || fail "no metrics.json from the first run"
+"$hpa" run "$scen/lissajous_T5.yaml" --camera analytic --out "$out/killed" --quiet > /dev/null 2>&1 &
+pid=$!
+sleep 0.5
+kill -9 "$pid"; wait "$pid" 2> /dev/null
+[ ! -e "$out/killed/metrics.json" ] || fail "the killed run left a metrics.json"
+[ ! -e "$out/killed/log.csv" ] || fail "the killed run left a log.csv"
+
+echo "== golden: refuses aborted or failing runs, blank reasons, bad tolerances, bad maps"
+golden="$out/golden.json"
+mkdir -p "$out/from"
+printf '{"tolerances": {"default": {"rel": 1e-3}}, "scenarios": {}}' > "$golden"
+expect_exit 2 "reason.*not blank" golden --golden "$golden" --update --reason '   ' --from "$out/from"
+printf '{"tolerances": {"default": {"rel": "tight"}}, "scenarios": {}}' > "$golden"
+expect_exit 2 "golden.json: key 'tolerances.default.rel': expected a number" golden --golden "$golden" \
+  --from "$out/from"
+printf '{"tolerances": {"default": {"rel": 1e-3}}, "scenarios": []}' > "$golden"
+expect_exit 2 "key 'scenarios': expected a map of scenario name to metrics, got a JSON array" \
+  golden --golden "$golden" --from "$out/from"
+printf '{"tolerances": {"default": {"rel": 1e-3}}}' > "$golden"
+expect_exit 2 "key 'scenarios': missing" golden --golden "$golden" --from "$out/from"
+# an aborted run's metrics (run_error set) are never recorded
+python3 - "$scen" "$out/from" <<'PY'
+import glob, json, os, sys
+scen, out = sys.argv[1], sys.argv[2]
+names = sorted([os.path.splitext(os.path.basename(p))[0] for p in glob.glob(scen + "/*.yaml")] +
+               ["ci_" + os.path.splitext(os.path.basename(p))[0] for p in glob.glob(scen + "/ci/*.yaml")])
+for i, n in enumerate(names):
+    os.makedirs(os.path.join(out, n), exist_ok=True)
+    m = {"scenario": n, "expect": {"passed": True, "failed": []}, "run_error": None}
+    if i == 0:
+        m["run_error"] = "stopped by signal 15 (at t = 1.2 s)"
+    json.dump(m, open(os.path.join(out, n, "metrics.json"), "w"))
+PY
+printf '{"tolerances": {"default": {"rel": 1e-3}}, "scenarios": {}}' > "$golden"
+expect_exit 2 "aborted.*not recorded as golden" golden --golden "$golden" --update --reason test \
+  --from "$out/from" --quiet
+
+echo "== golden and sweep-diff refuse FIFOs and devices (no hang, no unbounded read)"
+mkfifo "$out/fifo"
+expect_exit 2 "not a regular file" golden --golden "$out/fifo" --from "$out/from"
+expect_exit 2 "not a regular file" golden --golden /dev/zero --from "$out/from"
+mkdir -p "$out/fifo_sweep"
+mkfifo "$out/fifo_sweep/runs.jsonl"
+expect_exit 2 "not a regular file" sweep-diff "$out/fifo_sweep" "$out/fifo_sweep" --out "$out/d"
+
+echo "== an output that cannot be written: exit 4"
+expect_exit 4 "cannot write" render-frame "$base" --at 0.5 --out /dev/full/frame.png
+: > "$out/a_file"
+expect_exit 4 "cannot write.*a_file.*output folder" run "$base" --out "$out/a_file"
+
+[ $failures -eq 0 ] && echo "hostile input: all checks passed"
+exit $((failures > 0))
