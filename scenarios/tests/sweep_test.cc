@@ -197,4 +197,28 @@ TEST(SweepTest, BadPathsFailBeforeAnythingRuns) {
 }
 
 }  // namespace
+// The summary lists the runs the estimator lost although nothing crashed: a whole flight read
+// slack (mode accuracy 0.067 among runs at 0.99-1.00), and one with 5 filter restarts where the
+// rest have none; a run 0.03 below the median is not listed (below the 0.05 floor).
+TEST(SweepOutlierTest, ListsRunsWhoseModeAccuracyOrResetsStandOut) {
+  std::vector<sweep::Record> records(12);
+  for (size_t i = 0; i < records.size(); ++i) {
+    records[i].run = static_cast<int>(i);
+    records[i].controller = "hpa_mpc";
+    records[i].mode_accuracy = 0.99 + 0.001 * static_cast<double>(i % 5);
+  }
+  records[3].mode_accuracy = 0.067;
+  records[5].mode_accuracy = 0.962;
+  records[7].estimator_resets = 5;
+  records[9].error = true;  // errors are not judged
+  records[9].mode_accuracy = 0.0;
+  const std::vector<sweep::Outlier> outliers = sweep::FindOutliers(records);
+  ASSERT_EQ(outliers.size(), 2u);
+  EXPECT_EQ(outliers[0].record->run, 3);
+  EXPECT_EQ(outliers[0].metric, "mode_accuracy");
+  EXPECT_NEAR(outliers[0].median, 0.992, 0.002);  // the runs at 0.990-0.994
+  EXPECT_EQ(outliers[1].record->run, 7);
+  EXPECT_EQ(outliers[1].metric, "estimator_resets");
+}
+
 }  // namespace hpa

@@ -38,8 +38,24 @@ struct Record {
   bool expect_failed = false;  // any `expect` bound of the scenario failed (crash included)
   double payload_rmse_norm_m = 0, quad_dev_max_m = 0, solve_median_ms = 0, slack_time_s = 0;
   double payload_in_fov = 1;
-  std::string line;  // the raw JSON line
+  double mode_accuracy = 1;
+  double estimator_resets = 0;  // forced accepts and filter restarts (estimator health); 0 if none
+  std::string line;             // the raw JSON line
 };
+
+/// A run whose mode accuracy, in-view fraction or estimator resets stands out of its controller's
+/// runs (see FindOutliers).
+struct Outlier {
+  const Record* record = nullptr;
+  std::string metric;
+  double value = 0.0, median = 0.0;
+};
+
+/// Finished runs whose mode_accuracy or payload_in_fov_fraction lies below, or whose estimator
+/// resets lie above, their controller's median by more than 5 scaled median absolute deviations
+/// (1.4826 MAD: 5 standard deviations of a normal sample) and by more than a floor that matters
+/// (0.05 for the fractions, 2 resets): a run the estimator lost, which no crash flags.
+std::vector<Outlier> FindOutliers(const std::vector<Record>& records);
 
 /// Reads runs.jsonl; an unreadable line is skipped with a warning naming it.
 std::vector<Record> ReadRecords(const std::string& path);

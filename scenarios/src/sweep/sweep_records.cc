@@ -133,6 +133,13 @@ std::vector<Record> ReadRecords(const std::string& path) {
         r.solve_median_ms = number(m.at("mpc_solve_ms").at("median"));
         r.slack_time_s = number(m.at("slack_time_s"));
         r.payload_in_fov = number(m.at("payload_in_fov_fraction"));
+        r.mode_accuracy = number(m.at("mode_accuracy"));
+        if (m.contains("estimator") && m["estimator"].is_object()) {
+          const Json& e = m["estimator"];
+          for (const char* key : {"resets", "cable_reinitialisations"}) {
+            if (e.contains(key) && e[key].is_number()) r.estimator_resets += e[key].get<double>();
+          }
+        }
       }
     } catch (const Json::exception& e) {
       // a torn last line (the sweep was killed mid-write) is skipped; it will be re-run

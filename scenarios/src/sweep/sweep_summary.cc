@@ -143,6 +143,21 @@ void WriteSummary(const std::vector<Record>& records, const std::string& dir) {
     }
     summary["controllers"][c] = entry;
   }
+  const std::vector<Outlier> outliers = FindOutliers(records);
+  const auto replay = [](const Record& r) {
+    std::string command = "hpa run " + r.base + " --seed " + std::to_string(r.seed);
+    for (const auto& [path, value] : r.values) command += " --set " + path + "=" + value;
+    return command;
+  };
+  summary["outliers"] = Json::array();
+  for (const Outlier& o : outliers) {
+    summary["outliers"].push_back({{"run", o.record->run},
+                                   {"controller", o.record->controller},
+                                   {"metric", o.metric},
+                                   {"value", num(o.value)},
+                                   {"median", num(o.median)},
+                                   {"replay", replay(*o.record)}});
+  }
   WriteFileChecked(dir + "/summary.json", summary.dump(2) + "\n");
 
   // summary.md
@@ -203,6 +218,16 @@ void WriteSummary(const std::vector<Record>& records, const std::string& dir) {
     for (const auto& [path, value] : r.values) md << " --set " << path << "=" << value;
     md << "`\n";
   }
+  md << "\n## Outlier runs (mode accuracy, in view, estimator resets)\n\n"
+     << "A finished run is listed when its mode accuracy or in-view fraction lies below, or its "
+        "estimator resets above, its controller's median by more than 5 scaled MADs and by more "
+        "than 0.05 (fractions) or 2 (resets).\n\n";
+  if (outliers.empty()) md << "None.\n";
+  for (const Outlier& o : outliers) {
+    md << "- run " << o.record->run << " (" << o.record->controller << "): " << o.metric << " "
+       << Fixed(o.value) << " (median " << Fixed(o.median) << ")\n  `" << replay(*o.record)
+       << "`\n";
+  }
   WriteFileChecked(dir + "/summary.md", md.str());
 
   // crash rate plot, one line per controller
@@ -220,9 +245,16 @@ void WriteSummary(const std::vector<Record>& records, const std::string& dir) {
     int k = 0;
     for (const auto& c : controllers) {
       std::vector<double> x, y, lo, hi, fail;
+      std::vector<bool> segment_break;  // an empty bin lies before this point
+      bool gap = false;
       for (size_t b = 0; b < bins.size(); ++b) {
         const Cell& cell = per_bin[c][b];
-        if (cell.n == 0) continue;
+        if (cell.n == 0) {
+          gap = true;
+          continue;
+        }
+        segment_break.push_back(gap);
+        gap = false;
         const auto ci = Wilson(cell.crashes, cell.n);
         x.push_back(0.5 * (bins[b].first + bins[b].second));
         y.push_back(1.0 * cell.crashes / cell.n);
@@ -230,8 +262,22 @@ void WriteSummary(const std::vector<Record>& records, const std::string& dir) {
         hi.push_back(ci.second);
         fail.push_back(1.0 * cell.expect_failures / cell.n);
       }
-      p.Line(x, fail, SeriesColour(k), 1);
-      p.Line(x, y, SeriesColour(k), 2);
+      // lines join neighbouring bins only: an empty bin breaks them
+      std::vector<double> sx, sy, sfail;
+      const auto flush = [&]() {
+        p.Line(sx, sfail, SeriesColour(k), 1);
+        p.Line(sx, sy, SeriesColour(k), 2);
+        sx.clear();
+        sy.clear();
+        sfail.clear();
+      };
+      for (size_t i = 0; i < x.size(); ++i) {
+        if (i > 0 && segment_break[i]) flush();
+        sx.push_back(x[i]);
+        sy.push_back(y[i]);
+        sfail.push_back(fail[i]);
+      }
+      flush();
       p.ErrorBars(x, y, lo, hi, SeriesColour(k));
       legend.emplace_back(c, SeriesColour(k));
       ++k;
@@ -241,6 +287,46 @@ void WriteSummary(const std::vector<Record>& records, const std::string& dir) {
       throw OutputError(dir + "/crash_rate.png", "the PNG could not be written");
     }
   }
+}
+
+std::vector<Outlier> FindOutliers(const std::vector<Record>& records) {
+  struct Rule {
+    const char* metric;
+    double (*value)(const Record&);
+    int sign;      // -1: low is bad, +1: high is bad
+    double floor;  // smallest difference from the median worth listing
+  };
+  const Rule rules[] = {
+      {"mode_accuracy", [](const Record& r) { return r.mode_accuracy; }, -1, 0.05},
+      {"payload_in_fov_fraction", [](const Record& r) { return r.payload_in_fov; }, -1, 0.05},
+      {"estimator_resets", [](const Record& r) { return r.estimator_resets; }, +1, 2.0},
+  };
+  std::map<std::string, std::vector<const Record*>> by_controller;
+  for (const Record& r : records) {
+    if (!r.error) by_controller[r.controller].push_back(&r);
+  }
+  std::vector<Outlier> out;
+  for (const auto& [controller, runs] : by_controller) {
+    for (const Rule& rule : rules) {
+      std::vector<double> values;
+      for (const Record* r : runs) {
+        if (std::isfinite(rule.value(*r))) values.push_back(rule.value(*r));
+      }
+      if (values.size() < 3) continue;
+      const double median = Quantile(values, 0.5);
+      std::vector<double> deviations;
+      for (double v : values) deviations.push_back(std::fabs(v - median));
+      const double spread = 5.0 * 1.4826 * Quantile(deviations, 0.5);
+      for (const Record* r : runs) {
+        const double v = rule.value(*r);
+        const double beyond = rule.sign * (v - median);
+        if (std::isfinite(v) && beyond > spread && beyond > rule.floor) {
+          out.push_back({r, rule.metric, v, median});
+        }
+      }
+    }
+  }
+  return out;
 }
 
 }  // namespace hpa::sweep
