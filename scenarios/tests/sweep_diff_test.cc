@@ -164,7 +164,8 @@ TEST(SweepDiffVerdictTest, FourPairsAreInconclusive) {
   SweepDiffOptions options;
   options.a_dir = WriteSweep("a", a);
   options.b_dir = WriteSweep("b", b);
-  const MetricDiff& m = Find(CompareSweeps(options), "quad_position_deviation_max_m");
+  const SweepDiff four = CompareSweeps(options);
+  const MetricDiff& m = Find(four, "quad_position_deviation_max_m");
   EXPECT_EQ(m.verdict, "inconclusive");
   EXPECT_NE(m.reason.find("cannot reach p < 0.05"), std::string::npos) << m.reason;
   // six pairs can: 2 / 2^6 = 0.031

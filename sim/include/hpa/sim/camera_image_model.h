@@ -33,9 +33,10 @@ class CameraImageModel {
   /// Sensor image (CV_8UC3 BGR, the sensor's size) of `pinhole` (a render of the sensor's size
   /// at render_focal_px). `blur_px` is the image motion (render pixels) over the exposure of the
   /// region `blur_region` (render pixels; empty: the whole frame): the fast motion-blur
-  /// approximation smears that region along it, fading out over a band around it (no seam). `frame_index` keys the noise. A non-empty
-  /// `sensor_region` computes only that part of the sensor image (equal to the whole frame's
-  /// there), reading only RenderRegion(sensor_region, blur_px) of `pinhole`.
+  /// approximation smears that region along it, fading out over a band around it (no seam).
+  /// `frame_index` keys the noise. A non-empty `sensor_region` computes only that part of the
+  /// sensor image (equal to the whole frame's there), reading only
+  /// RenderRegion(sensor_region, blur_px) of `pinhole`.
   void Apply(const cv::Mat& pinhole, const Eigen::Vector2d& blur_px, const cv::Rect& blur_region,
              uint64_t frame_index, cv::Mat* sensor, const cv::Rect& sensor_region = cv::Rect());
 
