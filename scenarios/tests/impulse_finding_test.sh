@@ -4,16 +4,14 @@
 # of 0.1-2.5 N s), hpa_mpc's crash rate is not above the non-hybrid baseline's: its Wilson 95 %
 # interval does not lie above the baseline's, and the paired comparison (hpa sweep-diff, exact
 # McNemar) does not find it worse.
-# Measured on this sweep: hpa_mpc 3 of 40 crashes, nonhybrid_mpc 1 of 40 (McNemar p = 0.5);
-# two of hpa_mpc's are the payload striking the body at 20-23 m/s, which tumbles the vehicle
-# within 0.12 s. The paper's ordering (the baseline crashing more) does not show: with 100 draws
-# (ci/paper_comparison.sh) 5 against 2. Crash counts this small are chaotic (a change moving no
-# shipped scenario by 0.1 % moved hpa_mpc between 2 and 4 of 40).
-# Regression bounds: hpa_mpc at most 4 crashes (one more than measured: a count this small moves
+# Measured on this sweep: hpa_mpc 2 of 40 crashes, nonhybrid_mpc 1 of 40 (McNemar p = 1);
+# hpa_mpc's are the payload striking the body at 15-23 m/s, which tumbles the vehicle within
+# 0.12 s whichever controller flies. The paper's ordering (the baseline crashing more) does not
+# show: with 100 draws (ci/paper_comparison.sh) 3 against 2. Crash counts this small are chaotic
+# (a change moving no shipped scenario by 0.1 % once moved hpa_mpc between 2 and 4 of 40).
+# Regression bounds: hpa_mpc at most 3 crashes (one more than measured: a count this small moves
 # in steps of 1 of 40, so the median quadrotor deviation carries the tight bound) and a median
-# deviation at most 1.3 x the measured 0.267 m. Paired, hpa_mpc meets the re-taut faster than the
-# baseline here (v_z -0.11 m/s, p = 0.03) where the paper reports it slower: README, "paper
-# comparison".
+# deviation at most 1.3 x the measured 0.250 m. README, "paper comparison".
 set -u
 hpa="$1"; scen="$2"; out="$3"
 rm -rf "$out"; mkdir -p "$out"
@@ -37,9 +35,9 @@ print(f"Wilson 95 %: hpa_mpc {hpa['crash_rate_ci95']}, nonhybrid_mpc {base['cras
 assert hpa["crash_rate_ci95"][0] <= base["crash_rate_ci95"][1], \
     "hpa_mpc's crash rate interval lies above the baseline's"
 assert diff["metrics"]["crash_rate"]["verdict"] != "worse", diff["metrics"]["crash_rate"]
-assert hpa["crashes"] <= 4, f"hpa_mpc crashed {hpa['crashes']} times (measured 3)"
+assert hpa["crashes"] <= 3, f"hpa_mpc crashed {hpa['crashes']} times (measured 2)"
 deviation = hpa["quad_deviation_max_m"]["median"]
-print(f"hpa_mpc median quadrotor deviation {deviation:.3f} m (measured 0.267)")
-assert deviation <= 1.3 * 0.267, deviation
+print(f"hpa_mpc median quadrotor deviation {deviation:.3f} m (measured 0.250)")
+assert deviation <= 1.3 * 0.250, deviation
 PY
 echo "impulse finding: holds"
