@@ -73,7 +73,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   }
   try {
     const hpa::SweepSpec spec = hpa::LoadSweep(sweep_path);
-    if (spec.runs <= 100) {
+    if (hpa::SweepRunCount(spec) <= 100) {
       for (const auto& run : hpa::ExpandSweep(spec)) {
         for (const auto& [path, value] : run.values) {
           (void)path;

@@ -127,9 +127,24 @@ SweepSpec LoadSweep(const std::string& path) {
   }
   root.RejectUnknownKeys();
 
-  // every expanded run must be a valid scenario before anything runs: each draw of a
-  // distribution, not only its first, is checked against its key's range
-  for (const SweepRun& run : ExpandSweep(s)) {
+  if (SweepRunCount(s) > kMaxSweepRuns) {
+    throw InputError(path, "runs",
+                     "runs times the grid's cells is over " + std::to_string(kMaxSweepRuns) +
+                         " runs: split the sweep");
+  }
+  // the runs must be valid scenarios before anything runs: each draw of a distribution, not only
+  // its first, is checked against its key's range, for the first kValidatedRuns runs (a draw
+  // beyond them that is out of range is recorded as that run's error)
+  constexpr long kValidatedRuns = 2000;
+  SweepSpec probe = s;
+  const long cells = std::max(1L, SweepRunCount(s) / std::max(1, s.runs));
+  if (cells > kValidatedRuns) {
+    throw InputError(path, "vary",
+                     "the grid has " + std::to_string(cells) + " cells, more than " +
+                         std::to_string(kValidatedRuns) + ": split the sweep");
+  }
+  probe.runs = static_cast<int>(std::min<long>(s.runs, std::max(1L, kValidatedRuns / cells)));
+  for (const SweepRun& run : ExpandSweep(probe)) {
     try {
       BuildScenario(s, run);
     } catch (const InputError& e) {
@@ -146,6 +161,16 @@ SweepSpec LoadSweep(const std::string& path) {
   }
   s.sweep_id = Hex(Fnv1a(ReadFile(path) + "\n--base--\n" + ReadFile(s.base_path)));
   return s;
+}
+
+long SweepRunCount(const SweepSpec& spec) {
+  long cells = 1;
+  for (const VarySpec& v : spec.vary) {
+    if (v.kind != VarySpec::Kind::kGrid) continue;
+    cells *= std::max<long>(1, static_cast<long>(v.values.size()));
+    if (cells > kMaxSweepRuns) return kMaxSweepRuns + 1;  // no overflow past the limit
+  }
+  return std::min(cells * spec.runs, kMaxSweepRuns + 1);
 }
 
 std::vector<SweepRun> ExpandSweep(const SweepSpec& spec) {

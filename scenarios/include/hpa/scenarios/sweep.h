@@ -41,6 +41,13 @@ SweepSpec LoadSweep(const std::string& path);
 /// Expands the sweep into its runs (deterministic in the sweep seed).
 std::vector<SweepRun> ExpandSweep(const SweepSpec& spec);
 
+/// How many runs the sweep has: its draws times its grid cells (LoadSweep keeps it at most
+/// kMaxSweepRuns).
+long SweepRunCount(const SweepSpec& spec);
+
+/// The most runs one sweep may have (draws times grid cells).
+constexpr long kMaxSweepRuns = 1000000;
+
 /// The runs of shard K of N (K = 1..N): every N-th run, starting at index K - 1; the N shards
 /// partition the runs.
 std::vector<SweepRun> SelectShard(const std::vector<SweepRun>& runs, int shard_k, int shard_n);
