@@ -49,18 +49,10 @@ YamlMap::YamlMap(YAML::Node node, std::string file, std::string path)
   }
 }
 
-YAML::Node LoadYamlFile(const std::string& file) {
-  std::error_code ec;
-  const auto status = std::filesystem::status(file, ec);
-  if (ec || !std::filesystem::exists(status)) throw InputError(file, "", "cannot open file");
-  if (!std::filesystem::is_regular_file(status)) {
-    throw InputError(file, "", "not a regular file (a directory?): expected a YAML file");
-  }
-  std::ifstream in(file);
-  if (!in) throw InputError(file, "", "cannot open file");
+YAML::Node LoadYamlText(const std::string& text, const std::string& file) {
   try {
     // one document: a second ('---') would be ignored silently by YAML::Load
-    const std::vector<YAML::Node> documents = YAML::LoadAll(in);
+    const std::vector<YAML::Node> documents = YAML::LoadAll(text);
     if (documents.size() > 1) {
       throw InputError(file, "",
                        "holds " + std::to_string(documents.size()) +
@@ -69,10 +61,25 @@ YAML::Node LoadYamlFile(const std::string& file) {
     return documents.empty() ? YAML::Node() : documents.front();
   } catch (const YAML::Exception& e) {
     throw InputError(file, "", std::string("malformed YAML: ") + e.what());
-  } catch (const std::ios_base::failure& e) {
-    throw InputError(file, "", std::string("cannot read file: ") + e.what());
   }
 }
+
+std::string ReadYamlFile(const std::string& file) {
+  std::error_code ec;
+  const auto status = std::filesystem::status(file, ec);
+  if (ec || !std::filesystem::exists(status)) throw InputError(file, "", "cannot open file");
+  if (!std::filesystem::is_regular_file(status)) {
+    throw InputError(file, "", "not a regular file (a directory?): expected a YAML file");
+  }
+  std::ifstream in(file);
+  if (!in) throw InputError(file, "", "cannot open file");
+  std::ostringstream text;
+  text << in.rdbuf();
+  if (in.bad()) throw InputError(file, "", "cannot read file");
+  return text.str();
+}
+
+YAML::Node LoadYamlFile(const std::string& file) { return LoadYamlText(ReadYamlFile(file), file); }
 
 YamlMap YamlMap::LoadFile(const std::string& file) {
   const YAML::Node root = LoadYamlFile(file);

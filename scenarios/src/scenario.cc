@@ -252,18 +252,26 @@ void CheckControllerType(const std::string& type, const std::string& file, const
 
 Scenario LoadScenario(const std::string& path, const std::vector<ScenarioSet>& sets,
                       const std::string& origin) {
-  if (sets.empty()) return ParseScenario(YamlMap::LoadFile(path));
-  YAML::Node root = LoadYamlFile(path);
+  return LoadScenarioText(ReadYamlFile(path), path, sets, origin);
+}
+
+Scenario LoadScenarioText(const std::string& text, const std::string& path,
+                          const std::vector<ScenarioSet>& sets, const std::string& origin) {
+  YAML::Node root = LoadYamlText(text, path);
   if (!root.IsMap()) throw InputError(path, "", "expected a YAML map at the top level");
+  if (sets.empty()) return ParseScenario(YamlMap(root, path, ""));
   for (const ScenarioSet& set : sets) SetDottedPath(root, set.first, set.second, origin);
   try {
     return ParseScenario(YamlMap(root, path, ""));
   } catch (const InputError& e) {
-    // a bad value that came from --set: name the argument, not the file it did not come from
+    // a bad value that came from a set: name where it came from, not the file it is not in
     for (auto it = sets.rbegin(); it != sets.rend(); ++it) {
       const std::string& key = it->first;
       if (e.key() == key || e.key().rfind(key + ".", 0) == 0 || key.rfind(e.key() + ".", 0) == 0) {
-        throw InputError("--set " + key + "=" + it->second, e.key(), e.detail());
+        const std::string source = origin == "--set"
+                                       ? "--set " + key + "=" + it->second
+                                       : origin + " (" + key + " = " + it->second + ")";
+        throw InputError(source, e.key(), e.detail());
       }
     }
     throw;

@@ -60,6 +60,34 @@ for sig in TERM INT; do
   [ "$ok" -eq 80 ] || fail "SIG$sig: --resume left $ok of 80 runs done"
 done
 
+echo "== editing the base scenario during a sweep changes no run (the sweep runs its snapshot)"
+cp "$base" "$out/edited_base.yaml"
+sed "s|^base: .*|base: $out/edited_base.yaml|" "$sweep" > "$out/edited_sweep.yaml"
+"$hpa" sweep "$out/edited_sweep.yaml" --out "$out/edited" --jobs 2 > "$out/edited.log" 2>&1 &
+pid=$!
+for _ in $(seq 1 200); do [ -s "$out/edited/runs.jsonl" ] && break; sleep 0.05; done
+printf 'name: broken\nduration: -5\n' > "$out/edited_base.yaml"
+wait "$pid" || fail "the sweep failed after its base was edited: $(tail -2 "$out/edited.log")"
+ok=$(grep -c '"status":"ok"\|"status": "ok"' "$out/edited/runs.jsonl")
+[ "$ok" -eq 80 ] || fail "editing the base mid-sweep changed runs: $ok of 80 ok"
+expect_exit 2 "holds runs of a different sweep" sweep "$out/edited_sweep.yaml" --out "$out/edited" --resume
+
+echo "== merge: missing runs (exit 1), empty input (exit 2), conflicting records (a warning)"
+"$hpa" sweep "$sweep" --out "$out/half" --shard 1/2 --jobs 2 > /dev/null 2>&1 || fail "shard 1/2 failed"
+expect_exit 1 "merge incomplete: 40 of 80 runs missing \(1, 3, 5" merge "$out/half" --out "$out/half_merged"
+[ -s "$out/half_merged/runs.jsonl" ] || fail "an incomplete merge wrote no runs.jsonl"
+mkdir -p "$out/empty" && : > "$out/empty/runs.jsonl"
+expect_exit 2 "no runs recorded" merge "$out/empty" --out "$out/empty_merged"
+mkdir -p "$out/conflict"
+python3 - "$out/half/runs.jsonl" "$out/conflict/runs.jsonl" <<'PY'
+import json, sys
+lines = [json.loads(l) for l in open(sys.argv[1])]
+lines[0]["metrics"]["quad_position_deviation_max_m"] += 1.0
+open(sys.argv[2], "w").write(json.dumps(lines[0]) + "\n")
+PY
+expect_exit 1 "recorded twice with different results" merge "$out/half" "$out/conflict" \
+  --out "$out/conflict_merged"
+
 echo "== a shard spec that overflows is refused"
 expect_exit 2 "shard.*1 <= K <= N" sweep "$sweep" --out "$out/shard" --shard 4294967297/4294967297
 

@@ -153,7 +153,10 @@ int SweepMain(int argc, char** argv) {
       "results in %s\n",
       finished, failures, wall_s, finished * 60.0 / std::max(wall_s, 1e-9), jsonl.c_str());
   if (shard_n == 1) {
-    sweep::WriteSummary(sweep::ReadRecords(jsonl), out_dir);
+    std::vector<std::string> warnings;
+    sweep::WriteSummary(
+        sweep::UniqueRecords(sweep::ReadRecords(jsonl), SweepRunCount(spec), &warnings), out_dir);
+    for (const std::string& w : warnings) std::fprintf(stderr, "hpa: warning: %s\n", w.c_str());
     std::printf("summary: %s/summary.md, %s/summary.json, %s/crash_rate.png\n", out_dir.c_str(),
                 out_dir.c_str(), out_dir.c_str());
   } else {
@@ -166,12 +169,17 @@ int SweepMain(int argc, char** argv) {
 int MergeMain(int argc, char** argv) {
   std::vector<std::string> dirs;
   std::string out_dir;
-  CLI::App app{"Joins sweep shards (or resumed parts) into one runs.jsonl and its summary.",
-               "hpa merge"};
+  CLI::App app{
+      "Joins sweep shards (or resumed parts) into one runs.jsonl and its summary. One record per "
+      "run (a finished record wins over an error; two different finished records keep the first, "
+      "with a warning; runs outside the sweep are left out, with a warning). Exits 1, after "
+      "writing what it has, when runs of the sweep are missing (a shard not merged or not "
+      "finished); 2 when the folders hold no runs or mix sweeps.",
+      "hpa merge"};
   app.add_option("DIR", dirs, "sweep output folders, each with a runs.jsonl")->required();
   app.add_option("--out", out_dir, "output folder")->required();
   if (const auto code = ParseCommandLine(app, argc, argv)) return *code;
-  std::map<int, Record> by_run;
+  std::vector<Record> all;
   std::string sweep_id;
   for (const std::string& d : dirs) {
     const std::string path = d + "/runs.jsonl";
@@ -187,16 +195,23 @@ int MergeMain(int argc, char** argv) {
                          "mixes sweeps (" + r.sweep_id + " vs " + sweep_id +
                              "); merge only shards of one sweep");
       }
-      by_run[r.run] = r;  // a run recorded twice (resume after a torn write) counts once
+      all.push_back(std::move(r));
     }
   }
-  MakeOutputDir(out_dir);
-  std::vector<Record> records;
-  std::string merged;
-  for (auto& [index, r] : by_run) {
-    merged += r.line + "\n";
-    records.push_back(r);
+  if (all.empty()) throw InputError("", "DIR", "no runs recorded in the folders given");
+  // how many runs the sweep has: from its file when it is still the same sweep, else unknown
+  long expected = -1;
+  try {
+    const SweepSpec spec = LoadSweep(all.front().sweep_file);
+    if (spec.sweep_id == sweep_id) expected = SweepRunCount(spec);
+  } catch (const InputError&) {
   }
+  std::vector<std::string> warnings;
+  const std::vector<Record> records = sweep::UniqueRecords(all, expected, &warnings);
+  for (const std::string& w : warnings) std::fprintf(stderr, "hpa: warning: %s\n", w.c_str());
+  MakeOutputDir(out_dir);
+  std::string merged;
+  for (const Record& r : records) merged += r.line + "\n";
   // replaced in one rename: a folder that is also one of the inputs is read before it is written
   sweep::WriteFileChecked(out_dir + "/runs.jsonl.tmp", merged);
   if (std::rename((out_dir + "/runs.jsonl.tmp").c_str(), (out_dir + "/runs.jsonl").c_str()) != 0) {
@@ -206,7 +221,30 @@ int MergeMain(int argc, char** argv) {
   std::printf(
       "merged %zu runs from %zu folders into %s (summary.md, summary.json, crash_rate.png)\n",
       records.size(), dirs.size(), out_dir.c_str());
-  return 0;
+  // runs the sweep has that no folder recorded: the merge is incomplete (exit 1)
+  if (expected < 0) {
+    std::fprintf(stderr,
+                 "hpa: warning: the sweep file %s is gone or changed: missing runs not checked\n",
+                 all.front().sweep_file.c_str());
+    return 0;
+  }
+  std::vector<int> missing;
+  size_t next = 0;
+  for (int index = 0; index < expected; ++index) {
+    while (next < records.size() && records[next].run < index) ++next;
+    if (next < records.size() && records[next].run == index) continue;
+    missing.push_back(index);
+  }
+  if (missing.empty()) return 0;
+  std::string listed;
+  for (size_t i = 0; i < std::min<size_t>(10, missing.size()); ++i) {
+    listed += (listed.empty() ? "" : ", ") + std::to_string(missing[i]);
+  }
+  std::fprintf(stderr,
+               "hpa: merge incomplete: %zu of %ld runs missing (%s%s): a shard not merged or not "
+               "finished; the merged runs are written\n",
+               missing.size(), expected, listed.c_str(), missing.size() > 10 ? ", ..." : "");
+  return 1;
 }
 
 }  // namespace hpa

@@ -57,6 +57,14 @@ struct Outlier {
 /// (0.05 for the fractions, 2 resets): a run the estimator lost, which no crash flags.
 std::vector<Outlier> FindOutliers(const std::vector<Record>& records);
 
+/// One record per run index, the rule of both the sweep's summary and merge: a run recorded
+/// twice with the same outcome counts once; a finished record wins over an error record (a run
+/// retried); two different finished records keep the first and add a warning naming the run;
+/// a record whose index lies outside [0, expected_runs) is left out with a warning
+/// (expected_runs < 0: no bound). Sorted by run index.
+std::vector<Record> UniqueRecords(const std::vector<Record>& records, long expected_runs,
+                                  std::vector<std::string>* warnings);
+
 /// Reads runs.jsonl; an unreadable line is skipped with a warning naming it.
 std::vector<Record> ReadRecords(const std::string& path);
 

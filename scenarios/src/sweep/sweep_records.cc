@@ -9,6 +9,7 @@
 #include <cstdio>
 #include <cstring>
 #include <fstream>
+#include <map>
 #include <nlohmann/json.hpp>
 
 #include "hpa/models/input_error.h"
@@ -91,6 +92,42 @@ int DropErrorRecords(const std::string& jsonl) {
     throw std::runtime_error("cannot replace " + jsonl + ": " + std::strerror(errno));
   }
   return dropped;
+}
+
+std::vector<Record> UniqueRecords(const std::vector<Record>& records, long expected_runs,
+                                  std::vector<std::string>* warnings) {
+  // the metrics without the fields that measure the machine: two runs of one draw agree there
+  const auto outcome = [](const Record& r) {
+    Json j = Json::parse(r.line, nullptr, false);
+    if (j.is_discarded()) return r.line;
+    if (j.contains("metrics") && j["metrics"].is_object()) {
+      for (const char* key :
+           {"wall_time_s", "mpc_solve_ms", "render_ms", "detector_ms", "image_model_ms"}) {
+        j["metrics"].erase(key);
+      }
+    }
+    return j.dump();
+  };
+  std::map<int, Record> by_run;
+  for (const Record& r : records) {
+    if (r.run < 0 || (expected_runs >= 0 && r.run >= expected_runs)) {
+      warnings->push_back("run " + std::to_string(r.run) + " is outside the sweep's runs 0.." +
+                          std::to_string(expected_runs - 1) + ": left out");
+      continue;
+    }
+    const auto [it, inserted] = by_run.emplace(r.run, r);
+    if (inserted) continue;
+    Record& kept = it->second;
+    if (kept.error && !r.error) {
+      kept = r;  // a retried run that finished
+    } else if (!kept.error && !r.error && outcome(kept) != outcome(r)) {
+      warnings->push_back("run " + std::to_string(r.run) +
+                          " is recorded twice with different results: the first is kept");
+    }
+  }
+  std::vector<Record> out;
+  for (auto& [index, r] : by_run) out.push_back(std::move(r));
+  return out;
 }
 
 std::vector<Record> ReadRecords(const std::string& path) {

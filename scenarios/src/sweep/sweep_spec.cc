@@ -31,7 +31,10 @@ std::string FormatNumber(double v) {
 }
 
 Scenario BuildScenario(const SweepSpec& spec, const SweepRun& run) {
-  Scenario s = LoadScenario(spec.base_path, run.values, spec.file);
+  // the base as it was when the sweep was loaded: an edit during the sweep changes no run
+  Scenario s = spec.base_text.empty()
+                   ? LoadScenario(spec.base_path, run.values, spec.file)
+                   : LoadScenarioText(spec.base_text, spec.base_path, run.values, spec.file);
   s.seed = run.seed;
   return s;
 }
@@ -84,6 +87,11 @@ SweepSpec LoadSweep(const std::string& path) {
   s.file = path;
   const std::string base = root.String("base");
   s.base_path = (!base.empty() && base[0] == '/') ? base : Dirname(path) + "/" + base;
+  try {
+    s.base_text = ReadYamlFile(s.base_path);
+  } catch (const InputError& e) {
+    throw InputError(path, "base", e.what());
+  }
   s.runs = static_cast<int>(root.Integer("runs", 1, 1000000));
   s.seed = static_cast<unsigned long>(root.Integer("seed", 0, 4294967295L, 1));
   s.time_limit_s = root.Number("time_limit", 1.0, 1e6, 600.0);
@@ -159,7 +167,7 @@ SweepSpec LoadSweep(const std::string& path) {
                            ") is not a valid scenario: " + e.what());
     }
   }
-  s.sweep_id = Hex(Fnv1a(ReadFile(path) + "\n--base--\n" + ReadFile(s.base_path)));
+  s.sweep_id = Hex(Fnv1a(ReadFile(path) + "\n--base--\n" + s.base_text));
   return s;
 }
 

@@ -83,6 +83,12 @@ using ScenarioSet = std::pair<std::string, std::string>;
 Scenario LoadScenario(const std::string& path, const std::vector<ScenarioSet>& sets = {},
                       const std::string& origin = "--set");
 
+/// LoadScenario from the scenario's text (a sweep's snapshot of its base); `path` names it in
+/// messages.
+Scenario LoadScenarioText(const std::string& text, const std::string& path,
+                          const std::vector<ScenarioSet>& sets = {},
+                          const std::string& origin = "--set");
+
 /// Splits a `--set PATH=VALUE` argument; throws InputError if it has no PATH= part.
 ScenarioSet ParseSetArgument(const std::string& text);
 

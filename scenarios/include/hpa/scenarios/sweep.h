@@ -19,6 +19,7 @@ struct VarySpec {
 struct SweepSpec {
   std::string file;
   std::string base_path;  // scenario file, resolved against the sweep's folder
+  std::string base_text;  // its text when the sweep was loaded: every run uses this snapshot
   int runs = 1;           // random draws; grids multiply them
   unsigned long seed = 1;
   double time_limit_s = 600.0;  // per run; a run past it is killed and recorded as an error

@@ -16,6 +16,13 @@ namespace hpa {
 /// (a directory) or malformed.
 YAML::Node LoadYamlFile(const std::string& file);
 
+/// The text of a YAML file (checked as LoadYamlFile checks it).
+std::string ReadYamlFile(const std::string& file);
+
+/// Parses YAML text of one document; `file` names it in messages (InputError if malformed or
+/// holding more than one document).
+YAML::Node LoadYamlText(const std::string& text, const std::string& file);
+
 /// A view of one YAML map in one file, at a dotted key path; throws InputError on bad input.
 class YamlMap {
  public:
