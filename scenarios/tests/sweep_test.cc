@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <nlohmann/json.hpp>
 #include <set>
 
 #include "hpa/models/input_error.h"
@@ -219,6 +220,48 @@ TEST(SweepOutlierTest, ListsRunsWhoseModeAccuracyOrResetsStandOut) {
   EXPECT_NEAR(outliers[0].median, 0.992, 0.002);  // the runs at 0.990-0.994
   EXPECT_EQ(outliers[1].record->run, 7);
   EXPECT_EQ(outliers[1].metric, "estimator_resets");
+}
+
+// The summary groups runs by every grid variable, bins the drawn quantity over its declared
+// range (not the range the draws covered) and labels it with its `label:`.
+TEST(SweepSummaryTest, GroupsByGridVariablesAndBinsOverTheDeclaredRange) {
+  SweepSpec spec;
+  VarySpec mass;
+  mass.path = "world.payload_mass";
+  mass.kind = VarySpec::Kind::kUniform;
+  mass.a = 0.05;
+  mass.b = 0.35;
+  mass.label = "payload mass [kg]";
+  VarySpec cue;
+  cue.path = "estimation.slack_tension_cue";
+  cue.kind = VarySpec::Kind::kGrid;
+  cue.values = {"true", "false"};
+  spec.vary = {mass, cue};
+  spec.runs = 10;
+  std::vector<sweep::Record> records;
+  for (int i = 0; i < 20; ++i) {
+    sweep::Record r;
+    r.run = i;
+    r.controller = "hpa_mpc";
+    // draws cover 0.11-0.29 only
+    r.values = {{"world.payload_mass", std::to_string(0.11 + 0.02 * (i / 2))},
+                {"estimation.slack_tension_cue", i % 2 == 0 ? "true" : "false"}};
+    r.line = "{}";
+    records.push_back(r);
+  }
+  const std::string dir = TestTempDir() + "summary";
+  std::filesystem::create_directories(dir);
+  sweep::WriteSummary(records, dir, &spec);
+  const nlohmann::json summary = nlohmann::json::parse(std::ifstream(dir + "/summary.json"));
+  EXPECT_EQ(summary["main_varied_label"], "payload mass [kg]");
+  EXPECT_EQ(summary["grouped_by"].size(), 2u);
+  ASSERT_TRUE(summary["controllers"].contains("hpa_mpc, estimation.slack_tension_cue=true"));
+  ASSERT_TRUE(summary["controllers"].contains("hpa_mpc, estimation.slack_tension_cue=false"));
+  const auto& bins = summary["controllers"]["hpa_mpc, estimation.slack_tension_cue=true"]["bins"];
+  ASSERT_EQ(bins.size(), 6u);
+  EXPECT_NEAR(bins.front()["lo"].get<double>(), 0.05, 1e-12);
+  EXPECT_NEAR(bins.back()["hi"].get<double>(), 0.35, 1e-12);
+  EXPECT_EQ(bins.front()["runs"].get<int>(), 0);  // nothing drawn in 0.05-0.10: an empty bin
 }
 
 }  // namespace hpa

@@ -9,6 +9,7 @@
 #include <cstring>
 #include <fstream>
 #include <map>
+#include <optional>
 #include <set>
 #include <thread>
 
@@ -155,7 +156,8 @@ int SweepMain(int argc, char** argv) {
   if (shard_n == 1) {
     std::vector<std::string> warnings;
     sweep::WriteSummary(
-        sweep::UniqueRecords(sweep::ReadRecords(jsonl), SweepRunCount(spec), &warnings), out_dir);
+        sweep::UniqueRecords(sweep::ReadRecords(jsonl), SweepRunCount(spec), &warnings), out_dir,
+        &spec);
     for (const std::string& w : warnings) std::fprintf(stderr, "hpa: warning: %s\n", w.c_str());
     std::printf("summary: %s/summary.md, %s/summary.json, %s/crash_rate.png\n", out_dir.c_str(),
                 out_dir.c_str(), out_dir.c_str());
@@ -201,9 +203,13 @@ int MergeMain(int argc, char** argv) {
   if (all.empty()) throw InputError("", "DIR", "no runs recorded in the folders given");
   // how many runs the sweep has: from its file when it is still the same sweep, else unknown
   long expected = -1;
+  std::optional<SweepSpec> spec;
   try {
-    const SweepSpec spec = LoadSweep(all.front().sweep_file);
-    if (spec.sweep_id == sweep_id) expected = SweepRunCount(spec);
+    SweepSpec loaded = LoadSweep(all.front().sweep_file);
+    if (loaded.sweep_id == sweep_id) {
+      expected = SweepRunCount(loaded);
+      spec = std::move(loaded);
+    }
   } catch (const InputError&) {
   }
   std::vector<std::string> warnings;
@@ -217,7 +223,7 @@ int MergeMain(int argc, char** argv) {
   if (std::rename((out_dir + "/runs.jsonl.tmp").c_str(), (out_dir + "/runs.jsonl").c_str()) != 0) {
     throw OutputError(out_dir + "/runs.jsonl", std::strerror(errno));
   }
-  sweep::WriteSummary(records, out_dir);
+  sweep::WriteSummary(records, out_dir, spec ? &*spec : nullptr);
   std::printf(
       "merged %zu runs from %zu folders into %s (summary.md, summary.json, crash_rate.png)\n",
       records.size(), dirs.size(), out_dir.c_str());

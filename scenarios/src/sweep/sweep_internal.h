@@ -98,7 +98,11 @@ std::vector<std::pair<double, double>> MakeBins(const std::vector<double>& value
 int BinOf(const std::vector<std::pair<double, double>>& bins, double v);
 
 /// Writes summary.json, summary.md and crash_rate.png from the records of one sweep.
-void WriteSummary(const std::vector<Record>& records, const std::string& dir);
+/// With the sweep's spec (null when unknown) runs are grouped by every grid variable (not only
+/// the controller), the main varied quantity is binned over its declared range and labelled with
+/// its `label:`.
+void WriteSummary(const std::vector<Record>& records, const std::string& dir,
+                  const SweepSpec* spec = nullptr);
 
 /// Runs `runs` in up to `jobs` forked worker processes (crash isolation, a time limit per run),
 /// each rendering through `gl_backend`; `record` gets each run's JSON line as it finishes, with

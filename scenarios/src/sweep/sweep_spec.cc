@@ -110,7 +110,9 @@ SweepSpec LoadSweep(const std::string& path) {
       const std::vector<std::string> kinds = {"uniform", "normal", "grid", "list"};
       int found = 0;
       for (const auto& k : kinds) found += d.Has(k) ? 1 : 0;
-      if (found != 1) d.Fail("", "expected exactly one of uniform | normal | grid | list");
+      if (found != 1) {
+        d.Fail("", "expected exactly one of uniform | normal | grid | list (and optionally label)");
+      }
       if (d.Has("uniform")) {
         const Eigen::VectorXd ab = d.Vector("uniform", 2, -1e9, 1e9);
         if (ab(1) < ab(0)) d.Fail("uniform", "expected [low, high] with low <= high");
@@ -129,6 +131,7 @@ SweepSpec LoadSweep(const std::string& path) {
           v.values.push_back(item.as<std::string>());
         }
       }
+      v.label = d.String("label", "");
       d.RejectUnknownKeys();
       s.vary.push_back(v);
     }

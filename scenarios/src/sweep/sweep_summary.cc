@@ -59,15 +59,39 @@ int BinOf(const std::vector<std::pair<double, double>>& bins, double v) {
   return static_cast<int>(bins.size()) - 1;
 }
 
-void WriteSummary(const std::vector<Record>& records, const std::string& dir) {
-  // the main varied quantity: the first numeric vary path that is not the controller type
+void WriteSummary(const std::vector<Record>& records, const std::string& dir,
+                  const SweepSpec* spec) {
+  // grid variables group the runs (the controller always does); drawn ones are binned
+  std::set<std::string> grid_keys;
+  std::map<std::string, const VarySpec*> vary_of;
+  if (spec != nullptr) {
+    for (const VarySpec& v : spec->vary) {
+      vary_of[v.path] = &v;
+      if (v.kind == VarySpec::Kind::kGrid && v.path != "controller.type") grid_keys.insert(v.path);
+    }
+  }
+  const auto group_of = [&](const Record& r) {
+    std::string group = r.controller;
+    for (const auto& [path, value] : r.values) {
+      if (grid_keys.count(path)) group += ", " + path + "=" + value;
+    }
+    return group;
+  };
+  // the main varied quantity: the first numeric vary path that is neither the controller type
+  // nor a grid variable
   std::string main_path;
   for (const Record& r : records) {
     for (const auto& [path, value] : r.values) {
-      if (path != "controller.type" && IsNumber(value) && main_path.empty()) main_path = path;
+      if (path != "controller.type" && !grid_keys.count(path) && IsNumber(value) &&
+          main_path.empty()) {
+        main_path = path;
+      }
     }
     if (!main_path.empty()) break;
   }
+  const VarySpec* main_vary = vary_of.count(main_path) ? vary_of[main_path] : nullptr;
+  const std::string main_label =
+      main_vary != nullptr && !main_vary->label.empty() ? main_vary->label : main_path;
   auto main_value = [&](const Record& r) {
     for (const auto& [path, value] : r.values) {
       double v;
@@ -78,11 +102,20 @@ void WriteSummary(const std::vector<Record>& records, const std::string& dir) {
 
   std::vector<double> main_values;
   for (const Record& r : records) main_values.push_back(main_value(r));
-  const std::vector<std::pair<double, double>> bins = MakeBins(main_values);
+  std::vector<std::pair<double, double>> bins = MakeBins(main_values);
+  if (main_vary != nullptr && main_vary->kind == VarySpec::Kind::kUniform &&
+      main_vary->b > main_vary->a && bins.size() > 1 && bins.front().first != bins.front().second) {
+    // six bins over the declared range, not the range the draws happened to cover
+    bins.clear();
+    for (int i = 0; i < 6; ++i) {
+      bins.emplace_back(main_vary->a + (main_vary->b - main_vary->a) * i / 6.0,
+                        main_vary->a + (main_vary->b - main_vary->a) * (i + 1) / 6.0);
+    }
+  }
   auto bin_of = [&](double v) { return BinOf(bins, v); };
 
-  std::set<std::string> controllers;
-  for (const Record& r : records) controllers.insert(r.controller);
+  std::set<std::string> controllers;  // the groups: controller and grid values
+  for (const Record& r : records) controllers.insert(group_of(r));
 
   struct Cell {
     int n = 0, crashes = 0, errors = 0, expect_failures = 0;
@@ -92,7 +125,8 @@ void WriteSummary(const std::vector<Record>& records, const std::string& dir) {
   std::map<std::string, std::vector<Cell>> per_bin;
   for (const auto& c : controllers) per_bin[c].resize(bins.size());
   for (const Record& r : records) {
-    for (Cell* cell : {&total[r.controller], &per_bin[r.controller][bin_of(main_value(r))]}) {
+    const std::string group = group_of(r);
+    for (Cell* cell : {&total[group], &per_bin[group][bin_of(main_value(r))]}) {
       if (r.error) {
         ++cell->errors;
         continue;
@@ -111,6 +145,9 @@ void WriteSummary(const std::vector<Record>& records, const std::string& dir) {
   Json summary;
   summary["runs"] = records.size();
   summary["main_varied"] = main_path;
+  summary["main_varied_label"] = main_label;
+  summary["grouped_by"] = Json::array({"controller.type"});
+  for (const std::string& key : grid_keys) summary["grouped_by"].push_back(key);
   summary["controllers"] = Json::object();
   for (const auto& c : controllers) {
     const Cell& t = total[c];
@@ -182,7 +219,8 @@ void WriteSummary(const std::vector<Record>& records, const std::string& dir) {
        << Fixed(Quantile(t.dev, 0.9)) << " | " << Fixed(Quantile(t.solve, 0.5)) << " |\n";
   }
   if (!main_path.empty()) {
-    md << "\n## Crash rate (and expect-failure count) against `" << main_path << "`\n\n| bin |";
+    md << "\n## Crash rate (and expect-failure count) against " << main_label << " (`" << main_path
+       << "`)\n\n| bin |";
     for (const auto& c : controllers) md << " " << c << " |";
     md << "\n|---|";
     for (size_t i = 0; i < controllers.size(); ++i) md << "---|";
@@ -234,7 +272,7 @@ void WriteSummary(const std::vector<Record>& records, const std::string& dir) {
   if (!main_path.empty()) {
     cv::Mat fig = BlankFigure(1000, 600);
     PlotPanel p(&fig, cv::Rect(0, 0, 1000, 600),
-                "crash rate (thick, 95% Wilson CI) and expect-failure rate (thin)", main_path,
+                "crash rate (thick, 95% Wilson CI) and expect-failure rate (thin)", main_label,
                 "rate");
     double x0 = bins.front().first, x1 = bins.back().second;
     if (x1 <= x0) x1 = x0 + 1;

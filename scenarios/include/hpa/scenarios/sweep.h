@@ -13,6 +13,7 @@ struct VarySpec {
   enum class Kind { kUniform, kNormal, kGrid, kList } kind = Kind::kUniform;
   double a = 0.0, b = 0.0;          // uniform [a, b] or normal (mean a, sigma b)
   std::vector<std::string> values;  // grid values (product) or list values (draw i -> i % n)
+  std::string label;                // axis label with its unit (`label:`), e.g. "mass [kg]"
 };
 
 /// A sweep file, validated.
