@@ -1,5 +1,7 @@
 #include "hpa/models/yaml_reader.h"
 
+#include <yaml-cpp/eventhandler.h>
+
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -49,16 +51,41 @@ YamlMap::YamlMap(YAML::Node node, std::string file, std::string path)
   }
 }
 
+namespace {
+
+// Parser events ignored: only how many documents the text holds matters.
+class DocumentCounter final : public YAML::EventHandler {
+ public:
+  void OnDocumentStart(const YAML::Mark&) override {}
+  void OnDocumentEnd() override {}
+  void OnNull(const YAML::Mark&, YAML::anchor_t) override {}
+  void OnAlias(const YAML::Mark&, YAML::anchor_t) override {}
+  void OnScalar(const YAML::Mark&, const std::string&, YAML::anchor_t,
+                const std::string&) override {}
+  void OnSequenceStart(const YAML::Mark&, const std::string&, YAML::anchor_t,
+                       YAML::EmitterStyle::value) override {}
+  void OnSequenceEnd() override {}
+  void OnMapStart(const YAML::Mark&, const std::string&, YAML::anchor_t,
+                  YAML::EmitterStyle::value) override {}
+  void OnMapEnd() override {}
+};
+
+}  // namespace
+
 YAML::Node LoadYamlText(const std::string& text, const std::string& file) {
   try {
-    // one document: a second ('---') would be ignored silently by YAML::Load
-    const std::vector<YAML::Node> documents = YAML::LoadAll(text);
-    if (documents.size() > 1) {
+    // one document: YAML::Load reads the first and ignores the rest silently. A second is
+    // looked for one document at a time (YAML::LoadAll loops forever on some malformed texts,
+    // e.g. a stray '}' after the first document)
+    std::istringstream in(text);
+    YAML::Parser parser(in);
+    DocumentCounter counter;
+    if (parser.HandleNextDocument(counter) && parser.HandleNextDocument(counter)) {
       throw InputError(file, "",
-                       "holds " + std::to_string(documents.size()) +
-                           " YAML documents (separated by '---'); expected one");
+                       "holds more than one YAML document (a '---', or text after the first "
+                       "document ends); expected one");
     }
-    return documents.empty() ? YAML::Node() : documents.front();
+    return YAML::Load(text);
   } catch (const YAML::Exception& e) {
     throw InputError(file, "", std::string("malformed YAML: ") + e.what());
   }

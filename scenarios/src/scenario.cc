@@ -105,18 +105,11 @@ bool ListIndex(const std::string& s, double* v) {
 // The YAML text of a set value ("0.5", "[0, 0, 1]", "hpa_mpc") as a node; malformed YAML is bad
 // input naming where the value came from and its key.
 YAML::Node ParseValue(const std::string& value, const std::string& path, const std::string& file) {
-  std::vector<YAML::Node> documents;
   try {
-    documents = YAML::LoadAll(value);
-  } catch (const YAML::Exception& e) {
-    throw InputError(file, path, "malformed value '" + value + "': " + e.msg);
+    return LoadYamlText(value, file);
+  } catch (const InputError& e) {
+    throw InputError(file, path, "malformed value '" + value + "': " + e.detail());
   }
-  if (documents.size() != 1) {
-    throw InputError(file, path,
-                     "value '" + value + "' holds " + std::to_string(documents.size()) +
-                         " YAML documents; expected one");
-  }
-  return documents.front();
 }
 
 // Sets a dotted path in a YAML tree to a value; throws InputError if the path does not exist

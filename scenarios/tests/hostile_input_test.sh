@@ -106,8 +106,8 @@ expect_exit 2 "'02' is not an index" run "$scen/line_impulse.yaml" --set events.
 
 echo "== multi-document YAML and tagged scalars are refused"
 { cat "$base"; printf -- '---\nname: second\n'; } > "$out/two_docs.yaml"
-expect_exit 2 "two_docs.yaml: holds 2 YAML documents" run "$out/two_docs.yaml" --out "$out/x"
-expect_exit 2 "holds 2 YAML documents" run "$base" --set "duration=1
+expect_exit 2 "two_docs.yaml: holds more than one YAML document" run "$out/two_docs.yaml" --out "$out/x"
+expect_exit 2 "holds more than one YAML document" run "$base" --set "duration=1
 ---
 2" --out "$out/x"
 sed 's/^duration: 1.0/duration: !!str 2/' "$base" > "$out/tag_str.yaml"
