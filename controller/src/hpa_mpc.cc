@@ -56,17 +56,18 @@ Ocp HpaMpc::BuildProblem(const SystemState& state, const std::vector<InputVector
   if (lost) weights.q_load = weights.q_quad;
   Ocp ocp = BuildOcp(model_, *reference_, state.time_s, mode, perception, weights);
   SetCameraDeadzone(state, &ocp);
-  if (settings_.hybrid && settings_.predict_retaut && mode == CableMode::kSlack && !lost) {
-    // the mode sequence is fixed for the solve: where the warm start meets the guard
-    const int stage =
-        PredictRetautStage(ocp, state.ToVector(), guess.empty() ? WarmStart(state.time_s) : guess);
+  const bool slack_plan = settings_.hybrid && mode == CableMode::kSlack && !lost;
+  if (!slack_plan) return ocp;
+  // the plan the slack horizon is predicted along: the caller's guess, else the warm start
+  const std::vector<InputVector> plan = guess.empty() ? WarmStart(state.time_s) : guess;
+  const StateVector x0 = state.ToVector();
+  if (settings_.predict_retaut) {
+    // the mode sequence is fixed for the solve: where the plan meets the guard
+    const int stage = PredictRetautStage(ocp, x0, plan);
     if (stage > 0) ScheduleRetaut(*reference_, state.time_s, stage, &ocp);
   }
   // the slack camera term per stage, from that stage's predicted payload
-  if (perception > 0.0 && mode == CableMode::kSlack) {
-    SetCameraDeadzonesAlong(state.ToVector(), guess.empty() ? WarmStart(state.time_s) : guess,
-                            &ocp);
-  }
+  if (perception > 0.0) SetCameraDeadzonesAlong(x0, plan, &ocp);
   return ocp;
 }
 

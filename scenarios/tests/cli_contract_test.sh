@@ -5,18 +5,8 @@
 set -uo pipefail
 hpa=$1; scen=$2; out=$3
 rm -rf "$out"; mkdir -p "$out"
-failures=0
-fail() { echo "FAIL: $*"; failures=$((failures + 1)); }
-
-# expect_exit CODE PATTERN ARGS...: runs hpa ARGS, checks the exit code and that stderr+stdout
-# contains PATTERN (an extended regex)
-expect_exit() {
-  local code=$1 pattern=$2; shift 2
-  local text status
-  text=$("$hpa" "$@" 2>&1); status=$?
-  [ "$status" -eq "$code" ] || fail "hpa $* exited $status, expected $code: $text"
-  echo "$text" | grep -Eq -- "$pattern" || fail "hpa $* output lacks /$pattern/: $text"
-}
+# shellcheck source=cli_test_lib.sh
+source "$(dirname "$0")/cli_test_lib.sh"
 
 base="$out/base.yaml"
 printf 'name: base\nduration: 1.0\ncontroller: {type: geometric}\nestimation: {ground_truth: true, camera: analytic}\n' > "$base"

@@ -5,17 +5,8 @@
 set -uo pipefail
 hpa=$1; scen=$(cd "$2" && pwd); out=$3
 rm -rf "$out"; mkdir -p "$out"
-failures=0
-fail() { echo "FAIL: $*"; failures=$((failures + 1)); }
-
-# expect_exit CODE PATTERN ARGS...: hpa ARGS exits CODE and its output matches PATTERN (ERE)
-expect_exit() {
-  local code=$1 pattern=$2; shift 2
-  local text status
-  text=$(timeout 60 "$hpa" "$@" 2>&1); status=$?
-  [ "$status" -eq "$code" ] || fail "hpa $* exited $status, expected $code: $text"
-  echo "$text" | grep -Eq -- "$pattern" || fail "hpa $* output lacks /$pattern/: $text"
-}
+# shellcheck source=cli_test_lib.sh
+source "$(dirname "$0")/cli_test_lib.sh"
 
 # a short ground-truth hover and a sweep of it (seconds each)
 base="$out/base.yaml"

@@ -764,33 +764,27 @@ void World::CheckCrash() {
   const SystemState& s = t.state;
   if (!s.AllFinite()) return LatchCrash("non-finite state");
 
-  // the payload lying on the ground is ground: the body striking it is a crash
+  // any contact of the quadrotor body (ground or an obstacle); the payload against the body is
+  // contact, not a crash (against a rotor: UpdateContacts), unless the payload lies on the
+  // ground: then the body has struck the ground through it
   bool payload_on_ground = false, body_on_payload = false;
   for (int i = 0; i < data_->ncon; ++i) {
     const mjContact& c = data_->contact[i];
-    const auto is = [&](int geom_a, int geom_b) {
-      return (c.geom1 == geom_a && c.geom2 == geom_b) || (c.geom1 == geom_b && c.geom2 == geom_a);
-    };
-    payload_on_ground |= is(ids_.payload_geom, ids_.ground_geom);
     const int b1 = model_->geom_bodyid[c.geom1], b2 = model_->geom_bodyid[c.geom2];
-    body_on_payload |= (c.geom1 == ids_.payload_geom && b2 == ids_.quad_body) ||
-                       (c.geom2 == ids_.payload_geom && b1 == ids_.quad_body);
+    const bool has_payload = c.geom1 == ids_.payload_geom || c.geom2 == ids_.payload_geom;
+    payload_on_ground |=
+        has_payload && (c.geom1 == ids_.ground_geom || c.geom2 == ids_.ground_geom);
+    if (b1 != ids_.quad_body && b2 != ids_.quad_body) continue;
+    const int other = b1 == ids_.quad_body ? c.geom2 : c.geom1;
+    if (other == ids_.payload_geom) {
+      body_on_payload = true;
+      continue;
+    }
+    const char* name = mj_id2name(model_, mjOBJ_GEOM, other);
+    return LatchCrash(std::string("quadrotor contact with ") + (name ? name : "a geom"));
   }
   if (payload_on_ground && body_on_payload) {
     return LatchCrash("quadrotor contact with the payload lying on the ground");
-  }
-
-  // any contact of the quadrotor body (ground or an obstacle)
-  for (int i = 0; i < data_->ncon; ++i) {
-    const mjContact& c = data_->contact[i];
-    const int b1 = model_->geom_bodyid[c.geom1], b2 = model_->geom_bodyid[c.geom2];
-    if (b1 == ids_.quad_body || b2 == ids_.quad_body) {
-      const int other = b1 == ids_.quad_body ? c.geom2 : c.geom1;
-      // the payload against the body is contact, not a crash (against a rotor: UpdateContacts)
-      if (other == ids_.payload_geom) continue;
-      const char* name = mj_id2name(model_, mjOBJ_GEOM, other);
-      return LatchCrash(std::string("quadrotor contact with ") + (name ? name : "a geom"));
-    }
   }
 
   // tilt past 90 deg: body z points below the horizon
