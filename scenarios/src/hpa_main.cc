@@ -64,16 +64,19 @@ usage:
                         [--gl osmesa|egl] [--params FILE] [--set PATH=VALUE]...
       Runs the scenario to time T (s) and writes one 1280x720 onboard payload-camera frame.
       --gl egl renders through EGL (a GPU where there is one) instead of OSMesa.
-  hpa sweep SWEEP.yaml --out DIR [--jobs N] [--shard K/N] [--resume [--retry-errors]]
-                        [--gl osmesa|egl]
+  hpa sweep SWEEP.yaml --out DIR [--jobs N] [--shard K/N]
+                        [--resume [--retry-errors] [--allow-changed-inputs]] [--gl osmesa|egl]
       Monte Carlo sweep: one JSON line per run in DIR/runs.jsonl, then a summary. --jobs
       defaults to the number of cores; --shard K/N (K = 1..N) runs every N-th run; --resume
-      skips recorded runs, --retry-errors runs the recorded errors (killed, timed out) again.
+      skips recorded runs, --retry-errors runs the recorded errors (killed, timed out) again;
+      a resume refuses a sweep or base file changed since, unless --allow-changed-inputs.
   hpa merge DIR... --out DIR
       Joins sweep shards and writes DIR/summary.json, DIR/summary.md and plots.
-  hpa sweep-diff A B --out DIR [--a-where KEY=VALUE] [--b-where KEY=VALUE]
+  hpa sweep-diff A B --out DIR [--a-where KEY=VALUE] [--b-where KEY=VALUE] [--verdict-timing]
       Paired comparison of two sweep outputs: per metric B - A, 95 % interval, p-value and a
-      verdict (better / worse / same); writes DIR/diff.md, diff.json, diff.png.
+      verdict (better / worse / no difference shown / inconclusive when too few pairs could
+      show the metric's minimum effect); timing metrics are listed apart and given a verdict
+      only with --verdict-timing. Writes DIR/diff.md, diff.json, diff.png.
   hpa golden [--update --reason TEXT] [--from DIR] [--golden FILE]
       Compares every shipped scenario's metrics with scenarios/ci/golden.json (exit 1 on a
       change beyond tolerance); --update rewrites it.

@@ -62,6 +62,22 @@ wait "$pid" || fail "the sweep failed after its base was edited: $(tail -2 "$out
 ok=$(grep -c '"status":"ok"\|"status": "ok"' "$out/edited/runs.jsonl")
 [ "$ok" -eq 80 ] || fail "editing the base mid-sweep changed runs: $ok of 80 ok"
 expect_exit 2 "holds runs of a different sweep" sweep "$out/edited_sweep.yaml" --out "$out/edited" --resume
+echo "== --resume --allow-changed-inputs continues with changed inputs and marks the new records"
+{ cat "$base"; echo "# edited"; } > "$out/edited_base.yaml"
+head -n 78 "$out/edited/runs.jsonl" > "$out/edited/part" && mv "$out/edited/part" "$out/edited/runs.jsonl"
+expect_exit 2 "allow-changed-inputs" sweep "$out/edited_sweep.yaml" --out "$out/edited" --resume
+"$hpa" sweep "$out/edited_sweep.yaml" --out "$out/edited" --resume --allow-changed-inputs \
+  > "$out/allowed.log" 2>&1 || fail "--allow-changed-inputs failed: $(tail -2 "$out/allowed.log")"
+grep -q "warning: the sweep or base file changed" "$out/allowed.log" || fail "no warning for changed inputs"
+python3 - "$out/edited/runs.jsonl" <<'PY' || fail "records after --allow-changed-inputs are not marked"
+import json, sys
+records = [json.loads(l) for l in open(sys.argv[1]) if l.strip()]
+assert len(records) == 80, len(records)
+assert len({r["sweep_id"] for r in records}) == 1, "sweep_id changed"
+marked = [r for r in records if "inputs_id" in r]
+assert len(marked) == 2 and all(r["inputs_id"] != r["sweep_id"] for r in marked), marked
+PY
+"$hpa" merge "$out/edited" --out "$out/edited_merged" > /dev/null 2>&1 || fail "merge of a resumed-with-changed-inputs folder failed"
 
 echo "== merge: missing runs (exit 1), empty input (exit 2), conflicting records (a warning)"
 "$hpa" sweep "$sweep" --out "$out/half" --shard 1/2 --jobs 2 > /dev/null 2>&1 || fail "shard 1/2 failed"

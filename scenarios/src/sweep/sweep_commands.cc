@@ -26,7 +26,7 @@ using sweep::Record;
 int SweepMain(int argc, char** argv) {
   std::string sweep_file, out_dir, shard = "1/1", gl = "osmesa";
   int jobs = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
-  bool resume = false, retry_errors = false;
+  bool resume = false, retry_errors = false, allow_changed_inputs = false;
   CLI::App app{
       "Runs a Monte Carlo sweep: one JSON line per run in DIR/runs.jsonl, then DIR/summary.md, "
       "summary.json and crash_rate.png.",
@@ -39,6 +39,10 @@ int SweepMain(int argc, char** argv) {
   app.add_flag("--resume", resume, "continue a sweep in DIR, skipping the runs it recorded");
   app.add_flag("--retry-errors", retry_errors,
                "with --resume: run again the runs recorded as errors (killed, timed out)");
+  app.add_flag("--allow-changed-inputs", allow_changed_inputs,
+               "with --resume: continue although the sweep or base file changed since DIR's "
+               "runs were recorded; new records keep DIR's sweep_id and carry inputs_id, the "
+               "hash of the changed inputs");
   AddGlOption(app, &gl);
   if (const auto code = ParseCommandLine(app, argc, argv)) return *code;
   const sim::GlBackend gl_backend = ParseGlOption(gl);  // every worker renders with it
@@ -67,8 +71,11 @@ int SweepMain(int argc, char** argv) {
   if (retry_errors && !resume) {
     throw InputError("", "--retry-errors", "only with --resume (it re-runs recorded errors)");
   }
+  if (allow_changed_inputs && !resume) {
+    throw InputError("", "--allow-changed-inputs", "only with --resume");
+  }
 
-  const SweepSpec spec = LoadSweep(sweep_file);
+  SweepSpec spec = LoadSweep(sweep_file);
   const Params params = LoadParams(DefaultParamsPath());
   const std::vector<SweepRun> all_runs = ExpandSweep(spec);
   std::vector<SweepRun> runs = SelectShard(all_runs, shard_k, shard_n);
@@ -86,13 +93,26 @@ int SweepMain(int argc, char** argv) {
                 dropped, dropped == 1 ? "" : "s", jsonl.c_str());
   }
 
-  // resume: skip what is recorded; refuse to mix sweeps in one folder
+  // resume: skip what is recorded; refuse to mix sweeps in one folder unless told that the
+  // inputs changed on purpose, then the new records say so (inputs_id)
   std::set<int> done;
+  const std::string inputs_id = spec.sweep_id;
   for (const Record& r : sweep::ReadRecords(jsonl)) {
     if (r.sweep_id != spec.sweep_id) {
-      throw InputError(
-          jsonl, "",
-          "holds runs of a different sweep (sweep_id " + r.sweep_id + "); use another --out");
+      if (!allow_changed_inputs || !done.empty()) {
+        throw InputError(jsonl, "",
+                         "holds runs of a different sweep (sweep_id " + r.sweep_id + ", the " +
+                             "inputs now hash to " + inputs_id + "): the sweep or base file " +
+                             "changed; use another --out, or --resume --allow-changed-inputs " +
+                             "to continue with the changed inputs");
+      }
+      std::fprintf(stderr,
+                   "hpa: warning: the sweep or base file changed since %s was recorded (sweep_id "
+                   "%s, now %s); the runs still to do use the changed inputs and their records "
+                   "carry inputs_id %s\n",
+                   jsonl.c_str(), r.sweep_id.c_str(), inputs_id.c_str(), inputs_id.c_str());
+      spec.sweep_id = r.sweep_id;
+      spec.inputs_id = inputs_id;
     }
     done.insert(r.run);
   }

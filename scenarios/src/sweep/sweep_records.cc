@@ -193,6 +193,7 @@ std::string RecordLine(const SweepSpec& spec, const SweepRun& run, const std::st
                        const std::string& error, const std::string& metrics_json) {
   Json line;
   line["sweep_id"] = spec.sweep_id;
+  if (!spec.inputs_id.empty()) line["inputs_id"] = spec.inputs_id;
   line["sweep"] = spec.file;
   line["base"] = spec.base_path;
   line["run"] = run.index;

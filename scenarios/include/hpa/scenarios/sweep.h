@@ -25,7 +25,8 @@ struct SweepSpec {
   unsigned long seed = 1;
   double time_limit_s = 600.0;  // per run; a run past it is killed and recorded as an error
   std::vector<VarySpec> vary;
-  std::string sweep_id;  // hash of the sweep and base files: merge refuses mixes
+  std::string sweep_id;   // hash of the sweep and base files: merge refuses mixes
+  std::string inputs_id;  // set when a resume continues with changed inputs: their hash
 };
 
 /// One expanded run: which draw, which grid cell, its seed and its values.
