@@ -20,6 +20,10 @@ endforeach()
 # Change indication: the metrics just written by the scenario tests against scenarios/ci/golden.json
 add_test(NAME cli.golden COMMAND ${HPA_BIN} golden --from ${SCEN_OUT} --quiet)
 set_tests_properties(cli.golden PROPERTIES LABELS cli FIXTURES_REQUIRED scenario_metrics)
+add_test(NAME cli.golden_exact
+         COMMAND bash ${SCEN}/tests/golden_exact_test.sh ${HPA_BIN} ${SCEN_OUT}
+                 ${SCEN_OUT}/golden_exact)
+set_tests_properties(cli.golden_exact PROPERTIES LABELS cli FIXTURES_REQUIRED scenario_metrics)
 
 # Observing a run never changes it: --video, --video-slack-events and --plots give the same metrics
 add_test(NAME cli.observation_invariance

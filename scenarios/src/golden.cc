@@ -198,6 +198,13 @@ int RunGolden(const GoldenOptions& options) {
   if (options.update && blank_reason) {
     throw InputError("--reason", "", "an update needs a one-line reason (not blank)");
   }
+  if (options.exact && options.update) {
+    throw InputError("--exact", "", "compares only; --update records values whatever they are");
+  }
+  // --exact: the same build reproduces every value bit for bit, so a change that must not
+  // change behaviour is checked with no tolerance at all
+  const Json tolerances =
+      options.exact ? Json{{"default", {{"rel", 0.0}, {"abs", 0.0}}}} : golden["tolerances"];
   const Params params = LoadParams(std::string(HPA_SOURCE_DIR) + "/models/params.yaml");
   const std::vector<std::string> names = GoldenScenarioNames();
 
@@ -227,7 +234,7 @@ int RunGolden(const GoldenOptions& options) {
       continue;
     }
     GoldenDiff diff;
-    Compare(now, golden["scenarios"][name], "", golden["tolerances"], &diff);
+    Compare(now, golden["scenarios"][name], "", tolerances, &diff);
     if (!options.quiet) std::cerr << (diff.changes.empty() ? " unchanged\n" : " CHANGED\n");
     for (const std::string& c : diff.changes) std::cout << name << ": " << c << "\n";
     if (!diff.new_keys.empty() && !options.update) {
@@ -254,13 +261,15 @@ int RunGolden(const GoldenOptions& options) {
               << " (commit it with the reason: " << options.reason << ")\n";
     return 0;
   }
+  const char* within = options.exact ? "bit for bit" : "within tolerance";
   if (changed > 0) {
-    std::cout << "golden: " << changed << " of " << names.size()
-              << " scenarios changed beyond tolerance; if deliberate, run `hpa golden --update "
-                 "--reason \"...\"` and commit the file\n";
+    std::cout << "golden: " << changed << " of " << names.size() << " scenarios changed ("
+              << (options.exact ? "not bit for bit" : "beyond tolerance")
+              << "); if deliberate, run `hpa golden --update --reason \"...\"` and commit the "
+                 "file\n";
     return 1;
   }
-  std::cout << "golden: all " << names.size() << " scenarios within tolerance of " << path << "\n";
+  std::cout << "golden: all " << names.size() << " scenarios " << within << " of " << path << "\n";
   return 0;
 }
 
@@ -278,6 +287,9 @@ int GoldenMain(int argc, char** argv) {
                  "running the scenarios");
   app.add_flag("--update", options.update, "rewrite the golden file from the current metrics");
   app.add_option("--reason", options.reason, "one line: why the behaviour changed (--update)");
+  app.add_flag("--exact", options.exact,
+               "no tolerance: every value bit for bit (a refactor that must not change "
+               "behaviour; the same build reproduces every run exactly)");
   app.add_flag("--quiet", options.quiet, "no progress lines");
   if (const auto code = ParseCommandLine(app, argc, argv)) return *code;
   return RunGolden(options);

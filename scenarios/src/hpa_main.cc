@@ -77,9 +77,9 @@ usage:
       verdict (better / worse / no difference shown / inconclusive when too few pairs could
       show the metric's minimum effect); timing metrics are listed apart and given a verdict
       only with --verdict-timing. Writes DIR/diff.md, diff.json, diff.png.
-  hpa golden [--update --reason TEXT] [--from DIR] [--golden FILE]
+  hpa golden [--exact] [--update --reason TEXT] [--from DIR] [--golden FILE]
       Compares every shipped scenario's metrics with scenarios/ci/golden.json (exit 1 on a
-      change beyond tolerance); --update rewrites it.
+      change beyond tolerance; --exact: on any change at all); --update rewrites it.
   hpa --help                 this text; hpa COMMAND --help: the command's options
 
 exit codes: 0 ok and every `expect` bound holds; 1 an expectation failed (or an unexpected

@@ -16,6 +16,7 @@ struct GoldenOptions {
   bool update = false;      // rewrite the golden file from the current metrics
   std::string reason;       // one line, required with update: why the behaviour changed
   bool quiet = false;       // no per-scenario progress lines
+  bool exact = false;       // every value bit for bit: the file's tolerances are ignored
 };
 
 /// Shipped scenarios the golden file covers, as names relative to scenarios/ without ".yaml"
