@@ -5,8 +5,6 @@
 #include <cmath>
 #include <stdexcept>
 
-#include "controller_factories.h"
-
 namespace hpa {
 
 GeometricController::GeometricController(const Params& params,

@@ -5,8 +5,6 @@
 #include <cmath>
 #include <stdexcept>
 
-#include "controller_factories.h"
-
 namespace hpa {
 
 HpaMpc::HpaMpc(const Params& params, std::shared_ptr<const Reference> reference,

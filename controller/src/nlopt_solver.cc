@@ -5,7 +5,7 @@
 #include <algorithm>
 #include <cmath>
 
-#include "ocp_solver_factories.h"
+#include "hpa/controller/ocp_solver.h"
 
 namespace hpa {
 namespace {

@@ -4,7 +4,7 @@
 
 #include "box_qp.h"
 #include "condensing.h"
-#include "ocp_solver_factories.h"
+#include "hpa/controller/ocp_solver.h"
 
 namespace hpa {
 

@@ -4,7 +4,6 @@
 #include <cmath>
 #include <deque>
 
-#include "estimator_variants.h"
 
 namespace hpa {
 namespace {

@@ -1,78 +1,56 @@
 #include "hpa/estimator/estimator_registry.h"
 
-#include <stdexcept>
 #include <utility>
 
-#include "estimator_variants.h"
+#include "hpa/models/registry.h"
 
 namespace hpa {
+
+// Constructors of the built-in variants, each defined beside its filters (estimator.cc).
+std::unique_ptr<Estimator> MakeHybridEstimator(const EstimatorConfig&, const Params&,
+                                               const SystemState&);
+std::unique_ptr<Estimator> MakeAlwaysTautEstimator(const EstimatorConfig&, const Params&,
+                                                   const SystemState&);
+std::unique_ptr<Estimator> MakeAlwaysTautProjectedEstimator(const EstimatorConfig&, const Params&,
+                                                            const SystemState&);
+
 namespace {
 
 // The built-in variants, one line each.
-std::vector<EstimatorRegistration> BuiltInEstimators() {
-  return {
-      {"hybrid", "IMU+VIO filter, cable EKF, slack/taut mode detector, free-fall payload tracker",
-       MakeHybridEstimator},
-      {"always_taut",
-       "the paper's baseline: mode always taut, payload position and velocity as measured",
-       MakeAlwaysTautEstimator},
-      {"always_taut_projected",
-       "mode always taut, payload projected on the cable sphere at x_Q + l xi (cable EKF)",
-       MakeAlwaysTautProjectedEstimator},
-  };
-}
-
-std::vector<EstimatorRegistration>& Registry() {
-  static std::vector<EstimatorRegistration> registry = BuiltInEstimators();
+Registry<EstimatorRegistration>& TheRegistry() {
+  static Registry<EstimatorRegistration> registry(
+      "estimator",
+      {
+          {"hybrid",
+           "IMU+VIO filter, cable EKF, slack/taut mode detector, free-fall payload tracker",
+           MakeHybridEstimator},
+          {"always_taut",
+           "the paper's baseline: mode always taut, payload position and velocity as measured",
+           MakeAlwaysTautEstimator},
+          {"always_taut_projected",
+           "mode always taut, payload projected on the cable sphere at x_Q + l xi (cable EKF)",
+           MakeAlwaysTautProjectedEstimator},
+      });
   return registry;
-}
-
-std::string JoinedNames() {
-  std::string joined;
-  for (const std::string& name : EstimatorNames()) joined += (joined.empty() ? "" : ", ") + name;
-  return joined;
 }
 
 }  // namespace
 
-const std::vector<EstimatorRegistration>& Estimators() { return Registry(); }
+const std::vector<EstimatorRegistration>& Estimators() { return TheRegistry().All(); }
 
 const EstimatorRegistration* FindEstimator(const std::string& name) {
-  for (const EstimatorRegistration& registration : Registry()) {
-    if (registration.name == name) return &registration;
-  }
-  return nullptr;
+  return TheRegistry().Find(name);
 }
 
-std::vector<std::string> EstimatorNames() {
-  std::vector<std::string> names;
-  for (const EstimatorRegistration& registration : Registry()) names.push_back(registration.name);
-  return names;
-}
+std::vector<std::string> EstimatorNames() { return TheRegistry().Names(); }
 
 void RegisterEstimator(EstimatorRegistration registration) {
-  if (registration.name.empty()) {
-    throw std::invalid_argument("RegisterEstimator: empty estimator name");
-  }
-  if (!registration.make) {
-    throw std::invalid_argument("RegisterEstimator: estimator '" + registration.name +
-                                "' has no factory");
-  }
-  if (FindEstimator(registration.name) != nullptr) {
-    throw std::invalid_argument("RegisterEstimator: estimator '" + registration.name +
-                                "' is already registered");
-  }
-  Registry().push_back(std::move(registration));
+  TheRegistry().Add(std::move(registration));
 }
 
 std::unique_ptr<Estimator> MakeEstimator(const std::string& name, const EstimatorConfig& config,
                                          const Params& params, const SystemState& initial) {
-  const EstimatorRegistration* registration = FindEstimator(name);
-  if (registration == nullptr) {
-    throw std::invalid_argument("estimator: unknown variant '" + name +
-                                "' (known: " + JoinedNames() + ")");
-  }
-  return registration->make(config, params, initial);
+  return TheRegistry().Get(name, "estimator").make(config, params, initial);
 }
 
 }  // namespace hpa

@@ -2,6 +2,7 @@
 
 #include <sstream>
 
+#include "hpa/models/registry.h"
 #include "hpa/scenarios/metrics.h"
 
 namespace hpa {
@@ -135,18 +136,15 @@ std::vector<ExpectKey> BuildTable() {
   return t;
 }
 
+const Registry<ExpectKey>& TheRegistry() {
+  static const Registry<ExpectKey> registry("expect key", BuildTable());
+  return registry;
+}
+
 }  // namespace
 
-const std::vector<ExpectKey>& ExpectKeys() {
-  static const std::vector<ExpectKey> table = BuildTable();
-  return table;
-}
+const std::vector<ExpectKey>& ExpectKeys() { return TheRegistry().All(); }
 
-const ExpectKey* FindExpectKey(const std::string& key) {
-  for (const ExpectKey& k : ExpectKeys()) {
-    if (k.key == key) return &k;
-  }
-  return nullptr;
-}
+const ExpectKey* FindExpectKey(const std::string& key) { return TheRegistry().Find(key); }
 
 }  // namespace hpa

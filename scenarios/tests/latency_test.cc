@@ -21,7 +21,10 @@ Scenario PushedHover() {
   EventSpec push;
   push.at_s = 1.0;
   push.type = "impulse";
-  push.action = ImpulseEvent{Eigen::Vector3d(0.3, 0, 0), 0.01, /*on_payload=*/false};
+  auto impulse = std::make_shared<ImpulseEvent>();
+  impulse->impulse_W_Ns = Eigen::Vector3d(0.3, 0, 0);
+  impulse->on_payload = false;
+  push.action = impulse;
   s.events.push_back(push);
   return s;
 }

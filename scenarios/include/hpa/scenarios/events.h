@@ -1,13 +1,14 @@
 #pragma once
 // Scripted disturbances of a scenario (DESIGN.md section 5). Each event type is a struct with its
-// own parsing, validation and application, in its own file under scenarios/src/events/; a new
-// type is that file, its entry in EventAction and one registration line in event_registry.cc.
+// own parsing, validation and application, in its own file under scenarios/src/events/, deriving
+// from EventAction; a new type is that file (its struct declared here or in its own header) and
+// one registration line in event_registry.cc.
 
 #include <Eigen/Core>
 #include <functional>
+#include <memory>
 #include <optional>
 #include <string>
-#include <variant>
 #include <vector>
 
 namespace hpa {
@@ -17,62 +18,66 @@ namespace sim {
 class World;
 }
 
+/// What an event does to the world (type-erased: a new type needs no central list of types).
+struct EventAction {
+  virtual ~EventAction() = default;
+  /// Applies the event at its start time.
+  virtual void Apply(sim::World* world) const = 0;
+};
+
 /// The gripper takes the payload where it is.
-struct GripperGrabEvent {
+struct GripperGrabEvent final : EventAction {
   static GripperGrabEvent Parse(const YamlMap& map);
-  void Apply(sim::World* world) const;
+  void Apply(sim::World* world) const override;
 };
 
 /// The gripper (and a held payload) moves along a minimum-jerk path.
-struct GripperMoveEvent {
+struct GripperMoveEvent final : EventAction {
   Eigen::Vector3d to_W_m = Eigen::Vector3d::Zero();  // target  (3)
   double duration_s = 0.0;
   static GripperMoveEvent Parse(const YamlMap& map);
-  void Apply(sim::World* world) const;
+  void Apply(sim::World* world) const override;
 };
 
 /// The gripper lets the payload go.
-struct GripperReleaseEvent {
+struct GripperReleaseEvent final : EventAction {
   static GripperReleaseEvent Parse(const YamlMap& map);
-  void Apply(sim::World* world) const;
+  void Apply(sim::World* world) const override;
 };
 
 /// An impulse on the payload or the quadrotor, spread over a short time.
-struct ImpulseEvent {
+struct ImpulseEvent final : EventAction {
   Eigen::Vector3d impulse_W_Ns = Eigen::Vector3d::Zero();  // (3)
   double duration_s = 0.01;
   bool on_payload = true;  // body: payload or quadrotor
   static ImpulseEvent Parse(const YamlMap& map);
-  void Apply(sim::World* world) const;
+  void Apply(sim::World* world) const override;
 };
 
 /// A constant force on the quadrotor for a while.
-struct WindEvent {
+struct WindEvent final : EventAction {
   Eigen::Vector3d force_W_N = Eigen::Vector3d::Zero();  // constant force on the quadrotor  (3)
   // or: a wind velocity added to the profile's wind, acting through the drag of the quadrotor,
   // its rotors and the payload (flight profile; the ideal world has no air)  (3)
   std::optional<Eigen::Vector3d> velocity_W_mps;
   double duration_s = 0.0;
   static WindEvent Parse(const YamlMap& map);
-  void Apply(sim::World* world) const;
+  void Apply(sim::World* world) const override;
 };
-
-/// What an event does.
-using EventAction =
-    std::variant<GripperGrabEvent, GripperMoveEvent, GripperReleaseEvent, ImpulseEvent, WindEvent>;
 
 /// One scripted disturbance: when, what, and the name it was written with.
 struct EventSpec {
   double at_s = 0.0;  // simulated time it starts
   std::string type;   // registered name, as written in YAML
-  EventAction action;
+  std::shared_ptr<const EventAction> action;
 };
 
 /// One registered event type.
 struct EventRegistration {
-  std::string name;                                  // as written in YAML (`type:`)
-  std::string description;                           // one line for --help
-  std::function<EventAction(const YamlMap&)> parse;  // reads and validates the type's keys
+  std::string name;         // as written in YAML (`type:`)
+  std::string description;  // one line for --help
+  // reads and validates the type's keys
+  std::function<std::shared_ptr<const EventAction>(const YamlMap&)> parse;
 };
 
 /// Every event type, in registration order.
