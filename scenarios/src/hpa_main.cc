@@ -11,6 +11,7 @@
 #include <functional>
 #include <iostream>
 #include <map>
+#include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <optional>
 #include <string>
@@ -24,6 +25,7 @@
 #include "hpa/scenarios/cli.h"
 #include "hpa/scenarios/expect_keys.h"
 #include "hpa/scenarios/golden.h"
+#include "hpa/scenarios/metric_defs.h"
 #include "hpa/scenarios/plots.h"
 #include "hpa/scenarios/runner.h"
 #include "hpa/scenarios/sweep.h"
@@ -281,37 +283,14 @@ int Run(int argc, char** argv) {
 // for every controller after the first, its difference to the first.
 std::string ComparisonTable(const std::vector<RunResult>& results,
                             const std::vector<std::string>& types) {
-  struct Row {
-    std::string name;
-    std::function<std::optional<double>(const Metrics&)> value;
-  };
-  const auto norm = [](const Eigen::Vector3d& v) { return std::optional<double>(v.norm()); };
-  const std::vector<Row> rows = {
-      {"crashed", [](const Metrics& m) { return std::optional<double>(m.crashed ? 1 : 0); }},
-      {"payload RMSE norm [m]", [&](const Metrics& m) { return norm(m.payload_rmse_m); }},
-      {"payload RMSE norm, estimate [m]",
-       [&](const Metrics& m) { return norm(m.payload_rmse_est_m); }},
-      {"quad deviation max [m]",
-       [](const Metrics& m) { return std::optional<double>(m.quad_position_deviation_max_m); }},
-      {"payload in view",
-       [](const Metrics& m) { return std::optional<double>(m.payload_in_fov_fraction); }},
-      {"payload lost [s]",
-       [](const Metrics& m) { return std::optional<double>(m.payload_lost_time_s); }},
-      {"mode accuracy", [](const Metrics& m) { return std::optional<double>(m.mode_accuracy); }},
-      {"slack detection latency max [s]",
-       [](const Metrics& m) { return m.slack_detection_latency_max_s; }},
-      {"re-taut v_z min [m/s]",
-       [](const Metrics& m) {
-         return m.retaut_count > 0 ? std::optional<double>(m.retaut_quad_vz_min_mps) : std::nullopt;
-       }},
-      {"re-taut peak body rate [rad/s]",
-       [](const Metrics& m) {
-         return m.retaut_count > 0 ? std::optional<double>(m.retaut_peak_body_rate_radps)
-                                   : std::nullopt;
-       }},
-      {"MPC failures", [](const Metrics& m) { return std::optional<double>(m.mpc_failures); }},
-      {"expect passed", [](const Metrics& m) { return std::optional<double>(m.expect_passed); }},
-  };
+  // the rows: every metric of the metric table with a label, read from each run's metrics.json
+  std::vector<const MetricDef*> rows;
+  for (const MetricDef& def : MetricDefs()) {
+    if (!def.label.empty()) rows.push_back(&def);
+  }
+  std::vector<nlohmann::json> metrics;
+  for (const RunResult& r : results)
+    metrics.push_back(nlohmann::json::parse(MetricsToJson(r.metrics)));
   const auto cell = [](std::optional<double> v) {
     if (!v || !std::isfinite(*v)) return std::string("-");
     char text[32];
@@ -324,12 +303,12 @@ std::string ComparisonTable(const std::vector<RunResult>& results,
   md += "\n|---|";
   for (size_t i = 0; i < 2 * types.size() - 1; ++i) md += "---|";
   md += "\n";
-  for (const Row& row : rows) {
-    md += "| " + row.name + " |";
-    for (const RunResult& r : results) md += " " + cell(row.value(r.metrics)) + " |";
-    const std::optional<double> first = row.value(results.front().metrics);
-    for (size_t i = 1; i < results.size(); ++i) {
-      const std::optional<double> v = row.value(results[i].metrics);
+  for (const MetricDef* row : rows) {
+    md += "| " + row->label + " |";
+    for (const nlohmann::json& m : metrics) md += " " + cell(ReadMetric(*row, m)) + " |";
+    const std::optional<double> first = ReadMetric(*row, metrics.front());
+    for (size_t i = 1; i < metrics.size(); ++i) {
+      const std::optional<double> v = ReadMetric(*row, metrics[i]);
       md += " " + cell(v && first ? std::optional<double>(*v - *first) : std::nullopt) + " |";
     }
     md += "\n";

@@ -15,6 +15,7 @@
 #include <sstream>
 
 #include "hpa/models/input_error.h"
+#include "hpa/scenarios/metric_defs.h"
 #include "hpa/scenarios/metrics.h"
 #include "hpa/scenarios/plot_canvas.h"
 #include "scenarios/src/cli_parse.h"
@@ -36,7 +37,7 @@ struct Run {
 };
 
 // A metric read from one run; nullopt where the run does not define it.
-struct MetricDef {
+struct PairedMetric {
   std::string name;
   bool higher_is_better;
   bool binary;  // a rate: 0/1 per run, compared with McNemar
@@ -64,13 +65,6 @@ std::function<std::optional<double>(const Run&)> Field(
   };
 }
 
-// The retaut block's figures exist only for runs that had a re-taut.
-std::optional<double> RetautField(const Json& m, const char* key) {
-  const Json& retaut = m["retaut"];
-  if (!retaut.is_object() || retaut.value("count", 0) <= 0) return std::nullopt;
-  return Number(retaut[key]);
-}
-
 // A run that had slack events and missed one (never estimated slack during it).
 std::optional<double> MissedSlackEvent(const Run& r) {
   if (!r.ok || r.metrics.is_null()) return std::nullopt;
@@ -79,42 +73,30 @@ std::optional<double> MissedSlackEvent(const Run& r) {
   return latency.value("missed", 0) > 0 ? 1.0 : 0.0;
 }
 
-// Every compared metric with the smallest effect that matters (a rate: 5 percentage points; a
-// position: 5 mm to 1 cm; a vertical speed 0.05 m/s; a latency one 150 Hz control period).
-const std::vector<MetricDef>& MetricDefs() {
-  static const std::vector<MetricDef> defs = {
-      {"crash_rate", false, true,
-       [](const Run& r) -> std::optional<double> { return Crashed(r) ? 1.0 : 0.0; }, 0.05,
-       "fraction"},
-      {"expect_failure_rate", false, true,
-       [](const Run& r) -> std::optional<double> {
-         if (!r.ok || r.metrics.is_null()) return 1.0;
-         return r.metrics["expect"].value("passed", true) ? 0.0 : 1.0;
-       },
-       0.05, "fraction"},
-      {"slack_event_missed_rate", false, true, &MissedSlackEvent, 0.05, "fraction"},
-      {"payload_rmse_norm_m", false, false, Field([](const Json& m) -> std::optional<double> {
-         const Json& v = m["payload_rmse_m"];
-         if (!v.is_array() || v.size() != 3 || !v[0].is_number()) return std::nullopt;
-         return std::hypot(v[0].get<double>(), v[1].get<double>(), v[2].get<double>());
-       }),
-       0.005, "m"},
-      {"quad_position_deviation_max_m", false, false,
-       Field([](const Json& m) { return Number(m["quad_position_deviation_max_m"]); }), 0.01, "m"},
-      {"payload_in_fov_fraction", true, false,
-       Field([](const Json& m) { return Number(m["payload_in_fov_fraction"]); }), 0.01, "fraction"},
-      {"mode_accuracy", true, false,
-       Field([](const Json& m) { return Number(m["mode_accuracy"]); }), 0.01, "fraction"},
-      {"retaut_quad_vz_min_mps", true, false,
-       Field([](const Json& m) { return RetautField(m, "quad_vz_min_mps"); }), 0.05, "m/s"},
-      {"retaut_peak_body_rate_radps", false, false,
-       Field([](const Json& m) { return RetautField(m, "peak_body_rate_radps"); }), 0.2, "rad/s"},
-      {"slack_detection_latency_max_s", false, false,
-       Field([](const Json& m) { return Number(m["slack_detection_latency_s"]["max"]); }),
-       1.0 / 150.0, "s"},
-      {"mpc_solve_median_ms", false, false,
-       Field([](const Json& m) { return Number(m["mpc_solve_ms"]["median"]); }), 0.02, "ms", true},
-  };
+// Every compared metric: the three per-run rates, then the metrics the metric table marks as
+// compared (each with its smallest effect that matters).
+const std::vector<PairedMetric>& PairedMetrics() {
+  static const std::vector<PairedMetric> defs = [] {
+    std::vector<PairedMetric> d = {
+        {"crash_rate", false, true,
+         [](const Run& r) -> std::optional<double> { return Crashed(r) ? 1.0 : 0.0; }, 0.05,
+         "fraction"},
+        {"expect_failure_rate", false, true,
+         [](const Run& r) -> std::optional<double> {
+           if (!r.ok || r.metrics.is_null()) return 1.0;
+           return r.metrics["expect"].value("passed", true) ? 0.0 : 1.0;
+         },
+         0.05, "fraction"},
+        {"slack_event_missed_rate", false, true, &MissedSlackEvent, 0.05, "fraction"},
+    };
+    for (const MetricDef& def : MetricDefs()) {
+      if (!def.compared) continue;
+      d.push_back({def.name, def.better == Better::kHigher, false,
+                   Field([&def](const Json& m) { return ReadMetric(def, m); }), def.min_effect,
+                   def.unit, def.timing});
+    }
+    return d;
+  }();
   return defs;
 }
 
@@ -474,7 +456,7 @@ SweepDiff CompareSweeps(const SweepDiffOptions& options) {
                            " (B)");
   }
 
-  for (const MetricDef& def : MetricDefs()) {
+  for (const PairedMetric& def : PairedMetrics()) {
     MetricDiff m;
     m.name = def.name;
     m.higher_is_better = def.higher_is_better;

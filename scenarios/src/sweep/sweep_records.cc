@@ -13,6 +13,7 @@
 #include <nlohmann/json.hpp>
 
 #include "hpa/models/input_error.h"
+#include "hpa/scenarios/metric_defs.h"
 #include "scenarios/src/cli_parse.h"
 #include "scenarios/src/sweep/sweep_internal.h"
 
@@ -157,20 +158,18 @@ std::vector<Record> ReadRecords(const std::string& path) {
         r.error_text = n.at("error").is_string() ? n.at("error").get<std::string>() : "";
       } else {
         const Json& m = n.at("metrics");
-        const auto number = [](const Json& v) {
-          return v.is_number() ? v.get<double>() : std::nan("");
-        };
         r.crashed = m.at("crashed").get<bool>();
         r.expect_failed = !m.at("expect").at("passed").get<bool>();
-        const Json& e = m.at("payload_rmse_m");
-        r.payload_rmse_norm_m =
-            std::sqrt(std::pow(number(e.at(0)), 2) + std::pow(number(e.at(1)), 2) +
-                      std::pow(number(e.at(2)), 2));
-        r.quad_dev_max_m = number(m.at("quad_position_deviation_max_m"));
-        r.solve_median_ms = number(m.at("mpc_solve_ms").at("median"));
-        r.slack_time_s = number(m.at("slack_time_s"));
-        r.payload_in_fov = number(m.at("payload_in_fov_fraction"));
-        r.mode_accuracy = number(m.at("mode_accuracy"));
+        // metrics by the metric table's names; NaN where the run did not measure one
+        const auto metric = [&m](const char* name) {
+          return ReadMetric(name, m).value_or(std::nan(""));
+        };
+        r.payload_rmse_norm_m = metric("payload_rmse_norm_m");
+        r.quad_dev_max_m = metric("quad_position_deviation_max_m");
+        r.solve_median_ms = metric("mpc_solve_median_ms");
+        r.slack_time_s = metric("slack_time_s");
+        r.payload_in_fov = metric("payload_in_fov_fraction");
+        r.mode_accuracy = metric("mode_accuracy");
         if (m.contains("estimator") && m["estimator"].is_object()) {
           const Json& e = m["estimator"];
           for (const char* key : {"resets", "cable_reinitialisations"}) {

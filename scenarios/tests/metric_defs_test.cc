@@ -1,0 +1,66 @@
+#include "hpa/scenarios/metric_defs.h"
+
+#include <gtest/gtest.h>
+
+#include <nlohmann/json.hpp>
+#include <set>
+
+#include "hpa/scenarios/expect_keys.h"
+#include "hpa/scenarios/metrics.h"
+
+namespace hpa {
+namespace {
+
+// A metrics.json of a run that flew (control steps, frames and one re-taut).
+nlohmann::json FlownMetrics() {
+  Metrics m;
+  m.control_steps = 100;
+  m.camera_frames = 30;
+  m.payload_rmse_m = Eigen::Vector3d(0.03, 0.04, 0.12);
+  m.quad_position_deviation_max_m = 0.25;
+  m.mode_accuracy = 0.9;
+  m.retaut_count = 1;
+  m.retaut_quad_vz_min_mps = -0.7;
+  m.slack_detection_latency_max_s = 0.02;
+  m.mpc_solve_ms.median = 0.3;
+  return nlohmann::json::parse(MetricsToJson(m));
+}
+
+TEST(MetricDefsTest, EveryMetricIsReadFromTheMetricsJsonTheRunnerWrites) {
+  const nlohmann::json j = FlownMetrics();
+  for (const MetricDef& def : MetricDefs()) {
+    EXPECT_TRUE(ReadMetric(def, j).has_value()) << def.name << " at " << def.json_path;
+    EXPECT_FALSE(def.unit.empty()) << def.name;
+    EXPECT_FALSE(def.description.empty()) << def.name;
+    if (def.compared) EXPECT_GT(def.min_effect, 0.0) << def.name;
+  }
+  EXPECT_DOUBLE_EQ(*ReadMetric("payload_rmse_norm_m", j), 0.13);
+  EXPECT_DOUBLE_EQ(*ReadMetric("quad_position_deviation_max_m", j), 0.25);
+  EXPECT_DOUBLE_EQ(*ReadMetric("retaut_quad_vz_min_mps", j), -0.7);
+  EXPECT_DOUBLE_EQ(*ReadMetric("slack_detection_latency_max_s", j), 0.02);
+  EXPECT_DOUBLE_EQ(*ReadMetric("mpc_solve_median_ms", j), 0.3);
+  EXPECT_EQ(*ReadMetric("crashed", j), 0.0);
+  EXPECT_THROW(ReadMetric("no_such_metric", j), std::logic_error);
+}
+
+TEST(MetricDefsTest, WhatARunDidNotMeasureIsNotRead) {
+  Metrics unflown;  // ended before its first control step, no re-taut, no frames
+  const nlohmann::json j = nlohmann::json::parse(MetricsToJson(unflown));
+  EXPECT_FALSE(ReadMetric("quad_position_deviation_max_m", j));
+  EXPECT_FALSE(ReadMetric("payload_rmse_norm_m", j));
+  EXPECT_FALSE(ReadMetric("payload_in_fov_fraction", j));
+  EXPECT_FALSE(ReadMetric("retaut_quad_vz_min_mps", j));
+  EXPECT_FALSE(ReadMetric("slack_detection_latency_max_s", j));
+}
+
+TEST(MetricDefsTest, EveryExpectKeyBoundsADeclaredMetric) {
+  std::set<std::string> paths;
+  for (const MetricDef& def : MetricDefs()) paths.insert(def.json_path);
+  for (const ExpectKey& k : ExpectKeys()) {
+    EXPECT_EQ(paths.count(k.metric), 1u) << "expect key " << k.key << " bounds '" << k.metric
+                                         << "', which metric_defs.cc does not declare";
+  }
+}
+
+}  // namespace
+}  // namespace hpa
