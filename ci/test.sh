@@ -17,6 +17,12 @@ if grep -rIl '#include *<opencv' controller --include='*.h' --include='*.cc' | g
   exit 1
 fi
 
+echo "== sim/ depends on models only (no flight code)"
+if grep -rIl -e '#include "hpa/estimator' -e '#include "hpa/controller' sim/src sim/include; then
+  echo "sim/ depends on models only: the files above include flight code" >&2
+  exit 1
+fi
+
 echo "== flight-only build (HPA_FLIGHT_ONLY=ON: no MuJoCo, no GL, no sim target)"
 cmake -S . -B build-flight -G Ninja -DCMAKE_BUILD_TYPE=Release -DHPA_FLIGHT_ONLY=ON \
   -DHPA_BUILD_TESTS=OFF -DHPA_BUILD_BENCHMARKS=OFF > /dev/null

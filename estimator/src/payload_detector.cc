@@ -10,14 +10,6 @@
 namespace hpa {
 namespace {
 
-// Unit ray in C through a pixel (continuous coordinates, principal point at the image centre).
-Eigen::Vector3d PixelRay_C(const Params& params, const Eigen::Vector2d& px) {
-  const double f_px = params.CameraFocalPx();
-  return Eigen::Vector3d((px.x() - 0.5 * params.camera_width_px) / f_px,
-                         (px.y() - 0.5 * params.camera_height_px) / f_px, 1.0)
-      .normalized();
-}
-
 PayloadDetection NotFound(double time_s, const char* reason) {
   PayloadDetection d;
   d.time_s = time_s;
@@ -27,59 +19,6 @@ PayloadDetection NotFound(double time_s, const char* reason) {
 }
 
 }  // namespace
-
-double VisibleOutlineFraction(const Params& params, const Eigen::Matrix2Xd& outline_px) {
-  if (outline_px.cols() == 0) return 0.0;
-  int inside = 0;
-  for (int i = 0; i < outline_px.cols(); ++i) {
-    if (outline_px(0, i) < -1e8) continue;  // behind the camera
-    // where the lens puts the ideal outline point in the real image
-    const Eigen::Vector2d real_px = DistortPixel(params, outline_px.col(i));
-    const double u = real_px.x(), v = real_px.y();
-    if (u >= 1.0 && u <= params.camera_width_px - 1.0 && v >= 1.0 &&
-        v <= params.camera_height_px - 1.0) {
-      ++inside;
-    }
-  }
-  return static_cast<double>(inside) / outline_px.cols();
-}
-
-Eigen::Matrix2Xd SphereOutlinePx(const Params& params, const Eigen::Vector3d& p_CL_C,
-                                 double radius_m, int n) {
-  const double distance_m = p_CL_C.norm();
-  if (!(distance_m > radius_m) || n <= 0) return Eigen::Matrix2Xd(2, 0);
-  const Eigen::Vector3d d = p_CL_C / distance_m;
-  const double alpha_rad = std::asin(radius_m / distance_m);
-  // orthonormal basis (e1, e2) perpendicular to the cone axis d
-  const Eigen::Vector3d seed =
-      std::abs(d.x()) < 0.9 ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitY();
-  const Eigen::Vector3d e1 = d.cross(seed).normalized();
-  const Eigen::Vector3d e2 = d.cross(e1);
-  const double f_px = params.CameraFocalPx();
-  Eigen::Matrix2Xd outline(2, n);
-  for (int i = 0; i < n; ++i) {
-    const double phi = 2.0 * M_PI * i / n;
-    const Eigen::Vector3d ray =
-        std::cos(alpha_rad) * d + std::sin(alpha_rad) * (std::cos(phi) * e1 + std::sin(phi) * e2);
-    if (ray.z() <= 1e-9) {
-      // behind the camera: mark as far outside the image
-      outline.col(i).setConstant(-1e9);
-      continue;
-    }
-    outline(0, i) = 0.5 * params.camera_width_px + f_px * ray.x() / ray.z();
-    outline(1, i) = 0.5 * params.camera_height_px + f_px * ray.y() / ray.z();
-  }
-  return outline;
-}
-
-Eigen::Vector3d SphereCentreFromMajorAxis(const Params& params, const Eigen::Vector2d& end1_px,
-                                          const Eigen::Vector2d& end2_px, double radius_m) {
-  const Eigen::Vector3d r1 = PixelRay_C(params, end1_px);
-  const Eigen::Vector3d r2 = PixelRay_C(params, end2_px);
-  const double alpha_rad = 0.5 * std::acos(std::clamp(r1.dot(r2), -1.0, 1.0));
-  const double distance_m = radius_m / std::sin(alpha_rad);
-  return distance_m * (r1 + r2).normalized();
-}
 
 PayloadDetector::PayloadDetector(const Params& params, const PayloadDetectorConfig& config)
     : params_(params), config_(config) {}

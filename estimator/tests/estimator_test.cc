@@ -56,7 +56,7 @@ RunStats Simulate(const std::string& variant, double kick_up_mps, uint64_t seed,
 
   std::unique_ptr<Estimator> estimator = MakeEstimator(variant, config, p, truth);
   estimator->OnAllocatedThrust(told_thrust_scale * thrust_N);
-  const AnalyticCamera camera(p);
+  const sim::AnalyticCamera camera(p);
 
   constexpr double kDt = 0.002;
   const double kick_time_s = 1.0;
@@ -328,7 +328,7 @@ TEST(EstimatorTest, AlwaysTautVariantPassesTheMeasuredPayload) {
 
 TEST(EstimatorTest, SaysSoWhenItHasLostThePayload) {
   const Params p;
-  const AnalyticCamera camera(p);
+  const sim::AnalyticCamera camera(p);
   std::mt19937_64 rng(3);
   // hovering, taut: the payload is known while detections come, lost 0.2 s after the last one
   SystemState hover;

@@ -93,7 +93,7 @@ class RenderedDetectorTest : public ::testing::Test {
 
 TEST_F(RenderedDetectorTest, ErrorStatisticsByRegion) {
   const PayloadDetector detector(params_);
-  const AnalyticCamera exact(params_, CameraNoiseModel{0.0, 0.0, 0.0, 0.0});
+  const sim::AnalyticCamera exact(params_, CameraNoiseModel{0.0, 0.0, 0.0, 0.0});
   std::mt19937_64 rng(1);  // unused by the noiseless camera
   const double f_px = params_.CameraFocalPx();
   const double half_w = 0.5 * params_.camera_width_px, half_h = 0.5 * params_.camera_height_px;

@@ -192,7 +192,7 @@ RunResult RunScenario(const Scenario& scenario, const Params& params, const RunO
   CameraNoiseModel camera_noise = MeasuredDetectorNoise();
   camera_noise.centre_std_px *= scenario.estimation.detector_noise_scale;
   camera_noise.semi_major_std_px *= scenario.estimation.detector_noise_scale;
-  AnalyticCamera analytic_camera(params, camera_noise);
+  sim::AnalyticCamera analytic_camera(params, camera_noise);
   std::mt19937_64 camera_rng(scenario.seed * 0x9E3779B97F4A7C15ULL + 17);
 
   // recorders: the log and metrics inputs, the video, the caller's

@@ -3,9 +3,9 @@
 #include <algorithm>
 #include <cmath>
 
-#include "hpa/estimator/payload_detector.h"
+#include "hpa/models/camera_model.h"
 
-namespace hpa {
+namespace hpa::sim {
 
 AnalyticCamera::AnalyticCamera(const Params& params, const CameraNoiseModel& noise,
                                double min_visible_outline, double min_area_px2)
@@ -84,4 +84,4 @@ PayloadDetection AnalyticCamera::Measure(const Eigen::Vector3d& p_CL_C, double t
   return detection;
 }
 
-}  // namespace hpa
+}  // namespace hpa::sim

@@ -13,7 +13,7 @@ namespace {
 
 TEST(AnalyticCameraTest, NoiselessMeasurementIsExact) {
   const Params p;
-  const AnalyticCamera camera(p, CameraNoiseModel{0.0, 0.0, 0.0, 0.0});
+  const sim::AnalyticCamera camera(p, CameraNoiseModel{0.0, 0.0, 0.0, 0.0});
   std::mt19937_64 rng(1);
   for (const Eigen::Vector3d& p_CL_C :
        {Eigen::Vector3d(0, 0, 0.45), Eigen::Vector3d(0.25, -0.12, 0.4),
@@ -29,7 +29,7 @@ TEST(AnalyticCameraTest, NoiselessMeasurementIsExact) {
 TEST(AnalyticCameraTest, AgreesWithTheDetectorOnVisibility) {
   // the same acceptance rule as the detector: compare on synthetic frames across the edge
   const Params p;
-  const AnalyticCamera camera(p);
+  const sim::AnalyticCamera camera(p);
   const PayloadDetector detector(p);
   std::mt19937_64 rng(2);
   const double z = 0.45;
@@ -49,7 +49,7 @@ TEST(AnalyticCameraTest, AgreesWithTheDetectorOnVisibility) {
 TEST(AnalyticCameraTest, NoiseMatchesTheModelledCovariance) {
   const Params p;
   const CameraNoiseModel noise = MeasuredDetectorNoise();
-  const AnalyticCamera camera(p, noise);
+  const sim::AnalyticCamera camera(p, noise);
   std::mt19937_64 rng(3);
   const Eigen::Vector3d p_CL_C(0.1, 0.05, 0.45);
   Eigen::Matrix3d scatter = Eigen::Matrix3d::Zero();
@@ -67,7 +67,7 @@ TEST(AnalyticCameraTest, NoiseMatchesTheModelledCovariance) {
 
 TEST(AnalyticCameraTest, OutOfViewAndBehindAreNotFound) {
   const Params p;
-  const AnalyticCamera camera(p);
+  const sim::AnalyticCamera camera(p);
   std::mt19937_64 rng(4);
   EXPECT_FALSE(camera.Measure(Eigen::Vector3d(0, 0, -0.4), 0.0, rng).found);
   EXPECT_FALSE(camera.Measure(Eigen::Vector3d(2.0, 0, 0.4), 0.0, rng).found);

@@ -5,7 +5,7 @@
 #include <memory>
 
 #include "hpa/estimator/cable_ekf.h"
-#include "hpa/estimator/detection_noise.h"
+#include "hpa/models/detection_noise.h"
 #include "hpa/estimator/estimator_health.h"
 #include "hpa/estimator/mode_detector.h"
 #include "hpa/estimator/payload_tracker.h"

@@ -7,6 +7,7 @@
 #include <optional>
 #include <vector>
 
+#include "hpa/models/camera_model.h"
 #include "hpa/models/params.h"
 #include "hpa/models/sensor_types.h"
 
@@ -30,22 +31,6 @@ struct PayloadDetectorConfig {
   double min_radial_offset_px = 2.0;  // closer to the principal point: major axis from the fit
   double edge_bias_px = 0.5;          // contour runs through edge pixel centres: add to axes
 };
-
-/// Fraction of an outline (ideal pinhole pixels, continuous coordinates, origin at the top-left
-/// image corner) that the lens (Params::camera_distortion) puts inside the real image with a
-/// 1 px margin.
-double VisibleOutlineFraction(const Params& params, const Eigen::Matrix2Xd& outline_px);
-
-/// Exact image outline of a sphere of radius_m centred at p_CL_C: n points on the tangent cone,
-/// in continuous pixel coordinates (origin at the top-left corner, centre of the image at W/2,
-/// H/2).
-Eigen::Matrix2Xd SphereOutlinePx(const Params& params, const Eigen::Vector3d& p_CL_C,
-                                 double radius_m, int n);
-
-/// Sphere centre in C from the two major-axis end points of its image ellipse (pixels, continuous
-/// coordinates): rays r1, r2; direction normalised(r1 + r2); distance R / sin(acos(r1.r2) / 2).
-Eigen::Vector3d SphereCentreFromMajorAxis(const Params& params, const Eigen::Vector2d& end1_px,
-                                          const Eigen::Vector2d& end2_px, double radius_m);
 
 /// Red-sphere detector on 1280x720 BGR frames of a camera with the lens distortion of
 /// Params::camera_distortion; deterministic. The centre and radius it reports are in the ideal

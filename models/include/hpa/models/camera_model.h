@@ -36,4 +36,20 @@ Eigen::Vector2d UndistortPixel(const Params& params, const Eigen::Vector2d& dist
 /// Real (distorted) pixel of an ideal pinhole pixel (continuous coordinates, origin top-left).
 Eigen::Vector2d DistortPixel(const Params& params, const Eigen::Vector2d& ideal_px);
 
+/// Fraction of an outline (ideal pinhole pixels, continuous coordinates, origin at the top-left
+/// image corner) that the lens (Params::camera_distortion) puts inside the real image with a
+/// 1 px margin.
+double VisibleOutlineFraction(const Params& params, const Eigen::Matrix2Xd& outline_px);
+
+/// Exact image outline of a sphere of radius_m centred at p_CL_C: n points on the tangent cone,
+/// in continuous pixel coordinates (origin at the top-left corner, centre of the image at W/2,
+/// H/2).
+Eigen::Matrix2Xd SphereOutlinePx(const Params& params, const Eigen::Vector3d& p_CL_C,
+                                 double radius_m, int n);
+
+/// Sphere centre in C from the two major-axis end points of its image ellipse (pixels, continuous
+/// coordinates): rays r1, r2; direction normalised(r1 + r2); distance R / sin(acos(r1.r2) / 2).
+Eigen::Vector3d SphereCentreFromMajorAxis(const Params& params, const Eigen::Vector2d& end1_px,
+                                          const Eigen::Vector2d& end2_px, double radius_m);
+
 }  // namespace hpa

@@ -6,11 +6,11 @@
 #include <Eigen/Core>
 #include <random>
 
-#include "hpa/estimator/detection_noise.h"
+#include "hpa/models/detection_noise.h"
 #include "hpa/models/params.h"
 #include "hpa/models/sensor_types.h"
 
-namespace hpa {
+namespace hpa::sim {
 
 /// Sensor model: same acceptance rules as PayloadDetector (too small, partly out of view with
 /// the same visible-outline threshold), Gaussian noise on the image ellipse, then the detector's
@@ -32,4 +32,4 @@ class AnalyticCamera {
   double min_area_px2_;
 };
 
-}  // namespace hpa
+}  // namespace hpa::sim

@@ -1,9 +1,9 @@
-#include "hpa/estimator/detection_noise.h"
+#include "hpa/models/detection_noise.h"
 
 #include <algorithm>
 #include <cmath>
 
-#include "hpa/estimator/payload_detector.h"
+#include "hpa/models/camera_model.h"
 
 namespace hpa {
 
