@@ -28,6 +28,7 @@
 #include "hpa/scenarios/metric_defs.h"
 #include "hpa/scenarios/plots.h"
 #include "hpa/scenarios/runner.h"
+#include "hpa/scenarios/schema.h"
 #include "hpa/scenarios/sweep.h"
 #include "hpa/scenarios/sweep_diff.h"
 #include "hpa/scenarios/video_recorder.h"
@@ -82,6 +83,10 @@ usage:
   hpa golden [--exact] [--update --reason TEXT] [--from DIR] [--golden FILE]
       Compares every shipped scenario's metrics with scenarios/ci/golden.json (exit 1 on a
       change beyond tolerance; --exact: on any change at all); --update rewrites it.
+  hpa schema [SECTION] [SCENARIO.yaml]
+      Prints as Markdown what the tools accept and measure, from their registries: controllers,
+      estimators, solvers, events, expect keys, metrics (all: docs/schema.md), or with
+      `rates SCENARIO.yaml` every loop and stream of that scenario with its rate and latency.
   hpa --help                 this text; hpa COMMAND --help: the command's options
 
 exit codes: 0 ok and every `expect` bound holds; 1 an expectation failed (or an unexpected
@@ -450,6 +455,7 @@ int HpaMain(int argc, char** argv) {
     if (command == "merge") return MergeMain(argc, argv);
     if (command == "golden") return GoldenMain(argc, argv);
     if (command == "sweep-diff") return SweepDiffMain(argc, argv);
+    if (command == "schema") return SchemaMain(argc, argv);
     throw InputError("", "", "unknown command '" + command + "' (see hpa --help)");
   } catch (const InputError& e) {
     std::fprintf(stderr, "hpa: error: %s\n", e.what());

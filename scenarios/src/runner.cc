@@ -137,6 +137,35 @@ RateTable ScenarioRates(const Scenario& scenario) {
   return rates;
 }
 
+std::vector<RateRow> ScenarioRateTable(const Scenario& scenario, const Params& params) {
+  const RateTable rates = ScenarioRates(scenario);
+  const sim::LatencyProfile& latency = scenario.world.latency;
+  const std::unique_ptr<Controller> controller =
+      MakeController(scenario.controller, params, MakeReference(scenario, params));
+  std::vector<RateRow> rows = {
+      {"physics", 1.0 / sim::World::kPhysicsDt_s, 0.0, "MuJoCo timestep (sim::World)"},
+      {"imu", rates.imu.rate_hz, rates.imu.latency_s, "RateTable::imu"},
+  };
+  if (scenario.world.rate_loop.px4) {
+    rows.push_back({"rate loop (PX4) and its gyro", scenario.world.rate_loop.rate_hz, 0.0,
+                    "world profile rate_loop.rate_hz"});
+  } else {
+    rows.push_back({"rate loop (body-rate P)", rates.imu.rate_hz, 0.0, "RateTable::imu"});
+  }
+  rows.push_back({"vio", rates.vio.rate_hz, rates.vio.latency_s, "RateTable::vio"});
+  if (!scenario.estimation.ground_truth) {
+    rows.push_back({"camera (" + scenario.estimation.camera + ")", rates.camera.rate_hz,
+                    rates.camera.latency_s, "RateTable::camera, estimation.camera_latency"});
+  }
+  rows.push_back({"control (" + scenario.controller.type + ")", controller->RateHz(),
+                  latency.compute_s + latency.transport_s,
+                  "the controller's RateHz(); world profile latency.compute_s + transport_s"});
+  rows.push_back(
+      {"estimate to controller", 0.0, latency.estimate_s, "world profile latency.estimate_s"});
+  rows.push_back({"video (--video)", rates.video.rate_hz, 0.0, "RateTable::video"});
+  return rows;
+}
+
 Params WorldParams(const Scenario& scenario, const Params& params) {
   Params p = params;
   if (scenario.world_payload_mass_kg) p.payload_mass_kg = *scenario.world_payload_mass_kg;

@@ -59,6 +59,18 @@ struct RunOptions {
 /// The rate table a scenario runs with: the defaults, the scenario's camera latency.
 RateTable ScenarioRates(const Scenario& scenario);
 
+/// One loop or sensor stream of a run: how often it fires and how late its output arrives.
+struct RateRow {
+  std::string name;        // "physics", "imu", "rate loop", "vio", "camera", "control", ...
+  double rate_hz = 0.0;    // 0: not periodic (a latency only)
+  double latency_s = 0.0;  // capture (or computation) to delivery
+  std::string from;        // where the number is set
+};
+
+/// Every loop and stream of `scenario` with the rates and latencies RunScenario uses (the one
+/// rate table: `hpa schema rates` prints it).
+std::vector<RateRow> ScenarioRateTable(const Scenario& scenario, const Params& params);
+
 /// Everything a run produced.
 struct RunResult {
   Metrics metrics;
