@@ -210,7 +210,13 @@ class World {
     int64_t end_step;           // applied while step < end_step
   };
 
+  void CheckRates();
+  void LoadScene();
+  void ResolveIds();
+  void ApplyOverrides();
   void ApplyWorldParams();
+  void ApplyContactSettings();
+  void ApplyCameraPose(const Params& p);
   void WriteMotorControls();
   void UpdateGripper();
   void ApplyDisturbances();
