@@ -39,20 +39,21 @@ class RunRecorder {
   virtual void OnControlStep(const LogRow& row) { (void)row; }
   /// After each payload camera capture.
   virtual void OnCameraFrame(const CameraFrameRecord& frame) { (void)frame; }
-  /// At each video tick (RateTable::video) with the world to draw from and the HUD values.
+  /// At each video tick with the world to draw from and the HUD values.
   virtual void OnVideoTick(sim::World& world, const LogRow& latest, const cv::Mat& onboard) {
     (void)world, (void)latest, (void)onboard;
   }
+  /// The rate (Hz) of video ticks this recorder wants (0: none); the run ticks at the highest
+  /// rate any recorder asks for.
+  virtual double video_rate_hz() const { return 0.0; }
 };
 
 /// How to run (not what: that is the Scenario).
 struct RunOptions {
   bool progress = false;                     // progress line on stderr
-  std::string video_path;                    // MP4 of the chase camera with the onboard inset
-  bool video_slack_events_only = false;      // keep only a window around each slack event
   std::optional<double> stop_at_s;           // stop early (render-frame)
   std::function<void(sim::World&)> at_stop;  // called with the world when the run stops
-  std::vector<RunRecorder*> recorders;       // extra observers (not owned)
+  std::vector<RunRecorder*> recorders;       // extra observers, a video among them (not owned)
   sim::GlBackend gl_backend = sim::GlBackend::kOsMesa;  // GL context of the rendered cameras
 };
 

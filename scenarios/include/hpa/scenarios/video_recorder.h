@@ -7,6 +7,7 @@
 #include <string>
 
 #include "hpa/models/state.h"
+#include "hpa/scenarios/runner.h"
 
 namespace hpa {
 
@@ -55,6 +56,26 @@ class VideoRecorder {
   std::deque<cv::Mat> pre_buffer_;  // frames before a slack event (slack_events_only)
   double keep_until_s_ = -1.0;      // write frames up to this time
   int frames_written_ = 0;
+};
+
+/// The video of a run as a recorder: the chase camera and a whole onboard frame of its own at
+/// each video tick. It never reads or changes what the loop's camera path uses (its region, its
+/// frames), so a run with a video is the run without one. Pass it in RunOptions::recorders and
+/// call Finish() after the run.
+class VideoTickRecorder final : public RunRecorder {
+ public:
+  /// Writes `path` at rate_hz (RateTable::video), optionally only around slack events.
+  VideoTickRecorder(const std::string& path, double rate_hz, bool slack_events_only)
+      : video_(path, rate_hz, slack_events_only), rate_hz_(rate_hz) {}
+  void OnVideoTick(sim::World& world, const LogRow& now, const cv::Mat& onboard) override;
+  double video_rate_hz() const override { return rate_hz_; }
+  /// Flushes and closes the file (VideoRecorder::Finish).
+  int Finish() { return video_.Finish(); }
+
+ private:
+  VideoRecorder video_;
+  double rate_hz_;
+  cv::Mat onboard_;  // the whole onboard frame of the latest video tick
 };
 
 }  // namespace hpa

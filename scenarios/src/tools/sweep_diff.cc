@@ -18,8 +18,8 @@
 #include "hpa/scenarios/metric_defs.h"
 #include "hpa/scenarios/metrics.h"
 #include "hpa/scenarios/plot_canvas.h"
-#include "scenarios/src/cli_parse.h"
-#include "scenarios/src/sweep/sweep_internal.h"
+#include "scenarios/src/tools/cli_parse.h"
+#include "scenarios/src/tools/sweep/sweep_internal.h"
 
 namespace hpa {
 namespace {

@@ -15,7 +15,7 @@
 
 #include "hpa/scenarios/metrics.h"
 #include "hpa/scenarios/runner.h"
-#include "scenarios/src/sweep/sweep_internal.h"
+#include "scenarios/src/tools/sweep/sweep_internal.h"
 
 namespace hpa::sweep {
 namespace {

@@ -13,7 +13,7 @@
 #include "hpa/models/input_error.h"
 #include "hpa/scenarios/metrics.h"
 #include "hpa/scenarios/plot_canvas.h"
-#include "scenarios/src/sweep/sweep_internal.h"
+#include "scenarios/src/tools/sweep/sweep_internal.h"
 
 namespace hpa::sweep {
 namespace {

@@ -8,6 +8,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "hpa/models/input_error.h"
+#include "hpa/sim/world.h"
 
 namespace hpa {
 
@@ -114,6 +115,15 @@ int VideoRecorder::Finish() {
   // a slack-events video of a run without slack would be an empty file: write nothing
   if (slack_events_only_ && frames_written_ == 0) std::remove(path_.c_str());
   return frames_written_;
+}
+
+void VideoTickRecorder::OnVideoTick(sim::World& world, const LogRow& now, const cv::Mat& onboard) {
+  (void)onboard;
+  world.RenderPayloadCamera(&onboard_, cv::Rect());
+  VideoRecorder::Hud hud{now.time_s, now.truth.mode, now.estimate.mode, now.command.thrust_N,
+                         now.cable_tension_N};
+  video_.AddFrame(world.RenderChaseCamera(VideoRecorder::kWidthPx, VideoRecorder::kHeightPx),
+                  onboard_, hud);
 }
 
 }  // namespace hpa

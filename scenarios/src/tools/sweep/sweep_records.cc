@@ -14,8 +14,8 @@
 
 #include "hpa/models/input_error.h"
 #include "hpa/scenarios/metric_defs.h"
-#include "scenarios/src/cli_parse.h"
-#include "scenarios/src/sweep/sweep_internal.h"
+#include "scenarios/src/tools/cli_parse.h"
+#include "scenarios/src/tools/sweep/sweep_internal.h"
 
 namespace hpa::sweep {
 

@@ -16,8 +16,8 @@
 #include "hpa/models/input_error.h"
 #include "hpa/models/params.h"
 #include "hpa/scenarios/runner.h"
-#include "scenarios/src/cli_parse.h"
-#include "scenarios/src/sweep/sweep_internal.h"
+#include "scenarios/src/tools/cli_parse.h"
+#include "scenarios/src/tools/sweep/sweep_internal.h"
 
 namespace hpa {
 

@@ -33,7 +33,7 @@
 #include "hpa/scenarios/sweep_diff.h"
 #include "hpa/scenarios/video_recorder.h"
 #include "hpa/sim/world.h"
-#include "scenarios/src/cli_parse.h"
+#include "scenarios/src/tools/cli_parse.h"
 
 namespace hpa {
 namespace {
@@ -191,14 +191,13 @@ void RemoveStaleOutputs(const std::string& dir) {
 
 // Says where the video went; a slack-events video of a run without slack is not written, and
 // that is said even with --quiet (a missing file would otherwise look like a failure).
-void ReportVideo(const RunOptions& options, bool quiet) {
-  if (options.video_path.empty()) return;
+void ReportVideo(const std::string& video_path, bool quiet) {
+  if (video_path.empty()) return;
   struct stat st;
-  if (stat(options.video_path.c_str(), &st) != 0) {
-    std::printf("  no slack event in this run: no video written (%s)\n",
-                options.video_path.c_str());
+  if (stat(video_path.c_str(), &st) != 0) {
+    std::printf("  no slack event in this run: no video written (%s)\n", video_path.c_str());
   } else if (!quiet) {
-    std::printf("  video %s\n", options.video_path.c_str());
+    std::printf("  video %s\n", video_path.c_str());
   }
 }
 
@@ -247,13 +246,16 @@ int Run(int argc, char** argv) {
   RunOptions options;
   options.progress = !o.quiet;
   options.gl_backend = ParseGlOption(o.gl);
-  options.video_path = video;
-  options.video_slack_events_only = slack_events;
-  if (options.video_slack_events_only && options.video_path.empty()) {
-    options.video_path = out_dir + "/slack_events.mp4";
+  if (slack_events && video.empty()) video = out_dir + "/slack_events.mp4";
+  std::unique_ptr<VideoTickRecorder> recorder;
+  if (!video.empty()) {
+    CheckVideoPath(video);
+    recorder = std::make_unique<VideoTickRecorder>(video, ScenarioRates(scenario).video.rate_hz,
+                                                   slack_events);
+    options.recorders.push_back(recorder.get());
   }
-  if (!options.video_path.empty()) CheckVideoPath(options.video_path);
   const RunResult result = RunScenario(scenario, params, options);
+  if (recorder) recorder->Finish();
   // the log first, the metrics last: a complete metrics.json means a finished run
   WriteLogCsv(out_dir + "/log.csv.partial", result.rows);
   if (std::rename((out_dir + "/log.csv.partial").c_str(), (out_dir + "/log.csv").c_str()) != 0) {
@@ -266,7 +268,7 @@ int Run(int argc, char** argv) {
     }
   }
   if (!o.quiet) PrintSummary(result.metrics, out_dir);
-  ReportVideo(options, o.quiet);
+  ReportVideo(video, o.quiet);
   if (result.metrics.run_error) {
     std::fprintf(stderr, "hpa: internal error during the run (results so far are written): %s\n",
                  result.metrics.run_error->c_str());
@@ -356,11 +358,14 @@ int Compare(int argc, char** argv) {
     RunOptions options;
     options.progress = !o.quiet;
     options.gl_backend = ParseGlOption(o.gl);
+    const std::string video = slack_events ? dir + "/slack_events.mp4" : "";
+    std::unique_ptr<VideoTickRecorder> recorder;
     if (slack_events) {
-      options.video_path = dir + "/slack_events.mp4";
-      options.video_slack_events_only = true;
+      recorder = std::make_unique<VideoTickRecorder>(video, ScenarioRates(s).video.rate_hz, true);
+      options.recorders.push_back(recorder.get());
     }
     results.push_back(RunScenario(s, params, options));
+    if (recorder) recorder->Finish();
     WriteText(dir + "/metrics.json", MetricsToJson(results.back().metrics));
     WriteLogCsv(dir + "/log.csv", results.back().rows);
     all_passed = all_passed && results.back().metrics.expect_passed;
@@ -370,7 +375,7 @@ int Compare(int argc, char** argv) {
       run_error = true;
     }
     if (!o.quiet) PrintSummary(results.back().metrics, dir);
-    ReportVideo(options, o.quiet);
+    ReportVideo(video, o.quiet);
   }
   const std::string png = out_dir + "/comparison.png";
   WriteComparisonPlot(results, params, png);

@@ -13,7 +13,7 @@
 #include "hpa/scenarios/metrics.h"
 #include "hpa/scenarios/runner.h"
 #include "hpa/scenarios/scenario.h"
-#include "scenarios/src/cli_parse.h"
+#include "scenarios/src/tools/cli_parse.h"
 
 namespace hpa {
 namespace {

@@ -1,0 +1,125 @@
+#pragma once
+// The lockstep loop of one run (private to the runner): the world, the flight code it drives
+// (estimator, controller, rate loop) and the per-tick steps, each a method of its own.
+
+#include <chrono>
+#include <memory>
+#include <opencv2/core.hpp>
+#include <random>
+#include <vector>
+
+#include "hpa/controller/body_rate_controller.h"
+#include "hpa/controller/px4_rate_controller.h"
+#include "hpa/estimator/estimator.h"
+#include "hpa/estimator/payload_detector.h"
+#include "hpa/models/lockstep.h"
+#include "hpa/scenarios/runner.h"
+#include "hpa/sim/analytic_camera.h"
+#include "hpa/sim/world.h"
+
+namespace hpa::runner {
+
+/// The starting state: payload at the reference's start, hanging at rest under the quadrotor,
+/// with the cable length of `params`.
+SystemState InitialState(const Reference& reference, const Params& params);
+
+/// Refuses a reference that puts the payload into the ground, naming the first time it does.
+void CheckReferenceAboveGround(const Reference& reference, double duration_s, const Params& params);
+
+/// The PX4 rate loop's parameters from the world profile's rate_loop section.
+Px4RateParams Px4ParamsOf(const sim::RateLoopProfile& r);
+
+/// The signal a stop was requested with, or 0 (RequestStop sets it).
+int StopSignal();
+
+/// The log and metrics inputs of a run (the runner's own recorder).
+class LogRecorder final : public RunRecorder {
+ public:
+  /// Records into `inputs` (not owned).
+  explicit LogRecorder(MetricsInputs* inputs) : inputs_(inputs) {}
+  void OnControlStep(const LogRow& row) override { inputs_->rows.push_back(row); }
+  void OnCameraFrame(const CameraFrameRecord& frame) override;
+
+ private:
+  MetricsInputs* inputs_;
+};
+
+/// One run's world, flight code and schedule; Run() steps it tick by tick.
+class RunLoop {
+ public:
+  /// Sets up the world and the flight code of `scenario` (InputError on bad input).
+  RunLoop(const Scenario& scenario, const Params& params, const RunOptions& options,
+          Metrics* metrics);
+
+  /// Runs to the end, a crash or a stop request; throws what a step throws (the caller keeps
+  /// the results so far).
+  void Run();
+
+  /// Fills the metrics and log of the run so far (after Run, or after it threw).
+  void Finish(RunResult* result);
+
+  /// Simulated time reached (s).
+  double time_s() const { return tick_ * sim::World::kPhysicsDt_s; }
+
+ private:
+  using Clock = std::chrono::steady_clock;
+
+  bool Tick();  // one physics tick; false: the run ends here
+  void ApplyDueEvents(double t);
+  void CameraStep(double t, const sim::Truth& truth);
+  PayloadDetection RenderAndDetect(double t, CameraFrameRecord* frame);
+  SystemState ControllerState(double t, const SystemState& state);
+  void ControlStep(double t, const sim::Truth& truth, const SystemState& state,
+                   const SystemState& controller_state);
+  void RateLoopStep(const SystemState& state, bool rate_due);
+  void VideoStep(double t, const sim::Truth& truth, const SystemState& state);
+  bool StepWorld();  // false: crashed
+  void ShowProgress(double t);
+
+  const Scenario& scenario_;
+  const Params& params_;
+  const RunOptions& options_;
+  Metrics* metrics_;
+  Clock::time_point wall_start_;
+  bool ground_truth_, render_camera_;
+
+  std::unique_ptr<sim::World> world_;
+  std::shared_ptr<const Reference> reference_;
+  std::unique_ptr<Controller> controller_;
+  std::unique_ptr<BodyRateController> rate_controller_;
+  std::unique_ptr<Px4RateController> px4_rate_;  // the profile's PX4 loop, if it flies one
+  std::unique_ptr<Estimator> estimator_;
+  std::unique_ptr<PayloadDetector> detector_;
+  std::unique_ptr<sim::AnalyticCamera> analytic_camera_;
+  std::mt19937_64 camera_rng_;
+
+  MetricsInputs inputs_;
+  LogRecorder log_recorder_{&inputs_};
+  std::vector<RunRecorder*> recorders_;
+
+  // schedule
+  long tick_ = 0, end_tick_ = 0;
+  double end_s_ = 0.0;
+  std::unique_ptr<LockstepClock> clock_;
+  int camera_loop_ = -1, control_loop_ = -1, rate_loop_ = -1, video_loop_ = -1;
+  double rate_loop_dt_s_ = 0.0;
+  std::vector<EventSpec> events_;  // by start time
+  size_t next_event_ = 0;
+
+  // what is in flight between the loops
+  std::unique_ptr<DelayLine<PayloadDetection>> detections_in_flight_;  // camera to estimator
+  std::unique_ptr<DelayLine<ControlOutput>> commands_in_flight_;       // compute + transport
+  std::unique_ptr<DelayLine<SystemState>> estimates_in_flight_;        // estimate to controller
+  bool delayed_estimate_ = false;
+  ControlOutput control_;      // the command the rate loop tracks
+  SystemState delayed_state_;  // latest estimate old enough to have reached the controller
+  bool have_delayed_state_ = false;
+
+  cv::Mat rendered_;                 // the payload camera's frame buffer, reused frame to frame
+  PayloadDetection last_detection_;  // the region of the next frame is around it
+  bool mixer_saturated_ = false;     // the rate loop's last allocation fell short
+  bool show_progress_ = false;
+  int last_progress_pct_ = -1;
+};
+
+}  // namespace hpa::runner

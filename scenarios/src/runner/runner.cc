@@ -1,0 +1,91 @@
+#include "hpa/scenarios/runner.h"
+
+#include <unistd.h>
+
+#include <chrono>
+#include <cmath>
+#include <csignal>
+#include <cstdio>
+#include <deque>
+#include <random>
+#include <sstream>
+
+#include "hpa/sim/world.h"
+#include "scenarios/src/runner/run_loop.h"
+
+namespace hpa {
+namespace {
+volatile std::sig_atomic_t g_stop_signal = 0;  // set from a signal handler
+}  // namespace
+
+int runner::StopSignal() { return g_stop_signal; }
+
+void RequestStop(int signal_number) { g_stop_signal = signal_number; }
+
+int StopRequested() { return g_stop_signal; }
+
+RateTable ScenarioRates(const Scenario& scenario) {
+  RateTable rates;
+  rates.camera.latency_s = scenario.estimation.camera_latency_s;
+  return rates;
+}
+
+std::vector<RateRow> ScenarioRateTable(const Scenario& scenario, const Params& params) {
+  const RateTable rates = ScenarioRates(scenario);
+  const sim::LatencyProfile& latency = scenario.world.latency;
+  const std::unique_ptr<Controller> controller =
+      MakeController(scenario.controller, params, MakeReference(scenario, params));
+  std::vector<RateRow> rows = {
+      {"physics", 1.0 / sim::World::kPhysicsDt_s, 0.0, "MuJoCo timestep (sim::World)"},
+      {"imu", rates.imu.rate_hz, rates.imu.latency_s, "RateTable::imu"},
+  };
+  if (scenario.world.rate_loop.px4) {
+    rows.push_back({"rate loop (PX4) and its gyro", scenario.world.rate_loop.rate_hz, 0.0,
+                    "world profile rate_loop.rate_hz"});
+  } else {
+    rows.push_back({"rate loop (body-rate P)", rates.imu.rate_hz, 0.0, "RateTable::imu"});
+  }
+  rows.push_back({"vio", rates.vio.rate_hz, rates.vio.latency_s, "RateTable::vio"});
+  if (!scenario.estimation.ground_truth) {
+    rows.push_back({"camera (" + scenario.estimation.camera + ")", rates.camera.rate_hz,
+                    rates.camera.latency_s, "RateTable::camera, estimation.camera_latency"});
+  }
+  rows.push_back({"control (" + scenario.controller.type + ")", controller->RateHz(),
+                  latency.compute_s + latency.transport_s,
+                  "the controller's RateHz(); world profile latency.compute_s + transport_s"});
+  rows.push_back(
+      {"estimate to controller", 0.0, latency.estimate_s, "world profile latency.estimate_s"});
+  rows.push_back({"video (--video)", rates.video.rate_hz, 0.0, "RateTable::video"});
+  return rows;
+}
+
+Params WorldParams(const Scenario& scenario, const Params& params) {
+  Params p = params;
+  if (scenario.world_payload_mass_kg) p.payload_mass_kg = *scenario.world_payload_mass_kg;
+  if (scenario.world_cable_length_m) p.cable_length_m = *scenario.world_cable_length_m;
+  return p;
+}
+
+RunResult RunScenario(const Scenario& scenario, const Params& params, const RunOptions& options) {
+  RunResult result;
+  Metrics& metrics = result.metrics;
+  metrics.scenario = scenario.name;
+  metrics.controller = scenario.controller.type;
+  metrics.camera = scenario.estimation.ground_truth ? "ground_truth" : scenario.estimation.camera;
+  metrics.seed = scenario.seed;
+  metrics.world_profile = scenario.world.name;
+  if (scenario.reference.type == "lissajous") {
+    metrics.payload_rmse_from_s = scenario.reference.lissajous.ramp_s;
+  }
+  runner::RunLoop loop(scenario, params, options, &metrics);
+  try {
+    loop.Run();
+  } catch (const std::exception& e) {
+    // keep what was computed: the metrics of the run so far, with the error named
+    metrics.run_error = std::string(e.what()) + " (at t = " + std::to_string(loop.time_s()) + " s)";
+  }
+  loop.Finish(&result);
+  return result;
+}
+
+}  // namespace hpa
