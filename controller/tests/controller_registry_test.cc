@@ -9,13 +9,15 @@
 namespace hpa {
 namespace {
 
-// Holds the hover thrust, zero body rates: the smallest controller there is.
+// Holds the hover thrust, zero body rates: the smallest controller there is (it still says
+// when its input is not finite, as every controller must).
 class ToyController : public Controller {
  public:
   explicit ToyController(const Params& params) : thrust_N_(params.HoverThrustN()) {}
   ControlOutput Update(const SystemState& state) override {
     ControlOutput out;
     out.command.thrust_N = thrust_N_;
+    if (!state.AllFinite()) out.status = ControlStatus::kNonFinite;
     return out;
   }
   double RateHz() const override { return 50.0; }

@@ -4,11 +4,13 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <fstream>
 #include <functional>
 #include <map>
 #include <sstream>
 
+#include "hpa/models/input_error.h"
 #include "hpa/scenarios/metrics.h"
 #include "hpa/scenarios/scenario.h"
 
@@ -98,13 +100,56 @@ TEST(ExpectKeysTest, EveryKeyPassesAndFailsOnItsMetric) {
   EXPECT_EQ(Cases().size(), ExpectKeys().size()) << "a case for a key that is not in the table";
 }
 
+// A scenario whose expect block is `expect: {KEY: VALUE}`.
+std::string ScenarioWithExpect(const std::string& key, const std::string& value) {
+  return "name: expect_case\nduration: 1.0\ncontroller: {type: geometric}\n"
+         "estimation: {ground_truth: true}\n"
+         "reference: {type: hover, payload_position: [0, 0, 0.7]}\n"
+         "expect: {" +
+         key + ": " + value + "}\n";
+}
+
+// A bound of a key's size, every value `v` (a boolean key: true / false).
+std::string BoundText(const ExpectKey& k, double v) {
+  if (k.size == 0) return v != 0.0 ? "true" : "false";
+  std::ostringstream text;
+  text.precision(17);
+  if (k.size == 1) {
+    text << v;
+  } else {
+    text << "[";
+    for (int i = 0; i < k.size; ++i) text << (i ? ", " : "") << v;
+    text << "]";
+  }
+  return text.str();
+}
+
 TEST(ExpectKeysTest, EveryKeyParsesFromYamlWithinItsRange) {
   for (const ExpectKey& k : ExpectKeys()) {
     EXPECT_FALSE(k.description.empty()) << k.key;
     EXPECT_FALSE(k.unit.empty()) << k.key;
-    EXPECT_NE(FindExpectKey(k.key), nullptr);
+    // in range: the loader stores the bound as written
+    const double inside = k.size == 0 ? 1.0 : (k.integer ? std::floor(k.max) : k.max);
+    const Scenario s = LoadScenarioText(ScenarioWithExpect(k.key, BoundText(k, inside)), "case");
+    ASSERT_TRUE(s.expect.Has(k.key)) << k.key;
+    EXPECT_EQ(s.expect.bounds.at(k.key), std::vector<double>(std::max(1, k.size), inside)) << k.key;
+    if (k.size == 0) continue;
+    // beyond its range, or of the wrong size: refused, naming the key
+    const std::vector<std::string> refused = {BoundText(k, k.max + 1.0 + std::fabs(k.max)),
+                                              BoundText(k, k.min - 1.0 - std::fabs(k.min)),
+                                              k.size == 1 ? "[1, 2]" : "0.5", "\"tight\""};
+    for (const std::string& value : refused) {
+      try {
+        LoadScenarioText(ScenarioWithExpect(k.key, value), "case");
+        ADD_FAILURE() << k.key << ": " << value << " was accepted";
+      } catch (const InputError& e) {
+        EXPECT_NE(std::string(e.what()).find(k.key), std::string::npos)
+            << k.key << ": " << value << ": " << e.what();
+      }
+    }
   }
-  EXPECT_EQ(FindExpectKey("payload_rmse_maximum"), nullptr);
+  EXPECT_THROW(LoadScenarioText(ScenarioWithExpect("payload_rmse_maximum", "0.1"), "case"),
+               InputError);
 }
 
 TEST(ExpectKeysTest, ReadmeListsExactlyTheTablesKeys) {

@@ -9,9 +9,10 @@
 # 0.12 s whichever controller flies. The paper's ordering (the baseline crashing more) does not
 # show: with 100 draws (ci/paper_comparison.sh) 3 against 2. Crash counts this small are chaotic
 # (a change moving no shipped scenario by 0.1 % once moved hpa_mpc between 2 and 4 of 40).
-# Regression bounds: hpa_mpc at most 3 crashes (one more than measured: a count this small moves
-# in steps of 1 of 40, so the median quadrotor deviation carries the tight bound) and a median
-# deviation at most 1.3 x the measured 0.250 m. README, "paper comparison".
+# Regression bounds: no bound on the crash count itself (chaotic, above); the crash rate's Wilson
+# 95 % interval must reach below 10 % (measured 2 of 40: interval 0.014-0.165; 4 of 40 still
+# passes, 8 of 40 fails), and the median quadrotor deviation, which is not chaotic, carries the
+# tight bound: at most 1.3 x the measured 0.250 m.
 set -u
 hpa="$1"; scen="$2"; out="$3"
 rm -rf "$out"; mkdir -p "$out"
@@ -35,7 +36,8 @@ print(f"Wilson 95 %: hpa_mpc {hpa['crash_rate_ci95']}, nonhybrid_mpc {base['cras
 assert hpa["crash_rate_ci95"][0] <= base["crash_rate_ci95"][1], \
     "hpa_mpc's crash rate interval lies above the baseline's"
 assert diff["metrics"]["crash_rate"]["verdict"] != "worse", diff["metrics"]["crash_rate"]
-assert hpa["crashes"] <= 3, f"hpa_mpc crashed {hpa['crashes']} times (measured 2)"
+assert hpa["crash_rate_ci95"][0] <= 0.10, \
+    f"hpa_mpc crashed {hpa['crashes']} of 40 (measured 2): its rate is above 10 % at 95 %"
 deviation = hpa["quad_deviation_max_m"]["median"]
 print(f"hpa_mpc median quadrotor deviation {deviation:.3f} m (measured 0.250)")
 assert deviation <= 1.3 * 0.250, deviation
