@@ -9,6 +9,7 @@
 #include <tuple>
 
 #include "hpa/models/camera_model.h"
+#include "hpa/models/seed_streams.h"
 
 namespace hpa::sim {
 namespace {
@@ -17,14 +18,6 @@ constexpr size_t kNoiseTableSize = size_t{1} << 22;  // > one frame's 2.76 M cha
 
 // Narrowest band over which the fast motion blur fades into the unblurred image (px).
 constexpr int kMinBlurFadePx = 16;
-
-// SplitMix64: a well-mixed 64-bit hash of (seed, frame) for the noise table offset.
-uint64_t Mix(uint64_t x) {
-  x += 0x9E3779B97F4A7C15ull;
-  x = (x ^ (x >> 30)) * 0xBF58476D1CE4E5B9ull;
-  x = (x ^ (x >> 27)) * 0x94D049BB133111EBull;
-  return x ^ (x >> 31);
-}
 
 // N(0, 1) samples shared by every model in the process (fixed seed: deterministic).
 const std::vector<float>& UnitNormalTable() {
@@ -176,7 +169,7 @@ void CameraImageModel::Remap(const cv::Mat& pinhole, const cv::Rect& area, cv::M
 void CameraImageModel::AddNoise(uint64_t frame_index, const cv::Rect& area, cv::Mat* image) const {
   if (!profile_.noise) return;
   const size_t mask = kNoiseTableSize - 1;
-  const size_t offset = Mix(seed_ ^ Mix(frame_index)) & mask;
+  const size_t offset = SplitMix64(seed_ ^ SplitMix64(frame_index)) & mask;
   const float* table = unit_normal_.data();
   const float* sd = noise_sd_dn_.data();
   // each value's noise is keyed by its place in the whole frame: a region gets the frame's noise

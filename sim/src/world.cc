@@ -13,6 +13,7 @@
 
 #include "hpa/models/input_error.h"
 #include "hpa/models/rotor_model.h"
+#include "hpa/models/seed_streams.h"
 #include "hpa/sim/camera_image_model.h"
 #include "offscreen_renderer.h"
 #include "world_detail.h"
@@ -213,9 +214,9 @@ void World::Reset(const SystemState& initial) {
   model_->eq_active[ids_.gripper_weld] = 0;
   rng_.seed(config_.seed);
   imu_.ResetBias();
-  vio_.SetDrift(config_.profile.vio, DerivedSeed(config_.seed, 0x76696F));
+  vio_.SetDrift(config_.profile.vio, DeriveSeed(config_.seed, SeedStream::kVioDrift));
   imu_queue_.clear();
-  wind_rng_.seed(DerivedSeed(config_.seed, 0x77696E64));
+  wind_rng_.seed(DeriveSeed(config_.seed, SeedStream::kWind));
   gust_W_mps_.setZero();
   event_wind_W_mps_.setZero();
   event_wind_end_step_ = 0;
@@ -231,7 +232,7 @@ void World::Reset(const SystemState& initial) {
   imu_sum_w_B_radps_.setZero();
   imu_sum_specific_force_B_mps2_.setZero();
   imu_sum_count_ = 0;
-  rate_gyro_rng_.seed(DerivedSeed(config_.seed, 0x726174656779ULL));
+  rate_gyro_rng_.seed(DeriveSeed(config_.seed, SeedStream::kRateGyro));
   rate_gyro_sum_radps_.setZero();
   rate_gyro_sum_count_ = 0;
   rate_gyro_.reset();

@@ -1,6 +1,5 @@
 #pragma once
-// Private pieces the World's source files share: the MuJoCo warning collector and the seeds of
-// the world's own random generators.
+// Private pieces the World's source files share: the MuJoCo warning collector.
 
 #include <cstdint>
 #include <string>
@@ -15,11 +14,5 @@ std::string TakeWarnings();
 
 /// MJCF geom group of the gripper's visual (drawn in the chase camera while it holds the payload).
 constexpr int kGripperGeomGroup = 3;
-
-/// Seed of one of the world's own generators (mismatch, gusts, VIO drift, rate gyro,
-/// appearance), apart from the sensor noise stream: seed * golden-ratio constant + salt.
-inline uint64_t DerivedSeed(uint64_t seed, uint64_t salt) {
-  return seed * 0x9E3779B97F4A7C15ULL + salt;
-}
 
 }  // namespace hpa::sim

@@ -9,6 +9,7 @@
 
 #include "hpa/models/input_error.h"
 #include "hpa/models/rotor_model.h"
+#include "hpa/models/seed_streams.h"
 #include "hpa/sim/world.h"
 #include "world_detail.h"
 
@@ -110,7 +111,7 @@ void World::ApplyCameraPose(const Params& p) {
 
 void World::DrawMismatch() {
   // a generator of its own, so the sensor noise stream is the same with and without mismatch
-  std::mt19937_64 rng(DerivedSeed(config_.seed, 0x6D69736D61746368ULL));
+  std::mt19937_64 rng(DeriveSeed(config_.seed, SeedStream::kMismatch));
   std::normal_distribution<double> normal(0.0, 1.0);
   const MismatchProfile& m = config_.profile.mismatch;
   if (m.enabled) {

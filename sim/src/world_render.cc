@@ -10,6 +10,7 @@
 #include <string>
 
 #include "hpa/models/input_error.h"
+#include "hpa/models/seed_streams.h"
 #include "hpa/sim/camera_image_model.h"
 #include "hpa/sim/world.h"
 #include "offscreen_renderer.h"
@@ -20,7 +21,7 @@ namespace hpa::sim {
 void World::RandomizeAppearance() {
   // what the camera sees varies, the physics does not: floor shade and checker scale, and the
   // lights' strength and direction (no saturated colour: the detector looks for red)
-  std::mt19937_64 rng(DerivedSeed(config_.seed, 0x6C69676874ULL));
+  std::mt19937_64 rng(DeriveSeed(config_.seed, SeedStream::kAppearance));
   std::uniform_real_distribution<double> u(0.0, 1.0);
   const int floor_mat = model_->geom_matid[ids_.ground_geom];
   if (floor_mat >= 0) {
@@ -102,7 +103,7 @@ void World::RenderPayloadCamera(cv::Mat* bgr, const cv::Rect& region) {
   const CameraImageProfile& profile = config_.profile.camera;
   if (camera_image_ == nullptr) {
     camera_image_ = std::make_unique<CameraImageModel>(
-        world_params_, profile, DerivedSeed(config_.seed, 0x63616D657261ULL));
+        world_params_, profile, DeriveSeed(config_.seed, SeedStream::kCameraImage));
     // the render is a pinhole image wide enough to cover the distorted sensor
     model_->cam_fovy[ids_.payload_camera] = camera_image_->render_fovy_deg();
   }

@@ -11,6 +11,7 @@
 #include "hpa/estimator/estimator_registry.h"
 #include "hpa/models/camera_model.h"
 #include "hpa/models/input_error.h"
+#include "hpa/models/seed_streams.h"
 
 namespace hpa::runner {
 namespace {
@@ -84,7 +85,7 @@ RunLoop::RunLoop(const Scenario& scenario, const Params& params, const RunOption
       wall_start_(Clock::now()),
       ground_truth_(scenario.estimation.ground_truth),
       render_camera_(scenario.estimation.camera == "render"),
-      camera_rng_(scenario.seed * 0x9E3779B97F4A7C15ULL + 17) {
+      camera_rng_(DeriveSeed(scenario.seed, SeedStream::kAnalyticCamera)) {
   // the world: flight params plus the scenario's world-only overrides
   sim::WorldConfig world_config;
   world_config.params = params;

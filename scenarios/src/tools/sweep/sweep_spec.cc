@@ -9,6 +9,7 @@
 #include <sstream>
 
 #include "hpa/models/input_error.h"
+#include "hpa/models/seed_streams.h"
 #include "hpa/models/yaml_reader.h"
 #include "scenarios/src/tools/cli_parse.h"
 #include "scenarios/src/tools/sweep/sweep_internal.h"
@@ -45,14 +46,6 @@ namespace {
 
 using sweep::BuildScenario;
 using sweep::FormatNumber;
-
-// SplitMix64: derives independent seeds from the sweep seed (stable across platforms).
-uint64_t SplitMix64(uint64_t x) {
-  x += 0x9E3779B97F4A7C15ULL;
-  x = (x ^ (x >> 30)) * 0xBF58476D1CE4E5B9ULL;
-  x = (x ^ (x >> 27)) * 0x94D049BB133111EBULL;
-  return x ^ (x >> 31);
-}
 
 std::string ReadFile(const std::string& path) {
   CheckInputFile(path, "a YAML file");
