@@ -24,6 +24,9 @@ set_tests_properties(cli.golden PROPERTIES LABELS cli FIXTURES_REQUIRED scenario
 add_test(NAME cli.schema_docs
          COMMAND bash ${SCEN}/tests/schema_docs_test.sh ${HPA_BIN} ${CMAKE_SOURCE_DIR}/docs/schema.md)
 set_tests_properties(cli.schema_docs PROPERTIES LABELS cli)
+# README and docs/: every relative link resolves
+add_test(NAME cli.docs_links COMMAND bash ${SCEN}/tests/docs_links_test.sh ${CMAKE_SOURCE_DIR})
+set_tests_properties(cli.docs_links PROPERTIES LABELS cli)
 add_test(NAME cli.golden_exact
          COMMAND bash ${SCEN}/tests/golden_exact_test.sh ${HPA_BIN} ${SCEN_OUT}
                  ${SCEN_OUT}/golden_exact)

@@ -1,6 +1,6 @@
 #pragma once
 // Test harness: hpa::HybridModel as the plant (with taut/slack switching and the inelastic
-// re-taut jump of DESIGN.md section 9), the body-rate controller at 500 Hz and a high-level
+// re-taut jump of docs/design.md section 4), the body-rate controller at 500 Hz and a high-level
 // Controller at its own rate, on the runner's LockstepClock. No MuJoCo (the scenario tests add it).
 
 #include <cmath>

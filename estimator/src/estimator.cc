@@ -148,7 +148,7 @@ class CableEstimator final : public Estimator {
     }
     if (previous == CableMode::kSlack) {
       // re-taut: restart the cable EKF on the measured direction and the tracker's velocity
-      // (radial part removed, as in the inelastic collision of DESIGN.md section 9)
+      // (radial part removed, as in the inelastic collision of docs/design.md section 4)
       Eigen::Vector3d p_L, v_L;
       tracker_.PredictTo(quad_.state().time_s, &p_L, &v_L);
       const Eigen::Vector3d xi = (R_WB * p_BL_B).normalized();

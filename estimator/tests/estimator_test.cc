@@ -18,7 +18,7 @@ namespace hpa {
 namespace {
 
 // Truth from the analytic hybrid model (level quadrotor at hover thrust), with a payload kick
-// at kick_time_s: slack free flight, and an inelastic re-taut (DESIGN.md section 9) when the
+// at kick_time_s: slack free flight, and an inelastic re-taut (docs/design.md section 4) when the
 // cable reaches l again. Sensors: IMU 500 Hz, VIO 30 Hz (20 ms late), analytic camera 30 Hz
 // (one frame late), all noisy from one seeded generator.
 struct RunStats {

@@ -54,7 +54,7 @@ Latency RunKick(double v0_mps, uint64_t seed) {
 
 TEST(ModeDetectorTest, FlagsAScriptedSlackEventWithinTwoFrames) {
   // 1.5 m/s kick (0.15 N s on the 0.1 kg payload): the length falls below l - eps after ~37 ms;
-  // 3.5 m/s is DESIGN.md's 0.35 N s impulse
+  // 3.5 m/s is the 0.35 N s impulse of docs/design.md's example scenario
   for (double v0 : {1.5, 3.5}) {
     for (uint64_t seed = 1; seed <= 5; ++seed) {
       const Latency l = RunKick(v0, seed);

@@ -30,7 +30,7 @@ TEST(ParamsTest, DefaultFileLoadsThePaperValues) {
   EXPECT_DOUBLE_EQ(p.gravity_mps2, 9.81);
   EXPECT_EQ(p.camera_width_px, 1280);
   EXPECT_EQ(p.camera_height_px, 720);
-  // thrust-to-weight of quadrotor + payload about 2.5 (DESIGN.md section 2)
+  // thrust-to-weight of quadrotor + payload about 2.5 (docs/design.md section 2)
   const double max_thrust_N = 4 * p.k_f_N_per_radps2 * std::pow(p.motor_speed_max_radps, 2);
   EXPECT_NEAR(max_thrust_N / p.HoverThrustN(), 2.5, 0.05);
 }

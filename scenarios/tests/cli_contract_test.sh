@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# CLI contract checks for `hpa` (DESIGN.md section 6): exit codes 0/1/2, error messages that
+# CLI contract checks for `hpa` (docs/design.md section 7): exit codes 0/1/2, error messages that
 # name the file and the key, determinism of metrics.json, render-frame output.
 # usage: cli_contract_test.sh HPA_BIN SCENARIOS_DIR OUT_DIR
 set -uo pipefail
@@ -171,11 +171,11 @@ expect_exit 0 "no slack event in this run: no video written" run "$base" --video
 # SIGTERM mid-run: the metrics and log so far are written, and the run says it was stopped
 "$hpa" run "$scen/hover.yaml" --set duration=3000 --out "$out/sigterm" --quiet > /dev/null 2>&1 &
 pid=$!
-sleep 1
+sleep 1  # a loaded machine may still be setting up the world: the stop then comes at t = 0
 kill -TERM "$pid"
 wait "$pid"; status=$?
 [ "$status" -eq 3 ] || fail "SIGTERM: exit $status, expected 3"
-python3 -c 'import json, sys; m = json.load(open(sys.argv[1])); assert "signal 15" in m["run_error"] and 0 < m["sim_time_s"] < 3000, m' \
+python3 -c 'import json, sys; m = json.load(open(sys.argv[1])); assert "signal 15" in m["run_error"] and 0 <= m["sim_time_s"] < 3000, m' \
   "$out/sigterm/metrics.json" || fail "SIGTERM: no partial metrics.json naming the signal"
 [ -s "$out/sigterm/log.csv" ] || fail "SIGTERM: no partial log.csv"
 

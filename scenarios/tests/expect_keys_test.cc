@@ -1,4 +1,5 @@
-// Every expect key, pass and fail, from the one table; the README lists exactly these keys.
+// Every expect key, pass and fail, and parsed from YAML, from the one table (docs/schema.md lists
+// it: ctest cli.schema_docs).
 
 #include "hpa/scenarios/expect_keys.h"
 
@@ -84,6 +85,8 @@ const std::map<std::string, Case>& Cases() {
 
 TEST(ExpectKeysTest, EveryKeyPassesAndFailsOnItsMetric) {
   for (const ExpectKey& k : ExpectKeys()) {
+    // keys that other tests of this binary register describe themselves as "(test)"
+    if (k.description.find("(test)") != std::string::npos) continue;
     const auto c = Cases().find(k.key);
     ASSERT_NE(c, Cases().end()) << "expect key '" << k.key << "' has no test case here";
     ExpectSpec spec;
@@ -150,23 +153,6 @@ TEST(ExpectKeysTest, EveryKeyParsesFromYamlWithinItsRange) {
   }
   EXPECT_THROW(LoadScenarioText(ScenarioWithExpect("payload_rmse_maximum", "0.1"), "case"),
                InputError);
-}
-
-TEST(ExpectKeysTest, ReadmeListsExactlyTheTablesKeys) {
-  std::ifstream in(std::string(HPA_SOURCE_DIR) + "/README.md");
-  std::stringstream text;
-  text << in.rdbuf();
-  const std::string readme = text.str();
-  const size_t start = readme.find("### Expect keys");
-  ASSERT_NE(start, std::string::npos) << "README.md has no '### Expect keys' section";
-  const std::string section = readme.substr(start, readme.find("\n#", start + 4) - start);
-  int rows = 0;
-  for (size_t p = 0; (p = section.find("\n| `", p)) != std::string::npos; ++p) ++rows;
-  EXPECT_EQ(rows, static_cast<int>(ExpectKeys().size()));
-  for (const ExpectKey& k : ExpectKeys()) {
-    EXPECT_NE(section.find("| `" + k.key + "` |"), std::string::npos)
-        << k.key << " is missing from the README's expect-key table";
-  }
 }
 
 }  // namespace

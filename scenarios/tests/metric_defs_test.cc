@@ -32,7 +32,9 @@ TEST(MetricDefsTest, EveryMetricIsReadFromTheMetricsJsonTheRunnerWrites) {
     EXPECT_TRUE(ReadMetric(def, j).has_value()) << def.name << " at " << def.json_path;
     EXPECT_FALSE(def.unit.empty()) << def.name;
     EXPECT_FALSE(def.description.empty()) << def.name;
-    if (def.compared) EXPECT_GT(def.min_effect, 0.0) << def.name;
+    if (def.compared) {
+      EXPECT_GT(def.min_effect, 0.0) << def.name;
+    }
   }
   EXPECT_DOUBLE_EQ(*ReadMetric("payload_rmse_norm_m", j), 0.13);
   EXPECT_DOUBLE_EQ(*ReadMetric("quad_position_deviation_max_m", j), 0.25);

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Sweep checks (DESIGN.md section 7): shards through GNU parallel merge to exactly the unsharded
+# Sweep checks (docs/design.md section 6): shards through GNU parallel merge to exactly the unsharded
 # sweep; resume after a killed sweep loses nothing and repeats nothing; a worker that dies is
 # recorded as an error and the others go on; the time limit kills a hung run.
 # usage: sweep_cli_test.sh HPA_BIN SCENARIOS_DIR OUT_DIR

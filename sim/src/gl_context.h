@@ -1,5 +1,5 @@
 #pragma once
-// A headless OpenGL context for MuJoCo's renderer, from OSMesa or EGL (DESIGN.md section 8).
+// A headless OpenGL context for MuJoCo's renderer, from OSMesa or EGL (docs/design.md section 9).
 //
 // MuJoCo 2.2 resolves its GL function pointers once per process, on the first mjr_makeContext,
 // through the first of eglGetProcAddress, OSMesaGetProcAddress and glXGetProcAddressARB it

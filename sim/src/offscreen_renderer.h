@@ -1,5 +1,5 @@
 #pragma once
-// Headless MuJoCo rendering through OSMesa or EGL (DESIGN.md section 8): one GL context per
+// Headless MuJoCo rendering through OSMesa or EGL (docs/design.md section 9): one GL context per
 // renderer, created lazily on the first frame so runs that never render pay nothing.
 
 #include <mujoco/mujoco.h>

@@ -122,7 +122,7 @@ void World::CheckWarnings() {
     warning_count_[i] = n;
     const std::string text = TakeWarnings();
     if (i == mjWARN_BADQPOS || i == mjWARN_BADQVEL || i == mjWARN_BADQACC) {
-      // MuJoCo has reset mjData: the state went non-finite (DESIGN.md section 6: a crash)
+      // MuJoCo has reset mjData: the state went non-finite (docs/design.md section 8: a crash)
       LatchCrash("non-finite state (MuJoCo: " + text + ")");
       continue;
     }

@@ -1,6 +1,6 @@
 // The cable (a length-limited tendon, models/scene.xml) against its two requirements:
 // a taut cable barely stretches at hover, and the slack-to-taut snap is the perfectly inelastic
-// collision along the cable of DESIGN.md section 9, with no rebound.
+// collision along the cable of docs/design.md section 4, with no rebound.
 #include <gtest/gtest.h>
 
 #include <algorithm>

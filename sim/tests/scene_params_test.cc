@@ -1,4 +1,4 @@
-// models/scene.xml agrees with models/params.yaml (DESIGN.md section 2: the controller's model
+// models/scene.xml agrees with models/params.yaml (docs/design.md section 2: the controller's model
 // and the simulated world must never silently disagree). Loads the raw MJCF, not through World,
 // which would overwrite masses and the cable length from params.
 #include <gtest/gtest.h>

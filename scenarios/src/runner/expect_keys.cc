@@ -1,6 +1,8 @@
 #include "hpa/scenarios/expect_keys.h"
 
 #include <sstream>
+#include <stdexcept>
+#include <utility>
 
 #include "hpa/models/registry.h"
 #include "hpa/scenarios/metrics.h"
@@ -136,8 +138,8 @@ std::vector<ExpectKey> BuildTable() {
   return t;
 }
 
-const Registry<ExpectKey>& TheRegistry() {
-  static const Registry<ExpectKey> registry("expect key", BuildTable());
+Registry<ExpectKey>& TheRegistry() {
+  static Registry<ExpectKey> registry("expect key", BuildTable());
   return registry;
 }
 
@@ -146,5 +148,11 @@ const Registry<ExpectKey>& TheRegistry() {
 const std::vector<ExpectKey>& ExpectKeys() { return TheRegistry().All(); }
 
 const ExpectKey* FindExpectKey(const std::string& key) { return TheRegistry().Find(key); }
+
+void RegisterExpectKey(ExpectKey key) {
+  if (!key.check)
+    throw std::invalid_argument("register expect key: '" + key.key + "' has no check");
+  TheRegistry().Add(std::move(key));
+}
 
 }  // namespace hpa

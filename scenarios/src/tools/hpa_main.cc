@@ -1,4 +1,4 @@
-// The `hpa` command line (DESIGN.md section 6).
+// The `hpa` command line (docs/design.md section 7).
 
 #include <sys/stat.h>
 

@@ -47,11 +47,6 @@ struct PairedMetric {
   bool timing = false;  // measures the machine: no verdict between builds unless asked
 };
 
-std::optional<double> Number(const Json& j) {
-  if (j.is_number()) return j.get<double>();
-  return std::nullopt;
-}
-
 bool Crashed(const Run& r) {
   return !r.ok || r.metrics.is_null() || r.metrics.value("crashed", false);
 }

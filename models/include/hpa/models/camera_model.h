@@ -11,7 +11,7 @@
 namespace hpa {
 
 /// Payload centre in the camera frame C (OpenCV axes): p_C = (R R_BC)^T (x_L - x_Q - R t_BC),
-/// DESIGN.md's corrected form of the paper's transform.
+/// docs/design.md's corrected form of the paper's transform.
 Eigen::Vector3d PayloadInCamera_C(const Params& params, const SystemState& state);
 
 /// Pixel coordinates (u right, v down, origin top-left) of a camera-frame point, or nullopt if the

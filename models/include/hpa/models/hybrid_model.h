@@ -39,7 +39,7 @@ class HybridModel {
   void StepJacobians(const StateVector& x, const InputVector& u, CableMode mode, double dt_s,
                      StateVector* x_next, StateMatrix* a, InputMatrix* b) const;
 
-  /// The jump map a cable can give (DESIGN.md section 9): positions moved along xi, keeping the
+  /// The jump map a cable can give (docs/design.md section 4): positions moved along xi, keeping the
   /// centre of mass, only as far as the taut band l - epsilon <= |x_L - x_Q| <= l requires;
   /// a payload moving away along xi stopped by a perfectly inelastic collision (momentum kept),
   /// an approaching one left alone (a cable cannot push). Applied to a state just past the

@@ -1,5 +1,5 @@
 #pragma once
-// The lockstep clock and the rate table (DESIGN.md section 3): one place that says when each
+// The lockstep clock and the rate table (docs/design.md section 3): one place that says when each
 // loop and sensor of the simulated vehicle runs and how late its output arrives. Used by the
 // scenario runner, the simulated world and the closed-loop tests alike; no MuJoCo here.
 

@@ -6,7 +6,7 @@
 
 namespace hpa {
 
-/// Every physical number of the system (DESIGN.md section 2); SI units, z up.
+/// Every physical number of the system (docs/design.md section 2); SI units, z up.
 struct Params {
   double gravity_mps2 = 9.81;
 

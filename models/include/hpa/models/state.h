@@ -1,6 +1,6 @@
 #pragma once
 // The state type shared by truth and estimate (PX4 habit: the ground-truth switch changes the
-// source, not the type), and the 19-element vector layout of DESIGN.md section 4.
+// source, not the type), and the 19-element vector layout of docs/design.md section 4.
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>

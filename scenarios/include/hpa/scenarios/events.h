@@ -1,5 +1,5 @@
 #pragma once
-// Scripted disturbances of a scenario (DESIGN.md section 5). Each event type is a struct with its
+// Scripted disturbances of a scenario (docs/design.md section 5). Each event type is a struct with its
 // own parsing, validation and application, in its own file under scenarios/src/events/, deriving
 // from EventAction; a new type is that file (its struct declared here or in its own header) and
 // one registration line in event_registry.cc.
@@ -82,6 +82,10 @@ struct EventRegistration {
 
 /// Every event type, in registration order.
 const std::vector<EventRegistration>& EventTypes();
+
+/// Adds an event type at run time (tests, plugins); throws std::invalid_argument on an empty or
+/// duplicate name. Its `parse` reads the type's own keys from the event map.
+void RegisterEventType(EventRegistration registration);
 
 /// Parses one event map (`at`, `type` and the type's own keys); throws InputError naming the
 /// key, listing the registered types for an unknown one.

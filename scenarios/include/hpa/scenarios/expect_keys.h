@@ -1,7 +1,7 @@
 #pragma once
 // The one table of `expect:` keys (key, metric, comparison, unit): scenario validation, the
-// check after a run, `hpa --help` and the README's list all read it. A new expect key is one
-// entry in expect_keys.cc (plus its metric, if that is new).
+// check after a run, `hpa --help` and `hpa schema` all read it. A new expect key is one entry in
+// expect_keys.cc (plus its metric in metric_defs.cc, if that is new), or a RegisterExpectKey call.
 
 #include <functional>
 #include <map>
@@ -32,5 +32,9 @@ const std::vector<ExpectKey>& ExpectKeys();
 
 /// The key named `key`, or nullptr.
 const ExpectKey* FindExpectKey(const std::string& key);
+
+/// Adds an expect key at run time (tests, plugins); throws std::invalid_argument on an empty or
+/// duplicate key or a missing check. Its `metric` should name a metric of metric_defs.h.
+void RegisterExpectKey(ExpectKey key);
 
 }  // namespace hpa

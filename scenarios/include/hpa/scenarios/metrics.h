@@ -1,5 +1,5 @@
 #pragma once
-// Run metrics exactly as DESIGN.md section 6 defines them, and the expect check.
+// Run metrics exactly as docs/design.md section 8 defines them, and the expect check.
 
 #include <optional>
 #include <string>
@@ -34,7 +34,7 @@ struct Quantiles {
   double median = 0.0, p99 = 0.0, max = 0.0;
 };
 
-/// The metrics.json contract (DESIGN.md section 6) plus extensions.
+/// The metrics.json contract (docs/design.md section 8) plus extensions.
 struct Metrics {
   std::string scenario, controller, camera;
   unsigned long seed = 0;
@@ -104,7 +104,7 @@ void ComputeMetrics(const MetricsInputs& inputs, Metrics* metrics);
 /// Checks the scenario's expect bounds; fills expect_passed / expect_failed.
 void CheckExpectations(const ExpectSpec& expect, Metrics* metrics);
 
-/// metrics.json text (keys of DESIGN.md section 6; `wall_time_s` and `*_ms` are the only
+/// metrics.json text (keys of docs/design.md section 8; `wall_time_s` and `*_ms` are the only
 /// fields that differ between identical runs).
 std::string MetricsToJson(const Metrics& metrics);
 

@@ -1,5 +1,5 @@
 #pragma once
-// A scenario file (DESIGN.md section 5) loaded and validated: unknown keys, wrong types and
+// A scenario file (docs/design.md section 5) loaded and validated: unknown keys, wrong types and
 // out-of-range values are InputErrors naming the file and the key path.
 
 #include <Eigen/Core>

@@ -1,5 +1,5 @@
 #pragma once
-// Monte Carlo sweeps (DESIGN.md section 7): expansion of `vary` into runs, parallel worker
+// Monte Carlo sweeps (docs/design.md section 6): expansion of `vary` into runs, parallel worker
 // processes with crash isolation, JSON-lines results, shards, resume, merge and summaries.
 
 #include <string>

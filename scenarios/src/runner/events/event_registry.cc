@@ -1,3 +1,5 @@
+#include <utility>
+
 #include "hpa/models/input_error.h"
 #include "hpa/models/registry.h"
 #include "hpa/models/yaml_reader.h"
@@ -11,9 +13,9 @@ std::shared_ptr<const EventAction> Parse(const YamlMap& map) {
   return std::make_shared<const Event>(Event::Parse(map));
 }
 
-const Registry<EventRegistration>& TheRegistry() {
+Registry<EventRegistration>& TheRegistry() {
   // one line per event type
-  static const Registry<EventRegistration> registry(
+  static Registry<EventRegistration> registry(
       "event type",
       {
           {"gripper_grab", "the gripper takes the payload where it is", Parse<GripperGrabEvent>},
@@ -28,6 +30,10 @@ const Registry<EventRegistration>& TheRegistry() {
 }  // namespace
 
 const std::vector<EventRegistration>& EventTypes() { return TheRegistry().All(); }
+
+void RegisterEventType(EventRegistration registration) {
+  TheRegistry().Add(std::move(registration));
+}
 
 EventSpec ParseEvent(const YamlMap& map) {
   EventSpec event;

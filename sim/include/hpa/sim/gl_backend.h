@@ -1,5 +1,5 @@
 #pragma once
-// Which OpenGL context the rendered cameras use (DESIGN.md section 8). Only names here: the GL
+// Which OpenGL context the rendered cameras use (docs/design.md section 9). Only names here: the GL
 // headers stay inside sim/src.
 
 #include <string>

@@ -1,5 +1,5 @@
 #pragma once
-// The simulated world (DESIGN.md sections 2, 3, 6, 8, 9): MuJoCo physics of the quadrotor, the
+// The simulated world (docs/design.md): MuJoCo physics of the quadrotor, the
 // cable (a length-limited tendon) and the payload at 1 kHz, first-order motors, IMU and VIO
 // models, disturbances, the gripper, crash detection and the rendered cameras.
 // MuJoCo stays inside sim/src (this header only points to its model and data); flight code never
@@ -68,7 +68,7 @@ struct Truth {
   InputVector motor_speed_radps = InputVector::Zero();  // actual (lagged) rotor speeds  (4)
 };
 
-/// Latched crash flag (DESIGN.md section 6).
+/// Latched crash flag (docs/design.md section 8).
 struct CrashStatus {
   bool crashed = false;
   double time_s = 0;   // time of the first crash condition
