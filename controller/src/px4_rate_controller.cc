@@ -6,6 +6,28 @@
 #include "hpa/models/rotor_model.h"
 
 namespace hpa {
+
+const ParamTable<Px4RateParams>& Px4RateParamTable() {
+  using P = Px4RateParams;
+  static const ParamTable<P> t{
+      "rate_loop",
+      "PX4's multicopter rate controller and control allocation (flight-code parameters)",
+      {{"rate_hz", "Hz", 50.0, 1000.0,
+        "loop and gyro rate (PX4 runs the loop on each gyro sample); divides 1000 Hz", &P::rate_hz},
+       {"p", "1/(rad/s)", 0.0, 0.6, "MC_ROLLRATE_P, MC_PITCHRATE_P, MC_YAWRATE_P", &P::p},
+       {"i", "1/rad", 0.0, 5.0, "MC_*RATE_I", &P::i},
+       {"d", "1/(rad/s^2)", 0.0, 0.05, "MC_*RATE_D", &P::d},
+       {"k", "-", 0.01, 5.0, "MC_*RATE_K: scales P, I and D", &P::k},
+       {"integrator_limit", "-", 0.0, 1.0, "MC_RR_INT_LIM, MC_PR_INT_LIM, MC_YR_INT_LIM",
+        &P::integrator_limit},
+       {"gyro_cutoff_hz", "Hz", 0.0, 1000.0, "IMU_GYRO_CUTOFF: Butterworth on the gyro",
+        &P::gyro_cutoff_hz},
+       {"dgyro_cutoff_hz", "Hz", 0.0, 1000.0, "IMU_DGYRO_CUTOFF: Butterworth on d(gyro)/dt",
+        &P::dgyro_cutoff_hz},
+       {"yaw_torque_cutoff_hz", "Hz", 0.0, 10.0, "MC_YAW_TQ_CUTOFF: low-pass on the yaw torque",
+        &P::yaw_torque_cutoff_hz}}};
+  return t;
+}
 namespace {
 
 // Rotor thrust range: f = f_min + u (f_max - f_min).

@@ -142,24 +142,31 @@ TEST(WorldProfileTest, BadProfilesAndKeysAreNamed) {
 
 TEST(WorldProfileTest, TheFlightProfileFliesPx4sRateLoopWithPx4sDefaults) {
   const Scenario flight = LoadScenario(Write("flight.yaml", kMinimal));
-  const sim::RateLoopProfile& r = flight.world.rate_loop;
+  const RateLoopSpec& r = flight.rate_loop;
   EXPECT_TRUE(r.px4);
-  EXPECT_EQ(r.rate_hz, 1000.0);
-  EXPECT_EQ(r.p, (std::array<double, 3>{0.15, 0.15, 0.2}));
-  EXPECT_EQ(r.i, (std::array<double, 3>{0.2, 0.2, 0.1}));
-  EXPECT_EQ(r.d, (std::array<double, 3>{0.003, 0.003, 0.0}));
-  EXPECT_EQ(r.integrator_limit, (std::array<double, 3>{0.3, 0.3, 0.3}));
-  EXPECT_EQ(r.gyro_cutoff_hz, 30.0);
-  EXPECT_EQ(r.dgyro_cutoff_hz, 30.0);
-  EXPECT_EQ(r.yaw_torque_cutoff_hz, 2.0);
-  // the ideal world keeps the project's own loop
+  EXPECT_EQ(r.params.rate_hz, 1000.0);
+  EXPECT_EQ(r.params.p, Eigen::Vector3d(0.15, 0.15, 0.2));
+  EXPECT_EQ(r.params.i, Eigen::Vector3d(0.2, 0.2, 0.1));
+  EXPECT_EQ(r.params.d, Eigen::Vector3d(0.003, 0.003, 0.0));
+  EXPECT_EQ(r.params.integrator_limit, Eigen::Vector3d(0.3, 0.3, 0.3));
+  EXPECT_EQ(r.params.gyro_cutoff_hz, 30.0);
+  EXPECT_EQ(r.params.dgyro_cutoff_hz, 30.0);
+  EXPECT_EQ(r.params.yaw_torque_cutoff_hz, 2.0);
+  // the vehicle's rate gyro follows the loop
+  EXPECT_TRUE(flight.world.rate_gyro.enabled);
+  EXPECT_EQ(flight.world.rate_gyro.rate_hz, 1000.0);
+  // the ideal world keeps the project's own loop, and has no rate gyro
   const Scenario ideal = LoadScenario(Write("ideal.yaml", kMinimal), {{"world.profile", "ideal"}});
-  EXPECT_FALSE(ideal.world.rate_loop.px4);
+  EXPECT_FALSE(ideal.rate_loop.px4);
+  EXPECT_FALSE(ideal.world.rate_gyro.enabled);
   // one number overridden, the rest kept
   const Scenario s =
       LoadScenario(Write("override.yaml", kMinimal), {{"world.rate_loop.gyro_cutoff_hz", "80"}});
-  EXPECT_EQ(s.world.rate_loop.gyro_cutoff_hz, 80.0);
-  EXPECT_EQ(s.world.rate_loop.dgyro_cutoff_hz, 30.0);
+  EXPECT_EQ(s.rate_loop.params.gyro_cutoff_hz, 80.0);
+  EXPECT_EQ(s.rate_loop.params.dgyro_cutoff_hz, 30.0);
+  const Scenario half =
+      LoadScenario(Write("half.yaml", kMinimal), {{"world.rate_loop.rate_hz", "500"}});
+  EXPECT_EQ(half.world.rate_gyro.rate_hz, 500.0);
 }
 
 TEST(WorldProfileTest, BadRateLoopKeysAndValuesAreNamed) {

@@ -103,15 +103,15 @@ void World::CheckRates() {
   }
   imu_steps_ = static_cast<int>(std::lround(imu_steps));
   // the rate loop's own gyro (PX4 rate loop): the IMU's part at the loop's rate
-  if (config_.profile.rate_loop.px4) {
-    const double steps = config_.rates.physics_hz / config_.profile.rate_loop.rate_hz;
+  if (config_.profile.rate_gyro.enabled) {
+    const double steps = config_.rates.physics_hz / config_.profile.rate_gyro.rate_hz;
     if (!(steps >= 1.0) || std::abs(steps - std::round(steps)) > 1e-9) {
       throw InputError("", "world.rate_loop.rate_hz", "the rate must divide the physics rate");
     }
     rate_gyro_steps_ = static_cast<int>(std::lround(steps));
     // discrete white noise of the same density at this rate: sigma = density / sqrt(period)
     rate_gyro_sigma_radps_ = ImuNoise(config_).gyro_noise_density_radps_rthz /
-                             std::sqrt(1.0 / config_.profile.rate_loop.rate_hz);
+                             std::sqrt(1.0 / config_.profile.rate_gyro.rate_hz);
   }
 }
 

@@ -296,8 +296,8 @@ TEST(WorldTest, RateGyroSamplesAtTheRateLoopsRateOnlyWhenPx4Flies) {
   EXPECT_FALSE(off.TakeRateGyro().has_value());
 
   WorldConfig c = DefaultConfig();
-  c.profile.rate_loop.px4 = true;
-  c.profile.rate_loop.rate_hz = 1000.0;
+  c.profile.rate_gyro.enabled = true;
+  c.profile.rate_gyro.rate_hz = 1000.0;
   World world(c);
   SystemState s;
   s.p_WQ_W = Eigen::Vector3d(0, 0, 1.0);
@@ -324,7 +324,7 @@ TEST(WorldTest, RateGyroSamplesAtTheRateLoopsRateOnlyWhenPx4Flies) {
   EXPECT_NEAR(std::sqrt(sum_sq / n), sigma, 0.1 * sigma);
 
   // 500 Hz: every other step
-  c.profile.rate_loop.rate_hz = 500.0;
+  c.profile.rate_gyro.rate_hz = 500.0;
   World half(c);
   half.Reset(s);
   half.Step();

@@ -50,21 +50,6 @@ void CheckReferenceAboveGround(const Reference& reference, double duration_s,
   }
 }
 
-Px4RateParams Px4ParamsOf(const sim::RateLoopProfile& r) {
-  const auto v = [](const std::array<double, 3>& a) { return Eigen::Vector3d(a[0], a[1], a[2]); };
-  Px4RateParams p;
-  p.rate_hz = r.rate_hz;
-  p.p = v(r.p);
-  p.i = v(r.i);
-  p.d = v(r.d);
-  p.k = v(r.k);
-  p.integrator_limit = v(r.integrator_limit);
-  p.gyro_cutoff_hz = r.gyro_cutoff_hz;
-  p.dgyro_cutoff_hz = r.dgyro_cutoff_hz;
-  p.yaw_torque_cutoff_hz = r.yaw_torque_cutoff_hz;
-  return p;
-}
-
 void LogRecorder::OnCameraFrame(const CameraFrameRecord& frame) {
   inputs_->payload_in_fov_per_frame.push_back(frame.payload_in_image);
   if (frame.frame != nullptr) {
@@ -107,8 +92,8 @@ RunLoop::RunLoop(const Scenario& scenario, const Params& params, const RunOption
   controller_ = MakeController(scenario.controller, params, reference_);
   rate_controller_ = std::make_unique<BodyRateController>(params);
   // the profile may fly PX4's rate loop instead, on the world's rate gyro
-  if (scenario.world.rate_loop.px4) {
-    px4_rate_ = std::make_unique<Px4RateController>(params, Px4ParamsOf(scenario.world.rate_loop));
+  if (scenario.rate_loop.px4) {
+    px4_rate_ = std::make_unique<Px4RateController>(params, scenario.rate_loop.params);
   }
   EstimatorConfig estimator_config;
   estimator_config.tension_cue.enabled = scenario.estimation.slack_tension_cue;

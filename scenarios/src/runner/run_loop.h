@@ -26,9 +26,6 @@ SystemState InitialState(const Reference& reference, const Params& params);
 /// Refuses a reference that puts the payload into the ground, naming the first time it does.
 void CheckReferenceAboveGround(const Reference& reference, double duration_s, const Params& params);
 
-/// The PX4 rate loop's parameters from the world profile's rate_loop section.
-Px4RateParams Px4ParamsOf(const sim::RateLoopProfile& r);
-
 /// The signal a stop was requested with, or 0 (RequestStop sets it).
 int StopSignal();
 

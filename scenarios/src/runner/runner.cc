@@ -39,9 +39,9 @@ std::vector<RateRow> ScenarioRateTable(const Scenario& scenario, const Params& p
       {"physics", 1.0 / sim::World::kPhysicsDt_s, 0.0, "MuJoCo timestep (sim::World)"},
       {"imu", rates.imu.rate_hz, rates.imu.latency_s, "RateTable::imu"},
   };
-  if (scenario.world.rate_loop.px4) {
-    rows.push_back({"rate loop (PX4) and its gyro", scenario.world.rate_loop.rate_hz, 0.0,
-                    "world profile rate_loop.rate_hz"});
+  if (scenario.rate_loop.px4) {
+    rows.push_back({"rate loop (PX4) and its gyro", scenario.rate_loop.params.rate_hz, 0.0,
+                    "rate_loop.rate_hz (PX4's parameters, flight code)"});
   } else {
     rows.push_back({"rate loop (body-rate P)", rates.imu.rate_hz, 0.0, "RateTable::imu"});
   }

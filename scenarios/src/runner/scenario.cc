@@ -183,15 +183,17 @@ Scenario ParseScenario(const YamlMap& root) {
 
   // the world's realism profile (flight unless the scenario says), then its single-number
   // overrides and the explicit world-only parameters
-  s.world = LoadWorldProfile("flight");
+  WorldProfileSpec profile = LoadWorldProfile("flight");
   if (root.Has("world")) {
     const YamlMap w = root.Map("world");
-    s.world = LoadWorldProfile(w.Choice("profile", WorldProfileNames(), "flight"));
-    ReadWorldProfileSections(w, &s.world);
+    profile = LoadWorldProfile(w.Choice("profile", WorldProfileNames(), "flight"));
+    ReadWorldProfileSections(w, &profile);
     if (w.Has("payload_mass")) s.world_payload_mass_kg = w.Number("payload_mass", 1e-3, 10.0);
     if (w.Has("cable_length")) s.world_cable_length_m = w.Number("cable_length", 0.05, 5.0);
     w.RejectUnknownKeys();
   }
+  s.world = profile.world;
+  s.rate_loop = profile.rate_loop;
   if (root.Has("controller")) {
     const YamlMap c = root.Map("controller");
     s.controller.type = c.Choice("type", ControllerNames(), "hpa_mpc");

@@ -85,7 +85,8 @@ usage:
       change beyond tolerance; --exact: on any change at all); --update rewrites it.
   hpa schema [SECTION] [SCENARIO.yaml]
       Prints as Markdown what the tools accept and measure, from their registries: controllers,
-      estimators, solvers, events, expect keys, metrics (all: docs/schema.md), or with
+      estimators, solvers, events, expect keys, metrics, world-profile keys with their
+      units, ranges and values (all: docs/schema.md), or with
       `rates SCENARIO.yaml` every loop and stream of that scenario with its rate and latency.
   hpa --help                 this text; hpa COMMAND --help: the command's options
 

@@ -21,6 +21,7 @@
 #include <Eigen/Core>
 
 #include "hpa/controller/butterworth_low_pass.h"
+#include "hpa/models/param_table.h"
 #include "hpa/models/params.h"
 #include "hpa/models/state.h"
 
@@ -39,6 +40,11 @@ struct Px4RateParams {
   double yaw_torque_cutoff_hz = 2.0;  // MC_YAW_TQ_CUTOFF: first-order low-pass on yaw torque
   double yaw_headroom = 0.15;         // mixYaw: yaw may push actuators 15 % past their maximum
 };
+
+/// The PX4 parameters of Px4RateParams as a scenario sets them (the world profile's `rate_loop`
+/// section): YAML key, unit, the range of PX4's parameter declarations (@min/@max; a generous
+/// bound where PX4 gives no @max), meaning. Flight-code parameters, declared once here.
+const ParamTable<Px4RateParams>& Px4RateParamTable();
 
 /// Physical size of a unit normalised command: N m per unit roll, pitch, yaw torque and N per
 /// unit collective thrust (see the file comment).

@@ -1,8 +1,8 @@
 #pragma once
-// Scripted disturbances of a scenario (docs/design.md section 5). Each event type is a struct with its
-// own parsing, validation and application, in its own file under scenarios/src/events/, deriving
-// from EventAction; a new type is that file (its struct declared here or in its own header) and
-// one registration line in event_registry.cc.
+// Scripted disturbances of a scenario (docs/design.md section 5). Each event type is a struct with
+// its own parsing, validation and application, in its own file under scenarios/src/events/,
+// deriving from EventAction; a new type is that file (its struct declared here or in its own
+// header) and one registration line in event_registry.cc.
 
 #include <Eigen/Core>
 #include <functional>

@@ -12,6 +12,7 @@
 #include "hpa/controller/controller.h"
 #include "hpa/controller/reference.h"
 #include "hpa/scenarios/events.h"
+#include "hpa/scenarios/world_profile_yaml.h"
 #include "hpa/sim/world_profile.h"
 
 namespace hpa {
@@ -56,6 +57,7 @@ struct Scenario {
   // world realism profile; a scenario file gets `flight` unless it says `world.profile: ideal`,
   // a Scenario built in code the ideal world
   sim::WorldProfile world;
+  RateLoopSpec rate_loop;  // the flight code's body-rate loop (the profile's rate_loop section)
   std::optional<double> world_payload_mass_kg;  // world-only overrides (model mismatch)
   std::optional<double> world_cable_length_m;
   ControllerConfig controller;

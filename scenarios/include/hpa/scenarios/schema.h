@@ -8,7 +8,7 @@
 namespace hpa {
 
 /// The Markdown of one section ("controllers", "estimators", "solvers", "events", "expect",
-/// "metrics") or of all of them ("all"); throws InputError for an unknown section.
+/// "metrics", "world") or of all of them ("all"); throws InputError for an unknown section.
 std::string SchemaMarkdown(const std::string& section);
 
 /// `hpa schema` entry point; returns the exit code.

@@ -2,13 +2,14 @@
 // A realism profile of the simulated world: the parts a real flight has and the ideal world
 // leaves out (contact, actuation spread and battery sag, compute and transport latency, model
 // mismatch between the flight code's parameters and the world's, the camera's motion blur and
-// sensor noise, PX4's rate loop on its own gyro). Every part is off in a default-constructed
+// sensor noise, the rate loop's own gyro). Every part is off in a default-constructed
 // profile (the `ideal` world; the camera's lens PSF stays on); models/profiles/flight.yaml switches
 // them on with the source of every number. The scenario runner and the world read it; flight code
 // never does.
 
-#include <array>
 #include <string>
+
+#include "hpa/models/param_table.h"
 
 namespace hpa::sim {
 
@@ -105,21 +106,12 @@ struct CameraImageProfile {
   bool draw_cable = true;         // the cable is drawn in the payload camera's image
 };
 
-/// The body-rate loop the flight code runs: the project's own loop on the estimated body rate at
-/// the IMU rate (px4 false), or PX4's rate controller and control allocation on a gyro sampled at
-/// the loop's rate (hpa::Px4RateController; the numbers are PX4's parameters, in its normalised
-/// torque per rad/s, rad and rad/s^2).
-struct RateLoopProfile {
-  bool px4 = false;
-  double rate_hz = 1000.0;                                // loop and its gyro's sample rate
-  std::array<double, 3> p{0.15, 0.15, 0.2};               // MC_*RATE_P (roll, pitch, yaw)
-  std::array<double, 3> i{0.2, 0.2, 0.1};                 // MC_*RATE_I
-  std::array<double, 3> d{0.003, 0.003, 0.0};             // MC_*RATE_D
-  std::array<double, 3> k{1.0, 1.0, 1.0};                 // MC_*RATE_K
-  std::array<double, 3> integrator_limit{0.3, 0.3, 0.3};  // MC_RR/PR/YR_INT_LIM
-  double gyro_cutoff_hz = 30.0;                           // IMU_GYRO_CUTOFF
-  double dgyro_cutoff_hz = 30.0;                          // IMU_DGYRO_CUTOFF
-  double yaw_torque_cutoff_hz = 2.0;                      // MC_YAW_TQ_CUTOFF
+/// The rate loop's own gyro, a sensor of the vehicle: sampled at rate_hz when the flight code
+/// flies PX4's rate loop (which runs on each of its samples), absent otherwise. The loop's gains
+/// are flight-code parameters (hpa::Px4RateParams), not part of the world.
+struct RateGyroProfile {
+  bool enabled = false;
+  double rate_hz = 1000.0;  // sample rate; divides the 1 kHz physics rate
 };
 
 /// The whole profile: its name and its parts.
@@ -134,7 +126,19 @@ struct WorldProfile {
   VioDriftProfile vio;
   ImuProfile imu;
   CameraImageProfile camera;
-  RateLoopProfile rate_loop;
+  RateGyroProfile rate_gyro;
 };
+
+/// The declared parameters of each section (YAML key, unit, range, meaning): the profile
+/// loader, `hpa schema world` and docs/world_profiles.md read them.
+const ParamTable<ContactProfile>& ContactParams();
+const ParamTable<ActuationProfile>& ActuationParams();
+const ParamTable<LatencyProfile>& LatencyParams();
+const ParamTable<MismatchProfile>& MismatchParams();
+const ParamTable<AeroProfile>& AeroParams();
+const ParamTable<WindProfile>& WindParams();
+const ParamTable<VioDriftProfile>& VioDriftParams();
+const ParamTable<ImuProfile>& ImuParams();
+const ParamTable<CameraImageProfile>& CameraImageParams();
 
 }  // namespace hpa::sim

@@ -1,0 +1,74 @@
+#pragma once
+// Parameters declared once: one table per config struct (key, unit, range, description, the
+// member it sets), beside the struct. The YAML loaders read a section through it
+// (ReadParamTable, models/yaml), `--set` goes through the same loaders, and `hpa schema` and
+// the docs print it (ParamTableMarkdown) with each default taken from the struct itself.
+
+#include <Eigen/Core>
+#include <sstream>
+#include <string>
+#include <variant>
+#include <vector>
+
+namespace hpa {
+
+/// One parameter of a config struct C.
+template <class C>
+struct ParamDecl {
+  std::string key;   // as written in YAML
+  std::string unit;  // "s", "m", "N s/m", "-" for a pure number, "" for a switch
+  double min = 0.0;  // allowed range (each element of a vector; unused for a switch)
+  double max = 0.0;
+  std::string description;  // one line: what it is and, where it has one, its source
+  std::variant<double C::*, bool C::*, int C::*, Eigen::Vector3d C::*> member;
+};
+
+/// The parameters of one config struct, in the order they are documented.
+template <class C>
+struct ParamTable {
+  std::string section;      // its YAML section ("latency", "rate_loop")
+  std::string description;  // one line
+  std::vector<ParamDecl<C>> params;
+};
+
+/// Text of one value as the tables print it.
+inline std::string ParamValueText(double v) {
+  std::ostringstream out;
+  out << v;
+  return out.str();
+}
+inline std::string ParamValueText(bool v) { return v ? "true" : "false"; }
+inline std::string ParamValueText(int v) { return std::to_string(v); }
+inline std::string ParamValueText(const Eigen::Vector3d& v) {
+  return "[" + ParamValueText(v.x()) + ", " + ParamValueText(v.y()) + ", " + ParamValueText(v.z()) +
+         "]";
+}
+
+/// A Markdown table of `table`: key, unit, range, the value in `values` (a struct read from a
+/// profile, or the defaults: C{}) and the description. `prefix` goes before each key
+/// ("world.latency.").
+template <class C>
+std::string ParamTableMarkdown(const ParamTable<C>& table, const C& values,
+                               const std::string& prefix, const std::string& value_header) {
+  std::string md =
+      "| key | unit | range | " + value_header + " | meaning |\n|---|---|---|---|---|\n";
+  for (const ParamDecl<C>& d : table.params) {
+    std::string value, range;
+    std::visit(
+        [&](auto member) {
+          using T = std::decay_t<decltype(values.*member)>;
+          value = ParamValueText(values.*member);
+          if constexpr (std::is_same_v<T, bool>) {
+            range = "true / false";
+          } else {
+            range = ParamValueText(d.min) + " to " + ParamValueText(d.max);
+          }
+        },
+        d.member);
+    md += "| `" + prefix + d.key + "` | " + d.unit + " | " + range + " | " + value + " | " +
+          d.description + " |\n";
+  }
+  return md;
+}
+
+}  // namespace hpa

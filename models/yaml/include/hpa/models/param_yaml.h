@@ -1,0 +1,37 @@
+#pragma once
+// Reads a config struct's section of a YAML file through its ParamTable: every key of the table
+// that is present is read and range-checked into its member (absent keys keep the struct's
+// value), and a key the table does not declare is an InputError listing the valid keys.
+
+#include <type_traits>
+#include <variant>
+
+#include "hpa/models/param_table.h"
+#include "hpa/models/yaml_reader.h"
+
+namespace hpa {
+
+/// Reads the keys of `table` from `map` into `*config`; rejects unknown keys of `map`.
+template <class C>
+void ReadParamTable(const YamlMap& map, const ParamTable<C>& table, C* config) {
+  for (const ParamDecl<C>& d : table.params) {
+    std::visit(
+        [&](auto member) {
+          using T = std::decay_t<decltype(config->*member)>;
+          if constexpr (std::is_same_v<T, bool>) {
+            config->*member = map.Bool(d.key, config->*member);
+          } else if constexpr (std::is_same_v<T, int>) {
+            config->*member = static_cast<int>(map.Integer(
+                d.key, static_cast<long>(d.min), static_cast<long>(d.max), config->*member));
+          } else if constexpr (std::is_same_v<T, double>) {
+            config->*member = map.Number(d.key, d.min, d.max, config->*member);
+          } else {
+            if (map.Has(d.key)) config->*member = map.Vector(d.key, 3, d.min, d.max);
+          }
+        },
+        d.member);
+  }
+  map.RejectUnknownKeys();
+}
+
+}  // namespace hpa
