@@ -35,12 +35,23 @@ const char* ToString(ControlStatus status) {
   return "unknown";
 }
 
+const ParamTable<ControllerConfig>& ControllerParamTable() {
+  using C = ControllerConfig;
+  static const ParamTable<C> t{
+      "controller",
+      "the high-level controller",
+      {{"perception_weight", "-", 0.0, 1e3,
+        "scale on the tuned L_cam weights (1: as tuned, 0: L_cam off)", &C::perception_weight},
+       {"predict_retaut", "", 0, 0, "hpa_mpc: predict the slack-to-taut guard in the horizon",
+        &C::predict_retaut}}};
+  return t;
+}
+
 std::unique_ptr<Controller> MakeController(const ControllerConfig& config, const Params& params,
                                            std::shared_ptr<const Reference> reference) {
   if (!reference) throw std::invalid_argument("MakeController: null reference");
-  if (!std::isfinite(config.perception_weight) || config.perception_weight < 0.0) {
-    throw std::invalid_argument("controller.perception_weight: expected a finite value >= 0");
-  }
+  CheckParamValue(ControllerParamTable(), "controller.", "perception_weight",
+                  config.perception_weight);
   const std::vector<std::string> solvers = OcpSolverNames();
   if (std::find(solvers.begin(), solvers.end(), config.solver) == solvers.end()) {
     throw std::invalid_argument("controller.solver: expected one of " + Joined(solvers) +

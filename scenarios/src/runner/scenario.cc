@@ -8,6 +8,7 @@
 #include "hpa/controller/controller_registry.h"
 #include "hpa/estimator/estimator_registry.h"
 #include "hpa/models/input_error.h"
+#include "hpa/models/param_yaml.h"
 #include "hpa/models/yaml_reader.h"
 #include "hpa/scenarios/expect_keys.h"
 #include "hpa/scenarios/world_profile_yaml.h"
@@ -196,10 +197,9 @@ Scenario ParseScenario(const YamlMap& root) {
   s.rate_loop = profile.rate_loop;
   if (root.Has("controller")) {
     const YamlMap c = root.Map("controller");
-    s.controller.type = c.Choice("type", ControllerNames(), "hpa_mpc");
-    s.controller.perception_weight = c.Number("perception_weight", 0.0, 1e3, 1.0);
-    s.controller.solver = c.Choice("solver", OcpSolverNames(), "rti");
-    s.controller.predict_retaut = c.Bool("predict_retaut", false);
+    s.controller.type = c.Choice("type", ControllerNames(), s.controller.type);
+    s.controller.solver = c.Choice("solver", OcpSolverNames(), s.controller.solver);
+    ReadParamTable(c, ControllerParamTable(), &s.controller);
     c.RejectUnknownKeys();
   }
   if (root.Has("estimation")) {

@@ -6,6 +6,7 @@
 #include <string>
 
 #include "hpa/controller/reference.h"
+#include "hpa/models/param_table.h"
 #include "hpa/models/params.h"
 #include "hpa/models/state.h"
 
@@ -39,6 +40,10 @@ struct ControllerConfig {
   std::string solver = "rti";      // rti | nlopt (fully converged NMPC solve)
   bool predict_retaut = false;     // hpa_mpc: predict the slack-to-taut guard in the horizon
 };
+
+/// The declared numeric and boolean keys of ControllerConfig (the `controller:` block); `type`
+/// and `solver` are names from their registries.
+const ParamTable<ControllerConfig>& ControllerParamTable();
 
 /// A high-level controller running at its own rate (150 Hz for the MPCs).
 class Controller {

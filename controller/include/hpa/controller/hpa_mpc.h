@@ -15,9 +15,9 @@ namespace hpa {
 
 /// Settings of an MPC controller.
 struct MpcSettings {
-  bool hybrid = true;              // false: nonhybrid_mpc (always taut, no perception cost)
-  double perception_weight = 1.0;  // scale on q_cam (hybrid only)
-  std::string solver = "rti";      // a name from OcpSolvers(): rti | nlopt
+  bool hybrid = true;  // false: nonhybrid_mpc (always taut, no perception cost)
+  double perception_weight = ControllerConfig{}.perception_weight;  // scale on q_cam (hybrid)
+  std::string solver = "rti";  // a name from OcpSolvers(): rti | nlopt
   OcpWeights weights = OcpWeights::Tuned();
   OcpSolverSettings solvers;    // settings of the solver named by `solver`
   int rate_output_stage = 1;    // body rates flown: plan state x[1] (the paper's second stage)

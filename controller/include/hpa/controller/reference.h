@@ -15,7 +15,7 @@ struct ReferencePoint {
   Eigen::Vector3d v_WL_W = Eigen::Vector3d::Zero();  // payload velocity  (3)
   Eigen::Vector3d a_WL_W = Eigen::Vector3d::Zero();  // payload acceleration  (3)
   Eigen::Vector3d j_WL_W = Eigen::Vector3d::Zero();  // payload jerk  (3)
-  Eigen::Vector3d xi_W = Eigen::Vector3d(0, 0, -1);   // cable direction, quad -> payload  (3)
+  Eigen::Vector3d xi_W = Eigen::Vector3d(0, 0, -1);  // cable direction, quad -> payload  (3)
   Eigen::Vector3d p_WQ_W = Eigen::Vector3d::Zero();  // quadrotor position  (3)
   Eigen::Vector3d v_WQ_W = Eigen::Vector3d::Zero();  // quadrotor velocity  (3)
   Eigen::Vector3d a_WQ_W = Eigen::Vector3d::Zero();  // quadrotor acceleration  (3)
@@ -30,8 +30,7 @@ class Reference {
 };
 
 /// Constant payload position.
-std::shared_ptr<Reference> MakeHoverReference(const Params& params,
-                                              const Eigen::Vector3d& p_WL_W);
+std::shared_ptr<Reference> MakeHoverReference(const Params& params, const Eigen::Vector3d& p_WL_W);
 
 /// Straight line from start to end over duration_s with a smooth (minimum-jerk) time law,
 /// holding start before t = 0 and end after.

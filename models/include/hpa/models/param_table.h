@@ -6,6 +6,7 @@
 
 #include <Eigen/Core>
 #include <sstream>
+#include <stdexcept>
 #include <string>
 #include <variant>
 #include <vector>
@@ -30,6 +31,24 @@ struct ParamTable {
   std::string description;  // one line
   std::vector<ParamDecl<C>> params;
 };
+
+/// Checks `value` of the parameter `key` of `table` against its declared range; throws
+/// std::invalid_argument "PREFIXkey: expected MIN to MAX, got VALUE" (code that builds a config
+/// without the YAML loader gets the loader's range).
+template <class C>
+void CheckParamValue(const ParamTable<C>& table, const std::string& prefix, const std::string& key,
+                     double value) {
+  for (const ParamDecl<C>& d : table.params) {
+    if (d.key != key) continue;
+    if (!(value >= d.min && value <= d.max)) {
+      std::ostringstream what;
+      what << prefix << key << ": expected " << d.min << " to " << d.max << ", got " << value;
+      throw std::invalid_argument(what.str());
+    }
+    return;
+  }
+  throw std::invalid_argument(prefix + key + ": not a declared parameter");
+}
 
 /// Text of one value as the tables print it.
 inline std::string ParamValueText(double v) {
