@@ -29,13 +29,17 @@ struct RunStats {
   double slack_latency_s = -1.0;          // true slack start -> estimated slack
   int false_slack_steps = 0;              // estimated slack while truly taut (before the kick)
   bool ever_slack = false;
-  // mean payload velocity error over kRetautWindow_s after the true re-taut (0: no re-taut)
+  // mean payload velocity error from kRetautWindowStart_s to kRetautWindow_s after the true
+  // re-taut (0: no re-taut)
   double retaut_payload_velocity_error_mps = 0.0;
   EstimatorHealth health;  // at the end of the run
 };
 
-// Window after a true re-taut over which the payload velocity error is averaged.
-constexpr double kRetautWindow_s = 0.1;
+// Window after a true re-taut over which the payload velocity error is averaged: from the
+// detection that restarts the cable filter (a frame and its latency after the snap) to a few
+// frames later, where the velocity row, fused at the next detection, acts.
+constexpr double kRetautWindow_s = 0.12;
+constexpr double kRetautWindowStart_s = 0.05;
 
 // told_thrust_scale: the estimator is told the thrust the rotors make times this (1: what the
 // allocation produced; above 1: a command a saturated mixer did not deliver).
@@ -159,7 +163,8 @@ RunStats Simulate(const std::string& variant, double kick_up_mps, uint64_t seed,
       any_slack_se += e2;
       ++any_slack_n;
     }
-    if (retaut_time_s >= 0 && t > retaut_time_s && t <= retaut_time_s + kRetautWindow_s) {
+    if (retaut_time_s >= 0 && t > retaut_time_s + kRetautWindowStart_s &&
+        t <= retaut_time_s + kRetautWindow_s) {
       retaut_dv += (est.v_WL_W - truth.v_WL_W).norm();
       ++retaut_n;
     }
@@ -314,7 +319,7 @@ TEST(EstimatorTest, RetautVelocityRowSettlesThePayloadVelocityFaster) {
   with_row.retaut_velocity_row = true;
   without_row.retaut_velocity_row = false;
   double sum_with = 0.0, sum_without = 0.0;
-  constexpr int kSeeds = 8;
+  constexpr int kSeeds = 20;
   for (int seed = 1; seed <= kSeeds; ++seed) {
     const RunStats a = Simulate("hybrid", 1.2, seed, with_row);
     const RunStats b = Simulate("hybrid", 1.2, seed, without_row);
@@ -323,14 +328,14 @@ TEST(EstimatorTest, RetautVelocityRowSettlesThePayloadVelocityFaster) {
     sum_without += b.retaut_payload_velocity_error_mps / kSeeds;
   }
   std::printf(
-      "payload velocity error over 0.1 s after the re-taut: %.3f m/s with the velocity "
-      "row, %.3f m/s without\n",
+      "payload velocity error 0.05-0.12 s after the re-taut: %.3f m/s with the velocity row, "
+      "%.3f m/s without\n",
       sum_with, sum_without);
-  // measured (seeds 1-8): 0.028 m/s with the row, 0.035 m/s without (ratio 0.80). Bounds: at
-  // most 0.9 x the error without the row (the row switched off, or fused into nothing, fails)
-  // and 1.5 x its own measurement
+  // measured (seeds 1-20): 0.017 m/s with the row, 0.022 m/s without (ratio 0.77; built with
+  // clang 0.018 and 0.024, ratio 0.75). Bounds: at most 0.9 x the error without the row (the
+  // row switched off, or fused into nothing, fails) and 1.5 x its own measurement
   EXPECT_LT(sum_with, 0.9 * sum_without);
-  EXPECT_LT(sum_with, 1.5 * 0.028);
+  EXPECT_LT(sum_with, 1.5 * 0.017);
 }
 
 TEST(EstimatorTest, AlwaysTautProjectedVariantKeepsThePayloadOnTheCable) {
