@@ -9,6 +9,7 @@
 #include <cmath>
 #include <fstream>
 #include <mutex>
+#include <sstream>
 #include <string>
 
 #include "hpa/models/input_error.h"
@@ -93,21 +94,55 @@ World::World(const WorldConfig& config)
   Reset(initial);
 }
 
+std::vector<SensorDeclaration> SensorDeclarations(const WorldConfig& config) {
+  const RateTable& r = config.rates;
+  const SensorNoiseConfig noise = ImuNoise(config);
+  const auto text = [](double v) {
+    std::ostringstream out;
+    out << v;
+    return out.str();
+  };
+  std::vector<SensorDeclaration> sensors = {
+      {"imu", r.imu.rate_hz, r.imu.latency_s,
+       "gyro " + text(noise.gyro_noise_density_radps_rthz) + " rad/s/sqrt(Hz), accel " +
+           text(noise.accel_noise_density_mps2_rthz) + " m/s^2/sqrt(Hz), bias random walks",
+       "RateTable::imu; noise: world profile imu"}};
+  if (config.profile.rate_gyro.enabled) {
+    sensors.push_back({"rate gyro (PX4's rate loop runs on it)", config.profile.rate_gyro.rate_hz,
+                       0.0, "the IMU's gyro noise density and bias at this rate",
+                       "rate_loop.rate_hz"});
+  }
+  sensors.push_back(
+      {"vio", r.vio.rate_hz, r.vio.latency_s,
+       "position " + text(config.noise.vio_position_sigma_m) + " m, attitude " +
+           text(config.noise.vio_attitude_sigma_rad) + " rad, velocity " +
+           text(config.noise.vio_velocity_sigma_mps) + " m/s per sample" +
+           (config.profile.vio.enabled ? "; drift, dropouts and re-localisation" : ""),
+       "RateTable::vio; drift: world profile vio"});
+  sensors.push_back({"payload camera", r.camera.rate_hz, r.camera.latency_s,
+                     "rendered: the camera image model; analytic: the detector's measured noise",
+                     "RateTable::camera, estimation.camera_latency"});
+  // every stream the world samples must be a whole number of physics steps apart
+  for (const SensorDeclaration& s : sensors) {
+    const double steps = r.physics_hz / s.rate_hz;
+    if (!(steps >= 1.0) || std::abs(steps - std::round(steps)) > 1e-9) {
+      if (s.name == "vio" || s.name == "payload camera") continue;  // sampled at or after a tick
+      const bool imu = s.name == "imu";
+      throw InputError("", imu ? "rates.imu" : "world.rate_loop.rate_hz",
+                       imu ? "the IMU rate must divide the physics rate"
+                           : "the rate must divide the physics rate");
+    }
+  }
+  return sensors;
+}
+
 // The IMU must average a whole number of physics steps, and so must the rate loop's gyro.
 void World::CheckRates() {
-  // the physics step is the MJCF's; the table must agree (checked below), and the IMU averages
-  // a whole number of steps
-  const double imu_steps = config_.rates.physics_hz / config_.rates.imu.rate_hz;
-  if (!(imu_steps >= 1.0) || std::abs(imu_steps - std::round(imu_steps)) > 1e-9) {
-    throw InputError("", "rates.imu", "the IMU rate must divide the physics rate");
-  }
-  imu_steps_ = static_cast<int>(std::lround(imu_steps));
+  const std::vector<SensorDeclaration> sensors = SensorDeclarations(config_);
+  imu_steps_ = static_cast<int>(std::lround(config_.rates.physics_hz / sensors[0].rate_hz));
   // the rate loop's own gyro (PX4 rate loop): the IMU's part at the loop's rate
   if (config_.profile.rate_gyro.enabled) {
     const double steps = config_.rates.physics_hz / config_.profile.rate_gyro.rate_hz;
-    if (!(steps >= 1.0) || std::abs(steps - std::round(steps)) > 1e-9) {
-      throw InputError("", "world.rate_loop.rate_hz", "the rate must divide the physics rate");
-    }
     rate_gyro_steps_ = static_cast<int>(std::lround(steps));
     // discrete white noise of the same density at this rate: sigma = density / sqrt(period)
     rate_gyro_sigma_radps_ = ImuNoise(config_).gyro_noise_density_radps_rthz /

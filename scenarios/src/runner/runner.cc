@@ -31,31 +31,37 @@ RateTable ScenarioRates(const Scenario& scenario) {
 }
 
 std::vector<RateRow> ScenarioRateTable(const Scenario& scenario, const Params& params) {
-  const RateTable rates = ScenarioRates(scenario);
   const sim::LatencyProfile& latency = scenario.world.latency;
   const std::unique_ptr<Controller> controller =
       MakeController(scenario.controller, params, MakeReference(scenario, params));
-  std::vector<RateRow> rows = {
-      {"physics", 1.0 / sim::World::kPhysicsDt_s, 0.0, "MuJoCo timestep (sim::World)"},
-      {"imu", rates.imu.rate_hz, rates.imu.latency_s, "RateTable::imu"},
-  };
+  // the sensors as the world declares them, for this scenario's world
+  sim::WorldConfig world;
+  world.rates = ScenarioRates(scenario);
+  world.profile = scenario.world;
+  std::vector<RateRow> rows = {{"physics", 1.0 / sim::World::kPhysicsDt_s, 0.0,
+                                "MuJoCo timestep (sim::World::kPhysicsDt_s)"}};
+  for (const sim::SensorDeclaration& s : sim::SensorDeclarations(world)) {
+    if (s.name == "payload camera") {
+      if (scenario.estimation.ground_truth) continue;  // the flight code reads the truth
+      rows.push_back({s.name + " (" + scenario.estimation.camera + ")", s.rate_hz, s.latency_s,
+                      s.from, s.noise});
+    } else {
+      rows.push_back({s.name, s.rate_hz, s.latency_s, s.from, s.noise});
+    }
+  }
   if (scenario.rate_loop.px4) {
-    rows.push_back({"rate loop (PX4) and its gyro", scenario.rate_loop.params.rate_hz, 0.0,
+    rows.push_back({"rate loop (PX4's, on the rate gyro)", scenario.rate_loop.params.rate_hz, 0.0,
                     "rate_loop.rate_hz (PX4's parameters, flight code)"});
   } else {
-    rows.push_back({"rate loop (body-rate P)", rates.imu.rate_hz, 0.0, "RateTable::imu"});
-  }
-  rows.push_back({"vio", rates.vio.rate_hz, rates.vio.latency_s, "RateTable::vio"});
-  if (!scenario.estimation.ground_truth) {
-    rows.push_back({"camera (" + scenario.estimation.camera + ")", rates.camera.rate_hz,
-                    rates.camera.latency_s, "RateTable::camera, estimation.camera_latency"});
+    rows.push_back(
+        {"rate loop (body-rate P, on the IMU)", world.rates.imu.rate_hz, 0.0, "RateTable::imu"});
   }
   rows.push_back({"control (" + scenario.controller.type + ")", controller->RateHz(),
                   latency.compute_s + latency.transport_s,
                   "the controller's RateHz(); world profile latency.compute_s + transport_s"});
   rows.push_back(
       {"estimate to controller", 0.0, latency.estimate_s, "world profile latency.estimate_s"});
-  rows.push_back({"video (--video)", rates.video.rate_hz, 0.0, "RateTable::video"});
+  rows.push_back({"video (--video)", world.rates.video.rate_hz, 0.0, "RateTable::video"});
   return rows;
 }
 

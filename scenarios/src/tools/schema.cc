@@ -154,13 +154,14 @@ int SchemaMain(int argc, char** argv) {
     const Scenario scenario = LoadScenario(scenario_file);
     std::vector<std::vector<std::string>> rows;
     for (const RateRow& r : ScenarioRateTable(scenario, LoadParams(DefaultParamsPath()))) {
-      rows.push_back(
-          {r.name, r.rate_hz > 0 ? Short(r.rate_hz) : "-", Short(r.latency_s * 1e3), r.from});
+      rows.push_back({r.name, r.rate_hz > 0 ? Short(r.rate_hz) : "-", Short(r.latency_s * 1e3),
+                      r.noise.empty() ? "-" : r.noise, r.from});
     }
-    std::fputs(("## Rates of " + scenario.name + " (world profile " + scenario.world.name +
-                ")\n\n" + Table({"loop or stream", "rate [Hz]", "latency [ms]", "set by"}, rows))
-                   .c_str(),
-               stdout);
+    std::fputs(
+        ("## Rates of " + scenario.name + " (world profile " + scenario.world.name + ")\n\n" +
+         Table({"loop or stream", "rate [Hz]", "latency [ms]", "noise", "set by"}, rows))
+            .c_str(),
+        stdout);
     return 0;
   }
   if (!scenario_file.empty()) {

@@ -66,6 +66,7 @@ struct RateRow {
   double rate_hz = 0.0;    // 0: not periodic (a latency only)
   double latency_s = 0.0;  // capture (or computation) to delivery
   std::string from;        // where the number is set
+  std::string noise;       // a sensor's noise ("" for a loop)
 };
 
 /// Every loop and stream of `scenario` with the rates and latencies RunScenario uses (the one

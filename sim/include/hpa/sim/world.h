@@ -51,6 +51,22 @@ struct WorldConfig {
   GlBackend gl_backend = GlBackend::kOsMesa;
 };
 
+/// One simulated sensor stream as the world declares it: what it measures, how often, how late it
+/// is delivered and its noise. The world samples each stream at this rate and delivers it
+/// through a DelayLine of this latency; `hpa schema rates` prints these rows.
+struct SensorDeclaration {
+  std::string name;        // "imu", "rate gyro", "vio", "payload camera"
+  double rate_hz = 0.0;    // samples per second (the physics rate divides into whole steps)
+  double latency_s = 0.0;  // capture to delivery
+  std::string noise;       // its noise, one line with units
+  std::string from;        // where the rate and latency are set
+};
+
+/// The sensor streams a world with `config` has, in the order it samples them (the rate gyro
+/// only with its profile part); throws InputError when a rate does not divide the physics rate
+/// into whole steps. World checks its rates with it; the rate table lists it.
+std::vector<SensorDeclaration> SensorDeclarations(const WorldConfig& config);
+
 /// Contact episodes since Reset (a pair counts once each time it starts touching).
 struct ContactCounts {
   int payload_body = 0;     // payload against the quadrotor's body box
