@@ -168,6 +168,9 @@ python3 -c 'import json, sys; r = [json.loads(l) for l in open(sys.argv[1])]; as
 expect_exit 0 "no slack event in this run: no video written" run "$base" --video-slack-events --out "$out/novideo" --quiet
 [ -e "$out/novideo/slack_events.mp4" ] && fail "an empty slack-events video was written"
 
+# --version names the version and the commit the binary was built from
+expect_exit 0 "^hpa [0-9]+\.[0-9]+\.[0-9]+ \(commit ([0-9a-f]{12}|unknown)" --version
+
 # SIGTERM mid-run: the metrics and log so far are written, and the run says it was stopped
 "$hpa" run "$scen/hover.yaml" --set duration=3000 --out "$out/sigterm" --quiet > /dev/null 2>&1 &
 pid=$!

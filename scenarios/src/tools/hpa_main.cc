@@ -33,6 +33,7 @@
 #include "hpa/scenarios/sweep_diff.h"
 #include "hpa/scenarios/video_recorder.h"
 #include "hpa/sim/world.h"
+#include "hpa_version.h"
 #include "scenarios/src/tools/cli_parse.h"
 
 namespace hpa {
@@ -88,6 +89,7 @@ usage:
       estimators, solvers, events, expect keys, metrics, world-profile keys with their
       units, ranges and values (all: docs/schema.md), or with
       `rates SCENARIO.yaml` every loop and stream of that scenario with its rate and latency.
+  hpa --version              the version and the git commit this binary was built from
   hpa --help                 this text; hpa COMMAND --help: the command's options
 
 exit codes: 0 ok and every `expect` bound holds; 1 an expectation failed (or an unexpected
@@ -447,6 +449,10 @@ int HpaMain(int argc, char** argv) {
   // SIGTERM / SIGINT: a run stops at its next tick and writes its metrics and log so far
   std::signal(SIGTERM, RequestStop);
   std::signal(SIGINT, RequestStop);
+  if (argc >= 2 && !std::strcmp(argv[1], "--version")) {
+    std::printf("hpa %s (commit %s)\n", HPA_VERSION, HPA_GIT_COMMIT);
+    return kExitOk;
+  }
   if (argc < 2 || !std::strcmp(argv[1], "--help") || !std::strcmp(argv[1], "-h") ||
       !std::strcmp(argv[1], "help")) {
     std::fputs(Usage().c_str(), argc < 2 ? stderr : stdout);
