@@ -201,3 +201,58 @@ TEST(WorldProfileTest, AWindEventIsAForceOrAVelocityNotBoth) {
 
 }  // namespace
 }  // namespace hpa
+
+namespace hpa {
+namespace {
+
+// Payload reference positions of a scenario's reference over one period after the ramp.
+std::vector<Eigen::Vector3d> OnePeriod(const std::string& reference_yaml, double period_s) {
+  const Scenario s =
+      LoadScenario(Write("shape.yaml", std::string(kMinimal) + "reference: " + reference_yaml));
+  const std::shared_ptr<Reference> ref = MakeReference(s, Params());
+  std::vector<Eigen::Vector3d> points;
+  for (int k = 0; k < 200; ++k) points.push_back(ref->At(10.0 + k * period_s / 200).p_WL_W);
+  return points;
+}
+
+TEST(ReferenceShapesTest, ACircleKeepsItsRadiusAndHeight) {
+  const auto points = OnePeriod(
+      "{type: circle, radius: 1.5, period: 4, height: 1.2, centre: [1, -1, 0], ramp: 2}\n", 4.0);
+  double min_x = 1e9, max_x = -1e9;
+  for (const Eigen::Vector3d& p : points) {
+    EXPECT_NEAR(std::hypot(p.x() - 1.0, p.y() + 1.0), 1.5, 1e-9);
+    EXPECT_NEAR(p.z(), 1.2, 1e-12);
+    min_x = std::min(min_x, p.x());
+    max_x = std::max(max_x, p.x());
+  }
+  EXPECT_NEAR(max_x - min_x, 3.0, 1e-3);  // the whole circle in one period
+}
+
+TEST(ReferenceShapesTest, AFigureEightCrossesItsCentreTwicePerPeriod) {
+  const auto points =
+      OnePeriod("{type: figure_eight, half_length: 2, half_width: 0.5, period: 6}\n", 6.0);
+  int crossings = 0;
+  for (size_t k = 1; k < points.size(); ++k) {
+    if ((points[k - 1].x() < 0) != (points[k].x() < 0)) ++crossings;
+    EXPECT_LE(std::abs(points[k].x()), 2.0 + 1e-9);
+    EXPECT_LE(std::abs(points[k].y()), 0.5 + 1e-9);
+    // on the lemniscate y = b sin(2 theta) with x = a sin(theta): y^2 = 4 b^2 (x/a)^2 (1 - (x/a)^2)
+    const double u = points[k].x() / 2.0;
+    EXPECT_NEAR(points[k].y() * points[k].y(), 4 * 0.25 * u * u * (1 - u * u), 1e-9);
+  }
+  EXPECT_EQ(crossings, 2);
+}
+
+TEST(ReferenceShapesTest, MissingOrBadShapeKeysAreNamed) {
+  ExpectError(std::string(kMinimal) + "reference: {type: circle, period: 4}\n",
+              {"reference.radius"});
+  ExpectError(std::string(kMinimal) + "reference: {type: figure_eight, half_length: 2}\n",
+              {"reference.half_width"});
+  ExpectError(std::string(kMinimal) + "reference: {type: circle, radius: -1}\n",
+              {"reference.radius"});
+  ExpectError(std::string(kMinimal) + "reference: {type: circle, radius: 1, a: 2}\n",
+              {"reference.a", "unknown key"});
+}
+
+}  // namespace
+}  // namespace hpa

@@ -80,7 +80,8 @@ RunResult RunScenario(const Scenario& scenario, const Params& params, const RunO
   metrics.camera = scenario.estimation.ground_truth ? "ground_truth" : scenario.estimation.camera;
   metrics.seed = scenario.seed;
   metrics.world_profile = scenario.world.name;
-  if (scenario.reference.type == "lissajous") {
+  if (scenario.reference.type != "hover" &&
+      scenario.reference.type != "line") {  // Lissajous family
     metrics.payload_rmse_from_s = scenario.reference.lissajous.ramp_s;
   }
   runner::RunLoop loop(scenario, params, options, &metrics);

@@ -59,8 +59,27 @@ ExpectSpec ParseExpect(const YamlMap& e) {
 
 ReferenceSpec ParseReference(const YamlMap& r) {
   ReferenceSpec ref;
-  ref.type = r.Choice("type", {"hover", "lissajous", "line"}, "hover");
-  if (ref.type == "hover") {
+  ref.type = r.Choice("type", {"hover", "lissajous", "line", "circle", "figure_eight"}, "hover");
+  if (ref.type == "circle" || ref.type == "figure_eight") {
+    // the Lissajous family: a circle is a = b = radius, n = 1, phi = pi / 2; a figure eight is
+    // x = a sin(theta), y = b sin(2 theta)
+    LissajousSpec& s = ref.lissajous;
+    if (ref.type == "circle") {
+      s.a = s.b = r.Number("radius", 0.01, 100.0);
+      s.n = 1.0;
+      s.phi = M_PI / 2.0;
+    } else {
+      s.a = r.Number("half_length", 0.01, 100.0);
+      s.b = r.Number("half_width", 0.01, 100.0);
+      s.n = 2.0;
+      s.phi = 0.0;
+    }
+    s.c = 0.0;
+    s.psi = r.Number("height", 0.1, 100.0, s.psi);
+    s.period_s = r.Number("period", 0.1, 1e4, s.period_s);
+    s.ramp_s = r.Number("ramp", 0.0, 1e4, s.ramp_s);
+    if (r.Has("centre")) s.centre = Vec3(r, "centre", -kBig, kBig);
+  } else if (ref.type == "hover") {
     ref.payload_position_W_m = Vec3(r, "payload_position", -kBig, kBig);
   } else if (ref.type == "lissajous") {
     LissajousSpec& s = ref.lissajous;
@@ -283,7 +302,9 @@ ScenarioSet ParseSetArgument(const std::string& text) {
 
 std::shared_ptr<Reference> MakeReference(const Scenario& scenario, const Params& params) {
   const ReferenceSpec& r = scenario.reference;
-  if (r.type == "lissajous") return MakeLissajousReference(params, r.lissajous);
+  if (r.type == "lissajous" || r.type == "circle" || r.type == "figure_eight") {
+    return MakeLissajousReference(params, r.lissajous);
+  }
   if (r.type == "line") {
     // the line reference holds its start before t = 0; shift time so it starts at start_time
     class Delayed : public Reference {

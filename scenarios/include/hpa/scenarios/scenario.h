@@ -27,7 +27,7 @@ struct ExpectSpec {
 
 /// Where the payload reference comes from.
 struct ReferenceSpec {
-  std::string type = "hover";                       // hover | lissajous | line
+  std::string type = "hover";  // hover | lissajous | line | circle | figure_eight
   Eigen::Vector3d payload_position_W_m{0, 0, 0.7};  // hover set-point  (3)
   LissajousSpec lissajous;
   Eigen::Vector3d line_start_W_m = Eigen::Vector3d::Zero();  // (3)
