@@ -89,7 +89,7 @@ void OffscreenRenderer::Render(mjData* data, int camera_id, int width_px, int he
       throw std::runtime_error("MuJoCo offscreen framebuffer not available under " +
                                GlBackendName(backend_));
     }
-    // speed (docs/design.md section 9): 34 ms -> 15 ms a 1280x720 frame on llvmpipe
+    // speed (docs/design.md section 9): shadows, reflections and the skybox cost most of a frame
     gl->scene.flags[mjRND_SHADOW] = 0;
     gl->scene.flags[mjRND_REFLECTION] = 0;
     gl->scene.flags[mjRND_SKYBOX] = 0;
