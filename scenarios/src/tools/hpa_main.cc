@@ -115,7 +115,8 @@ std::string Usage() {
       "world:, e.g. --set world.latency.compute_s=0):\n"
       "  flight   contact, drag and wind, actuation spread and battery sag, latency, drifting "
       "VIO,\n"
-      "           model mismatch (models/profiles/flight.yaml, each number with its source)\n"
+      "           IMU and camera noise and blur, PX4's rate loop, model mismatch\n"
+      "           (models/profiles/flight.yaml, each number with its source; hpa schema world)\n"
       "  ideal    none of these: controller-only tests (models/profiles/ideal.yaml)\n";
   text += "expect keys (scenario `expect:` block):\n";
   for (const ExpectKey& k : ExpectKeys()) {
