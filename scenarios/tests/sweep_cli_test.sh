@@ -1,13 +1,14 @@
 #!/usr/bin/env bash
 # Sweep checks (docs/design.md section 6): shards through GNU parallel merge to exactly the unsharded
 # sweep; resume after a killed sweep loses nothing and repeats nothing; a worker that dies is
-# recorded as an error and the others go on; the time limit kills a hung run.
+# recorded as an error and the others go on; the time limit kills a hung run; --keep-logs keeps
+# the worst runs' logs.
 # usage: sweep_cli_test.sh HPA_BIN SCENARIOS_DIR OUT_DIR
 set -uo pipefail
 hpa=$1; scen=$2; out=$3
 rm -rf "$out"; mkdir -p "$out"
-failures=0
-fail() { echo "FAIL: $*"; failures=$((failures + 1)); }
+# shellcheck source=cli_test_lib.sh
+source "$(dirname "$0")/cli_test_lib.sh"
 # runs.jsonl records without the fields that time the machine, one sorted line each
 strip() {
   python3 -c 'import json, sys
@@ -196,6 +197,27 @@ mkdir -p "$out/dev_jsonl" && ln -s /dev/full "$out/dev_jsonl/runs.jsonl"
 status=$?
 [ "$status" -eq 2 ] && grep -q "not a regular file" "$out/dev_jsonl.log" \
   || fail "a runs.jsonl on a device: exit $status: $(tail -1 "$out/dev_jsonl.log")"
+
+echo "== --keep-logs worst:N keeps the log of the N worst runs, replayed bit for bit"
+"$hpa" sweep "$out/tiny.yaml" --out "$out/keep" --keep-logs worst:3 > "$out/keep.log" 2>&1 \
+  || fail "--keep-logs sweep failed: $(tail -3 "$out/keep.log")"
+grep -q "WARNING" "$out/keep.log" && fail "a kept run's replay differs from its record"
+python3 - "$out/keep" <<'PY' || fail "--keep-logs kept the wrong runs or no logs"
+import json, os, sys
+d = sys.argv[1]
+records = [json.loads(l) for l in open(os.path.join(d, "runs.jsonl")) if l.strip()]
+ok = [r for r in records if r["status"] == "ok"]
+key = lambda r: (r["metrics"]["crashed"], r["metrics"]["quad_position_deviation_max_m"])
+worst = sorted(ok, key=key, reverse=True)[:3]
+kept = sorted(int(n.split("_")[1]) for n in os.listdir(os.path.join(d, "logs")))
+assert kept == sorted(r["run"] for r in worst), (kept, [r["run"] for r in worst])
+for n in kept:
+    log = os.path.join(d, "logs", f"run_{n}", "log.csv")
+    assert sum(1 for _ in open(log)) > 100, log
+PY
+expect_exit 2 "expected worst:N" sweep "$out/tiny.yaml" --out "$out/keep_bad" --keep-logs best:2
+expect_exit 2 "unranked metric 'slack_time_s'" sweep "$out/tiny.yaml" --out "$out/keep_bad" \
+  --keep-logs worst:2:slack_time_s
 
 if [ $failures -ne 0 ]; then echo "$failures failure(s)"; exit 1; fi
 echo "all sweep checks passed"

@@ -68,12 +68,13 @@ usage:
                         [--gl osmesa|egl] [--params FILE] [--set PATH=VALUE]...
       Runs the scenario to time T (s) and writes one 1280x720 onboard payload-camera frame.
       --gl egl renders through EGL (a GPU where there is one) instead of OSMesa.
-  hpa sweep SWEEP.yaml --out DIR [--jobs N] [--shard K/N]
+  hpa sweep SWEEP.yaml --out DIR [--jobs N] [--shard K/N] [--keep-logs worst:N[:METRIC]]
                         [--resume [--retry-errors] [--allow-changed-inputs]] [--gl osmesa|egl]
       Monte Carlo sweep: one JSON line per run in DIR/runs.jsonl, then a summary. --jobs
       defaults to the number of cores; --shard K/N (K = 1..N) runs every N-th run; --resume
       skips recorded runs, --retry-errors runs the recorded errors (killed, timed out) again;
-      a resume refuses a sweep or base file changed since, unless --allow-changed-inputs.
+      a resume refuses a sweep or base file changed since, unless --allow-changed-inputs;
+      --keep-logs replays the N worst runs and keeps their log.csv in DIR/logs/.
   hpa merge DIR... --out DIR
       Joins sweep shards and writes DIR/summary.json, DIR/summary.md and plots.
   hpa sweep-diff A B --out DIR [--a-where KEY=VALUE] [--b-where KEY=VALUE] [--verdict-timing]

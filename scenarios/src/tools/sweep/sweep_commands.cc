@@ -24,7 +24,7 @@ namespace hpa {
 using sweep::Record;
 
 int SweepMain(int argc, char** argv) {
-  std::string sweep_file, out_dir, shard = "1/1", gl = "osmesa";
+  std::string sweep_file, out_dir, shard = "1/1", gl = "osmesa", keep_logs;
   int jobs = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
   bool resume = false, retry_errors = false, allow_changed_inputs = false;
   CLI::App app{
@@ -43,9 +43,15 @@ int SweepMain(int argc, char** argv) {
                "with --resume: continue although the sweep or base file changed since DIR's "
                "runs were recorded; new records keep DIR's sweep_id and carry inputs_id, the "
                "hash of the changed inputs");
+  app.add_option("--keep-logs", keep_logs,
+                 "worst:N[:METRIC]: after the sweep, replay the N worst runs (crashes first, then "
+                 "by METRIC, default quad_position_deviation_max_m) and keep their log.csv in "
+                 "DIR/logs/run_<index>/ (whole sweeps, not shards)");
   AddGlOption(app, &gl);
   if (const auto code = ParseCommandLine(app, argc, argv)) return *code;
   const sim::GlBackend gl_backend = ParseGlOption(gl);  // every worker renders with it
+  const sweep::KeepLogsSpec keep =
+      keep_logs.empty() ? sweep::KeepLogsSpec{} : sweep::ParseKeepLogs(keep_logs);
   // K/N as whole numbers in range (digits only: no sign, no overflow past kMaxShards)
   constexpr long kMaxShards = 1000000;
   int shard_k = 1, shard_n = 1;
@@ -175,13 +181,16 @@ int SweepMain(int argc, char** argv) {
       finished, failures, wall_s, finished * 60.0 / std::max(wall_s, 1e-9), jsonl.c_str());
   if (shard_n == 1) {
     std::vector<std::string> warnings;
-    sweep::WriteSummary(
-        sweep::UniqueRecords(sweep::ReadRecords(jsonl), SweepRunCount(spec), &warnings), out_dir,
-        &spec);
+    const std::vector<Record> unique =
+        sweep::UniqueRecords(sweep::ReadRecords(jsonl), SweepRunCount(spec), &warnings);
+    sweep::WriteSummary(unique, out_dir, &spec);
     for (const std::string& w : warnings) std::fprintf(stderr, "hpa: warning: %s\n", w.c_str());
     std::printf("summary: %s/summary.md, %s/summary.json, %s/crash_rate.png\n", out_dir.c_str(),
                 out_dir.c_str(), out_dir.c_str());
+    if (keep.count > 0) sweep::KeepWorstLogs(spec, unique, keep, out_dir, params, gl_backend);
   } else {
+    if (keep.count > 0)
+      std::printf("--keep-logs: not for a shard (the worst runs are the sweep's)\n");
     std::printf("shard %d/%d done; join the shards with: hpa merge DIR... --out DIR\n", shard_k,
                 shard_n);
   }

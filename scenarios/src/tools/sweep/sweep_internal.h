@@ -114,4 +114,21 @@ int RunPool(
     sim::GlBackend gl_backend, int jobs, const std::string& tmp_dir,
     const std::function<void(const std::string& line, bool failed, const SweepRun&)>& record);
 
+/// `--keep-logs worst:N[:METRIC]`: how many of the worst runs keep their log, by which metric.
+struct KeepLogsSpec {
+  int count = 0;  // 0: none
+  std::string metric = "quad_position_deviation_max_m";
+};
+
+/// Parses `worst:N` or `worst:N:METRIC` (a ranked metric of metric_defs.h); InputError naming
+/// --keep-logs and the valid metrics otherwise.
+KeepLogsSpec ParseKeepLogs(const std::string& text);
+
+/// Replays the `keep.count` worst finished runs of `records` (crashed first, then by the metric's
+/// bad end) and writes each one's log.csv and metrics.json to OUT/logs/run_<index>/, warning if
+/// a replay's metrics differ from its record.
+void KeepWorstLogs(const SweepSpec& spec, const std::vector<Record>& records,
+                   const KeepLogsSpec& keep, const std::string& out_dir, const Params& params,
+                   sim::GlBackend gl_backend);
+
 }  // namespace hpa::sweep
