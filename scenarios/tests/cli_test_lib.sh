@@ -12,5 +12,5 @@ expect_exit() {
   local text status
   text=$(timeout 60 "$hpa" "$@" 2>&1); status=$?
   [ "$status" -eq "$code" ] || fail "hpa $* exited $status, expected $code: $text"
-  echo "$text" | grep -Eq -- "$pattern" || fail "hpa $* output lacks /$pattern/: $text"
+  grep -Eq -- "$pattern" <<< "$text" || fail "hpa $* output lacks /$pattern/: $text"
 }
