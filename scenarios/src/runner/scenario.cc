@@ -301,27 +301,7 @@ ScenarioSet ParseSetArgument(const std::string& text) {
 }
 
 std::shared_ptr<Reference> MakeReference(const Scenario& scenario, const Params& params) {
-  const ReferenceSpec& r = scenario.reference;
-  if (r.type == "lissajous" || r.type == "circle" || r.type == "figure_eight") {
-    return MakeLissajousReference(params, r.lissajous);
-  }
-  if (r.type == "line") {
-    // the line reference holds its start before t = 0; shift time so it starts at start_time
-    class Delayed : public Reference {
-     public:
-      Delayed(std::shared_ptr<Reference> inner, double delay_s)
-          : inner_(std::move(inner)), delay_s_(delay_s) {}
-      ReferencePoint At(double t_s) const override { return inner_->At(t_s - delay_s_); }
-
-     private:
-      std::shared_ptr<Reference> inner_;
-      double delay_s_;
-    };
-    return std::make_shared<Delayed>(
-        MakeLineReference(params, r.line_start_W_m, r.line_end_W_m, r.line_duration_s),
-        r.line_start_time_s);
-  }
-  return MakeHoverReference(params, r.payload_position_W_m);
+  return MakeReference(scenario.reference, params);
 }
 
 }  // namespace hpa

@@ -11,6 +11,7 @@
 
 #include "hpa/controller/controller.h"
 #include "hpa/controller/reference.h"
+#include "hpa/controller/reference_spec.h"
 #include "hpa/scenarios/events.h"
 #include "hpa/scenarios/world_profile_yaml.h"
 #include "hpa/sim/world_profile.h"
@@ -23,17 +24,6 @@ struct ExpectSpec {
   std::map<std::string, std::vector<double>> bounds;  // expect key -> bound (booleans as 0 / 1)
   /// True if the scenario sets `key`.
   bool Has(const std::string& key) const { return bounds.count(key) > 0; }
-};
-
-/// Where the payload reference comes from.
-struct ReferenceSpec {
-  std::string type = "hover";  // hover | lissajous | line | circle | figure_eight
-  Eigen::Vector3d payload_position_W_m{0, 0, 0.7};  // hover set-point  (3)
-  LissajousSpec lissajous;
-  Eigen::Vector3d line_start_W_m = Eigen::Vector3d::Zero();  // (3)
-  Eigen::Vector3d line_end_W_m = Eigen::Vector3d::Zero();    // (3)
-  double line_duration_s = 1.0;
-  double line_start_time_s = 0.0;  // the line starts moving at this time
 };
 
 /// Estimation block: where flight code gets its state from.

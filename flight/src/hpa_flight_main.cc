@@ -1,0 +1,151 @@
+// hpa-flight: the project's own flight stack (payload detector, estimator, any registered
+// controller) as a separate process speaking the lockstep protocol (docs/protocol.md). The
+// simulator starts it (`hpa run --flight-stack "hpa-flight"`) with HPA_FLIGHT_SOCKET set; it
+// connects, builds the flight stack from the hello and answers every tick until the finish.
+
+#include <fcntl.h>
+#include <sys/mman.h>
+#include <unistd.h>
+
+#include <CLI/CLI.hpp>
+#include <cstdio>
+#include <cstdlib>
+#include <string>
+
+#include "hpa/flight/protocol.h"
+
+namespace {
+
+using hpa::flight::Channel;
+using hpa::flight::MessageType;
+using hpa::flight::ProtocolError;
+
+// The simulator's shared-memory ring of rendered frames, mapped read-only.
+class FrameRing {
+ public:
+  void Map(const nlohmann::json& camera) {
+    if (camera.is_null()) return;
+    const std::string name = camera.at("ring").get<std::string>();
+    slots_ = camera.at("slots").get<int>();
+    width_ = camera.at("width_px").get<int>();
+    height_ = camera.at("height_px").get<int>();
+    slot_bytes_ = camera.at("slot_bytes").get<size_t>();
+    if (slot_bytes_ < static_cast<size_t>(width_) * height_ * 3) {
+      throw ProtocolError("frame ring slots of " + std::to_string(slot_bytes_) +
+                          " bytes cannot hold a " + std::to_string(width_) + " x " +
+                          std::to_string(height_) + " BGR frame");
+    }
+    const int fd = ::shm_open(name.c_str(), O_RDONLY, 0);
+    if (fd < 0) throw ProtocolError("cannot open the frame ring " + name);
+    bytes_ = slot_bytes_ * static_cast<size_t>(slots_);
+    void* p = ::mmap(nullptr, bytes_, PROT_READ, MAP_SHARED, fd, 0);
+    ::close(fd);
+    if (p == MAP_FAILED) throw ProtocolError("cannot map the frame ring " + name);
+    base_ = static_cast<uint8_t*>(p);
+  }
+  ~FrameRing() {
+    if (base_ != nullptr) ::munmap(base_, bytes_);
+  }
+  // points each frame's image at its slot
+  void Attach(std::vector<hpa::flight::CameraFrame>* frames) const {
+    for (hpa::flight::CameraFrame& f : *frames) {
+      if (base_ == nullptr || f.slot < 0 || f.slot >= slots_) {
+        throw ProtocolError("a frame in slot " + std::to_string(f.slot) + " of a ring of " +
+                            std::to_string(slots_));
+      }
+      f.bgr = cv::Mat(height_, width_, CV_8UC3, base_ + slot_bytes_ * static_cast<size_t>(f.slot));
+    }
+  }
+
+ private:
+  uint8_t* base_ = nullptr;
+  size_t bytes_ = 0, slot_bytes_ = 0;
+  int slots_ = 0, width_ = 0, height_ = 0;
+};
+
+int Serve(Channel& channel, const std::string& controller, const std::string& estimator) {
+  const std::vector<uint8_t> hello_bytes = channel.Expect(MessageType::kHello, 60.0);
+  const nlohmann::json hello = nlohmann::json::parse(hello_bytes.begin(), hello_bytes.end());
+  const uint32_t version = hello.at("protocol_version").get<uint32_t>();
+  if (version != hpa::flight::kProtocolVersion) {
+    throw ProtocolError("the simulator speaks protocol version " + std::to_string(version) +
+                        ", hpa-flight version " + std::to_string(hpa::flight::kProtocolVersion));
+  }
+  hpa::flight::FlightConfig config = hpa::flight::ConfigFromJson(hello.at("config"));
+  if (!controller.empty()) config.controller.type = controller;
+  if (!estimator.empty()) config.estimator = estimator;
+  hpa::flight::FlightStack stack(config);
+  FrameRing ring;
+  ring.Map(hello.value("camera", nlohmann::json()));
+  channel.SendJson(MessageType::kHelloAck, {{"protocol_version", hpa::flight::kProtocolVersion},
+                                            {"name", "hpa-flight (" + config.controller.type + ")"},
+                                            {"control_rate_hz", stack.control_rate_hz()}});
+  std::vector<uint8_t> body;
+  while (true) {
+    const MessageType type = channel.Receive(&body, 0.0);
+    if (type == MessageType::kTick) {
+      hpa::flight::FlightInputs in = hpa::flight::DecodeTick(body);
+      ring.Attach(&in.frames);
+      channel.Send(MessageType::kTickReply, hpa::flight::EncodeReply(stack.Step(in)));
+    } else if (type == MessageType::kFinish) {
+      hpa::flight::FlightInputs in = hpa::flight::DecodeTick(body);
+      ring.Attach(&in.frames);
+      const int found = stack.Finish(in);
+      nlohmann::json health = nlohmann::json::array();
+      for (const auto& [name, value] : stack.EstimatorHealth()) health.push_back({name, value});
+      channel.SendJson(MessageType::kFinishReply,
+                       {{"estimator", config.ground_truth ? "" : config.estimator},
+                        {"estimator_health", health},
+                        {"frames_detected", found}});
+      return 0;
+    } else {
+      throw ProtocolError("unexpected " + hpa::flight::MessageTypeName(type) + " message");
+    }
+  }
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{
+      "hpa-flight: the project's flight stack (payload detector, estimator, registered "
+      "controller) as its own process, speaking the lockstep protocol of docs/protocol.md. "
+      "`hpa run --flight-stack hpa-flight SCENARIO` starts it with HPA_FLIGHT_SOCKET set; it "
+      "builds the stack the simulator's hello describes and answers each tick.",
+      "hpa-flight"};
+  std::string socket_path;
+  std::string controller, estimator;
+  app.add_option("--socket", socket_path,
+                 "the simulator's Unix socket (default: $HPA_FLIGHT_SOCKET)");
+  app.add_option("--controller", controller,
+                 "fly this registered controller instead of the scenario's");
+  app.add_option("--estimator", estimator,
+                 "use this registered estimator instead of the scenario's");
+  CLI11_PARSE(app, argc, argv);
+  if (socket_path.empty()) {
+    const char* env = std::getenv("HPA_FLIGHT_SOCKET");
+    if (env == nullptr || *env == '\0') {
+      std::fprintf(stderr,
+                   "hpa-flight: no socket: give --socket PATH or set HPA_FLIGHT_SOCKET (hpa run "
+                   "--flight-stack sets it)\n");
+      return 2;
+    }
+    socket_path = env;
+  }
+  std::unique_ptr<Channel> channel;
+  try {
+    channel = std::make_unique<Channel>(hpa::flight::ConnectUnix(socket_path));
+    return Serve(*channel, controller, estimator);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "hpa-flight: %s\n", e.what());
+    if (channel) {
+      try {
+        const std::string text = std::string("hpa-flight: ") + e.what();
+        channel->Send(MessageType::kError, std::vector<uint8_t>(text.begin(), text.end()));
+      } catch (const std::exception&) {
+        // the simulator has gone: nothing to tell
+      }
+    }
+    return 1;
+  }
+}
