@@ -236,6 +236,7 @@ std::string MetricsToJson(const Metrics& m) {
   o["mpc_failures"] = m.mpc_failures;
   o["closed_loop_cost"] = num(m.closed_loop_cost);
   o["world_profile"] = m.world_profile;
+  o["flight_stack"] = m.flight_stack;
   o["payload_quad_min_distance_m"] = num(m.payload_quad_min_distance_m);
   o["contacts"] = {{"payload_body", m.contacts_payload_body},
                    {"payload_rotor", m.contacts_payload_rotor},

@@ -8,7 +8,6 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "hpa/estimator/estimator_registry.h"
 #include "hpa/models/camera_model.h"
 #include "hpa/models/input_error.h"
 #include "hpa/models/seed_streams.h"
@@ -19,10 +18,6 @@ namespace {
 double Ms(std::chrono::steady_clock::time_point a, std::chrono::steady_clock::time_point b) {
   return std::chrono::duration<double, std::milli>(b - a).count();
 }
-
-// How far the payload's image may move between two rendered frames and stay in the region
-// around its last detection (beyond it the whole frame is rendered and searched).
-constexpr double kRegionMarginPx = 48.0;
 
 }  // namespace
 
@@ -48,6 +43,21 @@ void CheckReferenceAboveGround(const Reference& reference, double duration_s,
       throw InputError("", "reference", what.str());
     }
   }
+}
+
+flight::FlightConfig FlightConfigOf(const Scenario& scenario, const Params& params,
+                                    const SystemState& initial) {
+  flight::FlightConfig c;
+  c.params = params;
+  c.controller = scenario.controller;
+  c.estimator = EstimatorOf(scenario);
+  c.slack_tension_cue = scenario.estimation.slack_tension_cue;
+  c.reference = scenario.reference;
+  c.ground_truth = scenario.estimation.ground_truth;
+  c.estimate_latency_s = scenario.world.latency.estimate_s;
+  c.tick_hz = 1.0 / sim::World::kPhysicsDt_s;
+  c.initial_state = initial;
+  return c;
 }
 
 void LogRecorder::OnCameraFrame(const CameraFrameRecord& frame) {
@@ -84,21 +94,42 @@ RunLoop::RunLoop(const Scenario& scenario, const Params& params, const RunOption
   const RateTable rates = world_config.rates;
   world_ = std::make_unique<sim::World>(world_config);
 
-  // flight code: reference, controller, rate loop, estimator (flight params only); the world
-  // starts from its own parameters (mismatch draw and overrides)
+  // flight code: the flight stack (detector, estimator, controller; flight params only), in
+  // process or as a separate process, and the rate loop; the world starts from its own
+  // parameters (mismatch draw and overrides)
   reference_ = MakeReference(scenario, params);
   CheckReferenceAboveGround(*reference_, scenario.duration_s, params);
   world_->Reset(InitialState(*reference_, world_->world_params()));
-  controller_ = MakeController(scenario.controller, params, reference_);
+  const flight::FlightConfig flight_config =
+      FlightConfigOf(scenario, params, InitialState(*reference_, params));
+  if (options.flight_stack.empty()) {
+    flight_ = MakeInProcessFlight(flight_config);
+  } else {
+    ExternalFlightOptions external;
+    external.command = options.flight_stack;
+    external.step_timeout_s = options.flight_step_timeout_s;
+    external.scenario = scenario.name;
+    external.seed = scenario.seed;
+    if (render_camera_ && !ground_truth_) {
+      // frames in flight at once (capture to delivery), one being written, one spare
+      external.frames.slots =
+          static_cast<int>(std::ceil(rates.camera.latency_s * rates.camera.rate_hz)) + 2;
+      external.frames.width_px = params.camera_width_px;
+      external.frames.height_px = params.camera_height_px;
+    }
+    nlohmann::json rate_rows = nlohmann::json::array();
+    for (const RateRow& r : ScenarioRateTable(scenario, params)) {
+      rate_rows.push_back({{"name", r.name}, {"rate_hz", r.rate_hz}, {"latency_s", r.latency_s}});
+    }
+    external.rates = rate_rows;
+    flight_ = StartExternalFlight(flight_config, external);
+  }
+  metrics->flight_stack = flight_->name();
   rate_controller_ = std::make_unique<BodyRateController>(params);
   // the profile may fly PX4's rate loop instead, on the world's rate gyro
   if (scenario.rate_loop.px4) {
     px4_rate_ = std::make_unique<Px4RateController>(params, scenario.rate_loop.params);
   }
-  EstimatorConfig estimator_config;
-  estimator_config.tension_cue.enabled = scenario.estimation.slack_tension_cue;
-  estimator_ = MakeEstimator(EstimatorOf(scenario), estimator_config, params,
-                             InitialState(*reference_, params));
   detector_ = std::make_unique<PayloadDetector>(params);
   CameraNoiseModel camera_noise = MeasuredDetectorNoise();
   camera_noise.centre_std_px *= scenario.estimation.detector_noise_scale;
@@ -117,7 +148,6 @@ RunLoop::RunLoop(const Scenario& scenario, const Params& params, const RunOption
   end_tick_ = static_cast<long>(std::llround(end_s_ / sim::World::kPhysicsDt_s));
   clock_ = std::make_unique<LockstepClock>(rates.physics_hz);
   camera_loop_ = clock_->AddLoop("camera", rates.camera.rate_hz);
-  control_loop_ = clock_->AddLoop("control", controller_->RateHz());
   rate_loop_ = px4_rate_ ? -1 : clock_->AddLoop("rate", rates.imu.rate_hz);
   video_loop_ = video_rate_hz > 0.0 ? clock_->AddLoop("video", video_rate_hz) : -1;
   rate_loop_dt_s_ = 1.0 / rates.imu.rate_hz;
@@ -125,15 +155,14 @@ RunLoop::RunLoop(const Scenario& scenario, const Params& params, const RunOption
   std::stable_sort(events_.begin(), events_.end(),
                    [](const EventSpec& a, const EventSpec& b) { return a.at_s < b.at_s; });
 
-  // latencies: the camera's capture to detection; of the flight code (world profile): a command
-  // reaches the rate loop compute + transport after the state it was computed from, and the
-  // controller reads an estimate that is estimate_s old
+  // latencies: the camera's capture to detection (or, to a separate stack, to its frame's
+  // delivery); a command reaches the rate loop compute + transport after the state it was
+  // computed from (world profile); the estimate's own latency is the flight stack's
   const sim::LatencyProfile& latency = scenario.world.latency;
   detections_in_flight_ = std::make_unique<DelayLine<PayloadDetection>>(rates.camera.latency_s);
+  frames_in_flight_ = std::make_unique<DelayLine<flight::CameraFrame>>(rates.camera.latency_s);
   commands_in_flight_ =
       std::make_unique<DelayLine<ControlOutput>>(latency.compute_s + latency.transport_s);
-  delayed_estimate_ = latency.estimate_s > 0.0;
-  estimates_in_flight_ = std::make_unique<DelayLine<SystemState>>(latency.estimate_s);
   control_.command.thrust_N = params.HoverThrustN();
   show_progress_ = options.progress && isatty(STDERR_FILENO);
 }
@@ -152,29 +181,43 @@ bool RunLoop::Tick() {
   }
   ApplyDueEvents(t);
 
-  // which loops run at this tick; truth and the flight state only when one needs them
+  // which loops run at this tick; truth only when something needs it
   clock_->BeginTick();
   const bool camera_due = clock_->Fires(camera_loop_);
-  const bool control_due = clock_->Fires(control_loop_);
   const bool rate_due = rate_loop_ >= 0 && clock_->Fires(rate_loop_);
   const bool video_due = video_loop_ >= 0 && clock_->Fires(video_loop_);
-  const bool need_state = control_due || rate_due || video_due || delayed_estimate_;
   sim::Truth truth;
-  if (camera_due || control_due || video_due || (ground_truth_ && need_state)) {
-    truth = world_->GetTruth();
-  }
+  bool have_truth = false;
+  const auto need_truth = [&] {
+    if (!have_truth) truth = world_->GetTruth();
+    have_truth = true;
+  };
+  if (camera_due || video_due || ground_truth_) need_truth();
 
   if (camera_due) CameraStep(t, truth);
   while (auto detection = detections_in_flight_->PopReady(t)) {
-    estimator_->OnPayloadDetection(*detection);
+    pending_.detections.push_back(*detection);
   }
+  while (auto frame = frames_in_flight_->PopReady(t)) pending_.frames.push_back(*frame);
 
-  // what flight code sees
-  SystemState state;
-  if (need_state) state = ground_truth_ ? truth.state : estimator_->Estimate(t);
+  // the flight stack's tick: this tick's messages in, its estimate and command out
+  pending_.time_s = t;
+  pending_.need_estimate = rate_due || video_due;
+  if (ground_truth_) pending_.truth = truth.state;
+  pending_.gripper_active = world_->gripper_active();
+  if (flight_->wants_reference()) {
+    const ReferencePoint r = reference_->At(t);
+    pending_.reference = {r.p_WL_W, r.v_WL_W, r.a_WL_W};
+  }
+  const flight::FlightOutputs out = flight_->Step(pending_);
+  pending_ = flight::FlightInputs();
+  inputs_.detections += out.frames_detected;
+  SystemState state = out.estimate;
   state.time_s = t;
-  const SystemState controller_state = ControllerState(t, state);
-  if (control_due) ControlStep(t, truth, state, controller_state);
+  if (out.has_command) {
+    need_truth();
+    ControlStep(t, truth, state, out);
+  }
   while (auto arrived = commands_in_flight_->PopReady(t)) control_ = *arrived;
   RateLoopStep(state, rate_due);
   if (video_due) VideoStep(t, truth, state);
@@ -197,7 +240,11 @@ void RunLoop::CameraStep(double t, const sim::Truth& truth) {
   CameraFrameRecord frame;
   frame.time_s = t;
   frame.payload_in_image = InsideImage(params_, p_CL_C);
-  if (!ground_truth_) {
+  if (ground_truth_) {
+    // the flight code reads the truth: no frame
+  } else if (render_camera_ && flight_->wants_reference()) {
+    RenderForFlightStack(t, &frame);
+  } else {
     const PayloadDetection detection = render_camera_
                                            ? RenderAndDetect(t, &frame)
                                            : analytic_camera_->Measure(p_CL_C, t, camera_rng_);
@@ -211,7 +258,7 @@ void RunLoop::CameraStep(double t, const sim::Truth& truth) {
 // (DetectInRegion's result equals the whole frame's when it gives one). Recorders never change
 // this path: a video renders frames of its own.
 PayloadDetection RunLoop::RenderAndDetect(double t, CameraFrameRecord* frame) {
-  const cv::Rect region = detector_->RegionAround(last_detection_, kRegionMarginPx);
+  const cv::Rect region = detector_->RegionAround(last_detection_, flight::kRegionMarginPx);
   // renders `area` (empty: the whole frame) and detects in it; times add up
   const auto render_and_detect = [&](const cv::Rect& area) {
     world_->RenderPayloadCamera(&rendered_, area);
@@ -233,26 +280,22 @@ PayloadDetection RunLoop::RenderAndDetect(double t, CameraFrameRecord* frame) {
   return detection;
 }
 
-// The estimate the controller may read: now, or estimate_s ago (labelled with the time it is
-// read: the controller does not know its age).
-SystemState RunLoop::ControllerState(double t, const SystemState& state) {
-  SystemState controller_state = state;
-  if (delayed_estimate_) {
-    estimates_in_flight_->Push(t, state);
-    while (auto old = estimates_in_flight_->PopReady(t)) {
-      delayed_state_ = *old;
-      have_delayed_state_ = true;
-    }
-    if (have_delayed_state_) controller_state = delayed_state_;
-    controller_state.time_s = t;
-  }
-  return controller_state;
+// A separate flight stack detects on its side: the whole frame is rendered into the next slot of
+// the shared ring and travels, as its slot, with the camera's latency.
+void RunLoop::RenderForFlightStack(double t, CameraFrameRecord* frame) {
+  int slot = 0;
+  cv::Mat* image = flight_->NextFrameSlot(&slot);
+  world_->RenderPayloadCamera(image, cv::Rect());
+  frame->render_ms = world_->last_camera_timing().render_ms;
+  frame->image_model_ms = world_->last_camera_timing().image_model_ms;
+  frame->frame = image;
+  frames_in_flight_->Push(t, flight::CameraFrame{t, slot, *image});
 }
 
-// The high-level controller; its command reaches the rate loop after compute + transport.
+// The flight stack's control step; its command reaches the rate loop after compute + transport.
 void RunLoop::ControlStep(double t, const sim::Truth& truth, const SystemState& state,
-                          const SystemState& controller_state) {
-  const ControlOutput computed = controller_->Update(controller_state);
+                          const flight::FlightOutputs& out) {
+  const ControlOutput& computed = out.command;
   commands_in_flight_->Push(t, computed);
   LogRow row;
   row.time_s = t;
@@ -267,9 +310,8 @@ void RunLoop::ControlStep(double t, const sim::Truth& truth, const SystemState& 
   row.gripper_active = world_->gripper_active();
   row.mixer_saturated = mixer_saturated_;
   if (!ground_truth_) {
-    const EstimatorHealth health = estimator_->Health();
-    row.estimator_rejected_updates = health.RejectedUpdates();
-    row.estimator_resets = health.ForcedAccepts();
+    row.estimator_rejected_updates = out.estimator_rejected_updates;
+    row.estimator_resets = out.estimator_resets;
   }
   for (RunRecorder* r : recorders_) r->OnControlStep(row);
 }
@@ -282,7 +324,7 @@ void RunLoop::RateLoopStep(const SystemState& state, bool rate_due) {
     if (const std::optional<GyroSample> gyro = world_->TakeRateGyro()) {
       world_->SetMotorSpeedCommand(px4_rate_->Update(control_.command, gyro->gyro_B_radps));
       const Px4RateStatus& mixer = px4_rate_->status();
-      if (!ground_truth_) estimator_->OnAllocatedThrust(mixer.thrust_allocated_N);
+      pending_.allocation = flight::AllocationReport{mixer.thrust_allocated_N, mixer.saturated};
       ++inputs_.rate_loop_steps;
       inputs_.mixer_saturated_steps += mixer.saturated ? 1 : 0;
       mixer_saturated_ = mixer.saturated;
@@ -292,9 +334,9 @@ void RunLoop::RateLoopStep(const SystemState& state, bool rate_due) {
         rate_controller_->Update(control_.command, state.w_B, rate_loop_dt_s_);
     world_->SetMotorSpeedCommand(w_cmd);
     const double allocated_N = params_.k_f_N_per_radps2 * w_cmd.squaredNorm();
-    if (!ground_truth_) estimator_->OnAllocatedThrust(allocated_N);
     ++inputs_.rate_loop_steps;
     mixer_saturated_ = allocated_N < control_.command.thrust_N - 1e-6;
+    pending_.allocation = flight::AllocationReport{allocated_N, mixer_saturated_};
     inputs_.mixer_saturated_steps += mixer_saturated_ ? 1 : 0;
   }
 }
@@ -309,16 +351,12 @@ void RunLoop::VideoStep(double t, const sim::Truth& truth, const SystemState& st
   for (RunRecorder* r : recorders_) r->OnVideoTick(*world_, now, cv::Mat());
 }
 
-// One physics step, the sensors to the estimator (with ground truth its output is never read:
-// drain only), then the crash check.
+// One physics step, its sensor samples queued for the flight stack's next tick, then the crash
+// check.
 bool RunLoop::StepWorld() {
   world_->Step();
-  while (auto imu = world_->TakeImu()) {
-    if (!ground_truth_) estimator_->OnImu(*imu);
-  }
-  while (auto vio = world_->TakeVio()) {
-    if (!ground_truth_) estimator_->OnVio(*vio);
-  }
+  while (auto imu = world_->TakeImu()) pending_.imu.push_back(*imu);
+  while (auto vio = world_->TakeVio()) pending_.vio.push_back(*vio);
   const sim::CrashStatus crash = world_->Crash();
   if (!crash.crashed) return true;
   metrics_->crashed = true;
@@ -339,9 +377,19 @@ void RunLoop::ShowProgress(double t) {
 void RunLoop::Finish(RunResult* result) {
   if (show_progress_) std::fprintf(stderr, "\n");
   Metrics& metrics = *metrics_;
-  if (!ground_truth_) {
-    metrics.estimator = EstimatorOf(scenario_);
-    metrics.estimator_health = estimator_->Health().Fields();
+  // the flight stack's end: the last step's sensors, the frames still in flight (detected, not
+  // delivered) and its estimator's health
+  while (auto frame = frames_in_flight_->PopReady(1e300)) pending_.frames.push_back(*frame);
+  try {
+    const FlightFinish finish = flight_->Finish(pending_);
+    if (!ground_truth_) {
+      metrics.estimator = finish.estimator;
+      metrics.estimator_health = finish.estimator_health;
+    }
+    inputs_.detections += finish.frames_detected;
+  } catch (const std::exception& e) {
+    const std::string what = std::string("at the end of the run: ") + e.what();
+    metrics.run_error = metrics.run_error ? *metrics.run_error + "; " + what : what;
   }
   metrics.sim_time_s = std::min(tick_, end_tick_) * sim::World::kPhysicsDt_s;
   metrics.payload_quad_min_distance_m = world_->payload_quad_min_distance_m();

@@ -10,12 +10,12 @@
 
 #include "hpa/controller/body_rate_controller.h"
 #include "hpa/controller/px4_rate_controller.h"
-#include "hpa/estimator/estimator.h"
 #include "hpa/estimator/payload_detector.h"
 #include "hpa/models/lockstep.h"
 #include "hpa/scenarios/runner.h"
 #include "hpa/sim/analytic_camera.h"
 #include "hpa/sim/world.h"
+#include "scenarios/src/runner/flight_link.h"
 
 namespace hpa::runner {
 
@@ -41,6 +41,10 @@ class LogRecorder final : public RunRecorder {
   MetricsInputs* inputs_;
 };
 
+/// The flight stack's configuration for `scenario` (flight params, not the world's).
+flight::FlightConfig FlightConfigOf(const Scenario& scenario, const Params& params,
+                                    const SystemState& initial);
+
 /// One run's world, flight code and schedule; Run() steps it tick by tick.
 class RunLoop {
  public:
@@ -65,9 +69,9 @@ class RunLoop {
   void ApplyDueEvents(double t);
   void CameraStep(double t, const sim::Truth& truth);
   PayloadDetection RenderAndDetect(double t, CameraFrameRecord* frame);
-  SystemState ControllerState(double t, const SystemState& state);
+  void RenderForFlightStack(double t, CameraFrameRecord* frame);
   void ControlStep(double t, const sim::Truth& truth, const SystemState& state,
-                   const SystemState& controller_state);
+                   const flight::FlightOutputs& out);
   void RateLoopStep(const SystemState& state, bool rate_due);
   void VideoStep(double t, const sim::Truth& truth, const SystemState& state);
   bool StepWorld();  // false: crashed
@@ -81,12 +85,11 @@ class RunLoop {
   bool ground_truth_, render_camera_;
 
   std::unique_ptr<sim::World> world_;
-  std::shared_ptr<const Reference> reference_;
-  std::unique_ptr<Controller> controller_;
+  std::shared_ptr<const Reference> reference_;  // for the log and the metrics
+  std::unique_ptr<FlightLink> flight_;          // detector, estimator, controller
   std::unique_ptr<BodyRateController> rate_controller_;
   std::unique_ptr<Px4RateController> px4_rate_;  // the profile's PX4 loop, if it flies one
-  std::unique_ptr<Estimator> estimator_;
-  std::unique_ptr<PayloadDetector> detector_;
+  std::unique_ptr<PayloadDetector> detector_;    // in process: detects in the rendered region
   std::unique_ptr<sim::AnalyticCamera> analytic_camera_;
   std::mt19937_64 camera_rng_;
 
@@ -98,19 +101,17 @@ class RunLoop {
   long tick_ = 0, end_tick_ = 0;
   double end_s_ = 0.0;
   std::unique_ptr<LockstepClock> clock_;
-  int camera_loop_ = -1, control_loop_ = -1, rate_loop_ = -1, video_loop_ = -1;
+  int camera_loop_ = -1, rate_loop_ = -1, video_loop_ = -1;
   double rate_loop_dt_s_ = 0.0;
   std::vector<EventSpec> events_;  // by start time
   size_t next_event_ = 0;
 
   // what is in flight between the loops
   std::unique_ptr<DelayLine<PayloadDetection>> detections_in_flight_;  // camera to estimator
+  std::unique_ptr<DelayLine<flight::CameraFrame>> frames_in_flight_;   // to a separate stack
   std::unique_ptr<DelayLine<ControlOutput>> commands_in_flight_;       // compute + transport
-  std::unique_ptr<DelayLine<SystemState>> estimates_in_flight_;        // estimate to controller
-  bool delayed_estimate_ = false;
-  ControlOutput control_;      // the command the rate loop tracks
-  SystemState delayed_state_;  // latest estimate old enough to have reached the controller
-  bool have_delayed_state_ = false;
+  ControlOutput control_;         // the command the rate loop tracks
+  flight::FlightInputs pending_;  // what reaches the flight stack at the next tick
 
   cv::Mat rendered_;                 // the payload camera's frame buffer, reused frame to frame
   PayloadDetection last_detection_;  // the region of the next frame is around it

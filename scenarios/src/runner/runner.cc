@@ -84,14 +84,22 @@ RunResult RunScenario(const Scenario& scenario, const Params& params, const RunO
       scenario.reference.type != "line") {  // Lissajous family
     metrics.payload_rmse_from_s = scenario.reference.lissajous.ramp_s;
   }
-  runner::RunLoop loop(scenario, params, options, &metrics);
+  std::unique_ptr<runner::RunLoop> loop;
   try {
-    loop.Run();
+    loop = std::make_unique<runner::RunLoop>(scenario, params, options, &metrics);
+  } catch (const flight::ProtocolError& e) {
+    // a separate flight stack that did not start: a run error, nothing flown
+    metrics.run_error = e.what();
+    return result;
+  }
+  try {
+    loop->Run();
   } catch (const std::exception& e) {
     // keep what was computed: the metrics of the run so far, with the error named
-    metrics.run_error = std::string(e.what()) + " (at t = " + std::to_string(loop.time_s()) + " s)";
+    metrics.run_error =
+        std::string(e.what()) + " (at t = " + std::to_string(loop->time_s()) + " s)";
   }
-  loop.Finish(&result);
+  loop->Finish(&result);
   return result;
 }
 

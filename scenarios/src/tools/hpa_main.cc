@@ -227,7 +227,8 @@ void PrintSummary(const Metrics& m, const std::string& out_dir) {
 
 int Run(int argc, char** argv) {
   ScenarioOptions o;
-  std::string out_dir, controller, video;
+  std::string out_dir, controller, video, flight_stack;
+  double flight_timeout_s = 10.0;
   bool slack_events = false, plots = false;
   CLI::App app{"Runs one scenario; writes DIR/metrics.json and DIR/log.csv.", "hpa run"};
   AddScenarioOptions(app, &o, true, true);
@@ -237,6 +238,14 @@ int Run(int argc, char** argv) {
   app.add_flag("--video-slack-events", slack_events,
                "keep only a window around each slack event (alone: DIR/slack_events.mp4)");
   app.add_flag("--plots", plots, "write PNG plots of the run into DIR");
+  app.add_option("--flight-stack", flight_stack,
+                 "fly a separate flight stack: a shell command (e.g. hpa-flight, or python3 "
+                 "examples/python/hover_controller.py) started with HPA_FLIGHT_SOCKET set and "
+                 "run in lockstep over docs/protocol.md's protocol (default: in process)");
+  app.add_option("--flight-timeout", flight_timeout_s,
+                 "with --flight-stack: seconds to wait for its reply to one tick before the run "
+                 "stops with a run error")
+      ->check(CLI::Range(0.001, 3600.0));
   if (const auto code = ParseCommandLine(app, argc, argv)) return *code;
   const Params params = LoadParamsOf(o);
   Scenario scenario = LoadScenarioOf(o);
@@ -251,6 +260,8 @@ int Run(int argc, char** argv) {
   RunOptions options;
   options.progress = !o.quiet;
   options.gl_backend = ParseGlOption(o.gl);
+  options.flight_stack = flight_stack;
+  options.flight_step_timeout_s = flight_timeout_s;
   if (slack_events && video.empty()) video = out_dir + "/slack_events.mp4";
   std::unique_ptr<VideoTickRecorder> recorder;
   if (!video.empty()) {

@@ -74,6 +74,7 @@ struct Metrics {
   Quantiles image_model_ms;                      // per rendered frame: blur, distortion, PSF, noise
   std::optional<std::string> run_error;          // the run stopped on an exception (results kept)
   std::string world_profile = "ideal";           // realism profile of the simulated world
+  std::string flight_stack = "in_process";  // what flew: in process, or a separate stack's name
   // smallest payload-to-vehicle surface distance over the run (m; negative: they overlapped)
   double payload_quad_min_distance_m = 0.0;
   // contact episodes: payload-body, payload-rotor, payload-ground, quadrotor-ground,

@@ -55,6 +55,10 @@ struct RunOptions {
   std::function<void(sim::World&)> at_stop;  // called with the world when the run stops
   std::vector<RunRecorder*> recorders;       // extra observers, a video among them (not owned)
   sim::GlBackend gl_backend = sim::GlBackend::kOsMesa;  // GL context of the rendered cameras
+  // a separate flight stack: the shell command that starts it (empty: the flight stack runs in
+  // this process); it speaks the lockstep protocol (docs/protocol.md)
+  std::string flight_stack;
+  double flight_step_timeout_s = 10.0;  // longest wait for its reply to one tick
 };
 
 /// The rate table a scenario runs with: the defaults, the scenario's camera latency.

@@ -1,0 +1,258 @@
+"""A flight stack in Python over hpa-sim's lockstep protocol (docs/protocol.md).
+
+`hpa run --flight-stack "python3 my_stack.py" SCENARIO` starts the script with
+HPA_FLIGHT_SOCKET set. The script connects, receives the hello (the vehicle's parameters, the
+reference, the rates), then answers one tick at a time: each tick carries the sensor messages
+that reached the flight computer since the last one, and the reply carries the state estimate
+and, when the controller runs, a body-rate + collective-thrust command. Simulated time waits for
+each reply (lockstep), so a slow controller slows the run, never the simulated vehicle.
+
+    from hpa_sim import run, Command
+    class Hover:
+        def __init__(self, hello): ...
+        def step(self, tick):           # -> Command or None (keep the last command)
+            ...
+    run(Hover)
+"""
+
+import json
+import mmap
+import os
+import socket
+import struct
+import sys
+
+import numpy as np
+
+PROTOCOL_VERSION = 1
+MAGIC = 0x46415048  # "HPAF"
+HELLO, HELLO_ACK, TICK, TICK_REPLY, FINISH, FINISH_REPLY, ERROR = range(1, 8)
+
+_HAS_ALLOCATION, _SATURATED, _HAS_TRUTH, _NEED_ESTIMATE, _GRIPPER = 1, 2, 4, 8, 16
+_HAS_COMMAND, _HAS_ESTIMATE = 1, 2
+STATUS = ["success", "max_iterations", "qp_failure", "non_finite", "fallback", "recovery"]
+
+
+class ProtocolError(RuntimeError):
+    """A malformed or unexpected message."""
+
+
+class Command:
+    """Body rates (rad/s, body frame) and collective thrust (N) for the simulator's rate loop."""
+
+    def __init__(self, w_B_radps, thrust_N, status="success", solve_time_ms=0.0, cost=0.0):
+        self.w_B_radps = [float(v) for v in w_B_radps]
+        self.thrust_N = float(thrust_N)
+        self.status = status
+        self.solve_time_ms = float(solve_time_ms)
+        self.cost = float(cost)
+
+
+class Tick:
+    """One tick's inputs. imu: (n, 7) array [t_s, gyro_B (3) rad/s, accel_B (3) m/s^2];
+    vio: (n, 11) array [t_s, p_WB_W (3) m, q_WB (w, x, y, z), v_WB_W (3) m/s] stamped with
+    their capture time; detections: dicts (time_s, found, reason, p_CL_C, centre_px, radius_px);
+    frames: dicts (capture_time_s, slot, image: an (h, w, 3) uint8 BGR view, valid during the
+    tick); allocation: (thrust_allocated_N, saturated) or None; truth: a state dict (only with
+    the scenario's ground-truth switch) or None; reference: dict p_WL_W, v_WL_W, a_WL_W."""
+
+    __slots__ = ("time_s", "allocation", "imu", "vio", "detections", "frames", "truth",
+                 "need_estimate", "gripper_active", "reference")
+
+
+class _Reader:
+    def __init__(self, data):
+        self.data, self.pos = data, 0
+
+    def take(self, fmt):
+        size = struct.calcsize(fmt)
+        if self.pos + size > len(self.data):
+            raise ProtocolError("message ends early")
+        values = struct.unpack_from(fmt, self.data, self.pos)
+        self.pos += size
+        return values
+
+    def f64s(self, n):
+        return np.array(self.take("<%dd" % n))
+
+    def u32(self):
+        return self.take("<I")[0]
+
+    def state(self):
+        v = self.take("<20d")
+        mode, flags = self.take("<II")
+        return {"time_s": v[0], "p_WL_W": np.array(v[1:4]), "v_WL_W": np.array(v[4:7]),
+                "p_WQ_W": np.array(v[7:10]), "v_WQ_W": np.array(v[10:13]),
+                "q_WB": np.array(v[13:17]), "w_B": np.array(v[17:20]),
+                "mode": "taut" if mode == 1 else "slack",
+                "payload_visible": bool(flags & 1), "payload_lost": bool(flags & 2)}
+
+
+def _pack_state(s):
+    def vec(key, n, default=0.0):
+        v = s.get(key)
+        return [default] * n if v is None else [float(x) for x in v]
+    q = s.get("q_WB")
+    q = [1.0, 0.0, 0.0, 0.0] if q is None else [float(x) for x in q]
+    values = ([float(s.get("time_s", 0.0))] + vec("p_WL_W", 3) + vec("v_WL_W", 3) +
+              vec("p_WQ_W", 3) + vec("v_WQ_W", 3) + q + vec("w_B", 3))
+    flags = (1 if s.get("payload_visible", False) else 0) | (2 if s.get("payload_lost", True) else 0)
+    return struct.pack("<20dII", *values, 1 if s.get("mode", "taut") == "taut" else 0, flags)
+
+
+def decode_tick(data):
+    """Decodes a tick message body into a Tick (frames without images)."""
+    r = _Reader(data)
+    t = Tick()
+    t.time_s, flags = r.take("<dI")
+    t.allocation = None
+    if flags & _HAS_ALLOCATION:
+        t.allocation = (r.take("<d")[0], bool(flags & _SATURATED))
+    t.need_estimate = bool(flags & _NEED_ESTIMATE)
+    t.gripper_active = bool(flags & _GRIPPER)
+    ref = r.f64s(9)
+    t.reference = {"p_WL_W": ref[0:3], "v_WL_W": ref[3:6], "a_WL_W": ref[6:9]}
+    n = r.u32()
+    t.imu = r.f64s(7 * n).reshape(n, 7)
+    n = r.u32()
+    t.vio = r.f64s(11 * n).reshape(n, 11)
+    t.detections = []
+    for _ in range(r.u32()):
+        time_s, found = r.take("<dI")
+        v = r.f64s(6)
+        length = r.u32()
+        reason = bytes(r.data[r.pos:r.pos + length]).decode("utf-8", "replace")
+        r.pos += length
+        t.detections.append({"time_s": time_s, "found": bool(found), "p_CL_C": v[0:3],
+                             "centre_px": v[3:5], "radius_px": v[5], "reason": reason})
+    t.frames = []
+    for _ in range(r.u32()):
+        slot, capture_time_s = r.take("<Id")
+        t.frames.append({"slot": slot, "capture_time_s": capture_time_s, "image": None})
+    t.truth = r.state() if flags & _HAS_TRUTH else None
+    if r.pos != len(data):
+        raise ProtocolError("%d bytes after the tick's end" % (len(data) - r.pos))
+    return t
+
+
+def encode_reply(command, estimate, rejected=0, resets=0, frames_detected=0):
+    """Encodes a tick reply: a Command or None, a state dict or None, and health counters."""
+    flags = (_HAS_COMMAND if command is not None else 0) | (_HAS_ESTIMATE if estimate is not None else 0)
+    out = struct.pack("<I", flags)
+    if command is not None:
+        out += struct.pack("<4dIdd", *command.w_B_radps, command.thrust_N,
+                           STATUS.index(command.status), command.solve_time_ms, command.cost)
+    if estimate is not None:
+        out += _pack_state(estimate)
+    return out + struct.pack("<III", rejected, resets, frames_detected)
+
+
+class FlightStackClient:
+    """One connection to the simulator: messages in and out, and the frame ring."""
+
+    def __init__(self, path=None):
+        path = path or os.environ.get("HPA_FLIGHT_SOCKET")
+        if not path:
+            raise SystemExit("no HPA_FLIGHT_SOCKET: start this with hpa run --flight-stack")
+        self.sock = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
+        self.sock.connect(path)
+        self.ring = None
+
+    def receive(self):
+        """(type, body bytes) of the next message."""
+        magic, kind, length = struct.unpack("<III", self._read(12))
+        if magic != MAGIC:
+            raise ProtocolError("not an hpa lockstep message (bad magic)")
+        body = self._read(length)
+        if kind == ERROR:
+            raise ProtocolError("the simulator reported: " + body.decode("utf-8", "replace"))
+        return kind, body
+
+    def send(self, kind, body):
+        """Sends one message."""
+        self.sock.sendall(struct.pack("<III", MAGIC, kind, len(body)) + body)
+
+    def hello(self, name, control_rate_hz):
+        """Receives the hello (a dict), maps the frame ring, answers with the ack."""
+        kind, body = self.receive()
+        if kind != HELLO:
+            raise ProtocolError("expected a hello, got message type %d" % kind)
+        hello = json.loads(body)
+        if hello["protocol_version"] != PROTOCOL_VERSION:
+            self.send(ERROR, ("this client speaks protocol version %d" % PROTOCOL_VERSION).encode())
+            raise ProtocolError("the simulator speaks protocol version %d" % hello["protocol_version"])
+        camera = hello.get("camera")
+        if camera:
+            name_ = camera["ring"]
+            fd = os.open("/dev/shm/" + name_.lstrip("/"), os.O_RDONLY)
+            try:
+                self.ring = mmap.mmap(fd, camera["slot_bytes"] * camera["slots"], prot=mmap.PROT_READ)
+            finally:
+                os.close(fd)
+            self.camera = camera
+        self.send(HELLO_ACK, json.dumps({"protocol_version": PROTOCOL_VERSION, "name": name,
+                                         "control_rate_hz": control_rate_hz}).encode())
+        return hello
+
+    def attach_frames(self, tick):
+        """Points each frame of `tick` at its image in the ring (a read-only numpy view)."""
+        for f in tick.frames:
+            c = self.camera
+            offset = f["slot"] * c["slot_bytes"]
+            f["image"] = np.frombuffer(self.ring, dtype=np.uint8, count=c["width_px"] * c["height_px"] * 3,
+                                       offset=offset).reshape(c["height_px"], c["width_px"], 3)
+
+    def _read(self, n):
+        chunks = []
+        while n > 0:
+            chunk = self.sock.recv(n)
+            if not chunk:
+                raise EOFError("the simulator closed the connection")
+            chunks.append(chunk)
+            n -= len(chunk)
+        return b"".join(chunks)
+
+
+def run(controller_class, name=None, control_rate_hz=0.0):
+    """Serves one run: builds controller_class(hello) and calls its step(tick) every tick.
+    step returns a Command (a new command), or None (the rate loop keeps the last one); the
+    controller may set `estimate` (a state dict) for the simulator's log and rate loop, else the
+    latest VIO pose and IMU rate are sent."""
+    client = FlightStackClient()
+    try:
+        hello = client.hello(name or controller_class.__name__, control_rate_hz)
+        controller = controller_class(hello)
+        last_vio, last_gyro = None, np.zeros(3)
+        while True:
+            kind, body = client.receive()
+            tick = decode_tick(body)
+            if kind == FINISH:
+                client.send(FINISH_REPLY, json.dumps({"estimator": "", "estimator_health": [],
+                                                      "frames_detected": 0}).encode())
+                return 0
+            if kind != TICK:
+                raise ProtocolError("unexpected message type %d" % kind)
+            client.attach_frames(tick)
+            if len(tick.vio):
+                last_vio = tick.vio[-1]
+            if len(tick.imu):
+                last_gyro = tick.imu[-1, 1:4]
+            command = controller.step(tick)
+            estimate = getattr(controller, "estimate", None)
+            if estimate is None and tick.truth is not None:
+                estimate = tick.truth
+            if estimate is None and last_vio is not None:
+                estimate = {"p_WQ_W": last_vio[1:4], "q_WB": last_vio[4:8], "v_WQ_W": last_vio[8:11],
+                            "w_B": last_gyro}
+            if estimate is not None:
+                estimate = dict(estimate, time_s=tick.time_s)
+            client.send(TICK_REPLY, encode_reply(command, estimate))
+    except EOFError:
+        return 0
+    except Exception as e:  # tell the simulator why, then fail
+        try:
+            client.send(ERROR, ("%s: %s" % (type(e).__name__, e)).encode())
+        except OSError:
+            pass
+        print("flight stack: %s: %s" % (type(e).__name__, e), file=sys.stderr)
+        return 1

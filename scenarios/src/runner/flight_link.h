@@ -1,0 +1,67 @@
+#pragma once
+// How the runner reaches the flight stack (private to the runner): in process (the FlightStack
+// called directly) or a separate process over the lockstep protocol (the simulator serves a
+// Unix socket, starts the command with HPA_FLIGHT_SOCKET set and waits for each reply, so
+// simulated time waits for the flight code). Both carry the same messages in the same order.
+
+#include <memory>
+#include <opencv2/core.hpp>
+#include <string>
+
+#include "hpa/flight/protocol.h"
+
+namespace hpa::runner {
+
+/// What a flight stack reports at the end of a run.
+struct FlightFinish {
+  std::string estimator;                  // its estimator ("" with ground truth)
+  flight::HealthFields estimator_health;  // its estimator's counters
+  int frames_detected = 0;  // of the frames captured but not delivered, with the payload
+};
+
+/// The rendered-camera frames a separate flight stack reads: a shared-memory ring.
+struct FrameRingSpec {
+  int slots = 0;  // 0: no frames cross (analytic camera, ground truth, or in process)
+  int width_px = 0, height_px = 0;
+};
+
+/// One run's connection to its flight stack.
+class FlightLink {
+ public:
+  virtual ~FlightLink() = default;
+  /// One tick (FlightStack::Step).
+  virtual flight::FlightOutputs Step(const flight::FlightInputs& in) = 0;
+  /// The end of the run: delivers `pending` (FlightStack::Finish) and collects the report.
+  virtual FlightFinish Finish(const flight::FlightInputs& pending) = 0;
+  /// The next frame-ring slot to render into (its index in *slot); nullptr: frames do not
+  /// cross (the runner detects in process).
+  virtual cv::Mat* NextFrameSlot(int* slot) {
+    (void)slot;
+    return nullptr;
+  }
+  /// Whether the stack reads the per-tick reference sample (only a separate process does).
+  virtual bool wants_reference() const { return false; }
+  /// What flies: "in_process" or the name the separate stack gave in its hello.
+  virtual std::string name() const = 0;
+};
+
+/// The flight stack in this process.
+std::unique_ptr<FlightLink> MakeInProcessFlight(const flight::FlightConfig& config);
+
+/// Settings of a separate flight stack.
+struct ExternalFlightOptions {
+  std::string command;              // shell command line that starts it
+  double step_timeout_s = 10.0;     // longest wait for one reply (and for the hello)
+  double connect_timeout_s = 30.0;  // longest wait for it to connect
+  FrameRingSpec frames;             // the rendered camera's frames, if they cross
+  nlohmann::json rates;             // the rate table, for the hello
+  std::string scenario;             // the scenario's name and seed, for the hello
+  unsigned long seed = 0;
+};
+
+/// Starts `options.command` and completes the hello; throws flight::ProtocolError naming the
+/// command for one that does not start, connect, or speak this protocol's version.
+std::unique_ptr<FlightLink> StartExternalFlight(const flight::FlightConfig& config,
+                                                const ExternalFlightOptions& options);
+
+}  // namespace hpa::runner
