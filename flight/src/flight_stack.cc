@@ -6,15 +6,14 @@
 
 namespace hpa::flight {
 
-PayloadDetection DetectRegionFirst(const PayloadDetector& detector, const cv::Mat& bgr,
-                                   const PayloadDetection& last, double capture_time_s) {
-  const cv::Rect region = detector.RegionAround(last, kRegionMarginPx);
-  if (region.area() > 0) {
-    if (std::optional<PayloadDetection> d = detector.DetectInRegion(bgr, region, capture_time_s)) {
+PayloadDetection DetectFrame(const PayloadDetector& detector, const CameraFrame& frame) {
+  if (frame.region.area() > 0 && !frame.region_bgr.empty()) {
+    if (std::optional<PayloadDetection> d =
+            detector.DetectInRegion(frame.region_bgr, frame.region, frame.capture_time_s)) {
       return *d;
     }
   }
-  return detector.Detect(bgr, capture_time_s);
+  return detector.Detect(frame.whole_bgr, frame.capture_time_s);
 }
 
 FlightStack::FlightStack(const FlightConfig& config)
@@ -41,8 +40,7 @@ int FlightStack::Deliver(const FlightInputs& in) {
   for (const PayloadDetection& d : in.detections) estimator_->OnPayloadDetection(d);
   int found = 0;
   for (const CameraFrame& frame : in.frames) {
-    last_detection_ =
-        DetectRegionFirst(*detector_, frame.bgr, last_detection_, frame.capture_time_s);
+    last_detection_ = DetectFrame(*detector_, frame);
     found += last_detection_.found ? 1 : 0;
     estimator_->OnPayloadDetection(last_detection_);
   }
@@ -56,8 +54,7 @@ int FlightStack::Finish(const FlightInputs& in) {
   int found = 0;
   for (const CameraFrame& frame : in.frames) {
     if (!detector_) break;
-    last_detection_ =
-        DetectRegionFirst(*detector_, frame.bgr, last_detection_, frame.capture_time_s);
+    last_detection_ = DetectFrame(*detector_, frame);
     found += last_detection_.found ? 1 : 0;
   }
   return found;
@@ -95,6 +92,7 @@ FlightOutputs FlightStack::Step(const FlightInputs& in) {
       out.command = controller_->Update(controller_state);
     }
   }
+  if (detector_) out.camera_roi = detector_->RegionAround(last_detection_, kRegionMarginPx);
   if (estimator_) {
     const hpa::EstimatorHealth health = estimator_->Health();
     out.estimator_rejected_updates = health.RejectedUpdates();

@@ -49,15 +49,19 @@ class FrameRing {
   // points each frame's image at its slot
   void Attach(std::vector<hpa::flight::CameraFrame>* frames) const {
     for (hpa::flight::CameraFrame& f : *frames) {
-      if (base_ == nullptr || f.slot < 0 || f.slot >= slots_) {
-        throw ProtocolError("a frame in slot " + std::to_string(f.slot) + " of a ring of " +
-                            std::to_string(slots_));
-      }
-      f.bgr = cv::Mat(height_, width_, CV_8UC3, base_ + slot_bytes_ * static_cast<size_t>(f.slot));
+      if (f.region.area() > 0) f.region_bgr = Slot(f.region_slot);
+      f.whole_bgr = Slot(f.whole_slot);
     }
   }
 
  private:
+  cv::Mat Slot(int slot) const {
+    if (base_ == nullptr || slot < 0 || slot >= slots_) {
+      throw ProtocolError("a frame in slot " + std::to_string(slot) + " of a ring of " +
+                          std::to_string(slots_));
+    }
+    return cv::Mat(height_, width_, CV_8UC3, base_ + slot_bytes_ * static_cast<size_t>(slot));
+  }
   uint8_t* base_ = nullptr;
   size_t bytes_ = 0, slot_bytes_ = 0;
   int slots_ = 0, width_ = 0, height_ = 0;

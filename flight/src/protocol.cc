@@ -24,6 +24,9 @@ class Writer {
     for (int i = 0; i < 3; ++i) F64(v[i]);
   }
   void Quat(const Eigen::Quaterniond& q) { F64(q.w()), F64(q.x()), F64(q.y()), F64(q.z()); }
+  void Rect(const cv::Rect& r) {
+    for (const int v : {r.x, r.y, r.width, r.height}) U32(static_cast<uint32_t>(v));
+  }
   void Str(const std::string& s) {
     U32(static_cast<uint32_t>(s.size()));
     Raw(s.data(), s.size());
@@ -65,6 +68,11 @@ class Reader {
   Eigen::Quaterniond Quat() {
     const double w = F64(), x = F64(), y = F64(), z = F64();
     return Eigen::Quaterniond(w, x, y, z);
+  }
+  cv::Rect Rect() {
+    const int x = static_cast<int32_t>(U32()), y = static_cast<int32_t>(U32());
+    const int w = static_cast<int32_t>(U32()), h = static_cast<int32_t>(U32());
+    return cv::Rect(x, y, w, h);
   }
   std::string Str() {
     const uint32_t n = U32();
@@ -164,8 +172,10 @@ std::vector<uint8_t> EncodeTick(const FlightInputs& in) {
     w.F64(d.centre_px.x()), w.F64(d.centre_px.y()), w.F64(d.radius_px), w.Str(d.reason);
   }
   w.U32(static_cast<uint32_t>(in.frames.size()));
-  for (const CameraFrame& f : in.frames)
-    w.U32(static_cast<uint32_t>(f.slot)), w.F64(f.capture_time_s);
+  for (const CameraFrame& f : in.frames) {
+    w.F64(f.capture_time_s), w.Rect(f.region);
+    w.U32(static_cast<uint32_t>(f.region_slot)), w.U32(static_cast<uint32_t>(f.whole_slot));
+  }
   if (in.truth) w.State(*in.truth);
   return std::move(w.bytes);
 }
@@ -197,10 +207,12 @@ FlightInputs DecodeTick(const std::vector<uint8_t>& body) {
     d.radius_px = r.F64();
     d.reason = r.Str();
   }
-  in.frames.resize(r.Count(12));
+  in.frames.resize(r.Count(8 + 6 * 4));
   for (CameraFrame& f : in.frames) {
-    f.slot = static_cast<int>(r.U32());
     f.capture_time_s = r.F64();
+    f.region = r.Rect();
+    f.region_slot = static_cast<int32_t>(r.U32());
+    f.whole_slot = static_cast<int32_t>(r.U32());
   }
   if (flags & kHasTruth) in.truth = r.State();
   r.End();
@@ -221,6 +233,7 @@ std::vector<uint8_t> EncodeReply(const FlightOutputs& out) {
   w.U32(static_cast<uint32_t>(out.estimator_rejected_updates));
   w.U32(static_cast<uint32_t>(out.estimator_resets));
   w.U32(static_cast<uint32_t>(out.frames_detected));
+  w.Rect(out.camera_roi);
   return std::move(w.bytes);
 }
 
@@ -253,6 +266,7 @@ FlightOutputs DecodeReply(const std::vector<uint8_t>& body) {
   out.estimator_rejected_updates = static_cast<int>(r.U32());
   out.estimator_resets = static_cast<int>(r.U32());
   out.frames_detected = static_cast<int>(r.U32());
+  out.camera_roi = r.Rect();
   r.End();
   return out;
 }

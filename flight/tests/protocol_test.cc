@@ -34,7 +34,12 @@ FlightInputs SampleInputs() {
   d.reason = "partly out of view";
   d.p_CL_C = {0.01, 0.02, 0.5};
   in.detections = {d};
-  in.frames = {CameraFrame{1.2, 3, cv::Mat()}};
+  CameraFrame frame;
+  frame.capture_time_s = 1.2;
+  frame.region = cv::Rect(10, 20, 30, 40);
+  frame.region_slot = 2;
+  frame.whole_slot = 3;
+  in.frames = {frame};
   SystemState truth;
   truth.p_WQ_W = {0, 0, 1.2};
   truth.mode = CableMode::kSlack;
@@ -65,7 +70,9 @@ TEST(ProtocolTest, TickRoundTripsBitForBit) {
   EXPECT_FALSE(out.detections[0].found);
   EXPECT_EQ(out.detections[0].p_CL_C, in.detections[0].p_CL_C);
   ASSERT_EQ(out.frames.size(), 1u);
-  EXPECT_EQ(out.frames[0].slot, 3);
+  EXPECT_EQ(out.frames[0].whole_slot, 3);
+  EXPECT_EQ(out.frames[0].region_slot, 2);
+  EXPECT_EQ(out.frames[0].region, cv::Rect(10, 20, 30, 40));
   EXPECT_EQ(out.frames[0].capture_time_s, 1.2);
   ASSERT_TRUE(out.truth.has_value());
   EXPECT_EQ(out.truth->p_WQ_W, in.truth->p_WQ_W);
@@ -83,12 +90,14 @@ TEST(ProtocolTest, ReplyRoundTripsAndRefusesNonFiniteCommands) {
   out.estimate.p_WL_W = {1, 2, 3};
   out.estimator_resets = 2;
   out.frames_detected = 1;
+  out.camera_roi = cv::Rect(5, 6, 7, 8);
   const FlightOutputs back = DecodeReply(EncodeReply(out));
   EXPECT_EQ(back.command.command.thrust_N, out.command.command.thrust_N);
   EXPECT_EQ(back.command.status, ControlStatus::kFallback);
   EXPECT_EQ(back.estimate.p_WL_W, out.estimate.p_WL_W);
   EXPECT_EQ(back.estimator_resets, 2);
   EXPECT_EQ(back.frames_detected, 1);
+  EXPECT_EQ(back.camera_roi, out.camera_roi);
 
   out.command.command.thrust_N = std::numeric_limits<double>::quiet_NaN();
   try {

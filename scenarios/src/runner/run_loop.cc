@@ -112,8 +112,9 @@ RunLoop::RunLoop(const Scenario& scenario, const Params& params, const RunOption
     external.seed = scenario.seed;
     if (render_camera_ && !ground_truth_) {
       // frames in flight at once (capture to delivery), one being written, one spare
+      // two per frame (its region of interest and the whole frame)
       external.frames.slots =
-          static_cast<int>(std::ceil(rates.camera.latency_s * rates.camera.rate_hz)) + 2;
+          2 * (static_cast<int>(std::ceil(rates.camera.latency_s * rates.camera.rate_hz)) + 2);
       external.frames.width_px = params.camera_width_px;
       external.frames.height_px = params.camera_height_px;
     }
@@ -196,6 +197,7 @@ bool RunLoop::Tick() {
 
   if (camera_due) CameraStep(t, truth);
   while (auto detection = detections_in_flight_->PopReady(t)) {
+    last_detection_ = *detection;  // the camera's next region is around the last one delivered
     pending_.detections.push_back(*detection);
   }
   while (auto frame = frames_in_flight_->PopReady(t)) pending_.frames.push_back(*frame);
@@ -212,6 +214,7 @@ bool RunLoop::Tick() {
   const flight::FlightOutputs out = flight_->Step(pending_);
   pending_ = flight::FlightInputs();
   inputs_.detections += out.frames_detected;
+  camera_roi_ = out.camera_roi;
   SystemState state = out.estimate;
   state.time_s = t;
   if (out.has_command) {
@@ -275,21 +278,32 @@ PayloadDetection RunLoop::RenderAndDetect(double t, CameraFrameRecord* frame) {
   if (region.area() > 0) in_region = render_and_detect(region);
   frame->region_only = in_region.has_value();
   const PayloadDetection detection = in_region ? *in_region : *render_and_detect(cv::Rect());
-  last_detection_ = detection;
   frame->frame = &rendered_;
   return detection;
 }
 
-// A separate flight stack detects on its side: the whole frame is rendered into the next slot of
-// the shared ring and travels, as its slot, with the camera's latency.
+// A separate flight stack detects on its side: the camera reads out the region of interest the
+// stack asked for last and the whole frame (its fallback), each into a slot of the shared ring,
+// and the pair travels with the camera's latency. The pixels are those the in-process path
+// renders, so the stack's detection is the in-process one.
 void RunLoop::RenderForFlightStack(double t, CameraFrameRecord* frame) {
-  int slot = 0;
-  cv::Mat* image = flight_->NextFrameSlot(&slot);
-  world_->RenderPayloadCamera(image, cv::Rect());
-  frame->render_ms = world_->last_camera_timing().render_ms;
-  frame->image_model_ms = world_->last_camera_timing().image_model_ms;
-  frame->frame = image;
-  frames_in_flight_->Push(t, flight::CameraFrame{t, slot, *image});
+  flight::CameraFrame out;
+  out.capture_time_s = t;
+  if (camera_roi_.area() > 0) {
+    cv::Mat* region = flight_->NextFrameSlot(&out.region_slot);
+    world_->RenderPayloadCamera(region, camera_roi_);
+    frame->render_ms += world_->last_camera_timing().render_ms;
+    frame->image_model_ms += world_->last_camera_timing().image_model_ms;
+    out.region = camera_roi_;
+    out.region_bgr = *region;
+  }
+  cv::Mat* whole = flight_->NextFrameSlot(&out.whole_slot);
+  world_->RenderPayloadCamera(whole, cv::Rect());
+  frame->render_ms += world_->last_camera_timing().render_ms;
+  frame->image_model_ms += world_->last_camera_timing().image_model_ms;
+  out.whole_bgr = *whole;
+  frame->frame = whole;
+  frames_in_flight_->Push(t, out);
 }
 
 // The flight stack's control step; its command reaches the rate loop after compute + transport.

@@ -114,7 +114,8 @@ class RunLoop {
   flight::FlightInputs pending_;  // what reaches the flight stack at the next tick
 
   cv::Mat rendered_;                 // the payload camera's frame buffer, reused frame to frame
-  PayloadDetection last_detection_;  // the region of the next frame is around it
+  PayloadDetection last_detection_;  // the last delivered: in process, the next region is around it
+  cv::Rect camera_roi_;              // a separate stack's region of interest for the next frame
   bool mixer_saturated_ = false;     // the rate loop's last allocation fell short
   bool show_progress_ = false;
   int last_progress_pct_ = -1;

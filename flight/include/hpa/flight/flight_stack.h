@@ -46,11 +46,14 @@ struct AllocationReport {
   bool saturated = false;           // the allocation fell short of the command
 };
 
-/// One rendered payload-camera frame for the flight stack's detector.
+/// One rendered payload-camera frame for the flight stack's detector, read out as the camera's
+/// region of interest (the stack's last request) and, for when that cannot decide, whole.
 struct CameraFrame {
   double capture_time_s = 0.0;
-  int slot = 0;  // its shared-memory slot when it came through the protocol
-  cv::Mat bgr;   // CV_8UC3, top row first (a header onto memory the sender owns)
+  cv::Rect region;     // the region of interest read out (empty: none, only the whole frame)
+  cv::Mat region_bgr;  // CV_8UC3, top row first; valid inside `region` only
+  cv::Mat whole_bgr;   // CV_8UC3, top row first, the whole frame
+  int region_slot = -1, whole_slot = -1;  // their shared-memory slots (through the protocol)
 };
 
 /// The payload reference at one tick, for flight stacks that do not build their own.
@@ -84,6 +87,7 @@ struct FlightOutputs {
   int estimator_rejected_updates = 0;  // estimator health after this tick (0 with ground truth)
   int estimator_resets = 0;
   int frames_detected = 0;  // of this tick's frames, those in which the payload was found
+  cv::Rect camera_roi;      // the region the camera should read out next (empty: whole frame)
 };
 
 /// Estimator health as named numbers (metrics.json's estimator_health), in a fixed order.
@@ -126,10 +130,9 @@ class FlightStack {
   PayloadDetection last_detection_;  // the region of the next frame's search is around it
 };
 
-/// Detects the payload in a whole rendered frame, searching the region around `last` first
-/// (the region's result equals the whole frame's whenever the region gives one).
-PayloadDetection DetectRegionFirst(const PayloadDetector& detector, const cv::Mat& bgr,
-                                   const PayloadDetection& last, double capture_time_s);
+/// Detects the payload in a frame: in its region of interest first, in the whole frame when the
+/// region cannot decide (the order the in-process camera path uses).
+PayloadDetection DetectFrame(const PayloadDetector& detector, const CameraFrame& frame);
 
 /// How far (pixels) the payload's image may move between two frames and stay in the region
 /// around its last detection.
