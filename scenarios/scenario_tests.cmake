@@ -71,3 +71,14 @@ set_tests_properties(cli.impulse_finding PROPERTIES LABELS "cli;scenario" TIMEOU
 add_test(NAME cli.retaut_finding
          COMMAND bash ${SCEN}/tests/retaut_finding_test.sh ${HPA_BIN} ${SCEN} ${SCEN_OUT}/retaut_finding)
 set_tests_properties(cli.retaut_finding PROPERTIES LABELS "cli;scenario" TIMEOUT 600)
+
+# The flight stack as its own process over the lockstep protocol: hpa-flight equals in process,
+# the Python example flies, hostile stacks are run errors. Debian's python3 (numpy from
+# python3-numpy), not whichever python3 comes first on PATH.
+find_program(HPA_PYTHON3 NAMES python3 PATHS /usr/bin NO_DEFAULT_PATH)
+if(NOT HPA_PYTHON3)
+  find_program(HPA_PYTHON3 NAMES python3 REQUIRED)
+endif()
+add_test(NAME cli.flight_stack
+         COMMAND bash ${SCEN}/tests/flight_stack_test.sh ${HPA_BIN} ${CMAKE_SOURCE_DIR} ${HPA_PYTHON3})
+set_tests_properties(cli.flight_stack PROPERTIES LABELS "cli;scenario" TIMEOUT 600)

@@ -52,8 +52,8 @@ class Tick:
     """One tick's inputs. imu: (n, 7) array [t_s, gyro_B (3) rad/s, accel_B (3) m/s^2];
     vio: (n, 11) array [t_s, p_WB_W (3) m, q_WB (w, x, y, z), v_WB_W (3) m/s] stamped with
     their capture time; detections: dicts (time_s, found, reason, p_CL_C, centre_px, radius_px);
-    frames: dicts (capture_time_s, slot, image: an (h, w, 3) uint8 BGR view, valid during the
-    tick); allocation: (thrust_allocated_N, saturated) or None; truth: a state dict (only with
+    frames: dicts (capture_time_s, image: the whole (h, w, 3) uint8 BGR frame, a view valid
+    during the tick); allocation: (thrust_allocated_N, saturated) or None; truth: a state dict (only with
     the scenario's ground-truth switch) or None; reference: dict p_WL_W, v_WL_W, a_WL_W."""
 
     __slots__ = ("time_s", "allocation", "imu", "vio", "detections", "frames", "truth",
@@ -127,16 +127,19 @@ def decode_tick(data):
                              "centre_px": v[3:5], "radius_px": v[5], "reason": reason})
     t.frames = []
     for _ in range(r.u32()):
-        slot, capture_time_s = r.take("<Id")
-        t.frames.append({"slot": slot, "capture_time_s": capture_time_s, "image": None})
+        capture_time_s, x, y, w, h, region_slot, whole_slot = r.take("<d4iII")
+        t.frames.append({"capture_time_s": capture_time_s, "region": (x, y, w, h),
+                         "region_slot": region_slot, "whole_slot": whole_slot, "image": None})
     t.truth = r.state() if flags & _HAS_TRUTH else None
     if r.pos != len(data):
         raise ProtocolError("%d bytes after the tick's end" % (len(data) - r.pos))
     return t
 
 
-def encode_reply(command, estimate, rejected=0, resets=0, frames_detected=0):
-    """Encodes a tick reply: a Command or None, a state dict or None, and health counters."""
+def encode_reply(command, estimate, rejected=0, resets=0, frames_detected=0, camera_roi=(0, 0, 0, 0)):
+    """Encodes a tick reply: a Command or None, a state dict or None, health counters and the
+    region of interest (x, y, width, height pixels) the camera should read out next besides
+    the whole frame (zero size: none)."""
     flags = (_HAS_COMMAND if command is not None else 0) | (_HAS_ESTIMATE if estimate is not None else 0)
     out = struct.pack("<I", flags)
     if command is not None:
@@ -144,7 +147,7 @@ def encode_reply(command, estimate, rejected=0, resets=0, frames_detected=0):
                            STATUS.index(command.status), command.solve_time_ms, command.cost)
     if estimate is not None:
         out += _pack_state(estimate)
-    return out + struct.pack("<III", rejected, resets, frames_detected)
+    return out + struct.pack("<III4i", rejected, resets, frames_detected, *camera_roi)
 
 
 class FlightStackClient:
@@ -195,10 +198,10 @@ class FlightStackClient:
         return hello
 
     def attach_frames(self, tick):
-        """Points each frame of `tick` at its image in the ring (a read-only numpy view)."""
+        """Points each frame's "image" at its whole frame in the ring (a read-only numpy view)."""
         for f in tick.frames:
             c = self.camera
-            offset = f["slot"] * c["slot_bytes"]
+            offset = f["whole_slot"] * c["slot_bytes"]
             f["image"] = np.frombuffer(self.ring, dtype=np.uint8, count=c["width_px"] * c["height_px"] * 3,
                                        offset=offset).reshape(c["height_px"], c["width_px"], 3)
 
