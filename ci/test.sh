@@ -6,9 +6,9 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 ./ci/setup.sh
 
-echo "== dependency rule: flight code (models, estimator, controller) never includes MuJoCo or GL"
+echo "== dependency rule: flight code (models, estimator, controller, flight) never includes MuJoCo or GL"
 if grep -rIl -e '#include *<mujoco' -e '#include *<GL/' -e 'OSMesa' \
-     models controller estimator --include='*.h' --include='*.cc' | grep -v '/tests/'; then
+     models controller estimator flight --include='*.h' --include='*.cc' | grep -v '/tests/'; then
   echo "dependency rule broken by the files above" >&2
   exit 1
 fi
