@@ -70,5 +70,28 @@ grep -q '"run_error": "flight stack' "$out/h5/metrics.json" \
 grep -q '"sim_time_s": 0.05' "$out/h5/metrics.json" \
   || fail "the dead stack's run lost the 50 ticks it flew: $(grep sim_time "$out/h5/metrics.json")"
 
+# 4. the Python loader of a sweep's runs.jsonl: one dict per run with its drawn values
+cat > "$out/tiny_sweep.yaml" <<YAML
+base: $src/scenarios/hover.yaml
+runs: 2
+seed: 3
+vary:
+  duration: {list: [2.5]}
+  events.0.force.0: {uniform: [0.1, 0.3]}
+YAML
+"$hpa" sweep "$out/tiny_sweep.yaml" --out "$out/sweep" > /dev/null 2>&1 || fail "tiny sweep failed"
+"$python" - "$out/sweep/runs.jsonl" "$src/python" <<'PY' || fail "load_runs"
+import sys
+sys.path.insert(0, sys.argv[2])
+from hpa_sim import load_runs
+runs = load_runs(sys.argv[1])
+assert len(runs) == 2, len(runs)
+assert sorted(r["run"] for r in runs) == [0, 1], [r["run"] for r in runs]
+forces = [r["values"]["events.0.force.0"] for r in runs]
+assert all(0.1 <= f <= 0.3 for f in forces) and forces[0] != forces[1], forces
+assert all(r["status"] == "ok" for r in runs), [r["status"] for r in runs]
+print("load_runs: %d runs, forces %s" % (len(runs), forces))
+PY
+
 echo "flight_stack_test: $failures failure(s)"
 [ "$failures" -eq 0 ]
