@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "hpa/models/input_error.h"
+#include "hpa/models/params_yaml.h"
 #include "hpa/models/yaml_reader.h"
 
 namespace hpa {
@@ -18,8 +19,76 @@ double Params::CameraFocalPx() const {
 
 std::string DefaultParamsPath() { return std::string(HPA_SOURCE_DIR) + "/models/params.yaml"; }
 
-Params LoadParams(const std::string& path) {
-  const YamlMap root = YamlMap::LoadFile(path);
+Params LoadParams(const std::string& path) { return ParseParams(YamlMap::LoadFile(path)); }
+
+namespace {
+
+// Copies every key of `from` into `into`, descending into maps both have.
+void MergeInto(YAML::Node into, const YAML::Node& from) {
+  for (const auto& kv : from) {
+    const std::string key = kv.first.as<std::string>();
+    if (kv.second.IsMap() && into[key] && into[key].IsMap()) {
+      MergeInto(into[key], kv.second);
+    } else {
+      into[key] = YAML::Clone(kv.second);
+    }
+  }
+}
+
+YAML::Node Seq(const double* v, int n) {
+  YAML::Node s(YAML::NodeType::Sequence);
+  for (int i = 0; i < n; ++i) s.push_back(v[i]);
+  return s;
+}
+
+}  // namespace
+
+YAML::Node ParamsToYaml(const Params& p) {
+  YAML::Node n;
+  n["gravity_mps2"] = p.gravity_mps2;
+  n["quadrotor"]["mass_kg"] = p.quad_mass_kg;
+  n["quadrotor"]["inertia_kgm2"] = Seq(p.inertia_B_kgm2.data(), 3);
+  n["quadrotor"]["arm_length_m"] = p.arm_length_m;
+  n["quadrotor"]["body_half_size_m"] = Seq(p.body_half_size_m.data(), 3);
+  n["rotor"]["k_f_N_per_radps2"] = p.k_f_N_per_radps2;
+  n["rotor"]["k_m_Nm_per_radps2"] = p.k_m_Nm_per_radps2;
+  n["rotor"]["motor_time_constant_s"] = p.motor_time_constant_s;
+  n["rotor"]["motor_speed_min_radps"] = p.motor_speed_min_radps;
+  n["rotor"]["motor_speed_max_radps"] = p.motor_speed_max_radps;
+  n["payload"]["mass_kg"] = p.payload_mass_kg;
+  n["payload"]["radius_m"] = p.payload_radius_m;
+  n["cable"]["length_m"] = p.cable_length_m;
+  n["cable"]["slack_epsilon_m"] = p.slack_epsilon_m;
+  YAML::Node cam = n["payload_camera"];
+  cam["width_px"] = p.camera_width_px;
+  cam["height_px"] = p.camera_height_px;
+  cam["fovy_deg"] = p.camera_fovy_deg;
+  cam["t_BC_B_m"] = Seq(p.t_BC_B_m.data(), 3);
+  YAML::Node r(YAML::NodeType::Sequence);
+  for (int i = 0; i < 3; ++i) {
+    const Eigen::Vector3d row = p.R_BC.row(i).transpose();
+    r.push_back(Seq(row.data(), 3));
+  }
+  cam["R_BC"] = r;
+  cam["distortion_k1_k2_p1_p2"] = Seq(p.camera_distortion.data(), 4);
+  n["vio_camera"]["width_px"] = p.vio_width_px;
+  n["vio_camera"]["height_px"] = p.vio_height_px;
+  return n;
+}
+
+Params ParamsWithOverrides(const Params& base, const YAML::Node& overrides,
+                           const std::string& file) {
+  if (!overrides.IsMap()) {
+    throw InputError(file, "params",
+                     "expected a map shaped like params.yaml, e.g. "
+                     "{cable: {length_m: 0.8}}");
+  }
+  YAML::Node merged = ParamsToYaml(base);
+  MergeInto(merged, overrides);
+  return ParseParams(YamlMap(merged, file, "params"));
+}
+
+Params ParseParams(const YamlMap& root) {
   Params p;
   p.gravity_mps2 = root.Number("gravity_mps2", 0.1, 100.0);
 

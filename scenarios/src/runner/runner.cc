@@ -72,7 +72,10 @@ Params WorldParams(const Scenario& scenario, const Params& params) {
   return p;
 }
 
-RunResult RunScenario(const Scenario& scenario, const Params& params, const RunOptions& options) {
+RunResult RunScenario(const Scenario& scenario, const Params& base_params,
+                      const RunOptions& options) {
+  // the scenario's params: block changes the flight code's model and the world alike
+  const Params params = ScenarioParams(scenario, base_params);
   RunResult result;
   Metrics& metrics = result.metrics;
   metrics.scenario = scenario.name;

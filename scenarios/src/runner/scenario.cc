@@ -9,6 +9,7 @@
 #include "hpa/estimator/estimator_registry.h"
 #include "hpa/models/input_error.h"
 #include "hpa/models/param_yaml.h"
+#include "hpa/models/params_yaml.h"
 #include "hpa/models/yaml_reader.h"
 #include "hpa/scenarios/expect_keys.h"
 #include "hpa/scenarios/world_profile_yaml.h"
@@ -213,6 +214,12 @@ Scenario ParseScenario(const YamlMap& root) {
     w.RejectUnknownKeys();
   }
   s.world = profile.world;
+  if (root.Has("params")) {
+    // checked now against the defaults, applied to the run's params.yaml when it runs
+    const YAML::Node block = root.Node("params");
+    ParamsWithOverrides(Params(), block, root.file());
+    s.params_yaml = YAML::Dump(block);
+  }
   s.rate_loop = profile.rate_loop;
   if (root.Has("controller")) {
     const YamlMap c = root.Map("controller");
@@ -298,6 +305,11 @@ ScenarioSet ParseSetArgument(const std::string& text) {
     throw InputError("", "--set", "expected PATH=VALUE, got '" + text + "'");
   }
   return {text.substr(0, eq), text.substr(eq + 1)};
+}
+
+Params ScenarioParams(const Scenario& scenario, const Params& params) {
+  if (scenario.params_yaml.empty()) return params;
+  return ParamsWithOverrides(params, YAML::Load(scenario.params_yaml), scenario.file);
 }
 
 std::shared_ptr<Reference> MakeReference(const Scenario& scenario, const Params& params) {

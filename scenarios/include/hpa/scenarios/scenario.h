@@ -50,6 +50,9 @@ struct Scenario {
   RateLoopSpec rate_loop;  // the flight code's body-rate loop (the profile's rate_loop section)
   std::optional<double> world_payload_mass_kg;  // world-only overrides (model mismatch)
   std::optional<double> world_cable_length_m;
+  // the `params:` block as YAML text ("" none): values of params.yaml changed for this
+  // scenario, for the flight code's model and the world alike
+  std::string params_yaml;
   ControllerConfig controller;
   EstimationSpec estimation;
   ReferenceSpec reference;
@@ -86,6 +89,10 @@ ScenarioSet ParseSetArgument(const std::string& text);
 
 /// Validates an already parsed YAML node as a scenario (used by sweeps after applying `vary`).
 Scenario ParseScenario(const class YamlMap& root);
+
+/// The params a scenario flies with: `params` with the scenario's `params:` block applied
+/// (validated when the scenario was loaded).
+Params ScenarioParams(const Scenario& scenario, const Params& params);
 
 /// Builds the payload reference of a scenario.
 std::shared_ptr<Reference> MakeReference(const Scenario& scenario, const Params& params);
