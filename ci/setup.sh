@@ -11,6 +11,7 @@ packages=(
   libeigen3-dev            # linear algebra in models, estimator, controller
   libopencv-core-dev libopencv-imgproc-dev libopencv-imgcodecs-dev libopencv-videoio-dev
                            # payload detector, PNG frames and plots, MP4 video
+  libcairo2-dev            # SVG and PDF plots (OpenCV writes raster images only)
   libnlopt-cxx-dev         # fully converged NMPC solve (checks the RTI solver)
   libyaml-cpp-dev          # params.yaml, scenario and sweep files
   nlohmann-json3-dev       # every JSON file written and read (metrics, runs.jsonl, summaries)

@@ -9,7 +9,7 @@ foreach(file
     person_moves_payload person_moves_payload_no_perception
     ci/hover_gripper_pull_nonhybrid ci/line_impulse_nonhybrid ci/lissajous_T5_onboard
     ci/hover_hpa_mpc_truth ci/gripper_pull_truth ci/impulse_top_contact ci/wind_impulse_chaotic
-    ci/impulse_draw73 ci/impulse_draw21)
+    ci/impulse_draw73 ci/impulse_draw21 csv_reference)
   string(REPLACE "/" "_" name ${file})
   add_test(NAME scenario.${name}
            COMMAND ${HPA_BIN} run ${SCEN}/${file}.yaml --out ${SCEN_OUT}/${name} --quiet)
@@ -82,3 +82,8 @@ endif()
 add_test(NAME cli.flight_stack
          COMMAND bash ${SCEN}/tests/flight_stack_test.sh ${HPA_BIN} ${CMAKE_SOURCE_DIR} ${HPA_PYTHON3})
 set_tests_properties(cli.flight_stack PROPERTIES LABELS "cli;scenario" TIMEOUT 600)
+
+# Plots in PNG, SVG and PDF, each with the CSV of what it draws; plots never change a run
+add_test(NAME cli.plot_formats
+         COMMAND bash ${SCEN}/tests/plot_formats_test.sh ${HPA_BIN} ${CMAKE_SOURCE_DIR} ${HPA_PYTHON3})
+set_tests_properties(cli.plot_formats PROPERTIES LABELS cli TIMEOUT 300)

@@ -1,5 +1,6 @@
 #include "hpa/controller/reference.h"
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 
@@ -178,6 +179,52 @@ std::shared_ptr<Reference> MakeLissajousReference(const Params& params, const Li
     throw std::invalid_argument("lissajous reference: need period_s > 0 and ramp_s >= 0");
   }
   return std::make_shared<LissajousReference>(params, spec);
+}
+
+namespace {
+
+// Payload trajectory through samples, linear in p, v and a between them.
+class SampledReference : public Reference {
+ public:
+  SampledReference(const Params& params, std::vector<TrajectorySample> samples)
+      : params_(params), samples_(std::move(samples)) {}
+
+  ReferencePoint At(double t_s) const override {
+    PayloadDerivatives pd;
+    for (Eigen::Vector3d& d : pd.d) d.setZero();
+    if (t_s <= samples_.front().t_s) {
+      const TrajectorySample& s = samples_.front();
+      pd.d[0] = s.p_WL_W, pd.d[1] = s.v_WL_W, pd.d[2] = s.a_WL_W;
+      return FlatOutput(params_, pd);
+    }
+    if (t_s >= samples_.back().t_s) {
+      pd.d[0] = samples_.back().p_WL_W;  // at rest after the file ends
+      return FlatOutput(params_, pd);
+    }
+    const auto after = std::upper_bound(
+        samples_.begin(), samples_.end(), t_s,
+        [](double t, const TrajectorySample& s) { return t < s.t_s; });
+    const TrajectorySample& b = *after;
+    const TrajectorySample& a = *(after - 1);
+    const double h = b.t_s - a.t_s, w = (t_s - a.t_s) / h;
+    pd.d[0] = a.p_WL_W + w * (b.p_WL_W - a.p_WL_W);
+    pd.d[1] = a.v_WL_W + w * (b.v_WL_W - a.v_WL_W);
+    pd.d[2] = a.a_WL_W + w * (b.a_WL_W - a.a_WL_W);
+    pd.d[3] = (b.a_WL_W - a.a_WL_W) / h;
+    return FlatOutput(params_, pd);
+  }
+
+ private:
+  Params params_;
+  std::vector<TrajectorySample> samples_;
+};
+
+}  // namespace
+
+std::shared_ptr<Reference> MakeSampledReference(const Params& params,
+                                                std::vector<TrajectorySample> samples) {
+  if (samples.size() < 2) throw std::invalid_argument("a sampled reference needs two samples");
+  return std::make_shared<SampledReference>(params, std::move(samples));
 }
 
 }  // namespace hpa

@@ -23,6 +23,7 @@ std::shared_ptr<Reference> MakeReference(const ReferenceSpec& r, const Params& p
   if (r.type == "lissajous" || r.type == "circle" || r.type == "figure_eight") {
     return MakeLissajousReference(params, r.lissajous);
   }
+  if (r.type == "csv") return MakeSampledReference(params, r.samples);
   if (r.type == "line") {
     return std::make_shared<DelayedReference>(
         MakeLineReference(params, r.line_start_W_m, r.line_end_W_m, r.line_duration_s),

@@ -197,7 +197,7 @@ FlightInputs DecodeTick(const std::vector<uint8_t>& body) {
   in.vio.resize(r.Count(11 * 8));
   for (VioSample& s : in.vio)
     s.time_s = r.F64(), s.p_WB_W = r.Vec(), s.q_WB = r.Quat(), s.v_WB_W = r.Vec();
-  in.detections.resize(r.Count(8 * 8 + 2 * 4));
+  in.detections.resize(r.Count(7 * 8 + 2 * 4));
   for (PayloadDetection& d : in.detections) {
     d.time_s = r.F64();
     d.found = r.U32() != 0;
@@ -353,7 +353,14 @@ nlohmann::json ConfigToJson(const FlightConfig& c) {
                               {"line_start_W_m", Vec3(r.line_start_W_m)},
                               {"line_end_W_m", Vec3(r.line_end_W_m)},
                               {"line_duration_s", r.line_duration_s},
-                              {"line_start_time_s", r.line_start_time_s}};
+                              {"line_start_time_s", r.line_start_time_s},
+                              {"file", r.file}};
+  nlohmann::json samples = nlohmann::json::array();
+  for (const TrajectorySample& s : r.samples) {
+    samples.push_back({s.t_s, s.p_WL_W.x(), s.p_WL_W.y(), s.p_WL_W.z(), s.v_WL_W.x(),
+                       s.v_WL_W.y(), s.v_WL_W.z(), s.a_WL_W.x(), s.a_WL_W.y(), s.a_WL_W.z()});
+  }
+  reference["samples_t_p_v_a"] = samples;
   return {{"params", params},
           {"controller",
            {{"type", c.controller.type},
@@ -419,6 +426,18 @@ FlightConfig ConfigFromJson(const nlohmann::json& j) {
     r.line_end_W_m = ReadVec3(rj, "line_end_W_m");
     r.line_duration_s = rj.at("line_duration_s").get<double>();
     r.line_start_time_s = rj.at("line_start_time_s").get<double>();
+    r.file = rj.value("file", "");
+    for (const nlohmann::json& row : rj.value("samples_t_p_v_a", nlohmann::json::array())) {
+      if (!row.is_array() || row.size() != 10) {
+        throw ProtocolError("reference samples: expected rows of 10 numbers");
+      }
+      TrajectorySample s;
+      s.t_s = row[0].get<double>();
+      s.p_WL_W = {row[1].get<double>(), row[2].get<double>(), row[3].get<double>()};
+      s.v_WL_W = {row[4].get<double>(), row[5].get<double>(), row[6].get<double>()};
+      s.a_WL_W = {row[7].get<double>(), row[8].get<double>(), row[9].get<double>()};
+      r.samples.push_back(s);
+    }
     c.ground_truth = j.at("ground_truth").get<bool>();
     c.estimate_latency_s = j.at("estimate_latency_s").get<double>();
     c.tick_hz = j.at("tick_hz").get<double>();

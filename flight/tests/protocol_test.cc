@@ -80,6 +80,20 @@ TEST(ProtocolTest, TickRoundTripsBitForBit) {
   EXPECT_TRUE(out.truth->payload_lost);
 }
 
+// The smallest detection (found, no reason) as the tick's last message: the count check must
+// accept exactly its size.
+TEST(ProtocolTest, ATickWithOnlyADetectionDecodes) {
+  FlightInputs in;
+  PayloadDetection d;
+  d.found = true;
+  d.p_CL_C = {0.0, 0.1, 0.5};
+  in.detections = {d};
+  const FlightInputs out = DecodeTick(EncodeTick(in));
+  ASSERT_EQ(out.detections.size(), 1u);
+  EXPECT_TRUE(out.detections[0].found);
+  EXPECT_EQ(out.detections[0].p_CL_C, d.p_CL_C);
+}
+
 TEST(ProtocolTest, ReplyRoundTripsAndRefusesNonFiniteCommands) {
   FlightOutputs out;
   out.has_command = true;

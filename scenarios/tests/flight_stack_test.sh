@@ -30,6 +30,18 @@ assert not bad, "differ: %s" % bad
 print("hpa-flight equals in process on %d metrics" % (len(a) - len(skip)))
 PY
 
+# the analytic camera's detections cross too: the file-reference scenario, exactly
+"$hpa" run "$src/scenarios/csv_reference.yaml" --quiet --out "$out/csv_in" || fail "csv in process"
+"$hpa" run "$src/scenarios/csv_reference.yaml" --quiet --out "$out/csv_ex" \
+  --flight-stack hpa-flight || fail "csv through hpa-flight"
+"$python" - "$out/csv_in/metrics.json" "$out/csv_ex/metrics.json" <<'PY' || fail "csv metrics differ"
+import json, sys
+a, b = (json.load(open(p)) for p in sys.argv[1:3])
+skip = {"wall_time_s", "mpc_solve_ms", "flight_stack"}
+bad = [k for k in a if k not in skip and a[k] != b.get(k)]
+assert not bad, "differ: %s" % bad
+PY
+
 # 2. the Python example controller flies hover_gripper_pull to its end through the interface;
 # its bound: measured 0.217 m deviation (VIO-only hold, payload not estimated) times 1.5
 "$hpa" run "$src/scenarios/hover_gripper_pull.yaml" --quiet --out "$out/py" \

@@ -20,10 +20,6 @@ std::vector<double> Column(const std::vector<LogRow>& rows, F f) {
   return out;
 }
 
-void Save(const std::string& path, const cv::Mat& image) {
-  if (!cv::imwrite(path, image)) throw OutputError(path, "the PNG could not be written");
-}
-
 void ShadeSlack(PlotPanel* panel, const std::vector<LogRow>& rows) {
   for (const auto& [a, b] : TrueSlackIntervals(rows)) panel->ShadeX(a, b, kSlackShade);
 }
@@ -40,7 +36,7 @@ void ShadeSlackMarkRetaut(PlotPanel* panel, const std::vector<LogRow>& rows) {
 }  // namespace
 
 std::vector<std::string> WriteRunPlots(const RunResult& result, const Params& params,
-                                       const std::string& dir) {
+                                       const std::string& dir, PlotFormat format) {
   const auto& rows = result.rows;
   std::vector<std::string> written;
   if (rows.empty()) return written;
@@ -50,7 +46,7 @@ std::vector<std::string> WriteRunPlots(const RunResult& result, const Params& pa
 
   // payload x, y, z against the reference, slack shaded
   {
-    cv::Mat fig = BlankFigure(1200, 900);
+    Figure fig(1200, 900);
     static const char* kAxis[3] = {"x", "y", "z"};
     for (int i = 0; i < 3; ++i) {
       PlotPanel p(&fig, cv::Rect(0, i * 300, 1200, 300),
@@ -72,13 +68,12 @@ std::vector<std::string> WriteRunPlots(const RunResult& result, const Params& pa
                   {"slack (shaded)", kSlackShade}});
       }
     }
-    written.push_back(dir + "/tracking.png");
-    Save(written.back(), fig);
+    written.push_back(fig.Write(dir + "/tracking", format));
   }
 
   // x-y path coloured by payload speed
   {
-    cv::Mat fig = BlankFigure(900, 800);
+    Figure fig(900, 800);
     PlotPanel p(&fig, cv::Rect(0, 0, 900, 800), "payload x-y path" + title_suffix, "x [m]",
                 "y [m]");
     const auto x = Column(rows, [](const LogRow& r) { return r.truth.p_WL_W.x(); });
@@ -100,13 +95,12 @@ std::vector<std::string> WriteRunPlots(const RunResult& result, const Params& pa
     const double v_max = std::max(1e-3, result.metrics.payload_max_speed_mps);
     p.ColouredPath(x, y, speed, 0.0, v_max);
     p.ColourBar(0.0, v_max, "|v_L| m/s");
-    written.push_back(dir + "/xy_path.png");
-    Save(written.back(), fig);
+    written.push_back(fig.Write(dir + "/xy_path", format));
   }
 
   // quadrotor deviation, vertical velocity and body rates, slack shaded, re-taut marked
   {
-    cv::Mat fig = BlankFigure(1200, 900);
+    Figure fig(1200, 900);
     const auto dev =
         Column(rows, [](const LogRow& r) { return (r.truth.p_WQ_W - r.reference.p_WQ_W).norm(); });
     const auto vz = Column(rows, [](const LogRow& r) { return r.truth.v_WQ_W.z(); });
@@ -135,15 +129,14 @@ std::vector<std::string> WriteRunPlots(const RunResult& result, const Params& pa
                {"w_y", SeriesColour(1)},
                {"w_z", SeriesColour(2)},
                {"re-taut", cv::Scalar(0, 0, 220)}});
-    written.push_back(dir + "/retaut.png");
-    Save(written.back(), fig);
+    written.push_back(fig.Write(dir + "/retaut", format));
   }
   return written;
 }
 
-void WriteComparisonPlot(const std::vector<RunResult>& results, const Params& params,
-                         const std::string& png) {
-  cv::Mat fig = BlankFigure(1400, 1000);
+std::string WriteComparisonPlot(const std::vector<RunResult>& results, const Params& params,
+                                const std::string& stem, PlotFormat format) {
+  Figure fig(1400, 1000);
   const std::string name = results.empty() ? "" : results.front().metrics.scenario;
   struct Panel {
     const char* title;
@@ -151,9 +144,9 @@ void WriteComparisonPlot(const std::vector<RunResult>& results, const Params& pa
     double (*value)(const LogRow&);
   };
   const Panel panels[4] = {
-      {"payload z (dashed: reference)", "z_L [m]",
+      {"payload z (dotted: reference)", "z_L [m]",
        [](const LogRow& r) { return r.truth.p_WL_W.z(); }},
-      {"quadrotor z (dashed: reference)", "z_Q [m]",
+      {"quadrotor z (dotted: reference)", "z_Q [m]",
        [](const LogRow& r) { return r.truth.p_WQ_W.z(); }},
       {"quadrotor deviation |p_Q - p_Q,ref|", "[m]",
        [](const LogRow& r) { return (r.truth.p_WQ_W - r.reference.p_WQ_W).norm(); }},
@@ -191,7 +184,7 @@ void WriteComparisonPlot(const std::vector<RunResult>& results, const Params& pa
     if (k == 0) legend.emplace_back("slack (shaded per run)", cv::Scalar(0, 200, 255));
     p.Legend(legend);
   }
-  if (!cv::imwrite(png, fig)) throw OutputError(png, "the PNG could not be written");
+  return fig.Write(stem, format);
 }
 
 }  // namespace hpa

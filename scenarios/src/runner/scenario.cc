@@ -60,7 +60,19 @@ ExpectSpec ParseExpect(const YamlMap& e) {
 
 ReferenceSpec ParseReference(const YamlMap& r) {
   ReferenceSpec ref;
-  ref.type = r.Choice("type", {"hover", "lissajous", "line", "circle", "figure_eight"}, "hover");
+  ref.type =
+      r.Choice("type", {"hover", "lissajous", "line", "circle", "figure_eight", "csv"}, "hover");
+  if (ref.type == "csv") {
+    // a file of samples, relative to the scenario file
+    ref.file = r.String("file");
+    if (ref.file.empty() || ref.file[0] != '/') {
+      const size_t slash = r.file().rfind('/');
+      ref.file = (slash == std::string::npos ? "" : r.file().substr(0, slash + 1)) + ref.file;
+    }
+    ref.samples = LoadTrajectoryCsv(ref.file);
+    r.RejectUnknownKeys();
+    return ref;
+  }
   if (ref.type == "circle" || ref.type == "figure_eight") {
     // the Lissajous family: a circle is a = b = radius, n = 1, phi = pi / 2; a figure eight is
     // x = a sin(theta), y = b sin(2 theta)

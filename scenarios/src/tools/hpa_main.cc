@@ -188,8 +188,10 @@ void WriteText(const std::string& path, const std::string& text) {
 // Removes the outputs a previous run left in `dir`, so a run that is killed leaves nothing
 // that looks complete (metrics.json appears last, whole, when the run has finished).
 void RemoveStaleOutputs(const std::string& dir) {
-  for (const char* name :
-       {"metrics.json", "log.csv", "tracking.png", "xy_path.png", "retaut.png"}) {
+  for (const char* name : {"metrics.json", "log.csv", "tracking.png", "xy_path.png", "retaut.png",
+                           "tracking.svg", "xy_path.svg", "retaut.svg", "tracking.pdf",
+                           "xy_path.pdf", "retaut.pdf", "tracking.csv", "xy_path.csv",
+                           "retaut.csv"}) {
     std::remove((dir + "/" + name).c_str());
   }
 }
@@ -227,7 +229,7 @@ void PrintSummary(const Metrics& m, const std::string& out_dir) {
 
 int Run(int argc, char** argv) {
   ScenarioOptions o;
-  std::string out_dir, controller, video, flight_stack;
+  std::string out_dir, controller, video, flight_stack, plot_format = "png";
   double flight_timeout_s = 10.0;
   bool slack_events = false, plots = false;
   CLI::App app{"Runs one scenario; writes DIR/metrics.json and DIR/log.csv.", "hpa run"};
@@ -237,7 +239,11 @@ int Run(int argc, char** argv) {
   app.add_option("--video", video, "MP4 of the chase camera with the onboard inset");
   app.add_flag("--video-slack-events", slack_events,
                "keep only a window around each slack event (alone: DIR/slack_events.mp4)");
-  app.add_flag("--plots", plots, "write PNG plots of the run into DIR");
+  app.add_flag("--plots", plots,
+               "write plots of the run into DIR (tracking, xy_path, retaut), each with the CSV "
+               "of what it draws");
+  app.add_option("--plot-format", plot_format, "png | svg | pdf: the plots' format")
+      ->default_str("png");
   app.add_option("--flight-stack", flight_stack,
                  "fly a separate flight stack: a shell command (e.g. hpa-flight, or python3 "
                  "examples/python/hover_controller.py) started with HPA_FLIGHT_SOCKET set and "
@@ -247,6 +253,7 @@ int Run(int argc, char** argv) {
                  "stops with a run error")
       ->check(CLI::Range(0.001, 3600.0));
   if (const auto code = ParseCommandLine(app, argc, argv)) return *code;
+  const PlotFormat format = ParsePlotFormat(plot_format);
   const Params params = LoadParamsOf(o);
   Scenario scenario = LoadScenarioOf(o);
   if (!controller.empty()) {
@@ -279,7 +286,8 @@ int Run(int argc, char** argv) {
   }
   WriteText(out_dir + "/metrics.json", MetricsToJson(result.metrics));
   if (plots) {
-    for (const std::string& png : WriteRunPlots(result, params, out_dir)) {
+    for (const std::string& png :
+         WriteRunPlots(result, ScenarioParams(scenario, params), out_dir, format)) {
       if (!o.quiet) std::printf("  plot %s\n", png.c_str());
     }
   }
@@ -341,18 +349,21 @@ std::string ComparisonTable(const std::vector<RunResult>& results,
 
 int Compare(int argc, char** argv) {
   ScenarioOptions o;
-  std::string out_dir, list = "hpa_mpc,nonhybrid_mpc";
+  std::string out_dir, list = "hpa_mpc,nonhybrid_mpc", plot_format = "png";
   bool slack_events = false;
   CLI::App app{
       "Runs the scenario once per controller into DIR/<type>/ and writes "
-      "DIR/comparison.png.",
+      "DIR/comparison.png (or .svg, .pdf) with DIR/comparison.csv, its numbers.",
       "hpa compare"};
   AddScenarioOptions(app, &o, true, true);
   app.add_option("--out", out_dir, "output folder")->required();
   app.add_option("--controllers", list, "comma-separated controller types")
       ->default_str("hpa_mpc,nonhybrid_mpc");
   app.add_flag("--video-slack-events", slack_events, "a slack-event video per run");
+  app.add_option("--plot-format", plot_format, "png | svg | pdf: the comparison plot's format")
+      ->default_str("png");
   if (const auto code = ParseCommandLine(app, argc, argv)) return *code;
+  const PlotFormat format = ParsePlotFormat(plot_format);
   const Params params = LoadParamsOf(o);
   const Scenario base = LoadScenarioOf(o);
   std::vector<std::string> types;
@@ -393,8 +404,8 @@ int Compare(int argc, char** argv) {
     if (!o.quiet) PrintSummary(results.back().metrics, dir);
     ReportVideo(video, o.quiet);
   }
-  const std::string png = out_dir + "/comparison.png";
-  WriteComparisonPlot(results, params, png);
+  const std::string png =
+      WriteComparisonPlot(results, ScenarioParams(base, params), out_dir + "/comparison", format);
   const std::string table = ComparisonTable(results, types);
   WriteText(out_dir + "/comparison.md", table);
   if (!o.quiet) std::printf("\n%s", table.c_str());

@@ -293,7 +293,7 @@ void WriteOutputs(const SweepDiff& diff, const SweepDiffOptions& options) {
   }
   const int cols = 3, w = 420, h = 260;
   const int rows = std::max(1, (static_cast<int>(compared.size()) + cols - 1) / cols);
-  cv::Mat fig = BlankFigure(cols * w, rows * h);
+  Figure fig(cols * w, rows * h);
   for (size_t i = 0; i < compared.size(); ++i) {
     const MetricDiff& m = *compared[i];
     const cv::Scalar colour = m.verdict == "better"  ? cv::Scalar(60, 160, 40)
@@ -310,9 +310,7 @@ void WriteOutputs(const SweepDiff& diff, const SweepDiffOptions& options) {
     p.Line({-1.0, 1.0}, {0.0, 0.0}, cv::Scalar(0, 0, 0), true);
     p.ErrorBars({0.0}, {m.difference}, {m.ci95.first}, {m.ci95.second}, colour);
   }
-  if (!cv::imwrite(options.out_dir + "/diff.png", fig)) {
-    throw OutputError(options.out_dir + "/diff.png", "the PNG could not be written");
-  }
+  fig.Write(options.out_dir + "/diff", ParsePlotFormat(options.plot_format));
 }
 
 }  // namespace
@@ -554,7 +552,10 @@ int SweepDiffMain(int argc, char** argv) {
   app.add_flag("--verdict-timing", options.verdict_timing,
                "also give timing metrics (solve time) a verdict: only for runs on one quiet "
                "machine");
+  app.add_option("--plot-format", options.plot_format,
+                 "png | svg | pdf: the format of diff.png (diff.csv holds its numbers)");
   if (const auto code = ParseCommandLine(app, argc, argv)) return *code;
+  ParsePlotFormat(options.plot_format);  // refused before any work
   const SweepDiff diff = CompareSweeps(options);
   WriteOutputs(diff, options);
   std::cout << diff.runs_paired << " paired runs";
@@ -569,7 +570,8 @@ int SweepDiffMain(int argc, char** argv) {
                 m.name.c_str(), m.verdict.c_str(), m.difference, m.ci95.first, m.ci95.second,
                 m.p_value, m.pairs, m.reason.empty() ? "" : ": ", m.reason.c_str());
   }
-  std::cout << "wrote " << options.out_dir << "/diff.md, diff.json, diff.png\n";
+  std::cout << "wrote " << options.out_dir << "/diff.md, diff.json, diff."
+            << PlotExtension(ParsePlotFormat(options.plot_format)) << ", diff.csv\n";
   return 0;
 }
 

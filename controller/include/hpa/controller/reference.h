@@ -4,6 +4,8 @@
 
 #include <Eigen/Core>
 #include <memory>
+#include <string>
+#include <vector>
 
 #include "hpa/models/params.h"
 
@@ -47,5 +49,26 @@ struct LissajousSpec {
   Eigen::Vector3d centre = Eigen::Vector3d::Zero();
 };
 std::shared_ptr<Reference> MakeLissajousReference(const Params& params, const LissajousSpec& spec);
+
+/// One sample of a payload trajectory (a reference file's row, derivatives filled in).
+struct TrajectorySample {
+  double t_s = 0.0;
+  Eigen::Vector3d p_WL_W = Eigen::Vector3d::Zero();  // payload position  (3)
+  Eigen::Vector3d v_WL_W = Eigen::Vector3d::Zero();  // payload velocity  (3)
+  Eigen::Vector3d a_WL_W = Eigen::Vector3d::Zero();  // payload acceleration  (3)
+};
+
+/// A payload trajectory through samples (at least two, strictly increasing times): position,
+/// velocity and acceleration linear between samples (the jerk is the acceleration's slope),
+/// the first sample held before it, the last one held at rest after it.
+std::shared_ptr<Reference> MakeSampledReference(const Params& params,
+                                                std::vector<TrajectorySample> samples);
+
+/// Reads a reference CSV: a header naming t_s, x_m, y_m, z_m and optionally vx_mps, vy_mps,
+/// vz_mps and ax_mps2, ay_mps2, az_mps2, then one row per sample. Missing velocities and
+/// accelerations come from central differences (one-sided at the ends). Throws InputError naming
+/// the file, line and column for a missing or unknown column, a short row, a value that is not a
+/// finite number, times that do not increase, or fewer than two rows.
+std::vector<TrajectorySample> LoadTrajectoryCsv(const std::string& path);
 
 }  // namespace hpa

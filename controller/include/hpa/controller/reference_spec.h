@@ -6,6 +6,7 @@
 #include <Eigen/Core>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "hpa/controller/reference.h"
 #include "hpa/models/params.h"
@@ -14,13 +15,15 @@ namespace hpa {
 
 /// Where the payload reference comes from.
 struct ReferenceSpec {
-  std::string type = "hover";  // hover | lissajous | line | circle | figure_eight
+  std::string type = "hover";  // hover | lissajous | line | circle | figure_eight | csv
   Eigen::Vector3d payload_position_W_m{0, 0, 0.7};  // hover set-point  (3)
   LissajousSpec lissajous;
   Eigen::Vector3d line_start_W_m = Eigen::Vector3d::Zero();  // (3)
   Eigen::Vector3d line_end_W_m = Eigen::Vector3d::Zero();    // (3)
   double line_duration_s = 1.0;
   double line_start_time_s = 0.0;  // the line starts moving at this time
+  std::string file;                        // csv: the file the samples were read from
+  std::vector<TrajectorySample> samples;   // csv: the trajectory (LoadTrajectoryCsv)
 };
 
 /// Builds the reference a spec describes (the line delayed to its start time).

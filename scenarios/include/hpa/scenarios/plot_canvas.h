@@ -1,6 +1,8 @@
 #pragma once
-// A small line-chart canvas drawn with OpenCV (no plotting dependency): axes with ticks, lines,
-// shaded intervals, coloured scatter paths, legends. Used for the run and sweep PNGs.
+// A small line-chart canvas: axes with ticks, lines, shaded intervals, coloured scatter paths,
+// legends. Each figure is drawn once into a raster (OpenCV, for PNG) and a list of vector
+// primitives (cairo, for SVG and PDF, which OpenCV cannot write), and records the data of every
+// series it draws, written beside the plot as CSV. Used for the run, comparison and sweep plots.
 
 #include <opencv2/core.hpp>
 #include <string>
@@ -9,11 +11,74 @@
 
 namespace hpa {
 
+/// The file format of a plot.
+enum class PlotFormat { kPng, kSvg, kPdf };
+
+/// "png" | "svg" | "pdf" to a format; throws InputError (key `option`) for anything else.
+PlotFormat ParsePlotFormat(const std::string& text, const std::string& option = "--plot-format");
+
+/// The file extension of a format, without the dot.
+const char* PlotExtension(PlotFormat format);
+
+/// One figure: its raster, its vector primitives and the data of its series.
+class Figure {
+ public:
+  /// A white figure of the given size (pixels; the vector formats use the same units as points).
+  Figure(int width_px, int height_px);
+
+  /// Writes STEM.png|svg|pdf and STEM.csv (every drawn series: panel, series, axis labels with
+  /// their units, x, y and, where drawn, low, high and colour value); returns the plot's path.
+  /// Throws OutputError if a file cannot be written.
+  std::string Write(const std::string& stem, PlotFormat format) const;
+
+  /// The raster (what the PNG holds).
+  cv::Mat& image() { return image_; }
+
+  /// A stroked polyline in figure pixels (clipped to `clip` if it has an area).
+  struct Stroke {
+    std::vector<cv::Point2d> points;
+    cv::Scalar colour;  // BGR
+    double width_px = 1.0;
+    int dash = 0;  // 0 solid, 1 dashed, 2 dotted
+    cv::Rect clip;
+  };
+  /// A filled shape: a rectangle (radius 0) or a disc at the rectangle's centre.
+  struct Fill {
+    cv::Rect2d rect;
+    cv::Scalar colour;
+    double alpha = 1.0;
+    double radius_px = 0.0;
+  };
+  /// Text at a baseline-left point.
+  struct Text {
+    cv::Point2d at;
+    std::string text;
+    double size_px = 12.0;
+  };
+  /// The data of one drawn series (for the CSV).
+  struct Series {
+    std::string panel, name, x_label, y_label;
+    cv::Scalar colour;
+    bool dotted = false;  // drawn dotted (a reference): named "<legend name> (dotted)"
+    std::vector<double> x, y, low, high, value;
+  };
+
+  std::vector<Stroke> strokes;
+  std::vector<Fill> fills;
+  std::vector<Text> texts;
+  std::vector<Series> series;
+  // drawing order across the three primitive lists: (kind 0 stroke, 1 fill, 2 text, index)
+  std::vector<std::pair<int, size_t>> order;
+
+ private:
+  cv::Mat image_;
+};
+
 /// One panel of a figure: data coordinates mapped onto a pixel rectangle of the image.
 class PlotPanel {
  public:
-  /// Panel in `image` at `area` (pixels), titled, with axis labels.
-  PlotPanel(cv::Mat* image, cv::Rect area, std::string title, std::string x_label,
+  /// Panel in `figure` at `area` (pixels), titled, with axis labels (their units in brackets).
+  PlotPanel(Figure* figure, cv::Rect area, std::string title, std::string x_label,
             std::string y_label);
 
   /// Data range; call before drawing (or use FitRange).
@@ -25,7 +90,8 @@ class PlotPanel {
   void DrawAxes();
   /// Shades x in [x0, x1) over the full height (e.g. slack intervals).
   void ShadeX(double x0, double x1, const cv::Scalar& colour);
-  /// Polyline of (x, y); dashed if asked.
+  /// Polyline of (x, y): dotted if `dashed` (a reference), else solid for the panel's first
+  /// colour, dashed for its second, and so on, so series that overlap stay apart.
   void Line(const std::vector<double>& x, const std::vector<double>& y, const cv::Scalar& colour,
             int thickness = 2, bool dashed = false);
   /// Points coloured by value through the "turbo" colormap between v_min and v_max.
@@ -33,7 +99,8 @@ class PlotPanel {
                     const std::vector<double>& value, double v_min, double v_max);
   /// Vertical colour bar at the right of the panel.
   void ColourBar(double v_min, double v_max, const std::string& label);
-  /// Legend entries in the top-left corner.
+  /// Legend entries in the top-left corner (each drawn in its series' dash; the names also
+  /// name the series of that colour in the CSV).
   void Legend(const std::vector<std::pair<std::string, cv::Scalar>>& entries);
   /// Error bars (x, low, high) as vertical segments with markers at y.
   void ErrorBars(const std::vector<double>& x, const std::vector<double>& y,
@@ -42,16 +109,19 @@ class PlotPanel {
 
  private:
   cv::Point ToPixel(double x, double y) const;
+  cv::Point2d ToPoint(double x, double y) const;  // unrounded, for the vector primitives
+  void AddStroke(Figure::Stroke stroke);
+  void AddText(const cv::Point& at, const std::string& text, double scale);
+  Figure::Series& AddSeries(const cv::Scalar& colour);
 
+  Figure* figure_;
   cv::Mat* image_;
+  std::vector<cv::Scalar> colours_;  // colours of the panel's Line series, in order
   cv::Rect area_;  // whole panel
   cv::Rect plot_;  // inner plotting rectangle
   std::string title_, x_label_, y_label_;
   double x_min_ = 0, x_max_ = 1, y_min_ = 0, y_max_ = 1;
 };
-
-/// A white canvas of the given size.
-cv::Mat BlankFigure(int width_px, int height_px);
 
 /// Distinct line colours (BGR) for series i.
 cv::Scalar SeriesColour(int i);

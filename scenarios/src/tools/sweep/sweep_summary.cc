@@ -270,7 +270,7 @@ void WriteSummary(const std::vector<Record>& records, const std::string& dir,
 
   // crash rate plot, one line per controller
   if (!main_path.empty()) {
-    cv::Mat fig = BlankFigure(1000, 600);
+    Figure fig(1000, 600);
     PlotPanel p(&fig, cv::Rect(0, 0, 1000, 600),
                 "crash rate (thick, 95% Wilson CI) and expect-failure rate (thin)", main_label,
                 "rate");
@@ -321,9 +321,7 @@ void WriteSummary(const std::vector<Record>& records, const std::string& dir,
       ++k;
     }
     p.Legend(legend);
-    if (!cv::imwrite(dir + "/crash_rate.png", fig)) {
-      throw OutputError(dir + "/crash_rate.png", "the PNG could not be written");
-    }
+    fig.Write(dir + "/crash_rate", PlotFormat::kPng);
   }
 }
 
