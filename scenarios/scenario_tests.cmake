@@ -87,3 +87,8 @@ set_tests_properties(cli.flight_stack PROPERTIES LABELS "cli;scenario" TIMEOUT 6
 add_test(NAME cli.plot_formats
          COMMAND bash ${SCEN}/tests/plot_formats_test.sh ${HPA_BIN} ${CMAKE_SOURCE_DIR} ${HPA_PYTHON3})
 set_tests_properties(cli.plot_formats PROPERTIES LABELS cli TIMEOUT 300)
+
+# hpa replay: a run's video from its log after the fact, on hpa run's and a sweep's kept runs
+add_test(NAME cli.replay
+         COMMAND bash ${SCEN}/tests/replay_cli_test.sh ${HPA_BIN} ${CMAKE_SOURCE_DIR})
+set_tests_properties(cli.replay PROPERTIES LABELS cli TIMEOUT 300)

@@ -124,9 +124,12 @@ PlotFormat ParsePlotFormat(const std::string& text, const std::string& option) {
 
 const char* PlotExtension(PlotFormat format) {
   switch (format) {
-    case PlotFormat::kSvg: return "svg";
-    case PlotFormat::kPdf: return "pdf";
-    case PlotFormat::kPng: break;
+    case PlotFormat::kSvg:
+      return "svg";
+    case PlotFormat::kPdf:
+      return "pdf";
+    case PlotFormat::kPng:
+      break;
   }
   return "png";
 }
@@ -169,8 +172,8 @@ std::string Figure::Write(const std::string& stem, PlotFormat format) const {
       }
     }
     if (name.empty()) name = "series " + std::to_string(k) + (s.dotted ? " (dotted)" : "");
-    const std::string head = CsvText(s.panel) + "," + CsvText(name) + "," +
-                             CsvText(s.x_label) + "," + CsvText(s.y_label) + ",";
+    const std::string head = CsvText(s.panel) + "," + CsvText(name) + "," + CsvText(s.x_label) +
+                             "," + CsvText(s.y_label) + ",";
     for (size_t i = 0; i < s.x.size(); ++i) {
       out << head << CsvNumber(s.x, i) << "," << CsvNumber(s.y, i) << "," << CsvNumber(s.low, i)
           << "," << CsvNumber(s.high, i) << "," << CsvNumber(s.value, i) << "\n";
@@ -275,7 +278,10 @@ void PlotPanel::DrawAxes() {
   for (double y = std::ceil(y_min_ / ys) * ys; y <= y_max_ + 1e-9; y += ys) {
     const cv::Point p = ToPixel(x_min_, y);
     cv::line(*image_, p, cv::Point(plot_.x + plot_.width, p.y), kGrid, 1);
-    AddStroke({{cv::Point2d(p.x, p.y), cv::Point2d(plot_.x + plot_.width, p.y)}, kGrid, 1.0, 0,
+    AddStroke({{cv::Point2d(p.x, p.y), cv::Point2d(plot_.x + plot_.width, p.y)},
+               kGrid,
+               1.0,
+               0,
                cv::Rect()});
     AddText(cv::Point(area_.x + 8, p.y + 4), Label(y, ys), 0.4);
   }

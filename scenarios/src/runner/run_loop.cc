@@ -45,6 +45,28 @@ void CheckReferenceAboveGround(const Reference& reference, double duration_s,
   }
 }
 
+}  // namespace hpa::runner
+
+namespace hpa {
+
+sim::WorldConfig WorldConfigOf(const Scenario& scenario, const Params& params,
+                               sim::GlBackend gl_backend) {
+  sim::WorldConfig world_config;
+  world_config.params = params;
+  world_config.overrides.payload_mass_kg = scenario.world_payload_mass_kg;
+  world_config.overrides.cable_length_m = scenario.world_cable_length_m;
+  world_config.seed = scenario.seed;
+  world_config.rates = ScenarioRates(scenario);
+  world_config.profile = scenario.world;
+  world_config.gl_backend = gl_backend;
+  world_config.randomize_appearance = scenario.estimation.camera_randomize;
+  return world_config;
+}
+
+}  // namespace hpa
+
+namespace hpa::runner {
+
 flight::FlightConfig FlightConfigOf(const Scenario& scenario, const Params& params,
                                     const SystemState& initial) {
   flight::FlightConfig c;
@@ -82,15 +104,7 @@ RunLoop::RunLoop(const Scenario& scenario, const Params& params, const RunOption
       render_camera_(scenario.estimation.camera == "render"),
       camera_rng_(DeriveSeed(scenario.seed, SeedStream::kAnalyticCamera)) {
   // the world: flight params plus the scenario's world-only overrides
-  sim::WorldConfig world_config;
-  world_config.params = params;
-  world_config.overrides.payload_mass_kg = scenario.world_payload_mass_kg;
-  world_config.overrides.cable_length_m = scenario.world_cable_length_m;
-  world_config.seed = scenario.seed;
-  world_config.rates = ScenarioRates(scenario);
-  world_config.profile = scenario.world;
-  world_config.gl_backend = options.gl_backend;
-  world_config.randomize_appearance = scenario.estimation.camera_randomize;
+  const sim::WorldConfig world_config = WorldConfigOf(scenario, params, options.gl_backend);
   const RateTable rates = world_config.rates;
   world_ = std::make_unique<sim::World>(world_config);
 

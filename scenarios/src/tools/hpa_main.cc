@@ -27,6 +27,8 @@
 #include "hpa/scenarios/golden.h"
 #include "hpa/scenarios/metric_defs.h"
 #include "hpa/scenarios/plots.h"
+#include "hpa/scenarios/replay.h"
+#include "hpa/scenarios/run_record.h"
 #include "hpa/scenarios/runner.h"
 #include "hpa/scenarios/schema.h"
 #include "hpa/scenarios/sweep.h"
@@ -52,12 +54,17 @@ usage:
   hpa run SCENARIO.yaml [--out DIR] [--seed N] [--controller TYPE] [--camera render|analytic]
                         [--video FILE.mp4] [--video-slack-events] [--plots] [--quiet]
                         [--gl osmesa|egl] [--params FILE] [--set PATH=VALUE]...
-      Runs one scenario; writes DIR/metrics.json and DIR/log.csv (one row per control step),
-      plus PNG plots with --plots and an MP4 with --video (--video-slack-events keeps only
+                        [--plot-format png|svg|pdf] [--flight-stack "CMD"] [--flight-timeout S]
+      Runs one scenario; writes DIR/metrics.json, DIR/log.csv (one row per control step) and
+      DIR/run.json (what it ran), plus plots with --plots (--plot-format png|svg|pdf, each with
+      its CSV) and an MP4 with --video (--video-slack-events keeps only
       the slack events; alone it writes DIR/slack_events.mp4). DIR defaults to
       out/<scenario name>.
       TYPE: a registered controller (listed below). --set changes one dotted key of the
-      scenario (e.g. --set events.1.impulse.2=0.5); sweeps print such replay commands.
+      scenario (e.g. --set events.1.impulse.2=0.5, --set params.cable.length_m=0.8); sweeps
+      print such replay commands. --flight-stack flies a separate flight stack (hpa-flight, or
+      your own, e.g. python3 examples/python/hover_controller.py) in lockstep over
+      docs/protocol.md's protocol; --flight-timeout bounds its reply to one tick (default 10 s).
   hpa compare SCENARIO.yaml --out DIR [--controllers A,B] [--camera render|analytic]
                         [--seed N] [--video-slack-events] [--quiet] [--gl osmesa|egl]
                         [--params FILE] [--set PATH=VALUE]...
@@ -82,6 +89,10 @@ usage:
       verdict (better / worse / no difference shown / inconclusive when too few pairs could
       show the metric's minimum effect); timing metrics are listed apart and given a verdict
       only with --verdict-timing. Writes DIR/diff.md, diff.json, diff.png.
+  hpa replay DIR [-o FILE.mp4] [--rate HZ] [--gl osmesa|egl] [--quiet]
+      Renders the chase video (onboard inset, heads-up line) of a finished run from its
+      DIR/log.csv and DIR/run.json without running it again (hpa run writes both; so does
+      sweep --keep-logs in DIR/logs/run_N); default DIR/replay.mp4.
   hpa golden [--exact] [--update --reason TEXT] [--from DIR] [--golden FILE]
       Compares every shipped scenario's metrics with scenarios/ci/golden.json (exit 1 on a
       change beyond tolerance; --exact: on any change at all); --update rewrites it.
@@ -170,6 +181,19 @@ Params LoadParamsOf(const ScenarioOptions& o) {
   return LoadParams(o.params_file.empty() ? DefaultParamsPath() : o.params_file);
 }
 
+// What `hpa run` was run from, for DIR/run.json (hpa replay rebuilds the run from it).
+RunRecord RecordOf(const ScenarioOptions& o, const std::string& controller, const Params& params) {
+  RunRecord r;
+  r.scenario_file = o.scenario_file;
+  r.scenario_text = ReadYamlFile(o.scenario_file);
+  for (const std::string& text : o.sets) r.sets.push_back(ParseSetArgument(text));
+  r.seed = o.seed;
+  r.camera = o.camera;
+  r.controller = controller;
+  r.params = params;
+  return r;
+}
+
 // Writes a whole file; a write that does not reach the file (a full disk) is an error.
 void WriteText(const std::string& path, const std::string& text) {
   // written whole under a temporary name, then renamed: a reader never sees half a file
@@ -188,10 +212,10 @@ void WriteText(const std::string& path, const std::string& text) {
 // Removes the outputs a previous run left in `dir`, so a run that is killed leaves nothing
 // that looks complete (metrics.json appears last, whole, when the run has finished).
 void RemoveStaleOutputs(const std::string& dir) {
-  for (const char* name : {"metrics.json", "log.csv", "tracking.png", "xy_path.png", "retaut.png",
-                           "tracking.svg", "xy_path.svg", "retaut.svg", "tracking.pdf",
-                           "xy_path.pdf", "retaut.pdf", "tracking.csv", "xy_path.csv",
-                           "retaut.csv"}) {
+  for (const char* name :
+       {"metrics.json", "log.csv", "run.json", "tracking.png", "xy_path.png", "retaut.png",
+        "tracking.svg", "xy_path.svg", "retaut.svg", "tracking.pdf", "xy_path.pdf", "retaut.pdf",
+        "tracking.csv", "xy_path.csv", "retaut.csv"}) {
     std::remove((dir + "/" + name).c_str());
   }
 }
@@ -263,6 +287,7 @@ int Run(int argc, char** argv) {
   if (out_dir.empty()) out_dir = "out/" + scenario.name;
   MakeOutputDir(out_dir);
   RemoveStaleOutputs(out_dir);
+  WriteRunRecord(out_dir, RecordOf(o, controller, params));
 
   RunOptions options;
   options.progress = !o.quiet;
@@ -467,6 +492,38 @@ int RenderFrame(int argc, char** argv) {
   return kExitOk;
 }
 
+int ReplayMain(int argc, char** argv) {
+  ReplayOptions options;
+  std::string out, gl = "osmesa";
+  bool quiet = false;
+  CLI::App app{
+      "Renders a run's chase video (onboard inset, heads-up line) from its DIR/log.csv "
+      "and DIR/run.json, without running it again: DIR is an hpa run output folder or "
+      "a sweep's DIR/logs/run_N (--keep-logs). Writes DIR/replay.mp4 by default.",
+      "hpa replay"};
+  app.add_option("DIR", options.dir, "the run's folder (log.csv, run.json)")->required();
+  app.add_option("-o,--out", out, "the MP4 to write (default DIR/replay.mp4)");
+  app.add_option("--rate", options.rate_hz, "video frames per second (default 30, the run's)")
+      ->check(CLI::Range(1.0, 1000.0));
+  app.add_option("--gl", gl, "osmesa | egl: the GL back end of the cameras");
+  app.add_flag("--quiet", quiet, "no progress line");
+  if (const auto code = ParseCommandLine(app, argc, argv)) return *code;
+  options.gl_backend = ParseGlOption(gl);
+  options.progress = !quiet;
+  ReadRunRecord(options.dir);  // a folder that is not a run is refused before anything is written
+  if (out.empty()) out = options.dir + "/replay.mp4";
+  CheckVideoPath(out);
+  VideoRecorder video(out, options.rate_hz, false);
+  const int frames = ReplayRun(options, [&](const ReplayFrame& f) {
+    const VideoRecorder::Hud hud{f.time_s, f.row->truth.mode, f.row->estimate.mode,
+                                 f.row->command.thrust_N, f.row->cable_tension_N};
+    video.AddFrame(f.chase, f.onboard, hud);
+  });
+  video.Finish();
+  if (!quiet) std::printf("wrote %s (%d frames, %s)\n", out.c_str(), frames, video.codec().c_str());
+  return kExitOk;
+}
+
 }  // namespace
 
 int HpaMain(int argc, char** argv) {
@@ -492,6 +549,7 @@ int HpaMain(int argc, char** argv) {
     if (command == "golden") return GoldenMain(argc, argv);
     if (command == "sweep-diff") return SweepDiffMain(argc, argv);
     if (command == "schema") return SchemaMain(argc, argv);
+    if (command == "replay") return ReplayMain(argc, argv);
     throw InputError("", "", "unknown command '" + command + "' (see hpa --help)");
   } catch (const InputError& e) {
     std::fprintf(stderr, "hpa: error: %s\n", e.what());

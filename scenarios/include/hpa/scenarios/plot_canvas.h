@@ -117,8 +117,8 @@ class PlotPanel {
   Figure* figure_;
   cv::Mat* image_;
   std::vector<cv::Scalar> colours_;  // colours of the panel's Line series, in order
-  cv::Rect area_;  // whole panel
-  cv::Rect plot_;  // inner plotting rectangle
+  cv::Rect area_;                    // whole panel
+  cv::Rect plot_;                    // inner plotting rectangle
   std::string title_, x_label_, y_label_;
   double x_min_ = 0, x_max_ = 1, y_min_ = 0, y_max_ = 1;
 };

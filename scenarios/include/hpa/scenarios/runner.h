@@ -14,11 +14,9 @@
 #include "hpa/scenarios/metrics.h"
 #include "hpa/scenarios/scenario.h"
 #include "hpa/sim/gl_backend.h"
+#include "hpa/sim/world.h"
 
 namespace hpa {
-namespace sim {
-class World;
-}
 
 /// One payload camera frame as the runner saw it.
 struct CameraFrameRecord {
@@ -93,6 +91,11 @@ int StopRequested();
 /// Runs a scenario to its end (or to a crash, or stop_at_s) and computes its metrics and the
 /// expect check. Throws InputError for bad input found while setting up (MJCF, params).
 RunResult RunScenario(const Scenario& scenario, const Params& params, const RunOptions& options);
+
+/// The simulated world of a run of `scenario` with `params` (the flight params: the world adds
+/// the scenario's world-only overrides and its profile's mismatch draw).
+sim::WorldConfig WorldConfigOf(const Scenario& scenario, const Params& params,
+                               sim::GlBackend gl_backend);
 
 /// The world parameters of a scenario: flight params with the scenario's world overrides.
 Params WorldParams(const Scenario& scenario, const Params& params);

@@ -50,8 +50,8 @@ struct MetricDiff {
 /// What `hpa sweep-diff` compares.
 struct SweepDiffOptions {
   std::string a_dir, b_dir, out_dir;
-  std::string a_where, b_where;  // optional KEY=VALUE filters on the runs' varied values
-  bool verdict_timing = false;   // give timing metrics a verdict too (same machine, quiet)
+  std::string a_where, b_where;     // optional KEY=VALUE filters on the runs' varied values
+  bool verdict_timing = false;      // give timing metrics a verdict too (same machine, quiet)
   std::string plot_format = "png";  // diff.png | diff.svg | diff.pdf (and diff.csv)
 };
 

@@ -8,8 +8,10 @@
 #include <nlohmann/json.hpp>
 
 #include "hpa/models/input_error.h"
+#include "hpa/models/yaml_reader.h"
 #include "hpa/scenarios/golden.h"
 #include "hpa/scenarios/metric_defs.h"
+#include "hpa/scenarios/run_record.h"
 #include "hpa/scenarios/runner.h"
 #include "scenarios/src/tools/sweep/sweep_internal.h"
 
@@ -78,6 +80,14 @@ void KeepWorstLogs(const SweepSpec& spec, const std::vector<Record>& records,
     const std::string dir = out_dir + "/logs/run_" + std::to_string(run->index);
     MakeOutputDir(dir);
     WriteLogCsv(dir + "/log.csv", result.rows);
+    // what it ran, for hpa replay: the base's snapshot and the run's values and seed
+    RunRecord record;
+    record.scenario_file = spec.base_path;
+    record.scenario_text = spec.base_text.empty() ? ReadYamlFile(spec.base_path) : spec.base_text;
+    record.sets = run->values;
+    record.seed = run->seed;
+    record.params = params;
+    WriteRunRecord(dir, record);
     const std::string metrics = MetricsToJson(result.metrics);
     std::FILE* out = std::fopen((dir + "/metrics.json").c_str(), "w");
     if (out == nullptr || std::fputs(metrics.c_str(), out) < 0 || std::fclose(out) != 0) {
