@@ -92,3 +92,9 @@ set_tests_properties(cli.plot_formats PROPERTIES LABELS cli TIMEOUT 300)
 add_test(NAME cli.replay
          COMMAND bash ${SCEN}/tests/replay_cli_test.sh ${HPA_BIN} ${CMAKE_SOURCE_DIR})
 set_tests_properties(cli.replay PROPERTIES LABELS cli TIMEOUT 300)
+
+# cmake --install, the installed binaries reading the prefix's data, and a controller built
+# out of tree against find_package(hpa)
+add_test(NAME cli.install
+         COMMAND bash ${SCEN}/tests/install_test.sh ${CMAKE_BINARY_DIR} ${CMAKE_SOURCE_DIR})
+set_tests_properties(cli.install PROPERTIES LABELS cli TIMEOUT 600)

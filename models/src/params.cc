@@ -3,6 +3,7 @@
 #include <Eigen/LU>
 #include <cmath>
 
+#include "hpa/models/data_dir.h"
 #include "hpa/models/input_error.h"
 #include "hpa/models/params_yaml.h"
 #include "hpa/models/yaml_reader.h"
@@ -17,7 +18,7 @@ double Params::CameraFocalPx() const {
   return 0.5 * camera_height_px / std::tan(0.5 * camera_fovy_deg * M_PI / 180.0);
 }
 
-std::string DefaultParamsPath() { return std::string(HPA_SOURCE_DIR) + "/models/params.yaml"; }
+std::string DefaultParamsPath() { return DataPath("models/params.yaml"); }
 
 Params LoadParams(const std::string& path) { return ParseParams(YamlMap::LoadFile(path)); }
 

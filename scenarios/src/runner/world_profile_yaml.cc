@@ -4,6 +4,7 @@
 #include <map>
 #include <mutex>
 
+#include "hpa/models/data_dir.h"
 #include "hpa/models/input_error.h"
 #include "hpa/models/param_yaml.h"
 #include "hpa/models/yaml_reader.h"
@@ -70,7 +71,7 @@ WorldProfileSpec LoadWorldProfile(const std::string& name) {
   bool known = false;
   for (const std::string& n : WorldProfileNames()) known = known || n == name;
   if (!known) throw InputError("", "world.profile", "unknown profile '" + name + "'");
-  const std::string file = std::string(HPA_SOURCE_DIR) + "/models/profiles/" + name + ".yaml";
+  const std::string file = DataPath("models/profiles/" + name + ".yaml");
   const YamlMap root = YamlMap::LoadFile(file);
   WorldProfileSpec spec;
   spec.world.name = name;

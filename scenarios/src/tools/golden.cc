@@ -8,6 +8,7 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 
+#include "hpa/models/data_dir.h"
 #include "hpa/models/input_error.h"
 #include "hpa/models/params.h"
 #include "hpa/scenarios/metrics.h"
@@ -21,7 +22,8 @@ namespace {
 using Json = nlohmann::json;
 namespace fs = std::filesystem;
 
-const std::string kScenariosDir = std::string(HPA_SOURCE_DIR) + "/scenarios";
+// the shipped scenarios (of the source tree, or of an installed prefix)
+std::string ScenariosDir() { return DataPath("scenarios"); }
 
 // Fields that measure the machine, not the behaviour.
 bool IsTimingKey(const std::string& key) {
@@ -136,7 +138,7 @@ Json CurrentMetrics(const std::string& name, const GoldenOptions& options, const
     const std::string path = options.from_dir + "/" + flat + "/metrics.json";
     return ParseJson(ReadText(path, "the metrics of " + name), path);
   }
-  const Scenario scenario = LoadScenario(kScenariosDir + "/" + name + ".yaml");
+  const Scenario scenario = LoadScenario(ScenariosDir() + "/" + name + ".yaml");
   const RunResult result = RunScenario(scenario, params, RunOptions{});
   return Json::parse(MetricsToJson(result.metrics));
 }
@@ -146,7 +148,7 @@ Json CurrentMetrics(const std::string& name, const GoldenOptions& options, const
 std::vector<std::string> GoldenScenarioNames() {
   std::vector<std::string> names;
   for (const std::string sub : {"", "ci/"}) {
-    for (const auto& entry : fs::directory_iterator(kScenariosDir + "/" + sub)) {
+    for (const auto& entry : fs::directory_iterator(ScenariosDir() + "/" + sub)) {
       if (entry.path().extension() == ".yaml") names.push_back(sub + entry.path().stem().string());
     }
   }
@@ -164,7 +166,7 @@ GoldenDiff CompareWithGolden(const std::string& metrics_json, const std::string&
 
 int RunGolden(const GoldenOptions& options) {
   const std::string path =
-      options.golden_path.empty() ? kScenariosDir + "/ci/golden.json" : options.golden_path;
+      options.golden_path.empty() ? ScenariosDir() + "/ci/golden.json" : options.golden_path;
   Json golden = ParseJson(ReadText(path, "the golden file"), path);
   if (!golden.is_object()) throw InputError(path, "", "expected a JSON object");
   if (!golden.contains("tolerances") || !golden["tolerances"].is_object() ||
@@ -205,7 +207,7 @@ int RunGolden(const GoldenOptions& options) {
   // change behaviour is checked with no tolerance at all
   const Json tolerances =
       options.exact ? Json{{"default", {{"rel", 0.0}, {"abs", 0.0}}}} : golden["tolerances"];
-  const Params params = LoadParams(std::string(HPA_SOURCE_DIR) + "/models/params.yaml");
+  const Params params = LoadParams(DefaultParamsPath());
   const std::vector<std::string> names = GoldenScenarioNames();
 
   int changed = 0;

@@ -19,6 +19,7 @@
 
 #include "hpa/controller/controller_registry.h"
 #include "hpa/estimator/estimator_registry.h"
+#include "hpa/models/data_dir.h"
 #include "hpa/models/input_error.h"
 #include "hpa/models/params.h"
 #include "hpa/models/yaml_reader.h"
@@ -101,7 +102,9 @@ usage:
       estimators, solvers, events, expect keys, metrics, world-profile keys with their
       units, ranges and values (all: docs/schema.md), or with
       `rates SCENARIO.yaml` every loop and stream of that scenario with its rate and latency.
-  hpa --version              the version and the git commit this binary was built from
+  hpa --version              the version, the git commit this binary was built from and the
+                             data folder it reads (an installed prefix's share/hpa, or the
+                             source tree; $HPA_DATA_DIR overrides)
   hpa --help                 this text; hpa COMMAND --help: the command's options
 
 exit codes: 0 ok and every `expect` bound holds; 1 an expectation failed (or an unexpected
@@ -531,7 +534,7 @@ int HpaMain(int argc, char** argv) {
   std::signal(SIGTERM, RequestStop);
   std::signal(SIGINT, RequestStop);
   if (argc >= 2 && !std::strcmp(argv[1], "--version")) {
-    std::printf("hpa %s (commit %s)\n", HPA_VERSION, HPA_GIT_COMMIT);
+    std::printf("hpa %s (commit %s)\ndata: %s\n", HPA_VERSION, HPA_GIT_COMMIT, DataDir().c_str());
     return kExitOk;
   }
   if (argc < 2 || !std::strcmp(argv[1], "--help") || !std::strcmp(argv[1], "-h") ||

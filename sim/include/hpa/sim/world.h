@@ -15,6 +15,7 @@
 #include <string>
 #include <vector>
 
+#include "hpa/models/data_dir.h"
 #include "hpa/models/params.h"
 #include "hpa/models/sensor_types.h"
 #include "hpa/models/state.h"
@@ -41,7 +42,7 @@ struct WorldOverrides {
 struct WorldConfig {
   Params params;             // flight parameters (params.yaml)
   WorldOverrides overrides;  // perturb the WORLD only (mass, cable length): model mismatch
-  std::string scene_path = std::string(HPA_SOURCE_DIR) + "/models/scene.xml";  // MJCF file
+  std::string scene_path = DataPath("models/scene.xml");  // MJCF file
   uint64_t seed = 1;                  // the one generator for all sensor noise
   SensorNoiseConfig noise;            // IMU and VIO noise
   RateTable rates;                    // physics, IMU and VIO rates, VIO latency

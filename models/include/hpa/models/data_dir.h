@@ -1,0 +1,18 @@
+#pragma once
+// Where the project's data lives (models/params.yaml, models/scene.xml, models/profiles/,
+// scenarios/): an installed prefix's share/hpa, or the source tree of a build, so an installed
+// binary finds its data wherever the prefix is and a build runs from its tree.
+
+#include <string>
+
+namespace hpa {
+
+/// The data folder: $HPA_DATA_DIR when set; else <the executable's folder>/../share/hpa when it
+/// holds models/params.yaml (an installed prefix); else the source tree this binary was built
+/// from.
+std::string DataDir();
+
+/// DataDir() + "/" + relative (e.g. "models/params.yaml").
+std::string DataPath(const std::string& relative);
+
+}  // namespace hpa
