@@ -37,7 +37,7 @@ for r in rows:
 assert len(series) == 9, sorted(series)
 assert all(len(v) == log_rows for v in series.values()), {k: len(v) for k, v in series.items()}
 assert {r["x_label"] for r in rows} == {"t [s]"}, {r["x_label"] for r in rows}
-assert "reference" in {k[1] for k in series}, sorted(series)
+assert "reference (dotted)" in {k[1] for k in series}, sorted(series)
 # the PNG's and the SVG's CSV hold the same numbers
 assert open(out + "/png/tracking.csv").read() == open(out + "/svg/tracking.csv").read()
 skip = {"wall_time_s", "mpc_solve_ms", "render_ms", "image_model_ms", "detector_ms"}

@@ -43,16 +43,6 @@ int RequireId(const mjModel* m, const std::string& file, mjtObj type, const char
 const char* kRotorActuatorNames[4] = {"rotor0", "rotor1", "rotor2", "rotor3"};
 const char* kRotorDiscNames[4] = {"rotor0_disc", "rotor1_disc", "rotor2_disc", "rotor3_disc"};
 
-// The IMU noise the world simulates: the profile's IMU part when it has one.
-SensorNoiseConfig ImuNoise(const WorldConfig& config) {
-  SensorNoiseConfig noise = config.noise;
-  if (config.profile.imu.enabled) {
-    noise.gyro_noise_density_radps_rthz = config.profile.imu.gyro_noise_density_radps_rthz;
-    noise.accel_noise_density_mps2_rthz = config.profile.imu.accel_noise_density_mps2_rthz;
-  }
-  return noise;
-}
-
 }  // namespace
 
 void InstallWarningHandler() {
@@ -70,11 +60,16 @@ World::World(const WorldConfig& config)
     : config_(config),
       world_params_(config.params),
       rng_(config.seed),
-      imu_(ImuNoise(config), 1.0 / config.rates.imu.rate_hz, &rng_),
-      vio_(config.noise, config.rates.vio.latency_s, &rng_),
-      sensor_clock_(config.rates.physics_hz),
-      vio_loop_(sensor_clock_.AddLoop("vio", config.rates.vio.rate_hz, TickRounding::kAtOrAfter)) {
-  CheckRates();
+      sensors_(MakeSensors(config, &rng_)) {
+  // each sensor's output reaches its reader after the latency it declares
+  for (size_t i = 0; i < sensors_.size(); ++i) {
+    const SensorDeclaration& d = sensors_[i]->declaration();
+    deliveries_.emplace_back(d.latency_s);
+    const int index = static_cast<int>(i);
+    if (d.name == "imu") imu_sensor_ = index;
+    if (d.name.rfind("rate gyro", 0) == 0) rate_gyro_sensor_ = index;
+    if (d.name == "vio") vio_sensor_ = index;
+  }
   InstallWarningHandler();
   LoadScene();
   ResolveIds();
@@ -92,62 +87,6 @@ World::World(const WorldConfig& config)
   initial.p_WQ_W = Eigen::Vector3d(0, 0, 1.0);
   initial.p_WL_W = initial.p_WQ_W - Eigen::Vector3d(0, 0, world_params_.cable_length_m);
   Reset(initial);
-}
-
-std::vector<SensorDeclaration> SensorDeclarations(const WorldConfig& config) {
-  const RateTable& r = config.rates;
-  const SensorNoiseConfig noise = ImuNoise(config);
-  const auto text = [](double v) {
-    std::ostringstream out;
-    out << v;
-    return out.str();
-  };
-  std::vector<SensorDeclaration> sensors = {
-      {"imu", r.imu.rate_hz, r.imu.latency_s,
-       "gyro " + text(noise.gyro_noise_density_radps_rthz) + " rad/s/sqrt(Hz), accel " +
-           text(noise.accel_noise_density_mps2_rthz) + " m/s^2/sqrt(Hz), bias random walks",
-       "RateTable::imu; noise: world profile imu"}};
-  if (config.profile.rate_gyro.enabled) {
-    sensors.push_back({"rate gyro (PX4's rate loop runs on it)", config.profile.rate_gyro.rate_hz,
-                       0.0, "the IMU's gyro noise density and bias at this rate",
-                       "rate_loop.rate_hz"});
-  }
-  sensors.push_back(
-      {"vio", r.vio.rate_hz, r.vio.latency_s,
-       "position " + text(config.noise.vio_position_sigma_m) + " m, attitude " +
-           text(config.noise.vio_attitude_sigma_rad) + " rad, velocity " +
-           text(config.noise.vio_velocity_sigma_mps) + " m/s per sample" +
-           (config.profile.vio.enabled ? "; drift, dropouts and re-localisation" : ""),
-       "RateTable::vio; drift: world profile vio"});
-  sensors.push_back({"payload camera", r.camera.rate_hz, r.camera.latency_s,
-                     "rendered: the camera image model; analytic: the detector's measured noise",
-                     "RateTable::camera, estimation.camera_latency"});
-  // every stream the world samples must be a whole number of physics steps apart
-  for (const SensorDeclaration& s : sensors) {
-    const double steps = r.physics_hz / s.rate_hz;
-    if (!(steps >= 1.0) || std::abs(steps - std::round(steps)) > 1e-9) {
-      if (s.name == "vio" || s.name == "payload camera") continue;  // sampled at or after a tick
-      const bool imu = s.name == "imu";
-      throw InputError("", imu ? "rates.imu" : "world.rate_loop.rate_hz",
-                       imu ? "the IMU rate must divide the physics rate"
-                           : "the rate must divide the physics rate");
-    }
-  }
-  return sensors;
-}
-
-// The IMU must average a whole number of physics steps, and so must the rate loop's gyro.
-void World::CheckRates() {
-  const std::vector<SensorDeclaration> sensors = SensorDeclarations(config_);
-  imu_steps_ = static_cast<int>(std::lround(config_.rates.physics_hz / sensors[0].rate_hz));
-  // the rate loop's own gyro (PX4 rate loop): the IMU's part at the loop's rate
-  if (config_.profile.rate_gyro.enabled) {
-    const double steps = config_.rates.physics_hz / config_.profile.rate_gyro.rate_hz;
-    rate_gyro_steps_ = static_cast<int>(std::lround(steps));
-    // discrete white noise of the same density at this rate: sigma = density / sqrt(period)
-    rate_gyro_sigma_radps_ = ImuNoise(config_).gyro_noise_density_radps_rthz /
-                             std::sqrt(1.0 / config_.profile.rate_gyro.rate_hz);
-  }
 }
 
 // Loads the MJCF; any load error or warning is bad input naming the file.
@@ -248,9 +187,8 @@ void World::Reset(const SystemState& initial) {
   gripper_moving_ = false;
   model_->eq_active[ids_.gripper_weld] = 0;
   rng_.seed(config_.seed);
-  imu_.ResetBias();
-  vio_.SetDrift(config_.profile.vio, DeriveSeed(config_.seed, SeedStream::kVioDrift));
-  imu_queue_.clear();
+  for (const std::unique_ptr<Sensor>& sensor : sensors_) sensor->Reset();
+  for (DelayLine<SensorMessage>& line : deliveries_) line.Clear();
   wind_rng_.seed(DeriveSeed(config_.seed, SeedStream::kWind));
   gust_W_mps_.setZero();
   event_wind_W_mps_.setZero();
@@ -264,15 +202,6 @@ void World::Reset(const SystemState& initial) {
           wind.gust_sigma_mps * (i == 2 ? wind.gust_vertical_sigma_ratio : 1.0) * unit(wind_rng_);
     }
   }
-  imu_sum_w_B_radps_.setZero();
-  imu_sum_specific_force_B_mps2_.setZero();
-  imu_sum_count_ = 0;
-  rate_gyro_rng_.seed(DeriveSeed(config_.seed, SeedStream::kRateGyro));
-  rate_gyro_sum_radps_.setZero();
-  rate_gyro_sum_count_ = 0;
-  rate_gyro_.reset();
-  sensor_clock_ = LockstepClock(config_.rates.physics_hz);
-  vio_loop_ = sensor_clock_.AddLoop("vio", config_.rates.vio.rate_hz, TickRounding::kAtOrAfter);
   crash_ = CrashStatus{};
   contact_counts_ = ContactCounts{};
   for (bool& t : touching_) t = false;
@@ -333,8 +262,6 @@ void World::WriteMotorControls() {
 
 void World::Step() {
   // state at t_k is current (mj_forward / mj_step1 ran): sample what the sensors need from it
-  sensor_clock_.BeginTick();  // the clock's tick is step_
-  const bool vio_due = sensor_clock_.Fires(vio_loop_);
   const SystemState before = GetTruth().state;
 
   // first-order motor lag, exact for the 1 ms step; thrust to the actuators
@@ -354,40 +281,19 @@ void World::Step() {
   mj_step1(model_, data_);
   CheckWarnings();
 
-  // sensors, stamped with t_k (qacc from mj_step2 is the acceleration at t_k)
-  // The IMU averages over its 2 ms period (a real IMU's internal high-rate sampling and
-  // decimation filter): a point sample every other step would alias the 2 ms tension spike of a
-  // re-taut into a velocity error of either twice or none of the true impulse.
-  const double t_k = t0_s_ + (step_ - 1) * kPhysicsDt_s;
-  imu_sum_w_B_radps_ += before.w_B;
-  imu_sum_specific_force_B_mps2_ += QuadSpecificForce_B(before.q_WB);
-  if (++imu_sum_count_ == imu_steps_) {
-    const double interval_start_s = t_k - kPhysicsDt_s;
-    imu_queue_.push_back(imu_.Measure(interval_start_s, imu_sum_w_B_radps_ / imu_sum_count_,
-                                      imu_sum_specific_force_B_mps2_ / imu_sum_count_));
-    imu_sum_w_B_radps_.setZero();
-    imu_sum_specific_force_B_mps2_.setZero();
-    imu_sum_count_ = 0;
-    constexpr size_t kMaxQueued = 1000;  // 2 s of samples if the caller never takes them
-    if (imu_queue_.size() > kMaxQueued) imu_queue_.pop_front();
-  }
-  if (rate_gyro_steps_ > 0) {
-    // the rate loop's gyro: the same averaging over its own period, the IMU's current bias
-    rate_gyro_sum_radps_ += before.w_B;
-    if (++rate_gyro_sum_count_ == rate_gyro_steps_) {
-      std::normal_distribution<double> unit(0.0, 1.0);
-      GyroSample g;
-      g.time_s = t_k - (rate_gyro_steps_ - 1) * kPhysicsDt_s;
-      g.gyro_B_radps = rate_gyro_sum_radps_ / rate_gyro_steps_ + imu_.gyro_bias_B_radps();
-      for (int i = 0; i < 3; ++i)
-        g.gyro_B_radps(i) += rate_gyro_sigma_radps_ * unit(rate_gyro_rng_);
-      rate_gyro_ = g;
-      rate_gyro_sum_radps_.setZero();
-      rate_gyro_sum_count_ = 0;
+  // sensors, stamped with t_k (qacc from mj_step2 is the acceleration at t_k), each through
+  // the delay line of its declared latency
+  SensorInput in;
+  in.t_k_s = t0_s_ + (step_ - 1) * kPhysicsDt_s;
+  in.state = &before;
+  in.specific_force_B_mps2 = QuadSpecificForce_B(before.q_WB);
+  for (size_t i = 0; i < sensors_.size(); ++i) {
+    if (std::optional<SensorMessage> m = sensors_[i]->Sample(in)) {
+      deliveries_[i].Push(Sensor::CaptureTime(*m), std::move(*m));
+      constexpr size_t kMaxQueued = 1000;  // 2 s of IMU samples if the caller never takes them
+      if (deliveries_[i].size() > kMaxQueued) deliveries_[i].DropOldest();
     }
   }
-  if (vio_due) vio_.Capture(t_k, before.p_WQ_W, before.q_WB, before.v_WQ_W);
-  sensor_clock_.Advance();
   UpdateContacts();
   UpdateGripperContact();
   CheckCrash();
@@ -425,19 +331,34 @@ Truth World::GetTruth() const {
   return t;
 }
 
+std::vector<SensorMessage> World::TakeDelivered() {
+  std::vector<SensorMessage> out;
+  for (DelayLine<SensorMessage>& line : deliveries_) {
+    while (std::optional<SensorMessage> m = line.PopReady(time_s())) out.push_back(std::move(*m));
+  }
+  return out;
+}
+
 std::optional<ImuSample> World::TakeImu() {
-  if (imu_queue_.empty()) return std::nullopt;
-  ImuSample s = imu_queue_.front();
-  imu_queue_.pop_front();
-  return s;
+  std::optional<SensorMessage> m = deliveries_[imu_sensor_].PopReady(time_s());
+  if (!m) return std::nullopt;
+  return std::get<ImuSample>(*m);
 }
 
 std::optional<GyroSample> World::TakeRateGyro() {
-  std::optional<GyroSample> g = rate_gyro_;
-  rate_gyro_.reset();
-  return g;
+  if (rate_gyro_sensor_ < 0) return std::nullopt;
+  // the newest sample since the last call (the loop runs on the latest)
+  std::optional<GyroSample> newest;
+  while (std::optional<SensorMessage> m = deliveries_[rate_gyro_sensor_].PopReady(time_s())) {
+    newest = std::get<GyroSample>(*m);
+  }
+  return newest;
 }
 
-std::optional<VioSample> World::TakeVio() { return vio_.Take(time_s()); }
+std::optional<VioSample> World::TakeVio() {
+  std::optional<SensorMessage> m = deliveries_[vio_sensor_].PopReady(time_s());
+  if (!m) return std::nullopt;
+  return std::get<VioSample>(*m);
+}
 
 }  // namespace hpa::sim

@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <sstream>
 #include <stdexcept>
+#include <utility>
 
 #include "hpa/models/camera_model.h"
 #include "hpa/models/input_error.h"
@@ -349,7 +350,7 @@ void RunLoop::ControlStep(double t, const sim::Truth& truth, const SystemState& 
 // allocation made (a saturated mixer lowers it).
 void RunLoop::RateLoopStep(const SystemState& state, bool rate_due) {
   if (px4_rate_) {
-    if (const std::optional<GyroSample> gyro = world_->TakeRateGyro()) {
+    if (const std::optional<GyroSample> gyro = std::exchange(rate_gyro_, std::nullopt)) {
       world_->SetMotorSpeedCommand(px4_rate_->Update(control_.command, gyro->gyro_B_radps));
       const Px4RateStatus& mixer = px4_rate_->status();
       pending_.allocation = flight::AllocationReport{mixer.thrust_allocated_N, mixer.saturated};
@@ -383,8 +384,11 @@ void RunLoop::VideoStep(double t, const sim::Truth& truth, const SystemState& st
 // check.
 bool RunLoop::StepWorld() {
   world_->Step();
-  while (auto imu = world_->TakeImu()) pending_.imu.push_back(*imu);
-  while (auto vio = world_->TakeVio()) pending_.vio.push_back(*vio);
+  for (sim::SensorMessage& m : world_->TakeDelivered()) {
+    if (auto* imu = std::get_if<ImuSample>(&m)) pending_.imu.push_back(*imu);
+    if (auto* vio = std::get_if<VioSample>(&m)) pending_.vio.push_back(*vio);
+    if (auto* gyro = std::get_if<GyroSample>(&m)) rate_gyro_ = *gyro;  // the newest counts
+  }
   const sim::CrashStatus crash = world_->Crash();
   if (!crash.crashed) return true;
   metrics_->crashed = true;

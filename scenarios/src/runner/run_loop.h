@@ -117,6 +117,7 @@ class RunLoop {
   PayloadDetection last_detection_;  // the last delivered: in process, the next region is around it
   cv::Rect camera_roi_;              // a separate stack's region of interest for the next frame
   bool mixer_saturated_ = false;     // the rate loop's last allocation fell short
+  std::optional<GyroSample> rate_gyro_;  // the rate gyro's newest sample not yet flown on
   bool show_progress_ = false;
   int last_progress_pct_ = -1;
 };

@@ -116,6 +116,10 @@ class DelayLine {
 
   /// Drops everything queued.
   void Clear() { queue_.clear(); }
+  /// Drops the oldest item (a bounded queue whose reader fell behind).
+  void DropOldest() {
+    if (!queue_.empty()) queue_.pop_front();
+  }
   /// Items waiting.
   size_t size() const { return queue_.size(); }
   double latency_s() const { return latency_s_; }

@@ -21,6 +21,7 @@
 #include "hpa/models/state.h"
 #include "hpa/sim/gl_backend.h"
 #include "hpa/sim/sensor_models.h"
+#include "hpa/sim/sensors.h"
 #include "hpa/sim/world_profile.h"
 
 // MuJoCo's model and data, only pointed to here (sim/src includes MuJoCo)
@@ -43,30 +44,14 @@ struct WorldConfig {
   Params params;             // flight parameters (params.yaml)
   WorldOverrides overrides;  // perturb the WORLD only (mass, cable length): model mismatch
   std::string scene_path = DataPath("models/scene.xml");  // MJCF file
-  uint64_t seed = 1;                  // the one generator for all sensor noise
-  SensorNoiseConfig noise;            // IMU and VIO noise
-  RateTable rates;                    // physics, IMU and VIO rates, VIO latency
+  uint64_t seed = 1;                                      // the one generator for all sensor noise
+  SensorNoiseConfig noise;                                // IMU and VIO noise
+  RateTable rates;                                        // physics, IMU and VIO rates, VIO latency
   WorldProfile profile;               // realism parts (default: all off, the ideal world)
   bool randomize_appearance = false;  // floor shade, texture scale and lights drawn from the seed
   // GL context of the rendered cameras (one back end per process: sim/src/gl_context.h)
   GlBackend gl_backend = GlBackend::kOsMesa;
 };
-
-/// One simulated sensor stream as the world declares it: what it measures, how often, how late it
-/// is delivered and its noise. The world samples each stream at this rate and delivers it
-/// through a DelayLine of this latency; `hpa schema rates` prints these rows.
-struct SensorDeclaration {
-  std::string name;        // "imu", "rate gyro", "vio", "payload camera"
-  double rate_hz = 0.0;    // samples per second (the physics rate divides into whole steps)
-  double latency_s = 0.0;  // capture to delivery
-  std::string noise;       // its noise, one line with units
-  std::string from;        // where the rate and latency are set
-};
-
-/// The sensor streams a world with `config` has, in the order it samples them (the rate gyro
-/// only with its profile part); throws InputError when a rate does not divide the physics rate
-/// into whole steps. World checks its rates with it; the rate table lists it.
-std::vector<SensorDeclaration> SensorDeclarations(const WorldConfig& config);
 
 /// Contact episodes since Reset (a pair counts once each time it starts touching).
 struct ContactCounts {
@@ -135,6 +120,12 @@ class World {
 
   /// Ground truth now.
   Truth GetTruth() const;
+  /// The world's sensors, in the order it samples them (each declares its rate, latency and
+  /// noise).
+  const std::vector<std::unique_ptr<Sensor>>& sensors() const { return sensors_; }
+  /// Every sensor message whose latency has passed, sensor by sensor in the list's order, each
+  /// sensor's in capture order (what the flight computer receives after this step).
+  std::vector<SensorMessage> TakeDelivered();
   /// Oldest undelivered IMU sample (a new one every 2 ms), if any.
   std::optional<ImuSample> TakeImu();
   /// Newest gyro sample for the body-rate loop since the last call, if any (a new one every
@@ -227,7 +218,6 @@ class World {
     int64_t end_step;           // applied while step < end_step
   };
 
-  void CheckRates();
   void LoadScene();
   void ResolveIds();
   void ApplyOverrides();
@@ -256,17 +246,6 @@ class World {
   mjModel_* model_ = nullptr;
   mjData_* data_ = nullptr;
   Ids ids_{};
-  Eigen::Vector3d imu_sum_w_B_radps_ = Eigen::Vector3d::Zero();              // (3)
-  Eigen::Vector3d imu_sum_specific_force_B_mps2_ = Eigen::Vector3d::Zero();  // (3)
-  int imu_sum_count_ = 0;  // physics steps summed into the next IMU sample
-  int imu_steps_ = 2;      // physics steps per IMU sample (rates.physics_hz / rates.imu.rate_hz)
-  // the rate loop's gyro (PX4 profile): its own sample rate and white-noise generator
-  int rate_gyro_steps_ = 0;  // physics steps per sample (0: no rate gyro)
-  int rate_gyro_sum_count_ = 0;
-  Eigen::Vector3d rate_gyro_sum_radps_ = Eigen::Vector3d::Zero();  // (3)
-  double rate_gyro_sigma_radps_ = 0.0;                             // white noise per sample
-  std::mt19937_64 rate_gyro_rng_;
-  std::optional<GyroSample> rate_gyro_;
   double t0_s_ = 0.0;
   int64_t step_ = 0;
   std::vector<int> warning_count_;  // per MuJoCo warning kind (mjNWARNING)
@@ -283,12 +262,10 @@ class World {
   int64_t gripper_start_step_ = 0;
   int64_t gripper_end_step_ = 0;
 
-  std::mt19937_64 rng_;
-  ImuModel imu_;
-  VioModel vio_;
-  std::deque<ImuSample> imu_queue_;
-  LockstepClock sensor_clock_;  // IMU and VIO capture ticks on the physics clock
-  int vio_loop_;                // its VIO loop
+  std::mt19937_64 rng_;  // the IMU's and VIO's noise
+  std::vector<std::unique_ptr<Sensor>> sensors_;
+  std::vector<DelayLine<SensorMessage>> deliveries_;  // one per sensor, its declared latency
+  int imu_sensor_ = -1, rate_gyro_sensor_ = -1, vio_sensor_ = -1;  // their places in sensors_
 
   CrashStatus crash_;
   std::unique_ptr<OffscreenRenderer> renderer_;
