@@ -12,6 +12,7 @@
 #include "hpa/models/params_yaml.h"
 #include "hpa/models/yaml_reader.h"
 #include "hpa/scenarios/expect_keys.h"
+#include "hpa/scenarios/reference_types.h"
 #include "hpa/scenarios/world_profile_yaml.h"
 
 namespace hpa {
@@ -58,11 +59,26 @@ ExpectSpec ParseExpect(const YamlMap& e) {
   return x;
 }
 
+// A number of reference type `type`, with its declared range and default.
+double RefNumber(const YamlMap& r, const std::string& type, const std::string& key) {
+  const ReferenceKey& k = FindReferenceKey(type, key);
+  return k.fallback ? r.Number(key, k.min, k.max, *k.fallback) : r.Number(key, k.min, k.max);
+}
+
+// A vector of reference type `type`, with its declared range and default.
+Eigen::Vector3d RefVec3(const YamlMap& r, const std::string& type, const std::string& key) {
+  const ReferenceKey& k = FindReferenceKey(type, key);
+  if (!r.Has(key) && k.fallback) return Eigen::Vector3d::Constant(*k.fallback);
+  return Vec3(r, key, k.min, k.max);
+}
+
 ReferenceSpec ParseReference(const YamlMap& r) {
   ReferenceSpec ref;
-  ref.type =
-      r.Choice("type", {"hover", "lissajous", "line", "circle", "figure_eight", "csv"}, "hover");
-  if (ref.type == "csv") {
+  std::vector<std::string> names;
+  for (const ReferenceType& t : ReferenceTypes()) names.push_back(t.name);
+  ref.type = r.Choice("type", names, "hover");
+  const std::string& type = ref.type;
+  if (type == "csv") {
     // a file of samples, relative to the scenario file
     ref.file = r.String("file");
     if (ref.file.empty() || ref.file[0] != '/') {
@@ -70,47 +86,43 @@ ReferenceSpec ParseReference(const YamlMap& r) {
       ref.file = (slash == std::string::npos ? "" : r.file().substr(0, slash + 1)) + ref.file;
     }
     ref.samples = LoadTrajectoryCsv(ref.file);
-    r.RejectUnknownKeys();
-    return ref;
-  }
-  if (ref.type == "circle" || ref.type == "figure_eight") {
-    // the Lissajous family: a circle is a = b = radius, n = 1, phi = pi / 2; a figure eight is
-    // x = a sin(theta), y = b sin(2 theta)
+  } else if (type == "circle" || type == "figure_eight") {
+    // the Lissajous family (reference_types.cc gives each one's formula)
     LissajousSpec& s = ref.lissajous;
-    if (ref.type == "circle") {
-      s.a = s.b = r.Number("radius", 0.01, 100.0);
+    if (type == "circle") {
+      s.a = s.b = RefNumber(r, type, "radius");
       s.n = 1.0;
       s.phi = M_PI / 2.0;
     } else {
-      s.a = r.Number("half_length", 0.01, 100.0);
-      s.b = r.Number("half_width", 0.01, 100.0);
+      s.a = RefNumber(r, type, "half_length");
+      s.b = RefNumber(r, type, "half_width");
       s.n = 2.0;
       s.phi = 0.0;
     }
     s.c = 0.0;
-    s.psi = r.Number("height", 0.1, 100.0, s.psi);
-    s.period_s = r.Number("period", 0.1, 1e4, s.period_s);
-    s.ramp_s = r.Number("ramp", 0.0, 1e4, s.ramp_s);
-    if (r.Has("centre")) s.centre = Vec3(r, "centre", -kBig, kBig);
-  } else if (ref.type == "hover") {
-    ref.payload_position_W_m = Vec3(r, "payload_position", -kBig, kBig);
-  } else if (ref.type == "lissajous") {
+    s.psi = RefNumber(r, type, "height");
+    s.period_s = RefNumber(r, type, "period");
+    s.ramp_s = RefNumber(r, type, "ramp");
+    s.centre = RefVec3(r, type, "centre");
+  } else if (type == "hover") {
+    ref.payload_position_W_m = RefVec3(r, type, "payload_position");
+  } else if (type == "lissajous") {
     LissajousSpec& s = ref.lissajous;
-    s.a = r.Number("a", -100, 100, s.a);
-    s.b = r.Number("b", -100, 100, s.b);
-    s.c = r.Number("c", -100, 100, s.c);
-    s.n = r.Number("n", -100, 100, s.n);
-    s.m = r.Number("m", -100, 100, s.m);
-    s.phi = r.Number("phi", -100, 100, s.phi);
-    s.psi = r.Number("psi", -100, 100, s.psi);
-    s.period_s = r.Number("period", 0.1, 1e4, s.period_s);
-    s.ramp_s = r.Number("ramp", 0.0, 1e4, s.ramp_s);
-    if (r.Has("centre")) s.centre = Vec3(r, "centre", -kBig, kBig);
+    s.a = RefNumber(r, type, "a");
+    s.b = RefNumber(r, type, "b");
+    s.c = RefNumber(r, type, "c");
+    s.n = RefNumber(r, type, "n");
+    s.m = RefNumber(r, type, "m");
+    s.phi = RefNumber(r, type, "phi");
+    s.psi = RefNumber(r, type, "psi");
+    s.period_s = RefNumber(r, type, "period");
+    s.ramp_s = RefNumber(r, type, "ramp");
+    s.centre = RefVec3(r, type, "centre");
   } else {
-    ref.line_start_W_m = Vec3(r, "start", -kBig, kBig);
-    ref.line_end_W_m = Vec3(r, "end", -kBig, kBig);
-    ref.line_duration_s = r.Number("duration", 1e-3, 1e5);
-    ref.line_start_time_s = r.Number("start_time", 0.0, 1e5, 0.0);
+    ref.line_start_W_m = RefVec3(r, type, "start");
+    ref.line_end_W_m = RefVec3(r, type, "end");
+    ref.line_duration_s = RefNumber(r, type, "duration");
+    ref.line_start_time_s = RefNumber(r, type, "start_time");
   }
   r.RejectUnknownKeys();
   return ref;
