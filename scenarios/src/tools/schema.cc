@@ -58,6 +58,24 @@ std::string BetterText(Better b) {
   return "-";
 }
 
+// A copy of `node` with each number in its short form (0.72, not 0.71999999999999997).
+YAML::Node ShortNumbers(const YAML::Node& node) {
+  if (node.IsMap()) {
+    YAML::Node out(YAML::NodeType::Map);
+    for (const auto& kv : node) out[kv.first.as<std::string>()] = ShortNumbers(kv.second);
+    return out;
+  }
+  if (node.IsSequence()) {
+    YAML::Node out(YAML::NodeType::Sequence);
+    for (const auto& v : node) out.push_back(ShortNumbers(v));
+    if (out.size() <= 4) out.SetStyle(YAML::EmitterStyle::Flow);
+    return out;
+  }
+  double v = 0.0;
+  if (YAML::convert<double>::decode(node, v)) return YAML::Node(Short(v));
+  return node;
+}
+
 std::string Section(const std::string& section) {
   std::vector<std::vector<std::string>> rows;
   if (section == "controllers") {
@@ -125,7 +143,7 @@ std::string Section(const std::string& section) {
            "`vary: params.SECTION.KEY`) changes these for the flight code and the world alike, "
            "checked with params.yaml's ranges; the values here are "
            "models/params.yaml's.\n\n```yaml\n" +
-           YAML::Dump(ParamsToYaml(LoadParams(DefaultParamsPath()))) + "\n```\n";
+           YAML::Dump(ShortNumbers(ParamsToYaml(LoadParams(DefaultParamsPath())))) + "\n```\n";
   }
   if (section == "controller") {
     return "## Controller keys (`controller.KEY`)\n\n`type` names a registered controller and "
