@@ -301,7 +301,8 @@ void WriteOutputs(const SweepDiff& diff, const SweepDiffOptions& options) {
                                                      : cv::Scalar(120, 120, 120);
     PlotPanel p(&fig,
                 cv::Rect(static_cast<int>(i % cols) * w, static_cast<int>(i / cols) * h, w, h),
-                m.name, "B - A: " + m.verdict + " (p = " + Fixed(m.p_value, 2) + ")", "");
+                m.name, "B - A: " + m.verdict + " (p = " + Fixed(m.p_value, 2) + ")",
+                "B - A [" + (m.unit.empty() || m.unit == "-" ? std::string("1") : m.unit) + "]");
     const double lo = std::min({m.ci95.first, m.difference, 0.0});
     const double hi = std::max({m.ci95.second, m.difference, 0.0});
     const double pad = hi > lo ? 0.15 * (hi - lo) : 0.01;

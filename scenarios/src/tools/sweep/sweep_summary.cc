@@ -273,7 +273,7 @@ void WriteSummary(const std::vector<Record>& records, const std::string& dir,
     Figure fig(1000, 600);
     PlotPanel p(&fig, cv::Rect(0, 0, 1000, 600),
                 "crash rate (thick, 95% Wilson CI) and expect-failure rate (thin)", main_label,
-                "rate");
+                "rate [fraction of runs]");
     double x0 = bins.front().first, x1 = bins.back().second;
     if (x1 <= x0) x1 = x0 + 1;
     const double pad = 0.05 * (x1 - x0);
