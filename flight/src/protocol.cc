@@ -124,7 +124,6 @@ class Reader {
 constexpr uint32_t kHasAllocation = 1u, kSaturated = 2u, kHasTruth = 4u, kNeedEstimate = 8u,
                    kGripperActive = 16u;
 constexpr uint32_t kHasCommand = 1u, kHasEstimate = 2u;
-constexpr size_t kStateBytes = 20 * 8 + 2 * 4;
 
 bool Finite(const SystemState& s) { return s.AllFinite() && std::isfinite(s.time_s); }
 
