@@ -30,6 +30,17 @@ grep -q "data: $prefix/bin/../share/hpa" <<< "$version" || fail "the installed h
   --flight-stack hpa-flight || fail "the installed hpa with the installed hpa-flight"
 grep -q '"flight_stack": "hpa-flight' run_flight/metrics.json || fail "hpa-flight did not fly"
 
+# without its data an installed hpa names the places it looked in, never a source tree
+mv "$prefix/share/hpa/models/params.yaml" "$elsewhere/params.yaml.away"
+text=$("$prefix/bin/hpa" run "$prefix/share/hpa/scenarios/hover.yaml" --quiet --out nodata 2>&1)
+[ $? -eq 2 ] && grep -q "data folder.*not found.*holds no models/params.yaml" <<< "$text" \
+  || fail "the installed hpa without its data: $text"
+mv "$elsewhere/params.yaml.away" "$prefix/share/hpa/models/params.yaml"
+text=$(HPA_DATA_DIR=/nonexistent "$prefix/bin/hpa" run "$prefix/share/hpa/scenarios/hover.yaml" \
+  --quiet --out baddata 2>&1)
+[ $? -eq 2 ] && grep -q "HPA_DATA_DIR.*holds no models/params.yaml" <<< "$text" \
+  || fail "a wrong HPA_DATA_DIR: $text"
+
 cmake -S "$src/examples/out_of_tree_controller" -B oot -DCMAKE_BUILD_TYPE=Release \
   -DCMAKE_PREFIX_PATH="$prefix" > oot.log 2>&1 && cmake --build oot >> oot.log 2>&1 \
   || { cat oot.log; fail "building the out-of-tree controller against the package"; }

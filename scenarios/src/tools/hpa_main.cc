@@ -534,7 +534,13 @@ int HpaMain(int argc, char** argv) {
   std::signal(SIGTERM, RequestStop);
   std::signal(SIGINT, RequestStop);
   if (argc >= 2 && !std::strcmp(argv[1], "--version")) {
-    std::printf("hpa %s (commit %s)\ndata: %s\n", HPA_VERSION, HPA_GIT_COMMIT, DataDir().c_str());
+    std::string data;
+    try {
+      data = DataDir();
+    } catch (const InputError& e) {
+      data = std::string("none found: ") + e.what();
+    }
+    std::printf("hpa %s (commit %s)\ndata: %s\n", HPA_VERSION, HPA_GIT_COMMIT, data.c_str());
     return kExitOk;
   }
   if (argc < 2 || !std::strcmp(argv[1], "--help") || !std::strcmp(argv[1], "-h") ||

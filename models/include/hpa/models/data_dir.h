@@ -7,9 +7,10 @@
 
 namespace hpa {
 
-/// The data folder: $HPA_DATA_DIR when set; else <the executable's folder>/../share/hpa when it
-/// holds models/params.yaml (an installed prefix); else the source tree this binary was built
-/// from.
+/// The data folder: $HPA_DATA_DIR when set (InputError if it holds no models/params.yaml);
+/// else <the executable's folder>/../share/hpa when it holds models/params.yaml (an installed
+/// prefix); else, for a program inside the build tree, the source tree it was built from;
+/// else InputError naming the places looked in.
 std::string DataDir();
 
 /// DataDir() + "/" + relative (e.g. "models/params.yaml").
