@@ -5,6 +5,7 @@
 
 #include "hpa/models/input_error.h"
 #include "hpa/models/seed_streams.h"
+#include "hpa/sim/wind.h"
 #include "hpa/sim/world.h"
 
 namespace hpa::sim {
@@ -38,7 +39,7 @@ int WholeSteps(double physics_hz, double rate_hz, const std::string& key, const 
 }  // namespace
 
 double Sensor::CaptureTime(const SensorMessage& m) {
-  return std::visit([](const auto& sample) { return sample.time_s; }, m);
+  return std::visit([](const auto& message) { return message.time_s; }, m);
 }
 
 ImuSensor::ImuSensor(const WorldConfig& config, std::mt19937_64* rng)
@@ -156,11 +157,9 @@ std::vector<std::unique_ptr<Sensor>> MakeSensors(const WorldConfig& config, std:
   return sensors;
 }
 
-SensorDeclaration PayloadCameraDeclaration(const WorldConfig& config) {
-  return {"payload camera", config.rates.camera.rate_hz, config.rates.camera.latency_s,
-          "rendered: the camera image model; analytic: the detector's measured noise",
-          "RateTable::camera, estimation.camera_latency"};
-}
+GripperSensor::GripperSensor(const WorldConfig& config)
+    : declaration_{"gripper", config.rates.physics_hz, 0.0, "none (a switch)",
+                   "the physics rate; events grab and release"} {}
 
 std::vector<SensorDeclaration> SensorDeclarations(const WorldConfig& config) {
   std::mt19937_64 unused;
@@ -168,7 +167,9 @@ std::vector<SensorDeclaration> SensorDeclarations(const WorldConfig& config) {
   for (const std::unique_ptr<Sensor>& s : MakeSensors(config, &unused)) {
     rows.push_back(s->declaration());
   }
-  rows.push_back(PayloadCameraDeclaration(config));
+  rows.push_back(GripperSensor(config).declaration());
+  rows.push_back(PayloadCameraSensor(config).declaration());
+  rows.push_back(WindModel(config.profile.wind, config.rates.physics_hz, 0).declaration());
   return rows;
 }
 

@@ -64,12 +64,22 @@ World::World(const WorldConfig& config)
   // each sensor's output reaches its reader after the latency it declares
   for (size_t i = 0; i < sensors_.size(); ++i) {
     const SensorDeclaration& d = sensors_[i]->declaration();
+    sensor_lines_.push_back(static_cast<int>(deliveries_.size()));
     deliveries_.emplace_back(d.latency_s);
     const int index = static_cast<int>(i);
     if (d.name == "imu") imu_sensor_ = index;
     if (d.name.rfind("rate gyro", 0) == 0) rate_gyro_sensor_ = index;
     if (d.name == "vio") vio_sensor_ = index;
   }
+  // read at the start of a tick
+  gripper_sensor_ = std::make_unique<GripperSensor>(config);
+  gripper_line_ = static_cast<int>(deliveries_.size());
+  deliveries_.emplace_back(gripper_sensor_->declaration().latency_s);
+  camera_ = std::make_unique<PayloadCameraSensor>(config);
+  wind_ = std::make_unique<WindModel>(config.profile.wind, config.rates.physics_hz,
+                                      DeriveSeed(config.seed, SeedStream::kWind));
+  camera_line_ = static_cast<int>(deliveries_.size());
+  deliveries_.emplace_back(camera_->declaration().latency_s);
   InstallWarningHandler();
   LoadScene();
   ResolveIds();
@@ -188,20 +198,9 @@ void World::Reset(const SystemState& initial) {
   model_->eq_active[ids_.gripper_weld] = 0;
   rng_.seed(config_.seed);
   for (const std::unique_ptr<Sensor>& sensor : sensors_) sensor->Reset();
+  camera_->Reset();
   for (DelayLine<SensorMessage>& line : deliveries_) line.Clear();
-  wind_rng_.seed(DeriveSeed(config_.seed, SeedStream::kWind));
-  gust_W_mps_.setZero();
-  event_wind_W_mps_.setZero();
-  event_wind_end_step_ = 0;
-  if (config_.profile.wind.gust_sigma_mps > 0.0) {
-    // the gust starts from its stationary distribution
-    std::normal_distribution<double> unit(0.0, 1.0);
-    const WindProfile& wind = config_.profile.wind;
-    for (int i = 0; i < 3; ++i) {
-      gust_W_mps_(i) =
-          wind.gust_sigma_mps * (i == 2 ? wind.gust_vertical_sigma_ratio : 1.0) * unit(wind_rng_);
-    }
-  }
+  wind_->Reset();
   crash_ = CrashStatus{};
   contact_counts_ = ContactCounts{};
   for (bool& t : touching_) t = false;
@@ -289,9 +288,10 @@ void World::Step() {
   in.specific_force_B_mps2 = QuadSpecificForce_B(before.q_WB);
   for (size_t i = 0; i < sensors_.size(); ++i) {
     if (std::optional<SensorMessage> m = sensors_[i]->Sample(in)) {
-      deliveries_[i].Push(Sensor::CaptureTime(*m), std::move(*m));
+      DelayLine<SensorMessage>& line = deliveries_[static_cast<size_t>(sensor_lines_[i])];
+      line.Push(Sensor::CaptureTime(*m), std::move(*m));
       constexpr size_t kMaxQueued = 1000;  // 2 s of IMU samples if the caller never takes them
-      if (deliveries_[i].size() > kMaxQueued) deliveries_[i].DropOldest();
+      if (line.size() > kMaxQueued) line.DropOldest();
     }
   }
   UpdateContacts();
@@ -337,6 +337,34 @@ std::vector<SensorMessage> World::TakeDelivered() {
     while (std::optional<SensorMessage> m = line.PopReady(time_s())) out.push_back(std::move(*m));
   }
   return out;
+}
+
+void World::AddSensor(std::unique_ptr<Sensor> sensor) {
+  sensor->Reset();
+  sensor_lines_.push_back(static_cast<int>(deliveries_.size()));
+  deliveries_.emplace_back(sensor->declaration().latency_s);
+  sensors_.push_back(std::move(sensor));
+}
+
+std::vector<SensorMessage> World::TakeInFlight() {
+  std::vector<SensorMessage> out;
+  for (DelayLine<SensorMessage>& line : deliveries_) {
+    while (std::optional<SensorMessage> m = line.PopReady(1e300)) out.push_back(std::move(*m));
+  }
+  return out;
+}
+
+std::optional<CameraCapture> World::CaptureTickStart(CameraReadout* readout) {
+  deliveries_[static_cast<size_t>(gripper_line_)].Push(
+      time_s(), gripper_sensor_->Sample(time_s(), gripper_active()));
+  std::optional<PayloadDetection> detection;
+  std::optional<CameraFrames> frames;
+  std::optional<CameraCapture> capture =
+      camera_->Capture(*this, step_, time_s(), readout, &detection, &frames);
+  DelayLine<SensorMessage>& line = deliveries_[static_cast<size_t>(camera_line_)];
+  if (detection) line.Push(detection->time_s, std::move(*detection));
+  if (frames) line.Push(frames->time_s, std::move(*frames));
+  return capture;
 }
 
 std::optional<ImuSample> World::TakeImu() {

@@ -24,40 +24,20 @@ void World::UpdateGripper() {
   if (s >= 1.0) gripper_moving_ = false;
 }
 
-Eigen::Vector3d World::Wind_W_mps() const {
-  const WindProfile& w = config_.profile.wind;
-  const Eigen::Vector3d event_W =
-      step_ < event_wind_end_step_ ? event_wind_W_mps_ : Eigen::Vector3d::Zero();
-  return Eigen::Vector3d(w.mean_x_mps, w.mean_y_mps, w.mean_z_mps) + gust_W_mps_ + event_W;
-}
+Eigen::Vector3d World::Wind_W_mps() const { return wind_->Wind_W_mps(step_); }
 
 void World::SetWindVelocity(const Eigen::Vector3d& velocity_W_mps, double duration_s) {
   if (!velocity_W_mps.allFinite() || !std::isfinite(duration_s)) {
     throw std::invalid_argument("World::SetWindVelocity: non-finite velocity or duration");
   }
-  event_wind_W_mps_ = velocity_W_mps;
-  event_wind_end_step_ = step_ + std::max<int64_t>(0, std::llround(duration_s / kPhysicsDt_s));
+  wind_->SetEvent(velocity_W_mps, step_, std::llround(duration_s / kPhysicsDt_s));
 }
 
 void World::ApplyAerodynamics() {
-  const WindProfile& wind = config_.profile.wind;
-  if (!config_.profile.aero.enabled && wind.gust_sigma_mps <= 0.0) return;  // no air
+  if (!config_.profile.aero.enabled && !wind_->gusty()) return;  // no air
   const Truth truth = GetTruth();
   const SystemState& s = truth.state;
-  // gust: per axis first-order Gauss-Markov, exact for the step: x' = a x + sigma sqrt(1-a^2) n,
-  // a = exp(-dt / tau), tau = L / airspeed (Dryden's low-altitude form at the vehicle's airspeed)
-  if (wind.gust_sigma_mps > 0.0) {
-    const Eigen::Vector3d mean(wind.mean_x_mps, wind.mean_y_mps, wind.mean_z_mps);
-    const double airspeed_mps = std::max(wind.gust_min_speed_mps, (s.v_WQ_W - mean).norm());
-    std::normal_distribution<double> unit(0.0, 1.0);
-    for (int i = 0; i < 3; ++i) {
-      const bool vertical = i == 2;
-      const double sigma = wind.gust_sigma_mps * (vertical ? wind.gust_vertical_sigma_ratio : 1.0);
-      const double length_m = vertical ? wind.gust_vertical_length_m : wind.gust_length_m;
-      const double a = std::exp(-kPhysicsDt_s * airspeed_mps / length_m);
-      gust_W_mps_(i) = a * gust_W_mps_(i) + sigma * std::sqrt(1.0 - a * a) * unit(wind_rng_);
-    }
-  }
+  if (wind_->gusty()) wind_->StepGust(s.v_WQ_W);
   const AeroProfile& aero = config_.profile.aero;
   if (!aero.enabled) return;
   const Eigen::Vector3d wind_W = Wind_W_mps();

@@ -61,6 +61,10 @@ sim::WorldConfig WorldConfigOf(const Scenario& scenario, const Params& params,
   world_config.profile = scenario.world;
   world_config.gl_backend = gl_backend;
   world_config.randomize_appearance = scenario.estimation.camera_randomize;
+  world_config.camera.kind = scenario.estimation.ground_truth         ? sim::CameraKind::kNone
+                             : scenario.estimation.camera == "render" ? sim::CameraKind::kRendered
+                                                                      : sim::CameraKind::kAnalytic;
+  world_config.camera.detector_noise_scale = scenario.estimation.detector_noise_scale;
   return world_config;
 }
 
@@ -102,8 +106,7 @@ RunLoop::RunLoop(const Scenario& scenario, const Params& params, const RunOption
       metrics_(metrics),
       wall_start_(Clock::now()),
       ground_truth_(scenario.estimation.ground_truth),
-      render_camera_(scenario.estimation.camera == "render"),
-      camera_rng_(DeriveSeed(scenario.seed, SeedStream::kAnalyticCamera)) {
+      render_camera_(scenario.estimation.camera == "render") {
   // the world: flight params plus the scenario's world-only overrides
   const sim::WorldConfig world_config = WorldConfigOf(scenario, params, options.gl_backend);
   const RateTable rates = world_config.rates;
@@ -147,10 +150,7 @@ RunLoop::RunLoop(const Scenario& scenario, const Params& params, const RunOption
     px4_rate_ = std::make_unique<Px4RateController>(params, scenario.rate_loop.params);
   }
   detector_ = std::make_unique<PayloadDetector>(params);
-  CameraNoiseModel camera_noise = MeasuredDetectorNoise();
-  camera_noise.centre_std_px *= scenario.estimation.detector_noise_scale;
-  camera_noise.semi_major_std_px *= scenario.estimation.detector_noise_scale;
-  analytic_camera_ = std::make_unique<sim::AnalyticCamera>(params, camera_noise);
+  camera_readout_ = std::make_unique<FlightCameraReadout>(flight_.get(), detector_.get());
 
   // recorders: the log and metrics inputs, then the caller's (a video among them)
   recorders_.push_back(&log_recorder_);
@@ -163,7 +163,6 @@ RunLoop::RunLoop(const Scenario& scenario, const Params& params, const RunOption
   end_s_ = std::min(scenario.duration_s, options.stop_at_s.value_or(1e300));
   end_tick_ = static_cast<long>(std::llround(end_s_ / sim::World::kPhysicsDt_s));
   clock_ = std::make_unique<LockstepClock>(rates.physics_hz);
-  camera_loop_ = clock_->AddLoop("camera", rates.camera.rate_hz);
   rate_loop_ = px4_rate_ ? -1 : clock_->AddLoop("rate", rates.imu.rate_hz);
   video_loop_ = video_rate_hz > 0.0 ? clock_->AddLoop("video", video_rate_hz) : -1;
   rate_loop_dt_s_ = 1.0 / rates.imu.rate_hz;
@@ -171,12 +170,10 @@ RunLoop::RunLoop(const Scenario& scenario, const Params& params, const RunOption
   std::stable_sort(events_.begin(), events_.end(),
                    [](const EventSpec& a, const EventSpec& b) { return a.at_s < b.at_s; });
 
-  // latencies: the camera's capture to detection (or, to a separate stack, to its frame's
-  // delivery); a command reaches the rate loop compute + transport after the state it was
-  // computed from (world profile); the estimate's own latency is the flight stack's
+  // latencies: the world delivers each sensor's messages (the camera's among them) after the
+  // latency it declares; a command reaches the rate loop compute + transport after the state it
+  // was computed from (world profile); the estimate's own latency is the flight stack's
   const sim::LatencyProfile& latency = scenario.world.latency;
-  detections_in_flight_ = std::make_unique<DelayLine<PayloadDetection>>(rates.camera.latency_s);
-  frames_in_flight_ = std::make_unique<DelayLine<flight::CameraFrame>>(rates.camera.latency_s);
   commands_in_flight_ =
       std::make_unique<DelayLine<ControlOutput>>(latency.compute_s + latency.transport_s);
   control_.command.thrust_N = params.HoverThrustN();
@@ -199,7 +196,6 @@ bool RunLoop::Tick() {
 
   // which loops run at this tick; truth only when something needs it
   clock_->BeginTick();
-  const bool camera_due = clock_->Fires(camera_loop_);
   const bool rate_due = rate_loop_ >= 0 && clock_->Fires(rate_loop_);
   const bool video_due = video_loop_ >= 0 && clock_->Fires(video_loop_);
   sim::Truth truth;
@@ -208,20 +204,13 @@ bool RunLoop::Tick() {
     if (!have_truth) truth = world_->GetTruth();
     have_truth = true;
   };
-  if (camera_due || video_due || ground_truth_) need_truth();
-
-  if (camera_due) CameraStep(t, truth);
-  while (auto detection = detections_in_flight_->PopReady(t)) {
-    last_detection_ = *detection;  // the camera's next region is around the last one delivered
-    pending_.detections.push_back(*detection);
-  }
-  while (auto frame = frames_in_flight_->PopReady(t)) pending_.frames.push_back(*frame);
+  if (video_due || ground_truth_) need_truth();
+  CameraStep();
 
   // the flight stack's tick: this tick's messages in, its estimate and command out
   pending_.time_s = t;
   pending_.need_estimate = rate_due || video_due;
   if (ground_truth_) pending_.truth = truth.state;
-  pending_.gripper_active = world_->gripper_active();
   if (flight_->wants_reference()) {
     const ReferencePoint r = reference_->At(t);
     pending_.reference = {r.p_WL_W, r.v_WL_W, r.a_WL_W};
@@ -229,7 +218,7 @@ bool RunLoop::Tick() {
   const flight::FlightOutputs out = flight_->Step(pending_);
   pending_ = flight::FlightInputs();
   inputs_.detections += out.frames_detected;
-  camera_roi_ = out.camera_roi;
+  camera_readout_->SetStackRegion(out.camera_roi);  // the region of its next frame
   SystemState state = out.estimate;
   state.time_s = t;
   if (out.has_command) {
@@ -252,73 +241,62 @@ void RunLoop::ApplyDueEvents(double t) {
   }
 }
 
-// The payload camera: capture now, deliver after the latency.
-void RunLoop::CameraStep(double t, const sim::Truth& truth) {
-  const Eigen::Vector3d p_CL_C = PayloadInCamera_C(params_, truth.state);
-  CameraFrameRecord frame;
-  frame.time_s = t;
-  frame.payload_in_image = InsideImage(params_, p_CL_C);
-  if (ground_truth_) {
-    // the flight code reads the truth: no frame
-  } else if (render_camera_ && flight_->wants_reference()) {
-    RenderForFlightStack(t, &frame);
-  } else {
-    const PayloadDetection detection = render_camera_
-                                           ? RenderAndDetect(t, &frame)
-                                           : analytic_camera_->Measure(p_CL_C, t, camera_rng_);
-    frame.detected = detection.found;
-    detections_in_flight_->Push(detection.time_s, detection);
+// The payload camera: the world captures it if due (its message delivered after its latency);
+// then the camera's messages delivered by now join this tick's inputs, and the next in-process
+// region is around the last of them (a separate stack's is the one it asked for last).
+void RunLoop::CameraStep() {
+  if (const std::optional<sim::CameraCapture> capture =
+          world_->CaptureTickStart(camera_readout_.get())) {
+    CameraFrameRecord frame;
+    frame.time_s = capture->time_s;
+    frame.payload_in_image = capture->payload_in_image;
+    frame.detected = capture->detected;
+    frame.frame = capture->frame;
+    frame.render_ms = capture->render_ms;
+    frame.image_model_ms = capture->image_model_ms;
+    frame.detector_ms = capture->detector_ms;
+    frame.region_only = capture->region_only;
+    for (RunRecorder* r : recorders_) r->OnCameraFrame(frame);
   }
-  for (RunRecorder* r : recorders_) r->OnCameraFrame(frame);
+  // the gripper's switch, and a camera without latency, deliver at their capture tick
+  for (sim::SensorMessage& m : world_->TakeDelivered()) KeepTickStartMessage(&m);
+  for (PayloadDetection& d : camera_detections_) {
+    camera_readout_->Delivered(d);
+    pending_.detections.push_back(std::move(d));
+  }
+  for (flight::CameraFrame& f : camera_frames_) pending_.frames.push_back(std::move(f));
+  camera_detections_.clear();
+  camera_frames_.clear();
 }
 
-// The region around the last detection first; the whole frame when the region cannot decide
-// (DetectInRegion's result equals the whole frame's when it gives one). Recorders never change
-// this path: a video renders frames of its own.
-PayloadDetection RunLoop::RenderAndDetect(double t, CameraFrameRecord* frame) {
-  const cv::Rect region = detector_->RegionAround(last_detection_, flight::kRegionMarginPx);
-  // renders `area` (empty: the whole frame) and detects in it; times add up
-  const auto render_and_detect = [&](const cv::Rect& area) {
-    world_->RenderPayloadCamera(&rendered_, area);
-    frame->render_ms += world_->last_camera_timing().render_ms;
-    frame->image_model_ms += world_->last_camera_timing().image_model_ms;
-    const auto r1 = Clock::now();
-    const std::optional<PayloadDetection> d =
-        area.area() > 0 ? detector_->DetectInRegion(rendered_, area, t)
-                        : std::optional<PayloadDetection>(detector_->Detect(rendered_, t));
-    frame->detector_ms += Ms(r1, Clock::now());
-    return d;
-  };
-  std::optional<PayloadDetection> in_region;
-  if (region.area() > 0) in_region = render_and_detect(region);
-  frame->region_only = in_region.has_value();
-  const PayloadDetection detection = in_region ? *in_region : *render_and_detect(cv::Rect());
-  frame->frame = &rendered_;
-  return detection;
+// Keeps a delivered camera message for the flight stack's next tick (the gripper's switch for
+// this one).
+void RunLoop::KeepTickStartMessage(sim::SensorMessage* message) {
+  if (auto* g = std::get_if<GripperSample>(message)) pending_.gripper_active = g->active;
+  if (auto* d = std::get_if<PayloadDetection>(message)) camera_detections_.push_back(std::move(*d));
+  if (auto* f = std::get_if<sim::CameraFrames>(message)) {
+    flight::CameraFrame frame;
+    frame.capture_time_s = f->time_s;
+    frame.region = f->region;
+    frame.region_bgr = f->region_bgr;
+    frame.whole_bgr = f->whole_bgr;
+    frame.region_slot = f->region_slot;
+    frame.whole_slot = f->whole_slot;
+    camera_frames_.push_back(std::move(frame));
+  }
 }
 
-// A separate flight stack detects on its side: the camera reads out the region of interest the
-// stack asked for last and the whole frame (its fallback), each into a slot of the shared ring,
-// and the pair travels with the camera's latency. The pixels are those the in-process path
-// renders, so the stack's detection is the in-process one.
-void RunLoop::RenderForFlightStack(double t, CameraFrameRecord* frame) {
-  flight::CameraFrame out;
-  out.capture_time_s = t;
-  if (camera_roi_.area() > 0) {
-    cv::Mat* region = flight_->NextFrameSlot(&out.region_slot);
-    world_->RenderPayloadCamera(region, camera_roi_);
-    frame->render_ms += world_->last_camera_timing().render_ms;
-    frame->image_model_ms += world_->last_camera_timing().image_model_ms;
-    out.region = camera_roi_;
-    out.region_bgr = *region;
-  }
-  cv::Mat* whole = flight_->NextFrameSlot(&out.whole_slot);
-  world_->RenderPayloadCamera(whole, cv::Rect());
-  frame->render_ms += world_->last_camera_timing().render_ms;
-  frame->image_model_ms += world_->last_camera_timing().image_model_ms;
-  out.whole_bgr = *whole;
-  frame->frame = whole;
-  frames_in_flight_->Push(t, out);
+cv::Rect FlightCameraReadout::Region() {
+  return SendsFrames() ? stack_roi_
+                       : detector_->RegionAround(last_detection_, flight::kRegionMarginPx);
+}
+
+// In process: DetectInRegion on a region (its result equals the whole frame's when it gives
+// one), Detect on the whole frame.
+std::optional<PayloadDetection> FlightCameraReadout::Detect(const cv::Mat& bgr,
+                                                            const cv::Rect& area, double time_s) {
+  if (area.area() > 0) return detector_->DetectInRegion(bgr, area, time_s);
+  return detector_->Detect(bgr, time_s);
 }
 
 // The flight stack's control step; its command reaches the rate loop after compute + transport.
@@ -388,6 +366,7 @@ bool RunLoop::StepWorld() {
     if (auto* imu = std::get_if<ImuSample>(&m)) pending_.imu.push_back(*imu);
     if (auto* vio = std::get_if<VioSample>(&m)) pending_.vio.push_back(*vio);
     if (auto* gyro = std::get_if<GyroSample>(&m)) rate_gyro_ = *gyro;  // the newest counts
+    KeepTickStartMessage(&m);
   }
   const sim::CrashStatus crash = world_->Crash();
   if (!crash.crashed) return true;
@@ -411,7 +390,8 @@ void RunLoop::Finish(RunResult* result) {
   Metrics& metrics = *metrics_;
   // the flight stack's end: the last step's sensors, the frames still in flight (detected, not
   // delivered) and its estimator's health
-  while (auto frame = frames_in_flight_->PopReady(1e300)) pending_.frames.push_back(*frame);
+  for (sim::SensorMessage& m : world_->TakeInFlight()) KeepTickStartMessage(&m);
+  for (flight::CameraFrame& f : camera_frames_) pending_.frames.push_back(std::move(f));
   try {
     const FlightFinish finish = flight_->Finish(pending_);
     if (!ground_truth_) {

@@ -5,7 +5,6 @@
 #include <chrono>
 #include <memory>
 #include <opencv2/core.hpp>
-#include <random>
 #include <vector>
 
 #include "hpa/controller/body_rate_controller.h"
@@ -13,7 +12,6 @@
 #include "hpa/estimator/payload_detector.h"
 #include "hpa/models/lockstep.h"
 #include "hpa/scenarios/runner.h"
-#include "hpa/sim/analytic_camera.h"
 #include "hpa/sim/world.h"
 #include "scenarios/src/runner/flight_link.h"
 
@@ -39,6 +37,31 @@ class LogRecorder final : public RunRecorder {
 
  private:
   MetricsInputs* inputs_;
+};
+
+/// The flight stack's side of the payload camera's read-out: in process, its detector on the
+/// region around the last detection delivered; a separate stack detects on its side, from the
+/// region of interest it asked for and the whole frame, rendered into its shared-memory ring.
+class FlightCameraReadout final : public sim::CameraReadout {
+ public:
+  /// Reads out for `flight` (not owned), detecting in process with `detector` (not owned).
+  FlightCameraReadout(FlightLink* flight, const PayloadDetector* detector)
+      : flight_(flight), detector_(detector) {}
+  cv::Rect Region() override;
+  bool SendsFrames() const override { return flight_->wants_reference(); }
+  std::optional<PayloadDetection> Detect(const cv::Mat& bgr, const cv::Rect& area,
+                                         double time_s) override;
+  cv::Mat* NextFrameSlot(int* slot) override { return flight_->NextFrameSlot(slot); }
+  /// A detection reached the flight stack: the next in-process region is around it.
+  void Delivered(const PayloadDetection& detection) { last_detection_ = detection; }
+  /// The region of interest a separate stack asked for with its last reply.
+  void SetStackRegion(const cv::Rect& roi) { stack_roi_ = roi; }
+
+ private:
+  FlightLink* flight_;
+  const PayloadDetector* detector_;
+  PayloadDetection last_detection_;  // the last delivered
+  cv::Rect stack_roi_;
 };
 
 /// The flight stack's configuration for `scenario` (flight params, not the world's).
@@ -67,9 +90,8 @@ class RunLoop {
 
   bool Tick();  // one physics tick; false: the run ends here
   void ApplyDueEvents(double t);
-  void CameraStep(double t, const sim::Truth& truth);
-  PayloadDetection RenderAndDetect(double t, CameraFrameRecord* frame);
-  void RenderForFlightStack(double t, CameraFrameRecord* frame);
+  void CameraStep();
+  void KeepTickStartMessage(sim::SensorMessage* message);
   void ControlStep(double t, const sim::Truth& truth, const SystemState& state,
                    const flight::FlightOutputs& out);
   void RateLoopStep(const SystemState& state, bool rate_due);
@@ -90,8 +112,7 @@ class RunLoop {
   std::unique_ptr<BodyRateController> rate_controller_;
   std::unique_ptr<Px4RateController> px4_rate_;  // the profile's PX4 loop, if it flies one
   std::unique_ptr<PayloadDetector> detector_;    // in process: detects in the rendered region
-  std::unique_ptr<sim::AnalyticCamera> analytic_camera_;
-  std::mt19937_64 camera_rng_;
+  std::unique_ptr<FlightCameraReadout> camera_readout_;
 
   MetricsInputs inputs_;
   LogRecorder log_recorder_{&inputs_};
@@ -101,22 +122,21 @@ class RunLoop {
   long tick_ = 0, end_tick_ = 0;
   double end_s_ = 0.0;
   std::unique_ptr<LockstepClock> clock_;
-  int camera_loop_ = -1, rate_loop_ = -1, video_loop_ = -1;
+  int rate_loop_ = -1, video_loop_ = -1;
   double rate_loop_dt_s_ = 0.0;
   std::vector<EventSpec> events_;  // by start time
   size_t next_event_ = 0;
 
   // what is in flight between the loops
-  std::unique_ptr<DelayLine<PayloadDetection>> detections_in_flight_;  // camera to estimator
-  std::unique_ptr<DelayLine<flight::CameraFrame>> frames_in_flight_;   // to a separate stack
-  std::unique_ptr<DelayLine<ControlOutput>> commands_in_flight_;       // compute + transport
+  std::unique_ptr<DelayLine<ControlOutput>> commands_in_flight_;  // compute + transport
+  // the camera's messages delivered by a step, joining the flight stack's inputs at the next
+  // tick after that tick's capture (whose region is around the detections delivered before)
+  std::vector<PayloadDetection> camera_detections_;
+  std::vector<flight::CameraFrame> camera_frames_;
   ControlOutput control_;         // the command the rate loop tracks
   flight::FlightInputs pending_;  // what reaches the flight stack at the next tick
 
-  cv::Mat rendered_;                 // the payload camera's frame buffer, reused frame to frame
-  PayloadDetection last_detection_;  // the last delivered: in process, the next region is around it
-  cv::Rect camera_roi_;              // a separate stack's region of interest for the next frame
-  bool mixer_saturated_ = false;     // the rate loop's last allocation fell short
+  bool mixer_saturated_ = false;         // the rate loop's last allocation fell short
   std::optional<GyroSample> rate_gyro_;  // the rate gyro's newest sample not yet flown on
   bool show_progress_ = false;
   int last_progress_pct_ = -1;

@@ -21,6 +21,12 @@ struct GyroSample {
   Eigen::Vector3d gyro_B_radps = Eigen::Vector3d::Zero();  // body rate + bias + noise  (3)
 };
 
+/// The gripper's switch: whether it holds the payload (the flight stack's gripper flag).
+struct GripperSample {
+  double time_s = 0.0;
+  bool active = false;  // holding the payload
+};
+
 /// One VIO pose (30 Hz), stamped with the time it was measured (it arrives later).
 struct VioSample {
   double time_s = 0.0;                                       // capture time

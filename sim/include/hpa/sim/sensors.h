@@ -17,22 +17,13 @@
 #include "hpa/models/lockstep.h"
 #include "hpa/models/sensor_types.h"
 #include "hpa/models/state.h"
+#include "hpa/sim/payload_camera.h"
+#include "hpa/sim/sensor_declaration.h"
 #include "hpa/sim/sensor_models.h"
 
 namespace hpa::sim {
 
 struct WorldConfig;
-
-/// One simulated sensor stream as the world declares it: what it measures, how often, how late it
-/// is delivered and its noise. The world samples each stream at this rate and delivers it
-/// through a DelayLine of this latency; `hpa schema rates` prints these rows.
-struct SensorDeclaration {
-  std::string name;        // "imu", "rate gyro", "vio", "payload camera"
-  double rate_hz = 0.0;    // samples per second (the physics rate divides into whole steps)
-  double latency_s = 0.0;  // capture to delivery
-  std::string noise;       // its noise, one line with units
-  std::string from;        // where the rate and latency are set
-};
 
 /// What a sensor sees of the world after one physics step: the true state at t_k (the start of
 /// the step) and the specific force of that step.
@@ -43,7 +34,8 @@ struct SensorInput {
 };
 
 /// A sample a sensor produced.
-using SensorMessage = std::variant<ImuSample, GyroSample, VioSample>;
+using SensorMessage =
+    std::variant<ImuSample, GyroSample, VioSample, PayloadDetection, CameraFrames, GripperSample>;
 
 /// A simulated sensor: declares itself and samples the world once per physics step.
 class Sensor {
@@ -125,16 +117,28 @@ class VioSensor final : public Sensor {
   int loop_ = 0;
 };
 
+/// The gripper's switch, read at the start of every tick before its step (an event that grabs or
+/// releases at a tick is seen by that tick's flight step), delivered without latency.
+class GripperSensor {
+ public:
+  /// The switch of a world with `config` (its physics rate).
+  explicit GripperSensor(const WorldConfig& config);
+  /// Its row of the rate table.
+  const SensorDeclaration& declaration() const { return declaration_; }
+  /// The sample at time_s of a gripper that is `active`.
+  GripperSample Sample(double time_s, bool active) const { return {time_s, active}; }
+
+ private:
+  SensorDeclaration declaration_;
+};
+
 /// The sensors a world with `config` has, in the order it samples them (the rate gyro only with
 /// its profile part); throws InputError when a rate does not divide the physics rate into whole
 /// steps. `rng` is the world's sensor generator (not owned).
 std::vector<std::unique_ptr<Sensor>> MakeSensors(const WorldConfig& config, std::mt19937_64* rng);
 
-/// The payload camera's row: its frames are rendered (or projected) and detected by the runner
-/// for the flight stack, at this rate and latency.
-SensorDeclaration PayloadCameraDeclaration(const WorldConfig& config);
-
-/// The rate-table rows of a world with `config`: its sensors', then the payload camera's.
+/// The rate-table rows of a world with `config`: its sensors', then those read at the start of
+/// a tick (the gripper's switch, the payload camera: PayloadCameraSensor), then the wind's.
 std::vector<SensorDeclaration> SensorDeclarations(const WorldConfig& config);
 
 }  // namespace hpa::sim

@@ -20,8 +20,10 @@
 #include "hpa/models/sensor_types.h"
 #include "hpa/models/state.h"
 #include "hpa/sim/gl_backend.h"
+#include "hpa/sim/payload_camera.h"
 #include "hpa/sim/sensor_models.h"
 #include "hpa/sim/sensors.h"
+#include "hpa/sim/wind.h"
 #include "hpa/sim/world_profile.h"
 
 // MuJoCo's model and data, only pointed to here (sim/src includes MuJoCo)
@@ -48,6 +50,7 @@ struct WorldConfig {
   SensorNoiseConfig noise;                                // IMU and VIO noise
   RateTable rates;                                        // physics, IMU and VIO rates, VIO latency
   WorldProfile profile;               // realism parts (default: all off, the ideal world)
+  PayloadCameraConfig camera;         // what the payload camera produces (payload_camera.h)
   bool randomize_appearance = false;  // floor shade, texture scale and lights drawn from the seed
   // GL context of the rendered cameras (one back end per process: sim/src/gl_context.h)
   GlBackend gl_backend = GlBackend::kOsMesa;
@@ -126,6 +129,22 @@ class World {
   /// Every sensor message whose latency has passed, sensor by sensor in the list's order, each
   /// sensor's in capture order (what the flight computer receives after this step).
   std::vector<SensorMessage> TakeDelivered();
+  /// Adds a sensor after those of MakeSensors (what one line in MakeSensors does, at run time):
+  /// it is sampled after every step and delivered after its declared latency. Its rate-table row
+  /// is the caller's to print.
+  void AddSensor(std::unique_ptr<Sensor> sensor);
+  /// Every message still in a delay line (the end of a run), line by line in capture order.
+  std::vector<SensorMessage> TakeInFlight();
+  /// The payload camera: its declaration and clock.
+  const PayloadCameraSensor& payload_camera() const { return *camera_; }
+  /// The wind: its declaration, gust and events.
+  const WindModel& wind() const { return *wind_; }
+  /// Captures the sensors that read the world at the start of a tick, before its step (the state
+  /// and events the flight stack's tick sees): the gripper's switch, and the payload camera's
+  /// frame when one is due, read out through `readout` (rendered frames only; not owned). Each
+  /// is queued for delivery after its latency like every sensor's message (TakeDelivered).
+  /// The camera's capture, if it fired.
+  std::optional<CameraCapture> CaptureTickStart(CameraReadout* readout);
   /// Oldest undelivered IMU sample (a new one every 2 ms), if any.
   std::optional<ImuSample> TakeImu();
   /// Newest gyro sample for the body-rate loop since the last call, if any (a new one every
@@ -265,7 +284,11 @@ class World {
   std::mt19937_64 rng_;  // the IMU's and VIO's noise
   std::vector<std::unique_ptr<Sensor>> sensors_;
   std::vector<DelayLine<SensorMessage>> deliveries_;  // one per sensor, its declared latency
+  std::vector<int> sensor_lines_;                     // each of sensors_'s place in deliveries_
   int imu_sensor_ = -1, rate_gyro_sensor_ = -1, vio_sensor_ = -1;  // their places in sensors_
+  std::unique_ptr<GripperSensor> gripper_sensor_;
+  std::unique_ptr<PayloadCameraSensor> camera_;
+  int gripper_line_ = -1, camera_line_ = -1;  // their places in deliveries_ (after the sensors')
 
   CrashStatus crash_;
   std::unique_ptr<OffscreenRenderer> renderer_;
@@ -279,10 +302,7 @@ class World {
   Eigen::Vector4d rotor_km_factor_ = Eigen::Vector4d::Ones();  // per-rotor k_m spread  (4)
   double payload_quad_min_distance_m_ = 0.0;
   ContactCounts contact_counts_;
-  std::mt19937_64 wind_rng_;                                    // the gust's own generator
-  Eigen::Vector3d gust_W_mps_ = Eigen::Vector3d::Zero();        // gust velocity, world  (3)
-  Eigen::Vector3d event_wind_W_mps_ = Eigen::Vector3d::Zero();  // wind event's velocity  (3)
-  int64_t event_wind_end_step_ = 0;                             // applied while step < this
+  std::unique_ptr<WindModel> wind_;                             // mean wind, gust, wind events
   Eigen::Vector3d aero_quad_W_N_ = Eigen::Vector3d::Zero();     // last drag on the quad  (3)
   Eigen::Vector3d aero_payload_W_N_ = Eigen::Vector3d::Zero();  // last drag on the payload  (3)
   bool touching_[5] = {false, false, false, false, false};      // ContactCounts fields, last step
