@@ -9,15 +9,10 @@
 
 #include "hpa/models/params.h"
 #include "hpa/sim/world.h"
+#include "sim/tests/default_world_config.h"
 
 namespace hpa::sim {
 namespace {
-
-WorldConfig DefaultConfig() {
-  WorldConfig c;
-  c.params = LoadParams(DefaultParamsPath());
-  return c;
-}
 
 TEST(CableTest, StretchAtHoverIsBelowFiveMillimetres) {
   World world(DefaultConfig());

@@ -12,15 +12,10 @@
 #include "hpa/sim/sensors.h"
 #include "hpa/sim/wind.h"
 #include "hpa/sim/world.h"
+#include "sim/tests/default_world_config.h"
 
 namespace hpa::sim {
 namespace {
-
-WorldConfig DefaultConfig() {
-  WorldConfig c;
-  c.params = LoadParams(DefaultParamsPath());
-  return c;
-}
 
 // A toy altimeter: the true height as a VIO-shaped sample at 50 Hz, 40 ms late.
 class ToyAltimeter final : public Sensor {

@@ -1,6 +1,7 @@
 // hpa::sim::World: loading errors, hover, motors, sensors (rates, noise, determinism),
 // disturbances, gripper, crash detection and world overrides.
 #include "hpa/sim/world.h"
+#include "sim/tests/default_world_config.h"
 
 #include <gtest/gtest.h>
 
@@ -17,12 +18,6 @@
 
 namespace hpa::sim {
 namespace {
-
-WorldConfig DefaultConfig() {
-  WorldConfig c;
-  c.params = LoadParams(DefaultParamsPath());
-  return c;
-}
 
 InputVector HoverCommand(const World& world) {
   return InputVector::Constant(world.world_params().HoverMotorSpeedRadps());

@@ -247,16 +247,7 @@ void RunLoop::ApplyDueEvents(double t) {
 void RunLoop::CameraStep() {
   if (const std::optional<sim::CameraCapture> capture =
           world_->CaptureTickStart(camera_readout_.get())) {
-    CameraFrameRecord frame;
-    frame.time_s = capture->time_s;
-    frame.payload_in_image = capture->payload_in_image;
-    frame.detected = capture->detected;
-    frame.frame = capture->frame;
-    frame.render_ms = capture->render_ms;
-    frame.image_model_ms = capture->image_model_ms;
-    frame.detector_ms = capture->detector_ms;
-    frame.region_only = capture->region_only;
-    for (RunRecorder* r : recorders_) r->OnCameraFrame(frame);
+    for (RunRecorder* r : recorders_) r->OnCameraFrame(*capture);
   }
   // the gripper's switch, and a camera without latency, deliver at their capture tick
   for (sim::SensorMessage& m : world_->TakeDelivered()) KeepTickStartMessage(&m);

@@ -14,19 +14,13 @@
 #include "hpa/scenarios/metrics.h"
 #include "hpa/scenarios/scenario.h"
 #include "hpa/sim/gl_backend.h"
+#include "hpa/sim/payload_camera.h"
 #include "hpa/sim/world.h"
 
 namespace hpa {
 
-/// One payload camera frame as the runner saw it.
-struct CameraFrameRecord {
-  double time_s = 0.0;             // capture time
-  bool payload_in_image = false;   // the true payload inside the image
-  bool detected = false;           // the detector (or analytic camera) found it
-  const cv::Mat* frame = nullptr;  // the rendered frame (nullptr: analytic camera, ground truth)
-  double render_ms = 0.0, image_model_ms = 0.0, detector_ms = 0.0;  // rendered frames only
-  bool region_only = false;  // rendered and detected in a region around the last detection
-};
+/// One payload camera frame as the world captured it (sim/payload_camera.h).
+using CameraFrameRecord = sim::CameraCapture;
 
 /// Observes a run: the runner calls its recorders from the lockstep loop (its own log,
 /// metrics inputs and video are recorders too). Default methods ignore the call.
