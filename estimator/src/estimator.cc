@@ -4,7 +4,6 @@
 #include <cmath>
 #include <deque>
 
-
 namespace hpa {
 namespace {
 
@@ -85,21 +84,12 @@ class CableEstimator final : public Estimator {
     seen_ = true;
     last_seen_time_s_ = detection.time_s;
     tracker_hit_vehicle_ = false;
-    // body-frame payload position and its covariance
-    const Eigen::Vector3d p_BL_B = params_.t_BC_B_m + params_.R_BC * detection.p_CL_C;
-    const Eigen::Matrix3d cov_B =
-        params_.R_BC * DetectionCovariance_C(params_, config_.detection_noise, detection.p_CL_C) *
-            params_.R_BC.transpose() +
-        Eigen::Matrix3d::Identity() * std::pow(config_.detection_noise_floor_m, 2);
-    // quadrotor pose at the capture time
-    const QuadFilterState quad_then = quad_.StateAt(detection.time_s).value_or(quad_.state());
-    const Eigen::Matrix3d R_WB = quad_then.q_WB.toRotationMatrix();
-    const Eigen::Vector3d p_WL_W = quad_then.p_WB_W + R_WB * p_BL_B;
+    const LocatedDetection d = Locate(detection);
 
     // always-taut variants: the EKF takes the raw measurement whatever its length
     if (!hybrid_) {
-      cable_.Update(detection.time_s, p_BL_B, R_WB, cov_B);
-      if (taut_payload_ == TautPayload::kMeasured) UpdateMeasuredPayload(detection.time_s, p_WL_W);
+      cable_.Update(d.time_s, d.p_BL_B, d.R_WB, d.cov_B);
+      if (taut_payload_ == TautPayload::kMeasured) UpdateMeasuredPayload(d.time_s, d.p_WL_W);
       return;
     }
 
@@ -108,105 +98,33 @@ class CableEstimator final : public Estimator {
     const bool entered_by_tension = tension_entry_pending_;
     tension_entry_pending_ = false;
     const CableMode previous = entered_by_tension ? CableMode::kTaut : mode_;
-    const CableMode geometric = mode_detector_.Update(detection.time_s, p_BL_B.norm());
+    const CableMode geometric = mode_detector_.Update(d.time_s, d.p_BL_B.norm());
     // slack if either cue says so: a payload held at the cable's length is slack to the
     // tension cue, a payload thrown up faster than the low pass follows to the geometry
     const bool tension_slack = config_.tension_cue.enabled && tension_cue_.slack();
     mode_ = geometric == CableMode::kSlack || tension_slack ? CableMode::kSlack : CableMode::kTaut;
-    const bool had_last = has_last_detection_;
-    const Eigen::Vector3d last_p_WL_W = last_p_WL_W_;
-    const Eigen::Vector3d last_p_BL_B = last_p_BL_B_;
-    const double last_time_s = last_detection_time_s_;
+    const PreviousDetection last{has_last_detection_, last_p_WL_W_, last_p_BL_B_,
+                                 last_detection_time_s_};
     has_last_detection_ = true;
-    last_p_WL_W_ = p_WL_W;
-    last_p_BL_B_ = p_BL_B;
-    last_detection_time_s_ = detection.time_s;
+    last_p_WL_W_ = d.p_WL_W;
+    last_p_BL_B_ = d.p_BL_B;
+    last_detection_time_s_ = d.time_s;
     const Eigen::Matrix3d cov_W =
-        R_WB * cov_B * R_WB.transpose() + quad_.covariance().block<3, 3>(0, 0);
+        d.R_WB * d.cov_B * d.R_WB.transpose() + quad_.covariance().block<3, 3>(0, 0);
     if (mode_ == CableMode::kSlack) {
       if (previous == CableMode::kTaut) {
-        // enter slack: start the free-fall tracker at the detection; velocity from the last two
-        // detections (free fall between them) when recent, else from the taut model
-        Matrix6d cov = Matrix6d::Zero();
-        cov.block<3, 3>(0, 0) = cov_W;
-        Eigen::Vector3d v_WL_W = quad_then.v_WB_W + params_.cable_length_m * cable_.xi_dot_W();
-        double velocity_std_mps = config_.slack_entry_velocity_std_mps;
-        const double gap_s = detection.time_s - last_time_s;
-        if (had_last && gap_s > config_.slack_entry_min_detection_gap_s &&
-            gap_s < config_.slack_entry_max_detection_gap_s) {
-          v_WL_W = (p_WL_W - last_p_WL_W) / gap_s -
-                   Eigen::Vector3d(0, 0, 0.5 * params_.gravity_mps2 * gap_s);
-          velocity_std_mps = std::sqrt(2.0 * cov_W.trace() / 3.0) / gap_s;
-        }
-        cov.block<3, 3>(3, 3).diagonal().setConstant(std::pow(velocity_std_mps, 2));
-        tracker_.Reset(detection.time_s, p_WL_W, v_WL_W, cov);
-        if (!entered_by_tension) ++slack_entries_;
+        EnterSlack(d, last, cov_W, entered_by_tension);
       } else {
-        tracker_.Update(detection.time_s, p_WL_W, cov_W);
+        tracker_.Update(d.time_s, d.p_WL_W, cov_W);
       }
       return;
     }
     if (previous == CableMode::kSlack) {
-      // re-taut: restart the cable EKF on the measured direction and the tracker's velocity
-      // (radial part removed, as in the inelastic collision of docs/design.md section 4)
-      Eigen::Vector3d p_L, v_L;
-      tracker_.PredictTo(quad_.state().time_s, &p_L, &v_L);
-      const Eigen::Vector3d xi = (R_WB * p_BL_B).normalized();
-      const Eigen::Vector3d xi_dot = (v_L - quad_.state().v_WB_W) / params_.cable_length_m;
-      CableMatrix cov = CableMatrix::Zero();
-      cov.diagonal() << Eigen::Vector3d::Constant(std::pow(config_.retaut_xi_std, 2)),
-          Eigen::Vector3d::Constant(std::pow(config_.retaut_xi_dot_std_per_s, 2));
-      cable_.Reset(quad_.state().time_s, xi, xi_dot, cov);
-      ++retaut_restarts_;
-      velocity_row_pending_ = config_.retaut_velocity_row;
-      restart_time_s_ = quad_.state().time_s;
+      RestartCableAtRetaut(d);
       return;
     }
-    if (velocity_row_pending_) {
-      // the rate of the body-frame payload position between the restart's detection and this
-      // one, at the middle of their gap; the restart is at the time the restart's detection
-      // arrived, later than its capture, so no earlier than that
-      velocity_row_pending_ = false;
-      const double gap_s = detection.time_s - last_time_s;
-      const double fuse_time_s = std::max(detection.time_s - 0.5 * gap_s, restart_time_s_);
-      if (had_last && gap_s > config_.slack_entry_min_detection_gap_s &&
-          gap_s < config_.slack_entry_max_detection_gap_s) {
-        const QuadFilterState quad_mid = quad_.StateAt(fuse_time_s).value_or(quad_then);
-        cable_.UpdateVelocity(fuse_time_s, (p_BL_B - last_p_BL_B) / gap_s,
-                              quad_mid.q_WB.toRotationMatrix(), quad_mid.w_B_radps,
-                              2.0 * cov_B / (gap_s * gap_s));
-      }
-    }
-    // a run of rejected detections that agree with each other: the filter has diverged (e.g.
-    // on a thrust it was wrongly told), not the camera; restart it from the detections rather
-    // than lock them out or fuse one into a filter that is sure of the wrong state
-    const Eigen::Vector3d xi_detected_W = (R_WB * p_BL_B).normalized();
-    if (cable_.consecutive_rejections() >= cable_.config().gate.max_consecutive_rejections &&
-        RejectedRunAgrees(xi_detected_W)) {
-      const double gap_s = detection.time_s - rejected_times_s_.back();
-      const Eigen::Vector3d xi_dot_W =
-          gap_s > 0.0 ? Eigen::Vector3d((xi_detected_W - rejected_xi_W_.back()) / gap_s)
-                      : Eigen::Vector3d::Zero();
-      CableMatrix cov = CableMatrix::Zero();
-      cov.diagonal() << Eigen::Vector3d::Constant(std::pow(config_.retaut_xi_std, 2)),
-          Eigen::Vector3d::Constant(std::pow(config_.retaut_xi_dot_std_per_s, 2));
-      cable_.Reset(quad_.state().time_s, xi_detected_W, xi_dot_W, cov);
-      rejected_xi_W_.clear();
-      rejected_times_s_.clear();
-      ++cable_reinitialisations_;
-      return;
-    }
-    if (cable_.Update(detection.time_s, p_BL_B, R_WB, cov_B) == FilterStatus::kRejected) {
-      rejected_xi_W_.push_back(xi_detected_W);
-      rejected_times_s_.push_back(detection.time_s);
-      if (rejected_xi_W_.size() > 3) {
-        rejected_xi_W_.pop_front();
-        rejected_times_s_.pop_front();
-      }
-    } else {
-      rejected_xi_W_.clear();
-      rejected_times_s_.clear();
-    }
+    if (velocity_row_pending_) FuseRetautVelocity(d, last);
+    UpdateTautCable(d);
   }
 
   SystemState Estimate(double time_s) const override {
@@ -267,6 +185,127 @@ class CableEstimator final : public Estimator {
   }
 
  private:
+  // A detection carried to the body frame and, with the quadrotor's pose at its capture time,
+  // to the world frame.
+  struct LocatedDetection {
+    double time_s;              // capture time
+    Eigen::Vector3d p_BL_B;     // payload position, body frame
+    Eigen::Matrix3d cov_B;      // its covariance, body frame
+    QuadFilterState quad_then;  // the quadrotor filter's state at the capture time
+    Eigen::Matrix3d R_WB;       // the attitude then
+    Eigen::Vector3d p_WL_W;     // payload position, world frame
+  };
+
+  // The detection taken before the current one (for finite-difference velocities).
+  struct PreviousDetection {
+    bool valid;              // there was one
+    Eigen::Vector3d p_WL_W;  // its payload position, world frame
+    Eigen::Vector3d p_BL_B;  // the same in its body frame
+    double time_s;           // its capture time
+  };
+
+  // The detection in body and world frames with the body-frame covariance of its position
+  // (detection noise model plus floor), at the quadrotor pose of its capture time.
+  LocatedDetection Locate(const PayloadDetection& detection) const {
+    LocatedDetection d;
+    d.time_s = detection.time_s;
+    d.p_BL_B = params_.t_BC_B_m + params_.R_BC * detection.p_CL_C;
+    d.cov_B = params_.R_BC *
+                  DetectionCovariance_C(params_, config_.detection_noise, detection.p_CL_C) *
+                  params_.R_BC.transpose() +
+              Eigen::Matrix3d::Identity() * std::pow(config_.detection_noise_floor_m, 2);
+    d.quad_then = quad_.StateAt(detection.time_s).value_or(quad_.state());
+    d.R_WB = d.quad_then.q_WB.toRotationMatrix();
+    d.p_WL_W = d.quad_then.p_WB_W + d.R_WB * d.p_BL_B;
+    return d;
+  }
+
+  // Enters slack at a detection: starts the free-fall tracker there, its velocity from the last
+  // two detections (free fall between them) when recent, else from the taut model.
+  void EnterSlack(const LocatedDetection& d, const PreviousDetection& last,
+                  const Eigen::Matrix3d& cov_W, bool entered_by_tension) {
+    Matrix6d cov = Matrix6d::Zero();
+    cov.block<3, 3>(0, 0) = cov_W;
+    Eigen::Vector3d v_WL_W = d.quad_then.v_WB_W + params_.cable_length_m * cable_.xi_dot_W();
+    double velocity_std_mps = config_.slack_entry_velocity_std_mps;
+    const double gap_s = d.time_s - last.time_s;
+    if (last.valid && gap_s > config_.slack_entry_min_detection_gap_s &&
+        gap_s < config_.slack_entry_max_detection_gap_s) {
+      v_WL_W = (d.p_WL_W - last.p_WL_W) / gap_s -
+               Eigen::Vector3d(0, 0, 0.5 * params_.gravity_mps2 * gap_s);
+      velocity_std_mps = std::sqrt(2.0 * cov_W.trace() / 3.0) / gap_s;
+    }
+    cov.block<3, 3>(3, 3).diagonal().setConstant(std::pow(velocity_std_mps, 2));
+    tracker_.Reset(d.time_s, d.p_WL_W, v_WL_W, cov);
+    if (!entered_by_tension) ++slack_entries_;
+  }
+
+  // Re-taut: restarts the cable EKF on the measured direction and the tracker's velocity (radial
+  // part removed, as in the inelastic collision of docs/design.md section 4).
+  void RestartCableAtRetaut(const LocatedDetection& d) {
+    Eigen::Vector3d p_L, v_L;
+    tracker_.PredictTo(quad_.state().time_s, &p_L, &v_L);
+    const Eigen::Vector3d xi = (d.R_WB * d.p_BL_B).normalized();
+    const Eigen::Vector3d xi_dot = (v_L - quad_.state().v_WB_W) / params_.cable_length_m;
+    CableMatrix cov = CableMatrix::Zero();
+    cov.diagonal() << Eigen::Vector3d::Constant(std::pow(config_.retaut_xi_std, 2)),
+        Eigen::Vector3d::Constant(std::pow(config_.retaut_xi_dot_std_per_s, 2));
+    cable_.Reset(quad_.state().time_s, xi, xi_dot, cov);
+    ++retaut_restarts_;
+    velocity_row_pending_ = config_.retaut_velocity_row;
+    restart_time_s_ = quad_.state().time_s;
+  }
+
+  // The first detection after a re-taut restart fuses the rate of the body-frame payload position
+  // between the restart's detection and this one, at the middle of their gap; the restart is at
+  // the time the restart's detection arrived, later than its capture, so no earlier than that.
+  void FuseRetautVelocity(const LocatedDetection& d, const PreviousDetection& last) {
+    velocity_row_pending_ = false;
+    const double gap_s = d.time_s - last.time_s;
+    const double fuse_time_s = std::max(d.time_s - 0.5 * gap_s, restart_time_s_);
+    if (last.valid && gap_s > config_.slack_entry_min_detection_gap_s &&
+        gap_s < config_.slack_entry_max_detection_gap_s) {
+      const QuadFilterState quad_mid = quad_.StateAt(fuse_time_s).value_or(d.quad_then);
+      cable_.UpdateVelocity(fuse_time_s, (d.p_BL_B - last.p_BL_B) / gap_s,
+                            quad_mid.q_WB.toRotationMatrix(), quad_mid.w_B_radps,
+                            2.0 * d.cov_B / (gap_s * gap_s));
+    }
+  }
+
+  // A taut detection to the cable EKF. A run of rejected detections that agree with each other
+  // means the filter has diverged (e.g. on a thrust it was wrongly told), not the camera: it
+  // restarts from the detections rather than lock them out or fuse one into a filter that is
+  // sure of the wrong state.
+  void UpdateTautCable(const LocatedDetection& d) {
+    const Eigen::Vector3d xi_detected_W = (d.R_WB * d.p_BL_B).normalized();
+    if (cable_.consecutive_rejections() >= cable_.config().gate.max_consecutive_rejections &&
+        RejectedRunAgrees(xi_detected_W)) {
+      const double gap_s = d.time_s - rejected_times_s_.back();
+      const Eigen::Vector3d xi_dot_W =
+          gap_s > 0.0 ? Eigen::Vector3d((xi_detected_W - rejected_xi_W_.back()) / gap_s)
+                      : Eigen::Vector3d::Zero();
+      CableMatrix cov = CableMatrix::Zero();
+      cov.diagonal() << Eigen::Vector3d::Constant(std::pow(config_.retaut_xi_std, 2)),
+          Eigen::Vector3d::Constant(std::pow(config_.retaut_xi_dot_std_per_s, 2));
+      cable_.Reset(quad_.state().time_s, xi_detected_W, xi_dot_W, cov);
+      rejected_xi_W_.clear();
+      rejected_times_s_.clear();
+      ++cable_reinitialisations_;
+      return;
+    }
+    if (cable_.Update(d.time_s, d.p_BL_B, d.R_WB, d.cov_B) == FilterStatus::kRejected) {
+      rejected_xi_W_.push_back(xi_detected_W);
+      rejected_times_s_.push_back(d.time_s);
+      if (rejected_xi_W_.size() > 3) {
+        rejected_xi_W_.pop_front();
+        rejected_times_s_.pop_front();
+      }
+    } else {
+      rejected_xi_W_.clear();
+      rejected_times_s_.clear();
+    }
+  }
+
   // Whether the rejected run and `xi_W` agree with each other: a smooth swing (successive
   // directions within kAgreeRad, about a 10 rad/s swing between 30 Hz frames), not outliers.
   bool RejectedRunAgrees(const Eigen::Vector3d& xi_W) const {

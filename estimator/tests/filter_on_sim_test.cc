@@ -41,6 +41,66 @@ struct SimRunResult {
   bool crashed = false;
 };
 
+// The slow Lissajous of the payload the vehicle flies (1.5 m x 0.5 m, 8 s period, 1.4 m/s
+// peak) at 1 m height.
+std::shared_ptr<const Reference> SlowLissajous(const Params& params) {
+  LissajousSpec spec;
+  spec.a = 1.5;
+  spec.b = 0.5;
+  spec.period_s = 8.0;
+  return MakeLissajousReference(params, spec);
+}
+
+// Running sums of the scored samples' NEES and squared position errors.
+struct ScoreSums {
+  double nees = 0.0;
+  double squared_position_error_m2 = 0.0;
+};
+
+// Every IMU and VIO sample the World has delivered goes to the filter; failures are counted.
+void FeedFilter(sim::World* world, QuadFilter* filter, SimRunResult* result) {
+  while (auto imu = world->TakeImu()) {
+    result->predict_failures += filter->Predict(*imu) != FilterStatus::kOk;
+  }
+  while (auto vio = world->TakeVio()) {
+    result->vio_failures += filter->UpdateVio(*vio) != FilterStatus::kOk;
+  }
+}
+
+// Scores the filter's current estimate (latest IMU time) against the truth of that time, when
+// that tick is due (after kSettle_s, every score_every_ticks, not yet scored) and its truth is
+// still in recent_truth (truth before each step, by tick).
+void ScoreFilter(const QuadFilter& filter,
+                 const std::deque<std::pair<long, SystemState>>& recent_truth,
+                 long score_every_ticks, long* last_scored_tick, ScoreSums* sums,
+                 SimRunResult* result) {
+  const QuadFilterState& estimate = filter.state();
+  const long filter_tick = std::lround(estimate.time_s / sim::World::kPhysicsDt_s);
+  if (estimate.time_s < kSettle_s || filter_tick == *last_scored_tick ||
+      filter_tick % score_every_ticks != 0) {
+    return;
+  }
+  *last_scored_tick = filter_tick;
+  const auto match = std::find_if(recent_truth.begin(), recent_truth.end(),
+                                  [&](const auto& entry) { return entry.first == filter_tick; });
+  if (match == recent_truth.end()) return;
+  const SystemState& s = match->second;
+  QuadFilterState true_state = estimate;  // the World's IMU biases are not exposed: no error
+  true_state.p_WB_W = s.p_WQ_W;
+  true_state.v_WB_W = s.v_WQ_W;
+  true_state.q_WB = s.q_WB;
+  const Eigen::Matrix<double, kNeesDof, 1> e =
+      QuadFilter::ErrorState(estimate, true_state).head<kNeesDof>();
+  const Eigen::Matrix<double, kNeesDof, kNeesDof> P =
+      filter.covariance().topLeftCorner<kNeesDof, kNeesDof>();  // marginal of the 15x15
+  sums->nees += e.dot(P.ldlt().solve(e));
+  sums->squared_position_error_m2 += e.head<3>().squaredNorm();
+  result->peak_speed_mps = std::max(result->peak_speed_mps, s.v_WQ_W.norm());
+  ++result->samples;
+}
+
+// Flies the slow Lissajous with two wind gusts on ground truth for kDuration_s, feeding every
+// simulated IMU and VIO sample to a filter started at the true state, and scores the filter.
 SimRunResult FlyAndFilter(uint64_t seed) {
   const Params params = LoadParams(DefaultParamsPath());
   sim::WorldConfig world_config;
@@ -48,12 +108,7 @@ SimRunResult FlyAndFilter(uint64_t seed) {
   world_config.seed = seed;
   sim::World world(world_config);
 
-  // slow Lissajous of the payload (1.5 m x 0.5 m, 8 s period, 1.4 m/s peak) at 1 m height
-  LissajousSpec spec;
-  spec.a = 1.5;
-  spec.b = 0.5;
-  spec.period_s = 8.0;
-  const std::shared_ptr<const Reference> reference = MakeLissajousReference(params, spec);
+  const std::shared_ptr<const Reference> reference = SlowLissajous(params);
   SystemState initial;
   initial.p_WL_W = reference->At(0.0).p_WL_W;
   initial.p_WQ_W = initial.p_WL_W + Eigen::Vector3d(0, 0, params.cable_length_m);
@@ -78,7 +133,7 @@ SimRunResult FlyAndFilter(uint64_t seed) {
   control.command.thrust_N = params.HoverThrustN();
   std::deque<std::pair<long, SystemState>> recent_truth;  // truth before each step, by tick
   long last_scored_tick = -1;
-  double nees_sum = 0.0, squared_position_error_sum_m2 = 0.0;
+  ScoreSums sums;
   for (long tick = 0; tick < end_tick; ++tick, clock.Advance()) {
     const double t_s = tick * sim::World::kPhysicsDt_s;
     clock.BeginTick();
@@ -106,43 +161,12 @@ SimRunResult FlyAndFilter(uint64_t seed) {
       result.crashed = true;
       break;
     }
-
-    // every simulated sensor sample to the filter
-    while (auto imu = world.TakeImu()) {
-      result.predict_failures += filter.Predict(*imu) != FilterStatus::kOk;
-    }
-    while (auto vio = world.TakeVio()) {
-      result.vio_failures += filter.UpdateVio(*vio) != FilterStatus::kOk;
-    }
-
-    // score the filter's current estimate (latest IMU time) against the truth of that time
-    const QuadFilterState& estimate = filter.state();
-    const long filter_tick = std::lround(estimate.time_s / sim::World::kPhysicsDt_s);
-    if (estimate.time_s < kSettle_s || filter_tick == last_scored_tick ||
-        filter_tick % score_every_ticks != 0) {
-      continue;
-    }
-    last_scored_tick = filter_tick;
-    const auto match = std::find_if(recent_truth.begin(), recent_truth.end(),
-                                    [&](const auto& entry) { return entry.first == filter_tick; });
-    if (match == recent_truth.end()) continue;
-    const SystemState& s = match->second;
-    QuadFilterState true_state = estimate;  // the World's IMU biases are not exposed: no error
-    true_state.p_WB_W = s.p_WQ_W;
-    true_state.v_WB_W = s.v_WQ_W;
-    true_state.q_WB = s.q_WB;
-    const Eigen::Matrix<double, kNeesDof, 1> e =
-        QuadFilter::ErrorState(estimate, true_state).head<kNeesDof>();
-    const Eigen::Matrix<double, kNeesDof, kNeesDof> P =
-        filter.covariance().topLeftCorner<kNeesDof, kNeesDof>();  // marginal of the 15x15
-    nees_sum += e.dot(P.ldlt().solve(e));
-    squared_position_error_sum_m2 += e.head<3>().squaredNorm();
-    result.peak_speed_mps = std::max(result.peak_speed_mps, s.v_WQ_W.norm());
-    ++result.samples;
+    FeedFilter(&world, &filter, &result);
+    ScoreFilter(filter, recent_truth, score_every_ticks, &last_scored_tick, &sums, &result);
   }
   if (result.samples > 0) {
-    result.mean_nees = nees_sum / result.samples;
-    result.position_rmse_m = std::sqrt(squared_position_error_sum_m2 / result.samples);
+    result.mean_nees = sums.nees / result.samples;
+    result.position_rmse_m = std::sqrt(sums.squared_position_error_m2 / result.samples);
   }
   return result;
 }

@@ -59,19 +59,18 @@ std::vector<std::pair<double, double>> TrueSlackIntervals(const std::vector<LogR
   return intervals;
 }
 
-void ComputeMetrics(const MetricsInputs& in, Metrics* m) {
-  const auto& rows = in.rows;
-  m->control_steps = static_cast<int>(rows.size());
-  const auto slack = TrueSlackIntervals(rows);
-  m->slack_events = static_cast<int>(slack.size());
+namespace {
+
+// Tracking errors (RMS over the run; the payload's over the taut time when the cable went slack),
+// speeds, mode agreement, the closed-loop cost and the time the payload was reported lost.
+void TrackingMetrics(const std::vector<LogRow>& rows,
+                     const std::vector<std::pair<double, double>>& slack, Metrics* m) {
   auto in_slack = [&](double t) {
     for (const auto& s : slack) {
       if (t >= s.first && t < s.second) return true;
     }
     return false;
   };
-
-  // tracking errors, speeds and mode agreement
   Eigen::Vector3d payload_sq = Eigen::Vector3d::Zero(), quad_sq = Eigen::Vector3d::Zero();
   Eigen::Vector3d payload_est_sq = Eigen::Vector3d::Zero();
   int payload_n = 0, mode_agree = 0;
@@ -89,9 +88,6 @@ void ComputeMetrics(const MetricsInputs& in, Metrics* m) {
     if (r.truth.mode == r.estimate.mode) ++mode_agree;
     m->closed_loop_cost += r.cost;
   }
-  m->mixer_saturated_fraction =
-      in.rate_loop_steps > 0 ? static_cast<double>(in.mixer_saturated_steps) / in.rate_loop_steps
-                             : 0.0;
   m->payload_lost_time_s = 0.0;
   for (size_t i = 1; i < rows.size(); ++i) {
     if (rows[i].estimate.payload_lost)
@@ -105,8 +101,12 @@ void ComputeMetrics(const MetricsInputs& in, Metrics* m) {
     m->payload_rmse_m = (payload_sq / payload_n).cwiseSqrt();
     m->payload_rmse_est_m = (payload_est_sq / payload_n).cwiseSqrt();
   }
+}
 
-  // slack time, detection latency and re-taut impact
+// Slack time, how late the estimator flagged each slack onset (or missed it), and the re-taut
+// impact: the quadrotor's lowest vertical speed and peak body rate just after each re-taut.
+void SlackMetrics(const std::vector<LogRow>& rows,
+                  const std::vector<std::pair<double, double>>& slack, Metrics* m) {
   m->slack_time_s = 0.0;
   std::vector<double> latencies;
   double vz_min = 0.0, rate_peak = 0.0;
@@ -140,8 +140,11 @@ void ComputeMetrics(const MetricsInputs& in, Metrics* m) {
     m->slack_detection_latency_mean_s = sum / latencies.size();
     m->slack_detection_latency_max_s = *std::max_element(latencies.begin(), latencies.end());
   }
+}
 
-  // camera field of view
+// The camera's field of view and the timing statistics: solver, detector, renderer, image model;
+// MPC failures are the plans neither flown nor a designed recovery.
+void CameraAndTimingMetrics(const MetricsInputs& in, Metrics* m) {
   m->camera_frames = static_cast<int>(in.payload_in_fov_per_frame.size());
   m->detections = in.detections;
   if (m->camera_frames > 0) {
@@ -149,11 +152,9 @@ void ComputeMetrics(const MetricsInputs& in, Metrics* m) {
         std::count(in.payload_in_fov_per_frame.begin(), in.payload_in_fov_per_frame.end(), true);
     m->payload_in_fov_fraction = static_cast<double>(visible) / m->camera_frames;
   }
-
-  // solver statistics
   std::vector<double> solve_ms;
   m->mpc_failures = 0;
-  for (const LogRow& r : rows) {
+  for (const LogRow& r : in.rows) {
     solve_ms.push_back(r.solve_time_ms);
     // a plan stopped at its iteration cap is flown, a tumble recovery is by design: only real
     // failures count
@@ -169,6 +170,21 @@ void ComputeMetrics(const MetricsInputs& in, Metrics* m) {
   }
   m->render_ms = ComputeQuantiles(in.render_ms);
   m->image_model_ms = ComputeQuantiles(in.image_model_ms);
+}
+
+}  // namespace
+
+void ComputeMetrics(const MetricsInputs& in, Metrics* m) {
+  const auto& rows = in.rows;
+  m->control_steps = static_cast<int>(rows.size());
+  const auto slack = TrueSlackIntervals(rows);
+  m->slack_events = static_cast<int>(slack.size());
+  TrackingMetrics(rows, slack, m);
+  m->mixer_saturated_fraction =
+      in.rate_loop_steps > 0 ? static_cast<double>(in.mixer_saturated_steps) / in.rate_loop_steps
+                             : 0.0;
+  SlackMetrics(rows, slack, m);
+  CameraAndTimingMetrics(in, m);
 }
 
 void CheckExpectations(const ExpectSpec& e, Metrics* m) {

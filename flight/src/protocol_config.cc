@@ -1,0 +1,188 @@
+// The flight config as JSON (the hello's "config"): what hpa-flight needs to build the flight
+// stack the runner would (params, controller, estimator, reference, initial state).
+
+#include <string>
+
+#include "hpa/flight/protocol.h"
+
+namespace hpa::flight {
+namespace {
+
+// A vector as a JSON array of its 3 numbers.
+nlohmann::json Vec3(const Eigen::Vector3d& v) { return {v.x(), v.y(), v.z()}; }
+
+// The 3-number array at `key` of j; throws ProtocolError naming the key otherwise.
+Eigen::Vector3d ReadVec3(const nlohmann::json& j, const char* key) {
+  const nlohmann::json& a = j.at(key);
+  if (!a.is_array() || a.size() != 3)
+    throw ProtocolError(std::string(key) + ": expected 3 numbers");
+  return {a[0].get<double>(), a[1].get<double>(), a[2].get<double>()};
+}
+
+// The initial state as JSON (quaternion w, x, y, z; the mode by name).
+nlohmann::json StateJson(const SystemState& s) {
+  return {
+      {"time_s", s.time_s},       {"p_WL_W", Vec3(s.p_WL_W)},
+      {"v_WL_W", Vec3(s.v_WL_W)}, {"p_WQ_W", Vec3(s.p_WQ_W)},
+      {"v_WQ_W", Vec3(s.v_WQ_W)}, {"q_WB_wxyz", {s.q_WB.w(), s.q_WB.x(), s.q_WB.y(), s.q_WB.z()}},
+      {"w_B", Vec3(s.w_B)},       {"mode", ToString(s.mode)}};
+}
+
+// The initial state from StateJson's JSON.
+SystemState StateFromJson(const nlohmann::json& j) {
+  SystemState s;
+  s.time_s = j.at("time_s").get<double>();
+  s.p_WL_W = ReadVec3(j, "p_WL_W"), s.v_WL_W = ReadVec3(j, "v_WL_W");
+  s.p_WQ_W = ReadVec3(j, "p_WQ_W"), s.v_WQ_W = ReadVec3(j, "v_WQ_W");
+  const nlohmann::json& q = j.at("q_WB_wxyz");
+  s.q_WB = Eigen::Quaterniond(q.at(0).get<double>(), q.at(1).get<double>(), q.at(2).get<double>(),
+                              q.at(3).get<double>());
+  s.w_B = ReadVec3(j, "w_B");
+  s.mode = j.at("mode").get<std::string>() == "slack" ? CableMode::kSlack : CableMode::kTaut;
+  return s;
+}
+
+}  // namespace
+
+nlohmann::json ConfigToJson(const FlightConfig& c) {
+  const Params& p = c.params;
+  nlohmann::json params = {{"gravity_mps2", p.gravity_mps2},
+                           {"quad_mass_kg", p.quad_mass_kg},
+                           {"inertia_B_kgm2", Vec3(p.inertia_B_kgm2)},
+                           {"arm_length_m", p.arm_length_m},
+                           {"body_half_size_m", Vec3(p.body_half_size_m)},
+                           {"k_f_N_per_radps2", p.k_f_N_per_radps2},
+                           {"k_m_Nm_per_radps2", p.k_m_Nm_per_radps2},
+                           {"motor_time_constant_s", p.motor_time_constant_s},
+                           {"motor_speed_min_radps", p.motor_speed_min_radps},
+                           {"motor_speed_max_radps", p.motor_speed_max_radps},
+                           {"payload_mass_kg", p.payload_mass_kg},
+                           {"payload_radius_m", p.payload_radius_m},
+                           {"cable_length_m", p.cable_length_m},
+                           {"slack_epsilon_m", p.slack_epsilon_m},
+                           {"camera_width_px", p.camera_width_px},
+                           {"camera_height_px", p.camera_height_px},
+                           {"camera_fovy_deg", p.camera_fovy_deg},
+                           {"t_BC_B_m", Vec3(p.t_BC_B_m)},
+                           {"camera_distortion",
+                            {p.camera_distortion[0], p.camera_distortion[1], p.camera_distortion[2],
+                             p.camera_distortion[3]}},
+                           {"R_BC_rowmajor",
+                            {p.R_BC(0, 0), p.R_BC(0, 1), p.R_BC(0, 2), p.R_BC(1, 0), p.R_BC(1, 1),
+                             p.R_BC(1, 2), p.R_BC(2, 0), p.R_BC(2, 1), p.R_BC(2, 2)}},
+                           {"vio_width_px", p.vio_width_px},
+                           {"vio_height_px", p.vio_height_px}};
+  const ReferenceSpec& r = c.reference;
+  const LissajousSpec& l = r.lissajous;
+  nlohmann::json reference = {{"type", r.type},
+                              {"payload_position_W_m", Vec3(r.payload_position_W_m)},
+                              {"lissajous",
+                               {{"a", l.a},
+                                {"b", l.b},
+                                {"c", l.c},
+                                {"n", l.n},
+                                {"m", l.m},
+                                {"phi", l.phi},
+                                {"psi", l.psi},
+                                {"period_s", l.period_s},
+                                {"ramp_s", l.ramp_s},
+                                {"centre", Vec3(l.centre)}}},
+                              {"line_start_W_m", Vec3(r.line_start_W_m)},
+                              {"line_end_W_m", Vec3(r.line_end_W_m)},
+                              {"line_duration_s", r.line_duration_s},
+                              {"line_start_time_s", r.line_start_time_s},
+                              {"file", r.file}};
+  nlohmann::json samples = nlohmann::json::array();
+  for (const TrajectorySample& s : r.samples) {
+    samples.push_back({s.t_s, s.p_WL_W.x(), s.p_WL_W.y(), s.p_WL_W.z(), s.v_WL_W.x(), s.v_WL_W.y(),
+                       s.v_WL_W.z(), s.a_WL_W.x(), s.a_WL_W.y(), s.a_WL_W.z()});
+  }
+  reference["samples_t_p_v_a"] = samples;
+  return {{"params", params},
+          {"controller",
+           {{"type", c.controller.type},
+            {"perception_weight", c.controller.perception_weight},
+            {"solver", c.controller.solver},
+            {"predict_retaut", c.controller.predict_retaut}}},
+          {"estimator", c.estimator},
+          {"slack_tension_cue", c.slack_tension_cue},
+          {"reference", reference},
+          {"ground_truth", c.ground_truth},
+          {"estimate_latency_s", c.estimate_latency_s},
+          {"tick_hz", c.tick_hz},
+          {"initial_state", StateJson(c.initial_state)}};
+}
+
+FlightConfig ConfigFromJson(const nlohmann::json& j) {
+  try {
+    FlightConfig c;
+    const nlohmann::json& pj = j.at("params");
+    Params& p = c.params;
+    p.gravity_mps2 = pj.at("gravity_mps2").get<double>();
+    p.quad_mass_kg = pj.at("quad_mass_kg").get<double>();
+    p.inertia_B_kgm2 = ReadVec3(pj, "inertia_B_kgm2");
+    p.arm_length_m = pj.at("arm_length_m").get<double>();
+    p.body_half_size_m = ReadVec3(pj, "body_half_size_m");
+    p.k_f_N_per_radps2 = pj.at("k_f_N_per_radps2").get<double>();
+    p.k_m_Nm_per_radps2 = pj.at("k_m_Nm_per_radps2").get<double>();
+    p.motor_time_constant_s = pj.at("motor_time_constant_s").get<double>();
+    p.motor_speed_min_radps = pj.at("motor_speed_min_radps").get<double>();
+    p.motor_speed_max_radps = pj.at("motor_speed_max_radps").get<double>();
+    p.payload_mass_kg = pj.at("payload_mass_kg").get<double>();
+    p.payload_radius_m = pj.at("payload_radius_m").get<double>();
+    p.cable_length_m = pj.at("cable_length_m").get<double>();
+    p.slack_epsilon_m = pj.at("slack_epsilon_m").get<double>();
+    p.camera_width_px = pj.at("camera_width_px").get<int>();
+    p.camera_height_px = pj.at("camera_height_px").get<int>();
+    p.camera_fovy_deg = pj.at("camera_fovy_deg").get<double>();
+    p.t_BC_B_m = ReadVec3(pj, "t_BC_B_m");
+    for (int i = 0; i < 4; ++i)
+      p.camera_distortion[i] = pj.at("camera_distortion").at(i).get<double>();
+    for (int i = 0; i < 9; ++i) p.R_BC(i / 3, i % 3) = pj.at("R_BC_rowmajor").at(i).get<double>();
+    p.vio_width_px = pj.at("vio_width_px").get<int>();
+    p.vio_height_px = pj.at("vio_height_px").get<int>();
+    const nlohmann::json& cj = j.at("controller");
+    c.controller.type = cj.at("type").get<std::string>();
+    c.controller.perception_weight = cj.at("perception_weight").get<double>();
+    c.controller.solver = cj.at("solver").get<std::string>();
+    c.controller.predict_retaut = cj.at("predict_retaut").get<bool>();
+    c.estimator = j.at("estimator").get<std::string>();
+    c.slack_tension_cue = j.at("slack_tension_cue").get<bool>();
+    const nlohmann::json& rj = j.at("reference");
+    ReferenceSpec& r = c.reference;
+    r.type = rj.at("type").get<std::string>();
+    r.payload_position_W_m = ReadVec3(rj, "payload_position_W_m");
+    const nlohmann::json& lj = rj.at("lissajous");
+    LissajousSpec& l = r.lissajous;
+    l.a = lj.at("a").get<double>(), l.b = lj.at("b").get<double>(), l.c = lj.at("c").get<double>();
+    l.n = lj.at("n").get<double>(), l.m = lj.at("m").get<double>();
+    l.phi = lj.at("phi").get<double>(), l.psi = lj.at("psi").get<double>();
+    l.period_s = lj.at("period_s").get<double>(), l.ramp_s = lj.at("ramp_s").get<double>();
+    l.centre = ReadVec3(lj, "centre");
+    r.line_start_W_m = ReadVec3(rj, "line_start_W_m");
+    r.line_end_W_m = ReadVec3(rj, "line_end_W_m");
+    r.line_duration_s = rj.at("line_duration_s").get<double>();
+    r.line_start_time_s = rj.at("line_start_time_s").get<double>();
+    r.file = rj.value("file", "");
+    for (const nlohmann::json& row : rj.value("samples_t_p_v_a", nlohmann::json::array())) {
+      if (!row.is_array() || row.size() != 10) {
+        throw ProtocolError("reference samples: expected rows of 10 numbers");
+      }
+      TrajectorySample s;
+      s.t_s = row[0].get<double>();
+      s.p_WL_W = {row[1].get<double>(), row[2].get<double>(), row[3].get<double>()};
+      s.v_WL_W = {row[4].get<double>(), row[5].get<double>(), row[6].get<double>()};
+      s.a_WL_W = {row[7].get<double>(), row[8].get<double>(), row[9].get<double>()};
+      r.samples.push_back(s);
+    }
+    c.ground_truth = j.at("ground_truth").get<bool>();
+    c.estimate_latency_s = j.at("estimate_latency_s").get<double>();
+    c.tick_hz = j.at("tick_hz").get<double>();
+    c.initial_state = StateFromJson(j.at("initial_state"));
+    return c;
+  } catch (const nlohmann::json::exception& e) {
+    throw ProtocolError(std::string("bad flight config in the hello: ") + e.what());
+  }
+}
+
+}  // namespace hpa::flight
