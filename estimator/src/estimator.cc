@@ -46,12 +46,22 @@ class CableEstimator final : public Estimator {
     if (mode_ == CableMode::kTaut) {
       cable_.Predict(imu.time_s, thrust_N_, quad_.state().q_WB.toRotationMatrix());
     }
-    if (hybrid_ && config_.tension_cue.enabled) UpdateTensionCue(imu);
+    // the tracked payload at this sample, predicted once for the tension cue and the hit check
+    // (the cue restarts the tracker only from taut, when nothing was predicted yet)
+    bool tracked = false;
+    Eigen::Vector3d p_WL_W, v_WL_W;
+    const auto track = [&] {
+      if (!tracked) tracker_.PredictTo(imu.time_s, &p_WL_W, &v_WL_W);
+      tracked = true;
+    };
+    if (hybrid_ && config_.tension_cue.enabled) {
+      if (mode_ == CableMode::kSlack) track();
+      UpdateTensionCue(imu, p_WL_W);
+    }
     if (hybrid_ && mode_ == CableMode::kSlack && !tracker_hit_vehicle_) {
       // free fall through the vehicle: the payload has hit it, the prediction no longer holds
       const QuadFilterState& quad = quad_.state();
-      Eigen::Vector3d p_WL_W, v_WL_W;
-      tracker_.PredictTo(imu.time_s, &p_WL_W, &v_WL_W);
+      track();
       const Eigen::Vector3d p_BL_B =
           quad.q_WB.toRotationMatrix().transpose() * (p_WL_W - quad.p_WB_W);
       const Eigen::Array3d reach_B = params_.body_half_size_m.array() + params_.payload_radius_m +
@@ -320,15 +330,14 @@ class CableEstimator final : public Estimator {
     return true;
   }
 
-  // Feeds the tension cue; a taut-to-slack switch it flags starts the payload tracker from the
-  // cable EKF's payload state at once (the next detection is up to a frame away).
-  void UpdateTensionCue(const ImuSample& imu) {
+  // Feeds the tension cue (p_L: the tracked payload at the sample, read while slack); a
+  // taut-to-slack switch it flags starts the payload tracker from the cable EKF's payload state
+  // at once (the next detection is up to a frame away).
+  void UpdateTensionCue(const ImuSample& imu, const Eigen::Vector3d& p_L) {
     const QuadFilterState& quad = quad_.state();
     Eigen::Vector3d xi_W = cable_.xi_W();
     if (mode_ == CableMode::kSlack) {
       // the direction to the tracked payload (the cable EKF is frozen while slack)
-      Eigen::Vector3d p_L, v_L;
-      tracker_.PredictTo(imu.time_s, &p_L, &v_L);
       const Eigen::Vector3d d = p_L - quad.p_WB_W;
       if (d.norm() > 1e-6) xi_W = d.normalized();
     }
