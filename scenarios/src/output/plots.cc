@@ -33,6 +33,102 @@ void ShadeSlackMarkRetaut(PlotPanel* panel, const std::vector<LogRow>& rows) {
   }
 }
 
+// Payload x, y and z against the reference with the estimate, slack shaded: how well the
+// payload tracked, and where the cable was slack.
+std::string WriteTrackingPlot(const std::vector<LogRow>& rows, const std::vector<double>& t,
+                              const std::string& title_suffix, const std::string& dir,
+                              PlotFormat format) {
+  Figure fig(1200, 900);
+  static const char* kAxis[3] = {"x", "y", "z"};
+  for (int i = 0; i < 3; ++i) {
+    PlotPanel p(&fig, cv::Rect(0, i * 300, 1200, 300),
+                std::string("payload ") + kAxis[i] + (i == 0 ? title_suffix : ""), "t [s]",
+                std::string(kAxis[i]) + "_L [m]");
+    const auto actual = Column(rows, [i](const LogRow& r) { return r.truth.p_WL_W(i); });
+    const auto estimate = Column(rows, [i](const LogRow& r) { return r.estimate.p_WL_W(i); });
+    const auto ref = Column(rows, [i](const LogRow& r) { return r.reference.p_WL_W(i); });
+    p.FitRange({t}, {actual, ref});
+    ShadeSlack(&p, rows);
+    p.DrawAxes();
+    p.Line(t, ref, kReference, 2, true);
+    p.Line(t, estimate, SeriesColour(1), 1);
+    p.Line(t, actual, SeriesColour(0), 2);
+    if (i == 0) {
+      p.Legend({{"true", SeriesColour(0)},
+                {"estimate", SeriesColour(1)},
+                {"reference", kReference},
+                {"slack (shaded)", kSlackShade}});
+    }
+  }
+  return fig.Write(dir + "/tracking", format);
+}
+
+// The payload's x-y path coloured by its speed over the reference path, on equal axis scales
+// so the path's shape is not distorted.
+std::string WriteXyPathPlot(const RunResult& result, const std::string& title_suffix,
+                            const std::string& dir, PlotFormat format) {
+  const auto& rows = result.rows;
+  Figure fig(900, 800);
+  PlotPanel p(&fig, cv::Rect(0, 0, 900, 800), "payload x-y path" + title_suffix, "x [m]", "y [m]");
+  const auto x = Column(rows, [](const LogRow& r) { return r.truth.p_WL_W.x(); });
+  const auto y = Column(rows, [](const LogRow& r) { return r.truth.p_WL_W.y(); });
+  const auto xr = Column(rows, [](const LogRow& r) { return r.reference.p_WL_W.x(); });
+  const auto yr = Column(rows, [](const LogRow& r) { return r.reference.p_WL_W.y(); });
+  const auto speed = Column(rows, [](const LogRow& r) { return r.truth.v_WL_W.norm(); });
+  // equal scales on both axes
+  double x0 = 1e9, x1 = -1e9, y0 = 1e9, y1 = -1e9;
+  for (size_t i = 0; i < x.size(); ++i) {
+    x0 = std::min({x0, x[i], xr[i]}), x1 = std::max({x1, x[i], xr[i]});
+    y0 = std::min({y0, y[i], yr[i]}), y1 = std::max({y1, y[i], yr[i]});
+  }
+  const double half = 0.55 * std::max({x1 - x0, y1 - y0, 0.2});
+  const double cx = 0.5 * (x0 + x1), cy = 0.5 * (y0 + y1);
+  p.SetRange(cx - half * 1.1, cx + half * 1.1, cy - half, cy + half);
+  p.DrawAxes();
+  p.Line(xr, yr, kReference, 1, true);
+  const double v_max = std::max(1e-3, result.metrics.payload_max_speed_mps);
+  p.ColouredPath(x, y, speed, 0.0, v_max);
+  p.ColourBar(0.0, v_max, "|v_L| m/s");
+  return fig.Write(dir + "/xy_path", format);
+}
+
+// Quadrotor deviation, vertical velocity and body rates with slack shaded and each re-taut
+// marked: what the vehicle went through when the cable snapped taut.
+std::string WriteRetautPlot(const std::vector<LogRow>& rows, const std::vector<double>& t,
+                            const std::string& title_suffix, const std::string& dir,
+                            PlotFormat format) {
+  Figure fig(1200, 900);
+  const auto dev =
+      Column(rows, [](const LogRow& r) { return (r.truth.p_WQ_W - r.reference.p_WQ_W).norm(); });
+  const auto vz = Column(rows, [](const LogRow& r) { return r.truth.v_WQ_W.z(); });
+  PlotPanel p0(&fig, cv::Rect(0, 0, 1200, 300),
+               "quadrotor deviation |p_Q - p_Q,ref|" + title_suffix, "t [s]", "[m]");
+  p0.FitRange({t}, {dev});
+  ShadeSlackMarkRetaut(&p0, rows);
+  p0.DrawAxes();
+  p0.Line(t, dev, SeriesColour(0));
+  PlotPanel p1(&fig, cv::Rect(0, 300, 1200, 300), "quadrotor vertical velocity", "t [s]",
+               "v_z [m/s]");
+  p1.FitRange({t}, {vz});
+  ShadeSlackMarkRetaut(&p1, rows);
+  p1.DrawAxes();
+  p1.Line(t, vz, SeriesColour(0));
+  PlotPanel p2(&fig, cv::Rect(0, 600, 1200, 300), "body rates", "t [s]", "[rad/s]");
+  std::vector<std::vector<double>> rates;
+  for (int i = 0; i < 3; ++i) {
+    rates.push_back(Column(rows, [i](const LogRow& r) { return r.truth.w_B(i); }));
+  }
+  p2.FitRange({t}, rates);
+  ShadeSlackMarkRetaut(&p2, rows);
+  p2.DrawAxes();
+  for (int i = 0; i < 3; ++i) p2.Line(t, rates[i], SeriesColour(i));
+  p2.Legend({{"w_x", SeriesColour(0)},
+             {"w_y", SeriesColour(1)},
+             {"w_z", SeriesColour(2)},
+             {"re-taut", cv::Scalar(0, 0, 220)}});
+  return fig.Write(dir + "/retaut", format);
+}
+
 }  // namespace
 
 std::vector<std::string> WriteRunPlots(const RunResult& result, const Params& params,
@@ -43,94 +139,9 @@ std::vector<std::string> WriteRunPlots(const RunResult& result, const Params& pa
   const auto t = Column(rows, [](const LogRow& r) { return r.time_s; });
   const std::string title_suffix =
       " - " + result.metrics.scenario + " (" + result.metrics.controller + ")";
-
-  // payload x, y, z against the reference, slack shaded
-  {
-    Figure fig(1200, 900);
-    static const char* kAxis[3] = {"x", "y", "z"};
-    for (int i = 0; i < 3; ++i) {
-      PlotPanel p(&fig, cv::Rect(0, i * 300, 1200, 300),
-                  std::string("payload ") + kAxis[i] + (i == 0 ? title_suffix : ""), "t [s]",
-                  std::string(kAxis[i]) + "_L [m]");
-      const auto actual = Column(rows, [i](const LogRow& r) { return r.truth.p_WL_W(i); });
-      const auto estimate = Column(rows, [i](const LogRow& r) { return r.estimate.p_WL_W(i); });
-      const auto ref = Column(rows, [i](const LogRow& r) { return r.reference.p_WL_W(i); });
-      p.FitRange({t}, {actual, ref});
-      ShadeSlack(&p, rows);
-      p.DrawAxes();
-      p.Line(t, ref, kReference, 2, true);
-      p.Line(t, estimate, SeriesColour(1), 1);
-      p.Line(t, actual, SeriesColour(0), 2);
-      if (i == 0) {
-        p.Legend({{"true", SeriesColour(0)},
-                  {"estimate", SeriesColour(1)},
-                  {"reference", kReference},
-                  {"slack (shaded)", kSlackShade}});
-      }
-    }
-    written.push_back(fig.Write(dir + "/tracking", format));
-  }
-
-  // x-y path coloured by payload speed
-  {
-    Figure fig(900, 800);
-    PlotPanel p(&fig, cv::Rect(0, 0, 900, 800), "payload x-y path" + title_suffix, "x [m]",
-                "y [m]");
-    const auto x = Column(rows, [](const LogRow& r) { return r.truth.p_WL_W.x(); });
-    const auto y = Column(rows, [](const LogRow& r) { return r.truth.p_WL_W.y(); });
-    const auto xr = Column(rows, [](const LogRow& r) { return r.reference.p_WL_W.x(); });
-    const auto yr = Column(rows, [](const LogRow& r) { return r.reference.p_WL_W.y(); });
-    const auto speed = Column(rows, [](const LogRow& r) { return r.truth.v_WL_W.norm(); });
-    // equal scales on both axes
-    double x0 = 1e9, x1 = -1e9, y0 = 1e9, y1 = -1e9;
-    for (size_t i = 0; i < x.size(); ++i) {
-      x0 = std::min({x0, x[i], xr[i]}), x1 = std::max({x1, x[i], xr[i]});
-      y0 = std::min({y0, y[i], yr[i]}), y1 = std::max({y1, y[i], yr[i]});
-    }
-    const double half = 0.55 * std::max({x1 - x0, y1 - y0, 0.2});
-    const double cx = 0.5 * (x0 + x1), cy = 0.5 * (y0 + y1);
-    p.SetRange(cx - half * 1.1, cx + half * 1.1, cy - half, cy + half);
-    p.DrawAxes();
-    p.Line(xr, yr, kReference, 1, true);
-    const double v_max = std::max(1e-3, result.metrics.payload_max_speed_mps);
-    p.ColouredPath(x, y, speed, 0.0, v_max);
-    p.ColourBar(0.0, v_max, "|v_L| m/s");
-    written.push_back(fig.Write(dir + "/xy_path", format));
-  }
-
-  // quadrotor deviation, vertical velocity and body rates, slack shaded, re-taut marked
-  {
-    Figure fig(1200, 900);
-    const auto dev =
-        Column(rows, [](const LogRow& r) { return (r.truth.p_WQ_W - r.reference.p_WQ_W).norm(); });
-    const auto vz = Column(rows, [](const LogRow& r) { return r.truth.v_WQ_W.z(); });
-    PlotPanel p0(&fig, cv::Rect(0, 0, 1200, 300),
-                 "quadrotor deviation |p_Q - p_Q,ref|" + title_suffix, "t [s]", "[m]");
-    p0.FitRange({t}, {dev});
-    ShadeSlackMarkRetaut(&p0, rows);
-    p0.DrawAxes();
-    p0.Line(t, dev, SeriesColour(0));
-    PlotPanel p1(&fig, cv::Rect(0, 300, 1200, 300), "quadrotor vertical velocity", "t [s]",
-                 "v_z [m/s]");
-    p1.FitRange({t}, {vz});
-    ShadeSlackMarkRetaut(&p1, rows);
-    p1.DrawAxes();
-    p1.Line(t, vz, SeriesColour(0));
-    PlotPanel p2(&fig, cv::Rect(0, 600, 1200, 300), "body rates", "t [s]", "[rad/s]");
-    std::vector<std::vector<double>> rates;
-    for (int i = 0; i < 3; ++i) {
-      rates.push_back(Column(rows, [i](const LogRow& r) { return r.truth.w_B(i); }));
-    }
-    p2.FitRange({t}, rates);
-    ShadeSlackMarkRetaut(&p2, rows);
-    p2.DrawAxes();
-    for (int i = 0; i < 3; ++i) p2.Line(t, rates[i], SeriesColour(i));
-    p2.Legend({{"w_x", SeriesColour(0)},
-               {"w_y", SeriesColour(1)},
-               {"w_z", SeriesColour(2)},
-               {"re-taut", cv::Scalar(0, 0, 220)}});
-    written.push_back(fig.Write(dir + "/retaut", format));
-  }
+  written.push_back(WriteTrackingPlot(rows, t, title_suffix, dir, format));
+  written.push_back(WriteXyPathPlot(result, title_suffix, dir, format));
+  written.push_back(WriteRetautPlot(rows, t, title_suffix, dir, format));
   return written;
 }
 

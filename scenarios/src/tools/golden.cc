@@ -164,9 +164,11 @@ GoldenDiff CompareWithGolden(const std::string& metrics_json, const std::string&
   return diff;
 }
 
-int RunGolden(const GoldenOptions& options) {
-  const std::string path =
-      options.golden_path.empty() ? ScenariosDir() + "/ci/golden.json" : options.golden_path;
+namespace {
+
+// Reads the golden file and checks its tolerances and scenario map before anything runs; with
+// --update a file without scenarios gets an empty map, so a first update can fill it.
+Json LoadGoldenFile(const std::string& path, bool update) {
   Json golden = ParseJson(ReadText(path, "the golden file"), path);
   if (!golden.is_object()) throw InputError(path, "", "expected a JSON object");
   if (!golden.contains("tolerances") || !golden["tolerances"].is_object() ||
@@ -184,7 +186,7 @@ int RunGolden(const GoldenOptions& options) {
     }
   }
   if (!golden.contains("scenarios")) {
-    if (!options.update) {
+    if (!update) {
       throw InputError(path, "scenarios",
                        "missing: the map of scenario name to metrics (hpa golden --update "
                        "--reason \"...\" writes it)");
@@ -196,6 +198,11 @@ int RunGolden(const GoldenOptions& options) {
                      std::string("expected a map of scenario name to metrics, got a JSON ") +
                          golden["scenarios"].type_name());
   }
+  return golden;
+}
+
+// Refuses what cannot be meant: an update without a reason, --exact with --update.
+void CheckGoldenOptions(const GoldenOptions& options) {
   const bool blank_reason = options.reason.find_first_not_of(" \t\r\n") == std::string::npos;
   if (options.update && blank_reason) {
     throw InputError("--reason", "", "an update needs a one-line reason (not blank)");
@@ -203,6 +210,76 @@ int RunGolden(const GoldenOptions& options) {
   if (options.exact && options.update) {
     throw InputError("--exact", "", "compares only; --update records values whatever they are");
   }
+}
+
+// Refuses to record a run as golden when it was aborted or failed its expect bounds: golden
+// holds finished runs that met their bounds.
+void CheckRecordable(const std::string& name, const Json& now) {
+  const bool aborted = now.contains("run_error") && !now["run_error"].is_null();
+  const bool failed =
+      now.contains("expect") && now["expect"].is_object() && !now["expect"].value("passed", true);
+  if (aborted || failed) {
+    throw InputError(
+        name, "",
+        aborted ? "the run was aborted (" + now["run_error"].dump() + "): not recorded as golden"
+                : "the run failed its expect bounds (" +
+                      now["expect"].value("failed", Json::array()).dump() +
+                      "): not recorded as golden; fix the scenario or its bounds");
+  }
+}
+
+// Compares one scenario's metrics with its golden copy and prints what changed; returns 1 when
+// the scenario counts as changed (a scenario new to the file does, unless updating), else 0.
+int CompareScenario(const std::string& name, const Json& now, const Json& scenarios,
+                    const Json& tolerances, const GoldenOptions& options) {
+  if (!scenarios.contains(name)) {
+    if (!options.quiet) std::cerr << " not in the golden file\n";
+    return options.update ? 0 : 1;
+  }
+  GoldenDiff diff;
+  Compare(now, scenarios[name], "", tolerances, &diff);
+  if (!options.quiet) std::cerr << (diff.changes.empty() ? " unchanged\n" : " CHANGED\n");
+  for (const std::string& c : diff.changes) std::cout << name << ": " << c << "\n";
+  if (!diff.new_keys.empty() && !options.update) {
+    std::cout << name << ": new keys (not in the golden copy): ";
+    for (const std::string& k : diff.new_keys) std::cout << k << " ";
+    std::cout << "\n";
+  }
+  return diff.changes.empty() ? 0 : 1;
+}
+
+// Names the golden file's scenarios that are no longer shipped; returns how many count as
+// changed (none when updating: the update drops them).
+int CountDropped(const Json& scenarios, const Json& updated, const GoldenOptions& options) {
+  int changed = 0;
+  for (const auto& [name, value] : scenarios.items()) {
+    if (!updated.contains(name)) {
+      std::cout << name << ": in the golden file but no longer shipped\n";
+      if (!options.update) ++changed;
+    }
+  }
+  return changed;
+}
+
+// Rewrites the golden file with the current metrics and the reason for the change.
+void WriteGolden(const std::string& path, Json golden, const Json& updated,
+                 const GoldenOptions& options, size_t scenario_count) {
+  golden["scenarios"] = updated;
+  golden["reason"] = options.reason;
+  std::ofstream out(path);
+  out << golden.dump(1) << "\n";
+  if (!out.flush()) throw OutputError(path, "disk full?");
+  std::cout << "golden: wrote " << scenario_count << " scenarios to " << path
+            << " (commit it with the reason: " << options.reason << ")\n";
+}
+
+}  // namespace
+
+int RunGolden(const GoldenOptions& options) {
+  const std::string path =
+      options.golden_path.empty() ? ScenariosDir() + "/ci/golden.json" : options.golden_path;
+  const Json golden = LoadGoldenFile(path, options.update);
+  CheckGoldenOptions(options);
   // --exact: the same build reproduces every value bit for bit, so a change that must not
   // change behaviour is checked with no tolerance at all
   const Json tolerances =
@@ -215,52 +292,14 @@ int RunGolden(const GoldenOptions& options) {
   for (const std::string& name : names) {
     if (!options.quiet) std::cerr << "golden: " << name << " ..." << std::flush;
     const Json now = StripTiming(CurrentMetrics(name, options, params));
-    if (options.update) {
-      // golden holds finished runs that met their bounds, never an aborted or failing one
-      const bool aborted = now.contains("run_error") && !now["run_error"].is_null();
-      const bool failed = now.contains("expect") && now["expect"].is_object() &&
-                          !now["expect"].value("passed", true);
-      if (aborted || failed) {
-        throw InputError(name, "",
-                         aborted ? "the run was aborted (" + now["run_error"].dump() +
-                                       "): not recorded as golden"
-                                 : "the run failed its expect bounds (" +
-                                       now["expect"].value("failed", Json::array()).dump() +
-                                       "): not recorded as golden; fix the scenario or its bounds");
-      }
-    }
+    if (options.update) CheckRecordable(name, now);
     updated[name] = now;
-    if (!golden["scenarios"].contains(name)) {
-      if (!options.quiet) std::cerr << " not in the golden file\n";
-      if (!options.update) ++changed;
-      continue;
-    }
-    GoldenDiff diff;
-    Compare(now, golden["scenarios"][name], "", tolerances, &diff);
-    if (!options.quiet) std::cerr << (diff.changes.empty() ? " unchanged\n" : " CHANGED\n");
-    for (const std::string& c : diff.changes) std::cout << name << ": " << c << "\n";
-    if (!diff.new_keys.empty() && !options.update) {
-      std::cout << name << ": new keys (not in the golden copy): ";
-      for (const std::string& k : diff.new_keys) std::cout << k << " ";
-      std::cout << "\n";
-    }
-    if (!diff.changes.empty()) ++changed;
+    changed += CompareScenario(name, now, golden["scenarios"], tolerances, options);
   }
-  for (const auto& [name, value] : golden["scenarios"].items()) {
-    if (!updated.contains(name)) {
-      std::cout << name << ": in the golden file but no longer shipped\n";
-      if (!options.update) ++changed;
-    }
-  }
+  changed += CountDropped(golden["scenarios"], updated, options);
 
   if (options.update) {
-    golden["scenarios"] = updated;
-    golden["reason"] = options.reason;
-    std::ofstream out(path);
-    out << golden.dump(1) << "\n";
-    if (!out.flush()) throw OutputError(path, "disk full?");
-    std::cout << "golden: wrote " << names.size() << " scenarios to " << path
-              << " (commit it with the reason: " << options.reason << ")\n";
+    WriteGolden(path, golden, updated, options, names.size());
     return 0;
   }
   const char* within = options.exact ? "bit for bit" : "within tolerance";

@@ -1,33 +1,18 @@
 // The `hpa` command line (docs/design.md section 7).
 
-#include <sys/stat.h>
-
-#include <cerrno>
-#include <cmath>
+#include <algorithm>
 #include <csignal>
 #include <cstdio>
 #include <cstring>
-#include <fstream>
-#include <functional>
-#include <iostream>
-#include <map>
-#include <nlohmann/json.hpp>
-#include <opencv2/imgcodecs.hpp>
-#include <optional>
 #include <string>
-#include <vector>
 
 #include "hpa/controller/controller_registry.h"
 #include "hpa/estimator/estimator_registry.h"
 #include "hpa/models/data_dir.h"
 #include "hpa/models/input_error.h"
-#include "hpa/models/params.h"
-#include "hpa/models/yaml_reader.h"
 #include "hpa/scenarios/cli.h"
 #include "hpa/scenarios/expect_keys.h"
 #include "hpa/scenarios/golden.h"
-#include "hpa/scenarios/metric_defs.h"
-#include "hpa/scenarios/plots.h"
 #include "hpa/scenarios/replay.h"
 #include "hpa/scenarios/run_record.h"
 #include "hpa/scenarios/runner.h"
@@ -35,18 +20,12 @@
 #include "hpa/scenarios/sweep.h"
 #include "hpa/scenarios/sweep_diff.h"
 #include "hpa/scenarios/video_recorder.h"
-#include "hpa/sim/world.h"
 #include "hpa_version.h"
 #include "scenarios/src/tools/cli_parse.h"
+#include "scenarios/src/tools/scenario_commands.h"
 
 namespace hpa {
 namespace {
-
-constexpr int kExitOk = 0;
-constexpr int kExitExpectFailed = 1;
-constexpr int kExitBadInput = 2;
-constexpr int kExitInternal = 3;
-constexpr int kExitCannotWrite = 4;
 
 const char* kUsage =
     R"(hpa: software-in-the-loop simulator for HPA-MPC (quadrotor + cable-suspended payload)
@@ -141,360 +120,6 @@ std::string Usage() {
   return text;
 }
 
-// Options every scenario command shares (run, compare, render-frame).
-struct ScenarioOptions {
-  std::string scenario_file;
-  std::string params_file;
-  std::vector<std::string> sets;  // --set PATH=VALUE, in order
-  std::optional<unsigned long> seed;
-  std::string camera;         // "" keeps the scenario's
-  std::string gl = "osmesa";  // --gl: GL back end of the rendered cameras
-  bool quiet = false;
-};
-
-// Adds the shared options to a command's parser.
-void AddScenarioOptions(CLI::App& app, ScenarioOptions* o, bool with_camera, bool with_quiet) {
-  app.add_option("SCENARIO.yaml", o->scenario_file, "the scenario file")->required();
-  app.add_option("--params", o->params_file, "parameter file (default models/params.yaml)");
-  app.add_option("--set", o->sets,
-                 "PATH=VALUE: changes one dotted key of the scenario (repeatable), e.g. "
-                 "--set events.1.impulse.2=0.5")
-      ->allow_extra_args(false);  // one PATH=VALUE per --set: a later positional is not a set
-  app.add_option("--seed", o->seed, "scenario seed")->check(CLI::Range(0UL, 4294967295UL));
-  if (with_camera) {
-    app.add_option("--camera", o->camera, "payload camera")
-        ->check(CLI::IsMember({"render", "analytic"}));
-  }
-  if (with_quiet) app.add_flag("--quiet", o->quiet, "no progress or summary lines");
-  AddGlOption(app, &o->gl);
-}
-
-// Loads the scenario with --set applied, then --seed and --camera.
-Scenario LoadScenarioOf(const ScenarioOptions& o) {
-  std::vector<ScenarioSet> sets;
-  for (const std::string& text : o.sets) sets.push_back(ParseSetArgument(text));
-  Scenario s = LoadScenario(o.scenario_file, sets, "--set");
-  if (o.seed) s.seed = *o.seed;
-  if (!o.camera.empty()) s.estimation.camera = o.camera;
-  return s;
-}
-
-// The parameters: --params or models/params.yaml.
-Params LoadParamsOf(const ScenarioOptions& o) {
-  return LoadParams(o.params_file.empty() ? DefaultParamsPath() : o.params_file);
-}
-
-// What `hpa run` was run from, for DIR/run.json (hpa replay rebuilds the run from it).
-RunRecord RecordOf(const ScenarioOptions& o, const std::string& controller, const Params& params) {
-  RunRecord r;
-  r.scenario_file = o.scenario_file;
-  r.scenario_text = ReadYamlFile(o.scenario_file);
-  for (const std::string& text : o.sets) r.sets.push_back(ParseSetArgument(text));
-  r.seed = o.seed;
-  r.camera = o.camera;
-  r.controller = controller;
-  r.params = params;
-  return r;
-}
-
-// Writes a whole file; a write that does not reach the file (a full disk) is an error.
-void WriteText(const std::string& path, const std::string& text) {
-  // written whole under a temporary name, then renamed: a reader never sees half a file
-  const std::string partial = path + ".partial";
-  {
-    std::ofstream out(partial);
-    if (!out) throw OutputError(path, std::strerror(errno));
-    out << text;
-    out.flush();
-    if (!out) throw OutputError(path, "disk full?");
-  }
-  if (std::rename(partial.c_str(), path.c_str()) != 0)
-    throw OutputError(path, std::strerror(errno));
-}
-
-// Removes the outputs a previous run left in `dir`, so a run that is killed leaves nothing
-// that looks complete (metrics.json appears last, whole, when the run has finished).
-void RemoveStaleOutputs(const std::string& dir) {
-  for (const char* name :
-       {"metrics.json", "log.csv", "run.json", "tracking.png", "xy_path.png", "retaut.png",
-        "tracking.svg", "xy_path.svg", "retaut.svg", "tracking.pdf", "xy_path.pdf", "retaut.pdf",
-        "tracking.csv", "xy_path.csv", "retaut.csv"}) {
-    std::remove((dir + "/" + name).c_str());
-  }
-}
-
-// Says where the video went; a slack-events video of a run without slack is not written, and
-// that is said even with --quiet (a missing file would otherwise look like a failure).
-void ReportVideo(const std::string& video_path, bool quiet) {
-  if (video_path.empty()) return;
-  struct stat st;
-  if (stat(video_path.c_str(), &st) != 0) {
-    std::printf("  no slack event in this run: no video written (%s)\n", video_path.c_str());
-  } else if (!quiet) {
-    std::printf("  video %s\n", video_path.c_str());
-  }
-}
-
-void PrintSummary(const Metrics& m, const std::string& out_dir) {
-  std::printf("%s [%s, %s, seed %lu]: %.2f s simulated in %.2f s wall (%.2f sim s per wall s)\n",
-              m.scenario.c_str(), m.controller.c_str(), m.camera.c_str(), m.seed, m.sim_time_s,
-              m.wall_time_s, m.sim_time_s / std::max(m.wall_time_s, 1e-9));
-  std::printf(
-      "  crashed %s%s  payload RMSE [%.3f %.3f %.3f] m (estimate vs reference [%.3f %.3f %.3f] m)"
-      "  quad dev max %.3f m\n",
-      m.crashed ? "YES: " : "no", m.crashed ? m.crash_reason->c_str() : "", m.payload_rmse_m.x(),
-      m.payload_rmse_m.y(), m.payload_rmse_m.z(), m.payload_rmse_est_m.x(),
-      m.payload_rmse_est_m.y(), m.payload_rmse_est_m.z(), m.quad_position_deviation_max_m);
-  std::printf(
-      "  slack %.2f s (%d events), mode accuracy %.3f, payload in view %.3f, "
-      "solve median %.3f ms, failures %d\n",
-      m.slack_time_s, m.slack_events, m.mode_accuracy, m.payload_in_fov_fraction,
-      m.mpc_solve_ms.median, m.mpc_failures);
-  for (const auto& f : m.expect_failed) std::printf("  EXPECT FAILED %s\n", f.c_str());
-  std::printf("  wrote %s/metrics.json, %s/log.csv\n", out_dir.c_str(), out_dir.c_str());
-}
-
-int Run(int argc, char** argv) {
-  ScenarioOptions o;
-  std::string out_dir, controller, video, flight_stack, plot_format = "png";
-  double flight_timeout_s = 10.0;
-  bool slack_events = false, plots = false;
-  CLI::App app{"Runs one scenario; writes DIR/metrics.json and DIR/log.csv.", "hpa run"};
-  AddScenarioOptions(app, &o, true, true);
-  app.add_option("--out", out_dir, "output folder (default out/<scenario name>)");
-  app.add_option("--controller", controller, "a registered controller (see hpa --help)");
-  app.add_option("--video", video, "MP4 of the chase camera with the onboard inset");
-  app.add_flag("--video-slack-events", slack_events,
-               "keep only a window around each slack event (alone: DIR/slack_events.mp4)");
-  app.add_flag("--plots", plots,
-               "write plots of the run into DIR (tracking, xy_path, retaut), each with the CSV "
-               "of what it draws");
-  app.add_option("--plot-format", plot_format, "png | svg | pdf: the plots' format")
-      ->default_str("png");
-  app.add_option("--flight-stack", flight_stack,
-                 "fly a separate flight stack: a shell command (e.g. hpa-flight, or python3 "
-                 "examples/python/hover_controller.py) started with HPA_FLIGHT_SOCKET set and "
-                 "run in lockstep over docs/protocol.md's protocol (default: in process)");
-  app.add_option("--flight-timeout", flight_timeout_s,
-                 "with --flight-stack: seconds to wait for its reply to one tick before the run "
-                 "stops with a run error")
-      ->check(CLI::Range(0.001, 3600.0));
-  if (const auto code = ParseCommandLine(app, argc, argv)) return *code;
-  const PlotFormat format = ParsePlotFormat(plot_format);
-  const Params params = LoadParamsOf(o);
-  Scenario scenario = LoadScenarioOf(o);
-  if (!controller.empty()) {
-    CheckControllerType(controller, "", "--controller");
-    scenario.controller.type = controller;
-  }
-  if (out_dir.empty()) out_dir = "out/" + scenario.name;
-  MakeOutputDir(out_dir);
-  RemoveStaleOutputs(out_dir);
-  WriteRunRecord(out_dir, RecordOf(o, controller, params));
-
-  RunOptions options;
-  options.progress = !o.quiet;
-  options.gl_backend = ParseGlOption(o.gl);
-  options.flight_stack = flight_stack;
-  options.flight_step_timeout_s = flight_timeout_s;
-  if (slack_events && video.empty()) video = out_dir + "/slack_events.mp4";
-  std::unique_ptr<VideoTickRecorder> recorder;
-  if (!video.empty()) {
-    CheckVideoPath(video);
-    recorder = std::make_unique<VideoTickRecorder>(video, ScenarioRates(scenario).video.rate_hz,
-                                                   slack_events);
-    options.recorders.push_back(recorder.get());
-  }
-  const RunResult result = RunScenario(scenario, params, options);
-  if (recorder) recorder->Finish();
-  // the log first, the metrics last: a complete metrics.json means a finished run
-  WriteLogCsv(out_dir + "/log.csv.partial", result.rows);
-  if (std::rename((out_dir + "/log.csv.partial").c_str(), (out_dir + "/log.csv").c_str()) != 0) {
-    throw OutputError(out_dir + "/log.csv", std::strerror(errno));
-  }
-  WriteText(out_dir + "/metrics.json", MetricsToJson(result.metrics));
-  if (plots) {
-    for (const std::string& png :
-         WriteRunPlots(result, ScenarioParams(scenario, params), out_dir, format)) {
-      if (!o.quiet) std::printf("  plot %s\n", png.c_str());
-    }
-  }
-  if (!o.quiet) PrintSummary(result.metrics, out_dir);
-  ReportVideo(video, o.quiet);
-  if (result.metrics.run_error) {
-    std::fprintf(stderr, "hpa: internal error during the run (results so far are written): %s\n",
-                 result.metrics.run_error->c_str());
-    return kExitInternal;
-  }
-  if (result.metrics.crashed && !scenario.expect.Has("crashed")) {
-    // no expect block says a crash is fine: an unexpected crash fails the run
-    std::fprintf(stderr,
-                 "hpa: the vehicle crashed (%s at t = %.3f s) and the scenario does not "
-                 "expect a crash\n",
-                 result.metrics.crash_reason.value_or("").c_str(),
-                 result.metrics.crash_time_s.value_or(0.0));
-    return kExitExpectFailed;
-  }
-  return result.metrics.expect_passed ? kExitOk : kExitExpectFailed;
-}
-
-// The paired comparison of one scenario's runs (same seed): each controller's metrics and,
-// for every controller after the first, its difference to the first.
-std::string ComparisonTable(const std::vector<RunResult>& results,
-                            const std::vector<std::string>& types) {
-  // the rows: every metric of the metric table with a label, read from each run's metrics.json
-  std::vector<const MetricDef*> rows;
-  for (const MetricDef& def : MetricDefs()) {
-    if (!def.label.empty()) rows.push_back(&def);
-  }
-  std::vector<nlohmann::json> metrics;
-  for (const RunResult& r : results)
-    metrics.push_back(nlohmann::json::parse(MetricsToJson(r.metrics)));
-  const auto cell = [](std::optional<double> v) {
-    if (!v || !std::isfinite(*v)) return std::string("-");
-    char text[32];
-    std::snprintf(text, sizeof(text), "%.4g", *v);
-    return std::string(text);
-  };
-  std::string md = "| metric (seed " + std::to_string(results.front().metrics.seed) + ") |";
-  for (const std::string& t : types) md += " " + t + " |";
-  for (size_t i = 1; i < types.size(); ++i) md += " " + types[i] + " - " + types[0] + " |";
-  md += "\n|---|";
-  for (size_t i = 0; i < 2 * types.size() - 1; ++i) md += "---|";
-  md += "\n";
-  for (const MetricDef* row : rows) {
-    md += "| " + row->label + " |";
-    for (const nlohmann::json& m : metrics) md += " " + cell(ReadMetric(*row, m)) + " |";
-    const std::optional<double> first = ReadMetric(*row, metrics.front());
-    for (size_t i = 1; i < metrics.size(); ++i) {
-      const std::optional<double> v = ReadMetric(*row, metrics[i]);
-      md += " " + cell(v && first ? std::optional<double>(*v - *first) : std::nullopt) + " |";
-    }
-    md += "\n";
-  }
-  return md;
-}
-
-int Compare(int argc, char** argv) {
-  ScenarioOptions o;
-  std::string out_dir, list = "hpa_mpc,nonhybrid_mpc", plot_format = "png";
-  bool slack_events = false;
-  CLI::App app{
-      "Runs the scenario once per controller into DIR/<type>/ and writes "
-      "DIR/comparison.png (or .svg, .pdf) with DIR/comparison.csv, its numbers.",
-      "hpa compare"};
-  AddScenarioOptions(app, &o, true, true);
-  app.add_option("--out", out_dir, "output folder")->required();
-  app.add_option("--controllers", list, "comma-separated controller types")
-      ->default_str("hpa_mpc,nonhybrid_mpc");
-  app.add_flag("--video-slack-events", slack_events, "a slack-event video per run");
-  app.add_option("--plot-format", plot_format, "png | svg | pdf: the comparison plot's format")
-      ->default_str("png");
-  if (const auto code = ParseCommandLine(app, argc, argv)) return *code;
-  const PlotFormat format = ParsePlotFormat(plot_format);
-  const Params params = LoadParamsOf(o);
-  const Scenario base = LoadScenarioOf(o);
-  std::vector<std::string> types;
-  list += ",";
-  for (size_t p = 0; (p = list.find(',')) != std::string::npos; list.erase(0, p + 1)) {
-    if (p > 0) types.push_back(list.substr(0, p));
-  }
-  // every name checked before the first run
-  if (types.empty()) throw InputError("", "--controllers", "expected a list such as A,B");
-  for (const std::string& type : types) CheckControllerType(type, "", "--controllers");
-  std::vector<RunResult> results;
-  bool all_passed = true;
-  bool run_error = false;
-  for (const std::string& type : types) {
-    Scenario s = base;
-    s.controller.type = type;
-    const std::string dir = out_dir + "/" + type;
-    MakeOutputDir(dir);
-    RunOptions options;
-    options.progress = !o.quiet;
-    options.gl_backend = ParseGlOption(o.gl);
-    const std::string video = slack_events ? dir + "/slack_events.mp4" : "";
-    std::unique_ptr<VideoTickRecorder> recorder;
-    if (slack_events) {
-      recorder = std::make_unique<VideoTickRecorder>(video, ScenarioRates(s).video.rate_hz, true);
-      options.recorders.push_back(recorder.get());
-    }
-    results.push_back(RunScenario(s, params, options));
-    if (recorder) recorder->Finish();
-    WriteText(dir + "/metrics.json", MetricsToJson(results.back().metrics));
-    WriteLogCsv(dir + "/log.csv", results.back().rows);
-    all_passed = all_passed && results.back().metrics.expect_passed;
-    if (results.back().metrics.run_error) {
-      std::fprintf(stderr, "hpa: internal error during the %s run (its results are written): %s\n",
-                   type.c_str(), results.back().metrics.run_error->c_str());
-      run_error = true;
-    }
-    if (!o.quiet) PrintSummary(results.back().metrics, dir);
-    ReportVideo(video, o.quiet);
-  }
-  const std::string png =
-      WriteComparisonPlot(results, ScenarioParams(base, params), out_dir + "/comparison", format);
-  const std::string table = ComparisonTable(results, types);
-  WriteText(out_dir + "/comparison.md", table);
-  if (!o.quiet) std::printf("\n%s", table.c_str());
-  if (!o.quiet) std::printf("comparison plot %s\n", png.c_str());
-  if (run_error) return kExitInternal;
-  return all_passed ? kExitOk : kExitExpectFailed;
-}
-
-int RenderFrame(int argc, char** argv) {
-  ScenarioOptions o;
-  std::string out, controller;
-  double at_s = 0.0;
-  CLI::App app{"Runs the scenario to time T and writes one onboard payload-camera frame (PNG).",
-               "hpa render-frame"};
-  AddScenarioOptions(app, &o, false, false);
-  app.add_option("--at", at_s, "time T [s] in [0, duration]")->required();
-  app.add_option("--out", out, "FILE.png")->required();
-  app.add_option("--controller", controller, "a registered controller (see hpa --help)");
-  if (const auto code = ParseCommandLine(app, argc, argv)) return *code;
-  if (out.size() < 5 || out.compare(out.size() - 4, 4, ".png") != 0) {
-    throw InputError("", "--out",
-                     "the frame is written as PNG: give a FILE.png, got '" + out + "'");
-  }
-  const Params params = LoadParamsOf(o);
-  Scenario scenario = LoadScenarioOf(o);
-  if (!controller.empty()) {
-    CheckControllerType(controller, "", "--controller");
-    scenario.controller.type = controller;
-  }
-  if (!std::isfinite(at_s) || at_s < 0 || at_s > scenario.duration_s) {
-    throw InputError("", "--at", "expected a time in [0, duration] of the scenario");
-  }
-  RunOptions options;
-  options.stop_at_s = at_s;
-  options.gl_backend = ParseGlOption(o.gl);
-  bool written = false;
-  double frame_time_s = at_s;
-  options.at_stop = [&](sim::World& world) {
-    frame_time_s = world.time_s();
-    const cv::Mat frame = world.RenderPayloadCamera();
-    try {
-      written = cv::imwrite(out, frame);
-    } catch (const cv::Exception&) {
-      written = false;  // e.g. an extension OpenCV cannot encode
-    }
-  };
-  const RunResult result = RunScenario(scenario, params, options);
-  if (result.metrics.run_error) {
-    std::fprintf(stderr, "hpa: internal error during the run: %s\n",
-                 result.metrics.run_error->c_str());
-    return kExitInternal;
-  }
-  if (!written) throw OutputError(out, "the PNG could not be written (does its folder exist?)");
-  if (result.metrics.crashed) {
-    std::printf("note: the vehicle crashed at t = %.3f s (%s); the frame is from then\n",
-                frame_time_s, result.metrics.crash_reason.value_or("").c_str());
-  }
-  std::printf("wrote %s (payload camera at t = %.3f s)\n", out.c_str(), frame_time_s);
-  return kExitOk;
-}
-
 int ReplayMain(int argc, char** argv) {
   ReplayOptions options;
   std::string out, gl = "osmesa";
@@ -550,9 +175,9 @@ int HpaMain(int argc, char** argv) {
   }
   const std::string command = argv[1];
   try {
-    if (command == "run") return Run(argc, argv);
-    if (command == "compare") return Compare(argc, argv);
-    if (command == "render-frame") return RenderFrame(argc, argv);
+    if (command == "run") return RunMain(argc, argv);
+    if (command == "compare") return CompareMain(argc, argv);
+    if (command == "render-frame") return RenderFrameMain(argc, argv);
     if (command == "sweep") return SweepMain(argc, argv);
     if (command == "merge") return MergeMain(argc, argv);
     if (command == "golden") return GoldenMain(argc, argv);

@@ -2,6 +2,7 @@
 
 #include <CLI/CLI.hpp>
 #include <cstdio>
+#include <map>
 #include <sstream>
 #include <vector>
 
@@ -76,86 +77,118 @@ YAML::Node ShortNumbers(const YAML::Node& node) {
   return node;
 }
 
-std::string Section(const std::string& section) {
+// The registered controllers with the estimator each flies with.
+std::string ControllersSection() {
   std::vector<std::vector<std::string>> rows;
-  if (section == "controllers") {
-    for (const ControllerRegistration& c : Controllers()) {
-      rows.push_back({"`" + c.name + "`", c.estimator, c.description});
-    }
-    return "## Controllers (`controller.type`, `--controller`)\n\n" +
-           Table({"name", "estimator", "what it is"}, rows);
+  for (const ControllerRegistration& c : Controllers()) {
+    rows.push_back({"`" + c.name + "`", c.estimator, c.description});
   }
-  if (section == "estimators") {
-    for (const EstimatorRegistration& e : Estimators()) {
-      rows.push_back({"`" + e.name + "`", e.description});
-    }
-    return "## Estimators (`estimation.estimator`)\n\n" + Table({"name", "what it is"}, rows);
+  return "## Controllers (`controller.type`, `--controller`)\n\n" +
+         Table({"name", "estimator", "what it is"}, rows);
+}
+
+// The registered estimator variants.
+std::string EstimatorsSection() {
+  std::vector<std::vector<std::string>> rows;
+  for (const EstimatorRegistration& e : Estimators()) {
+    rows.push_back({"`" + e.name + "`", e.description});
   }
-  if (section == "solvers") {
-    for (const OcpSolverRegistration& s : OcpSolvers()) {
-      rows.push_back({"`" + s.name + "`", s.description});
-    }
-    return "## OCP solvers (`controller.solver`)\n\n" + Table({"name", "what it is"}, rows);
+  return "## Estimators (`estimation.estimator`)\n\n" + Table({"name", "what it is"}, rows);
+}
+
+// The registered OCP solvers.
+std::string SolversSection() {
+  std::vector<std::vector<std::string>> rows;
+  for (const OcpSolverRegistration& s : OcpSolvers()) {
+    rows.push_back({"`" + s.name + "`", s.description});
   }
-  if (section == "events") {
-    for (const EventRegistration& e : EventTypes()) {
-      rows.push_back({"`" + e.name + "`", e.description});
-    }
-    return "## Event types (`events[].type`)\n\n" + Table({"type", "what it does"}, rows);
+  return "## OCP solvers (`controller.solver`)\n\n" + Table({"name", "what it is"}, rows);
+}
+
+// The registered event types.
+std::string EventsSection() {
+  std::vector<std::vector<std::string>> rows;
+  for (const EventRegistration& e : EventTypes()) {
+    rows.push_back({"`" + e.name + "`", e.description});
   }
-  if (section == "expect") {
-    for (const ExpectKey& k : ExpectKeys()) {
-      rows.push_back(
-          {"`" + k.key + "`", "`" + k.metric + "`", k.comparison, k.unit, k.description});
-    }
-    return "## Expect keys (`expect:`)\n\n" +
-           Table({"key", "metric", "passes when", "unit", "meaning"}, rows);
+  return "## Event types (`events[].type`)\n\n" + Table({"type", "what it does"}, rows);
+}
+
+// The expect keys with the metric each bounds, its comparison and unit.
+std::string ExpectSection() {
+  std::vector<std::vector<std::string>> rows;
+  for (const ExpectKey& k : ExpectKeys()) {
+    rows.push_back({"`" + k.key + "`", "`" + k.metric + "`", k.comparison, k.unit, k.description});
   }
-  if (section == "metrics") {
-    for (const MetricDef& m : MetricDefs()) {
-      rows.push_back({"`" + m.name + "`", "`" + m.json_path + "`", m.unit, BetterText(m.better),
-                      m.compared ? Short(m.min_effect) : "-", m.timing ? "yes" : "no",
-                      m.description});
-    }
-    return "## Metrics (read from metrics.json by compare, sweep-diff and sweep summaries)\n\n" +
-           Table(
-               {"name", "metrics.json", "unit", "better", "sweep-diff effect", "timing", "meaning"},
+  return "## Expect keys (`expect:`)\n\n" +
+         Table({"key", "metric", "passes when", "unit", "meaning"}, rows);
+}
+
+// The metric table: where each metric sits in metrics.json, its unit and how it is compared.
+std::string MetricsSection() {
+  std::vector<std::vector<std::string>> rows;
+  for (const MetricDef& m : MetricDefs()) {
+    rows.push_back({"`" + m.name + "`", "`" + m.json_path + "`", m.unit, BetterText(m.better),
+                    m.compared ? Short(m.min_effect) : "-", m.timing ? "yes" : "no",
+                    m.description});
+  }
+  return "## Metrics (read from metrics.json by compare, sweep-diff and sweep summaries)\n\n" +
+         Table({"name", "metrics.json", "unit", "better", "sweep-diff effect", "timing", "meaning"},
                rows);
-  }
-  if (section == "references") {
-    std::string md = "## Reference types (`reference.type`) and their keys (`reference.KEY`)\n";
-    for (const ReferenceType& t : ReferenceTypes()) {
-      rows.clear();
-      for (const ReferenceKey& k : t.keys) {
-        const std::string range =
-            k.size == 0 ? "-" : Short(k.min) + " to " + Short(k.max) + (k.size == 3 ? " (3)" : "");
-        rows.push_back({"`" + k.key + "`", k.unit.empty() ? "-" : k.unit, range,
-                        k.fallback ? Short(*k.fallback) : "required", k.meaning});
-      }
-      md += "\n### `" + t.name + "`\n\n" + t.description + ".\n\n" +
-            Table({"key", "unit", "range", "default", "meaning"}, rows);
+}
+
+// Each reference type with a table of its keys (unit, range, default).
+std::string ReferencesSection() {
+  std::string md = "## Reference types (`reference.type`) and their keys (`reference.KEY`)\n";
+  for (const ReferenceType& t : ReferenceTypes()) {
+    std::vector<std::vector<std::string>> rows;
+    for (const ReferenceKey& k : t.keys) {
+      const std::string range =
+          k.size == 0 ? "-" : Short(k.min) + " to " + Short(k.max) + (k.size == 3 ? " (3)" : "");
+      rows.push_back({"`" + k.key + "`", k.unit.empty() ? "-" : k.unit, range,
+                      k.fallback ? Short(*k.fallback) : "required", k.meaning});
     }
-    return md;
+    md += "\n### `" + t.name + "`\n\n" + t.description + ".\n\n" +
+          Table({"key", "unit", "range", "default", "meaning"}, rows);
   }
-  if (section == "params") {
-    return "## Parameters (`params.SECTION.KEY` in a scenario, params.yaml's keys)\n\n"
-           "A scenario's `params:` block (or `--set params.SECTION.KEY=VALUE`, a sweep's "
-           "`vary: params.SECTION.KEY`) changes these for the flight code and the world alike, "
-           "checked with params.yaml's ranges; the values here are "
-           "models/params.yaml's.\n\n```yaml\n" +
-           YAML::Dump(ShortNumbers(ParamsToYaml(LoadParams(DefaultParamsPath())))) + "\n```\n";
-  }
-  if (section == "controller") {
-    return "## Controller keys (`controller.KEY`)\n\n`type` names a registered controller and "
-           "`solver` a registered OCP solver (above); the others:\n\n" +
-           ParamTableMarkdown(ControllerParamTable(), ControllerConfig{}, "controller.", "default");
-  }
-  if (section == "world") {
-    return "## World profile keys (`world.SECTION.KEY`, with the `flight` profile's values)\n\n"
-           "Any key can be set in a scenario's `world:` block or with `--set`; `ideal` switches "
-           "every part off.\n" +
-           WorldProfileMarkdown("flight");
-  }
+  return md;
+}
+
+// models/params.yaml's values as YAML, the keys a scenario's params: block can change.
+std::string ParamsSection() {
+  return "## Parameters (`params.SECTION.KEY` in a scenario, params.yaml's keys)\n\n"
+         "A scenario's `params:` block (or `--set params.SECTION.KEY=VALUE`, a sweep's "
+         "`vary: params.SECTION.KEY`) changes these for the flight code and the world alike, "
+         "checked with params.yaml's ranges; the values here are "
+         "models/params.yaml's.\n\n```yaml\n" +
+         YAML::Dump(ShortNumbers(ParamsToYaml(LoadParams(DefaultParamsPath())))) + "\n```\n";
+}
+
+// The controller's tuning keys from its declared parameter table.
+std::string ControllerSection() {
+  return "## Controller keys (`controller.KEY`)\n\n`type` names a registered controller and "
+         "`solver` a registered OCP solver (above); the others:\n\n" +
+         ParamTableMarkdown(ControllerParamTable(), ControllerConfig{}, "controller.", "default");
+}
+
+// The world-profile keys with the flight profile's values.
+std::string WorldSection() {
+  return "## World profile keys (`world.SECTION.KEY`, with the `flight` profile's values)\n\n"
+         "Any key can be set in a scenario's `world:` block or with `--set`; `ideal` switches "
+         "every part off.\n" +
+         WorldProfileMarkdown("flight");
+}
+
+// One section of the schema by name; InputError naming the valid ones for any other.
+std::string Section(const std::string& section) {
+  static const std::map<std::string, std::string (*)()> kSections = {
+      {"controllers", &ControllersSection}, {"estimators", &EstimatorsSection},
+      {"solvers", &SolversSection},         {"events", &EventsSection},
+      {"expect", &ExpectSection},           {"metrics", &MetricsSection},
+      {"references", &ReferencesSection},   {"params", &ParamsSection},
+      {"controller", &ControllerSection},   {"world", &WorldSection}};
+  const auto it = kSections.find(section);
+  if (it != kSections.end()) return it->second();
   throw InputError("", "schema",
                    "unknown section '" + section +
                        "' (expected all, controllers, estimators, solvers, controller, events, "

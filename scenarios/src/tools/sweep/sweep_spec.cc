@@ -72,73 +72,49 @@ std::string Dirname(const std::string& path) {
   return slash == std::string::npos ? "." : path.substr(0, slash);
 }
 
-}  // namespace
-
-SweepSpec LoadSweep(const std::string& path) {
-  const YamlMap root = YamlMap::LoadFile(path);
-  SweepSpec s;
-  s.file = path;
-  const std::string base = root.String("base");
-  s.base_path = (!base.empty() && base[0] == '/') ? base : Dirname(path) + "/" + base;
-  try {
-    s.base_text = ReadYamlFile(s.base_path);
-  } catch (const InputError& e) {
-    throw InputError(path, "base", e.what());
+// One entry of `vary`: its path, exactly one of uniform | normal | grid | list, and its label.
+VarySpec LoadVary(const YamlMap& vary, const std::string& path) {
+  VarySpec v;
+  v.path = path;
+  if (v.path == "seed") {
+    vary.Fail("seed",
+              "the seed cannot be varied: each run's seed is drawn from the sweep's "
+              "`seed`");
   }
-  s.runs = static_cast<int>(root.Integer("runs", 1, 1000000));
-  s.seed = static_cast<unsigned long>(root.Integer("seed", 0, 4294967295L, 1));
-  s.time_limit_s = root.Number("time_limit", 1.0, 1e6, 600.0);
-  if (root.Has("vary")) {
-    const YamlMap vary = root.Map("vary");
-    const YAML::Node node = root.Node("vary");
-    for (const auto& kv : node) {
-      VarySpec v;
-      v.path = kv.first.as<std::string>();
-      if (v.path == "seed") {
-        vary.Fail("seed",
-                  "the seed cannot be varied: each run's seed is drawn from the sweep's "
-                  "`seed`");
-      }
-      const YamlMap d = vary.Map(v.path);
-      const std::vector<std::string> kinds = {"uniform", "normal", "grid", "list"};
-      int found = 0;
-      for (const auto& k : kinds) found += d.Has(k) ? 1 : 0;
-      if (found != 1) {
-        d.Fail("", "expected exactly one of uniform | normal | grid | list (and optionally label)");
-      }
-      if (d.Has("uniform")) {
-        const Eigen::VectorXd ab = d.Vector("uniform", 2, -1e9, 1e9);
-        if (ab(1) < ab(0)) d.Fail("uniform", "expected [low, high] with low <= high");
-        v.kind = VarySpec::Kind::kUniform, v.a = ab(0), v.b = ab(1);
-      } else if (d.Has("normal")) {
-        const Eigen::VectorXd ab = d.Vector("normal", 2, -1e9, 1e9);
-        if (ab(1) < 0) d.Fail("normal", "expected [mean, sigma] with sigma >= 0");
-        v.kind = VarySpec::Kind::kNormal, v.a = ab(0), v.b = ab(1);
-      } else {
-        const std::string key = d.Has("grid") ? "grid" : "list";
-        v.kind = key == "grid" ? VarySpec::Kind::kGrid : VarySpec::Kind::kList;
-        const YAML::Node list = d.Node(key);
-        if (!list.IsSequence() || list.size() == 0) d.Fail(key, "expected a non-empty list");
-        for (const auto& item : list) {
-          if (!item.IsScalar()) d.Fail(key, "expected a list of scalars");
-          v.values.push_back(item.as<std::string>());
-        }
-      }
-      v.label = d.String("label", "");
-      d.RejectUnknownKeys();
-      s.vary.push_back(v);
+  const YamlMap d = vary.Map(v.path);
+  const std::vector<std::string> kinds = {"uniform", "normal", "grid", "list"};
+  int found = 0;
+  for (const auto& k : kinds) found += d.Has(k) ? 1 : 0;
+  if (found != 1) {
+    d.Fail("", "expected exactly one of uniform | normal | grid | list (and optionally label)");
+  }
+  if (d.Has("uniform")) {
+    const Eigen::VectorXd ab = d.Vector("uniform", 2, -1e9, 1e9);
+    if (ab(1) < ab(0)) d.Fail("uniform", "expected [low, high] with low <= high");
+    v.kind = VarySpec::Kind::kUniform, v.a = ab(0), v.b = ab(1);
+  } else if (d.Has("normal")) {
+    const Eigen::VectorXd ab = d.Vector("normal", 2, -1e9, 1e9);
+    if (ab(1) < 0) d.Fail("normal", "expected [mean, sigma] with sigma >= 0");
+    v.kind = VarySpec::Kind::kNormal, v.a = ab(0), v.b = ab(1);
+  } else {
+    const std::string key = d.Has("grid") ? "grid" : "list";
+    v.kind = key == "grid" ? VarySpec::Kind::kGrid : VarySpec::Kind::kList;
+    const YAML::Node list = d.Node(key);
+    if (!list.IsSequence() || list.size() == 0) d.Fail(key, "expected a non-empty list");
+    for (const auto& item : list) {
+      if (!item.IsScalar()) d.Fail(key, "expected a list of scalars");
+      v.values.push_back(item.as<std::string>());
     }
   }
-  root.RejectUnknownKeys();
+  v.label = d.String("label", "");
+  d.RejectUnknownKeys();
+  return v;
+}
 
-  if (SweepRunCount(s) > kMaxSweepRuns) {
-    throw InputError(path, "runs",
-                     "runs times the grid's cells is over " + std::to_string(kMaxSweepRuns) +
-                         " runs: split the sweep");
-  }
-  // the runs must be valid scenarios before anything runs: each draw of a distribution, not only
-  // its first, is checked against its key's range, for the first kValidatedRuns runs (a draw
-  // beyond them that is out of range is recorded as that run's error)
+// Checks before anything runs that the runs are valid scenarios: each draw of a distribution,
+// not only its first, is checked against its key's range, for the first kValidatedRuns runs (a
+// draw beyond them that is out of range is recorded as that run's error).
+void ValidateRuns(const SweepSpec& s, const std::string& path) {
   constexpr long kValidatedRuns = 2000;
   SweepSpec probe = s;
   const long cells = std::max(1L, SweepRunCount(s) / std::max(1, s.runs));
@@ -163,6 +139,37 @@ SweepSpec LoadSweep(const std::string& path) {
                            ") is not a valid scenario: " + e.what());
     }
   }
+}
+
+}  // namespace
+
+SweepSpec LoadSweep(const std::string& path) {
+  const YamlMap root = YamlMap::LoadFile(path);
+  SweepSpec s;
+  s.file = path;
+  const std::string base = root.String("base");
+  s.base_path = (!base.empty() && base[0] == '/') ? base : Dirname(path) + "/" + base;
+  try {
+    s.base_text = ReadYamlFile(s.base_path);
+  } catch (const InputError& e) {
+    throw InputError(path, "base", e.what());
+  }
+  s.runs = static_cast<int>(root.Integer("runs", 1, 1000000));
+  s.seed = static_cast<unsigned long>(root.Integer("seed", 0, 4294967295L, 1));
+  s.time_limit_s = root.Number("time_limit", 1.0, 1e6, 600.0);
+  if (root.Has("vary")) {
+    const YamlMap vary = root.Map("vary");
+    const YAML::Node node = root.Node("vary");
+    for (const auto& kv : node) s.vary.push_back(LoadVary(vary, kv.first.as<std::string>()));
+  }
+  root.RejectUnknownKeys();
+
+  if (SweepRunCount(s) > kMaxSweepRuns) {
+    throw InputError(path, "runs",
+                     "runs times the grid's cells is over " + std::to_string(kMaxSweepRuns) +
+                         " runs: split the sweep");
+  }
+  ValidateRuns(s, path);
   s.sweep_id = Hex(Fnv1a(ReadFile(path) + "\n--base--\n" + s.base_text));
   return s;
 }

@@ -59,26 +59,46 @@ int BinOf(const std::vector<std::pair<double, double>>& bins, double v) {
   return static_cast<int>(bins.size()) - 1;
 }
 
-void WriteSummary(const std::vector<Record>& records, const std::string& dir,
-                  const SweepSpec* spec) {
-  // grid variables group the runs (the controller always does); drawn ones are binned
-  std::set<std::string> grid_keys;
-  std::map<std::string, const VarySpec*> vary_of;
-  if (spec != nullptr) {
-    for (const VarySpec& v : spec->vary) {
-      vary_of[v.path] = &v;
-      if (v.kind == VarySpec::Kind::kGrid && v.path != "controller.type") grid_keys.insert(v.path);
-    }
+namespace {
+
+// Tallies of the runs of one group, or of one group's bin of the main varied quantity.
+struct Cell {
+  int n = 0, crashes = 0, errors = 0, expect_failures = 0;
+  std::vector<double> rmse, dev, solve;
+};
+
+// How a summary groups and bins a sweep's runs, and the tallies of each group and bin.
+struct SummaryTable {
+  std::set<std::string> grid_keys;  // grid variables that split the groups, besides the controller
+  std::string main_path;            // the main varied quantity ("" when none)
+  std::string main_label;           // its label (its `label:`, else its path)
+  std::vector<std::pair<double, double>> bins;  // over the main varied quantity
+  std::set<std::string> groups;                 // controller and grid values
+  std::map<std::string, Cell> total;
+  std::map<std::string, std::vector<Cell>> per_bin;
+};
+
+// A run's group: its controller and its values of the grid variables.
+std::string GroupOf(const Record& r, const std::set<std::string>& grid_keys) {
+  std::string group = r.controller;
+  for (const auto& [path, value] : r.values) {
+    if (grid_keys.count(path)) group += ", " + path + "=" + value;
   }
-  const auto group_of = [&](const Record& r) {
-    std::string group = r.controller;
-    for (const auto& [path, value] : r.values) {
-      if (grid_keys.count(path)) group += ", " + path + "=" + value;
-    }
-    return group;
-  };
-  // the main varied quantity: the first numeric vary path that is neither the controller type
-  // nor a grid variable
+  return group;
+}
+
+// A run's value of the main varied quantity (0 when it has none).
+double MainValue(const Record& r, const std::string& main_path) {
+  for (const auto& [path, value] : r.values) {
+    double v;
+    if (path == main_path && IsNumber(value, &v)) return v;
+  }
+  return 0.0;
+}
+
+// The main varied quantity: the first numeric vary path that is neither the controller type
+// nor a grid variable ("" when there is none).
+std::string MainPath(const std::vector<Record>& records, const std::set<std::string>& grid_keys) {
   std::string main_path;
   for (const Record& r : records) {
     for (const auto& [path, value] : r.values) {
@@ -89,155 +109,179 @@ void WriteSummary(const std::vector<Record>& records, const std::string& dir,
     }
     if (!main_path.empty()) break;
   }
-  const VarySpec* main_vary = vary_of.count(main_path) ? vary_of[main_path] : nullptr;
-  const std::string main_label =
-      main_vary != nullptr && !main_vary->label.empty() ? main_vary->label : main_path;
-  auto main_value = [&](const Record& r) {
-    for (const auto& [path, value] : r.values) {
-      double v;
-      if (path == main_path && IsNumber(value, &v)) return v;
-    }
-    return 0.0;
-  };
+  return main_path;
+}
 
+// Bins over the main varied quantity: a uniform draw gets six bins over its declared range, not
+// the range the draws happened to cover; anything else gets MakeBins over the values.
+std::vector<std::pair<double, double>> MainBins(const std::vector<Record>& records,
+                                                const std::string& main_path,
+                                                const VarySpec* main_vary) {
   std::vector<double> main_values;
-  for (const Record& r : records) main_values.push_back(main_value(r));
+  for (const Record& r : records) main_values.push_back(MainValue(r, main_path));
   std::vector<std::pair<double, double>> bins = MakeBins(main_values);
   if (main_vary != nullptr && main_vary->kind == VarySpec::Kind::kUniform &&
       main_vary->b > main_vary->a && bins.size() > 1 && bins.front().first != bins.front().second) {
-    // six bins over the declared range, not the range the draws happened to cover
     bins.clear();
     for (int i = 0; i < 6; ++i) {
       bins.emplace_back(main_vary->a + (main_vary->b - main_vary->a) * i / 6.0,
                         main_vary->a + (main_vary->b - main_vary->a) * (i + 1) / 6.0);
     }
   }
-  auto bin_of = [&](double v) { return BinOf(bins, v); };
+  return bins;
+}
 
-  std::set<std::string> controllers;  // the groups: controller and grid values
-  for (const Record& r : records) controllers.insert(group_of(r));
+// Adds one run to a cell's tallies (an error counts apart; RMSE only of runs that did not crash).
+void AddRun(const Record& r, Cell* cell) {
+  if (r.error) {
+    ++cell->errors;
+    return;
+  }
+  ++cell->n;
+  if (r.crashed) ++cell->crashes;
+  if (r.expect_failed) ++cell->expect_failures;
+  if (!r.crashed) cell->rmse.push_back(r.payload_rmse_norm_m);
+  cell->dev.push_back(r.quad_dev_max_m);
+  cell->solve.push_back(r.solve_median_ms);
+}
 
-  struct Cell {
-    int n = 0, crashes = 0, errors = 0, expect_failures = 0;
-    std::vector<double> rmse, dev, solve;
-  };
-  std::map<std::string, Cell> total;
-  std::map<std::string, std::vector<Cell>> per_bin;
-  for (const auto& c : controllers) per_bin[c].resize(bins.size());
-  for (const Record& r : records) {
-    const std::string group = group_of(r);
-    for (Cell* cell : {&total[group], &per_bin[group][bin_of(main_value(r))]}) {
-      if (r.error) {
-        ++cell->errors;
-        continue;
-      }
-      ++cell->n;
-      if (r.crashed) ++cell->crashes;
-      if (r.expect_failed) ++cell->expect_failures;
-      if (!r.crashed) cell->rmse.push_back(r.payload_rmse_norm_m);
-      cell->dev.push_back(r.quad_dev_max_m);
-      cell->solve.push_back(r.solve_median_ms);
+// Groups the runs (grid variables group them, the controller always does), bins the main
+// varied quantity and tallies each group and bin.
+SummaryTable Tabulate(const std::vector<Record>& records, const SweepSpec* spec) {
+  SummaryTable t;
+  std::map<std::string, const VarySpec*> vary_of;
+  if (spec != nullptr) {
+    for (const VarySpec& v : spec->vary) {
+      vary_of[v.path] = &v;
+      if (v.kind == VarySpec::Kind::kGrid && v.path != "controller.type")
+        t.grid_keys.insert(v.path);
     }
   }
+  t.main_path = MainPath(records, t.grid_keys);
+  const VarySpec* main_vary = vary_of.count(t.main_path) ? vary_of[t.main_path] : nullptr;
+  t.main_label = main_vary != nullptr && !main_vary->label.empty() ? main_vary->label : t.main_path;
+  t.bins = MainBins(records, t.main_path, main_vary);
+  for (const Record& r : records) t.groups.insert(GroupOf(r, t.grid_keys));
+  for (const auto& c : t.groups) t.per_bin[c].resize(t.bins.size());
+  for (const Record& r : records) {
+    const std::string group = GroupOf(r, t.grid_keys);
+    const int bin = BinOf(t.bins, MainValue(r, t.main_path));
+    for (Cell* cell : {&t.total[group], &t.per_bin[group][bin]}) AddRun(r, cell);
+  }
+  return t;
+}
 
-  // summary.json (non-finite values, e.g. quantiles of no run, are null)
-  const auto num = [](double v) { return std::isfinite(v) ? Json(v) : Json(); };
+// A number for summary.json; non-finite values (e.g. quantiles of no run) are null.
+Json Num(double v) { return std::isfinite(v) ? Json(v) : Json(); }
+
+// The command that replays a run exactly.
+std::string ReplayCommand(const Record& r) {
+  std::string command = "hpa run " + r.base + " --seed " + std::to_string(r.seed);
+  for (const auto& [path, value] : r.values) command += " --set " + path + "=" + value;
+  return command;
+}
+
+// One group's entry of summary.json: its counts, crash rate, quantiles and per-bin crash rates.
+Json GroupJson(const Cell& t, const std::vector<Cell>& cells,
+               const std::vector<std::pair<double, double>>& bins) {
+  const auto ci = Wilson(t.crashes, t.n);
+  Json entry = {{"runs", t.n},
+                {"errors", t.errors},
+                {"crashes", t.crashes},
+                {"crash_rate", t.n ? Num(static_cast<double>(t.crashes) / t.n) : Json()},
+                {"crash_rate_ci95", {Num(ci.first), Num(ci.second)}},
+                {"expect_failures", t.expect_failures},
+                {"payload_rmse_norm_m",
+                 {{"median", Num(Quantile(t.rmse, 0.5))}, {"p90", Num(Quantile(t.rmse, 0.9))}}},
+                {"quad_deviation_max_m",
+                 {{"median", Num(Quantile(t.dev, 0.5))}, {"p90", Num(Quantile(t.dev, 0.9))}}},
+                {"mpc_solve_median_ms",
+                 {{"median", Num(Quantile(t.solve, 0.5))}, {"p99", Num(Quantile(t.solve, 0.99))}}},
+                {"bins", Json::array()}};
+  for (size_t b = 0; b < bins.size(); ++b) {
+    const Cell& cell = cells[b];
+    const auto bci = Wilson(cell.crashes, cell.n);
+    entry["bins"].push_back(
+        {{"lo", Num(bins[b].first)},
+         {"hi", Num(bins[b].second)},
+         {"runs", cell.n},
+         {"crashes", cell.crashes},
+         {"crash_rate", cell.n ? Num(static_cast<double>(cell.crashes) / cell.n) : Json()},
+         {"ci95", {Num(bci.first), Num(bci.second)}},
+         {"expect_failures", cell.expect_failures}});
+  }
+  return entry;
+}
+
+// Writes summary.json: how the runs are grouped, each group's entry and the outlier runs.
+void WriteSummaryJson(const std::vector<Record>& records, const SummaryTable& t,
+                      const std::vector<Outlier>& outliers, const std::string& dir) {
   Json summary;
   summary["runs"] = records.size();
-  summary["main_varied"] = main_path;
-  summary["main_varied_label"] = main_label;
+  summary["main_varied"] = t.main_path;
+  summary["main_varied_label"] = t.main_label;
   summary["grouped_by"] = Json::array({"controller.type"});
-  for (const std::string& key : grid_keys) summary["grouped_by"].push_back(key);
+  for (const std::string& key : t.grid_keys) summary["grouped_by"].push_back(key);
   summary["controllers"] = Json::object();
-  for (const auto& c : controllers) {
-    const Cell& t = total[c];
-    const auto ci = Wilson(t.crashes, t.n);
-    Json entry = {
-        {"runs", t.n},
-        {"errors", t.errors},
-        {"crashes", t.crashes},
-        {"crash_rate", t.n ? num(static_cast<double>(t.crashes) / t.n) : Json()},
-        {"crash_rate_ci95", {num(ci.first), num(ci.second)}},
-        {"expect_failures", t.expect_failures},
-        {"payload_rmse_norm_m",
-         {{"median", num(Quantile(t.rmse, 0.5))}, {"p90", num(Quantile(t.rmse, 0.9))}}},
-        {"quad_deviation_max_m",
-         {{"median", num(Quantile(t.dev, 0.5))}, {"p90", num(Quantile(t.dev, 0.9))}}},
-        {"mpc_solve_median_ms",
-         {{"median", num(Quantile(t.solve, 0.5))}, {"p99", num(Quantile(t.solve, 0.99))}}},
-        {"bins", Json::array()}};
-    for (size_t b = 0; b < bins.size(); ++b) {
-      const Cell& cell = per_bin[c][b];
-      const auto bci = Wilson(cell.crashes, cell.n);
-      entry["bins"].push_back(
-          {{"lo", num(bins[b].first)},
-           {"hi", num(bins[b].second)},
-           {"runs", cell.n},
-           {"crashes", cell.crashes},
-           {"crash_rate", cell.n ? num(static_cast<double>(cell.crashes) / cell.n) : Json()},
-           {"ci95", {num(bci.first), num(bci.second)}},
-           {"expect_failures", cell.expect_failures}});
-    }
-    summary["controllers"][c] = entry;
+  for (const auto& c : t.groups) {
+    summary["controllers"][c] = GroupJson(t.total.at(c), t.per_bin.at(c), t.bins);
   }
-  const std::vector<Outlier> outliers = FindOutliers(records);
-  const auto replay = [](const Record& r) {
-    std::string command = "hpa run " + r.base + " --seed " + std::to_string(r.seed);
-    for (const auto& [path, value] : r.values) command += " --set " + path + "=" + value;
-    return command;
-  };
   summary["outliers"] = Json::array();
   for (const Outlier& o : outliers) {
     summary["outliers"].push_back({{"run", o.record->run},
                                    {"controller", o.record->controller},
                                    {"metric", o.metric},
-                                   {"value", num(o.value)},
-                                   {"median", num(o.median)},
-                                   {"replay", replay(*o.record)}});
+                                   {"value", Num(o.value)},
+                                   {"median", Num(o.median)},
+                                   {"replay", ReplayCommand(*o.record)}});
   }
   WriteFileChecked(dir + "/summary.json", summary.dump(2) + "\n");
+}
 
-  // summary.md
-  std::ostringstream md;
-  md << "# Sweep summary\n\n" << records.size() << " runs";
-  if (!records.empty())
-    md << " of `" << records.front().sweep_file << "` (base `" << records.front().base << "`)";
-  md << ". Crash rates with 95 % Wilson intervals; RMSE is the norm of the per-axis payload RMSE "
-        "over runs that did not crash.\n\n";
+// summary.md's table of each group's counts, rates with Wilson intervals and quantiles.
+void GroupTableMarkdown(const SummaryTable& t, std::ostringstream& md) {
   md << "| controller | runs | errors | crashes | crash rate [95% CI] | expect failures [95% CI] | "
         "payload RMSE median / p90 [m] | quad deviation median / p90 [m] | solve median [ms] "
         "|\n|---|---|---|---|---|---|---|---|---|\n";
-  for (const auto& c : controllers) {
-    const Cell& t = total[c];
-    const auto ci = Wilson(t.crashes, t.n);
-    md << "| " << c << " | " << t.n << " | " << t.errors << " | " << t.crashes << " | "
-       << Fixed(t.n ? 1.0 * t.crashes / t.n : 0.0, 3) << " [" << Fixed(ci.first, 3) << ", "
-       << Fixed(ci.second, 3) << "] | " << t.expect_failures << "/" << t.n << " ["
-       << Fixed(Wilson(t.expect_failures, t.n).first, 3) << ", "
-       << Fixed(Wilson(t.expect_failures, t.n).second, 3) << "] | " << Fixed(Quantile(t.rmse, 0.5))
-       << " / " << Fixed(Quantile(t.rmse, 0.9)) << " | " << Fixed(Quantile(t.dev, 0.5)) << " / "
-       << Fixed(Quantile(t.dev, 0.9)) << " | " << Fixed(Quantile(t.solve, 0.5)) << " |\n";
+  for (const auto& c : t.groups) {
+    const Cell& g = t.total.at(c);
+    const auto ci = Wilson(g.crashes, g.n);
+    md << "| " << c << " | " << g.n << " | " << g.errors << " | " << g.crashes << " | "
+       << Fixed(g.n ? 1.0 * g.crashes / g.n : 0.0, 3) << " [" << Fixed(ci.first, 3) << ", "
+       << Fixed(ci.second, 3) << "] | " << g.expect_failures << "/" << g.n << " ["
+       << Fixed(Wilson(g.expect_failures, g.n).first, 3) << ", "
+       << Fixed(Wilson(g.expect_failures, g.n).second, 3) << "] | " << Fixed(Quantile(g.rmse, 0.5))
+       << " / " << Fixed(Quantile(g.rmse, 0.9)) << " | " << Fixed(Quantile(g.dev, 0.5)) << " / "
+       << Fixed(Quantile(g.dev, 0.9)) << " | " << Fixed(Quantile(g.solve, 0.5)) << " |\n";
   }
-  if (!main_path.empty()) {
-    md << "\n## Crash rate (and expect-failure count) against " << main_label << " (`" << main_path
-       << "`)\n\n| bin |";
-    for (const auto& c : controllers) md << " " << c << " |";
-    md << "\n|---|";
-    for (size_t i = 0; i < controllers.size(); ++i) md << "---|";
-    md << "\n";
-    for (size_t b = 0; b < bins.size(); ++b) {
-      md << "| " << Fixed(bins[b].first)
-         << (bins[b].first == bins[b].second ? "" : " - " + Fixed(bins[b].second)) << " |";
-      for (const auto& c : controllers) {
-        const Cell& cell = per_bin[c][b];
-        const auto ci = Wilson(cell.crashes, cell.n);
-        md << " " << cell.crashes << "/" << cell.n << " [" << Fixed(ci.first, 2) << ", "
-           << Fixed(ci.second, 2) << "] (expect failed " << cell.expect_failures << ") |";
-      }
-      md << "\n";
+}
+
+// summary.md's crash rate (and expect-failure count) of each group per bin of the main varied
+// quantity; nothing when no quantity is varied.
+void BinTableMarkdown(const SummaryTable& t, std::ostringstream& md) {
+  if (t.main_path.empty()) return;
+  md << "\n## Crash rate (and expect-failure count) against " << t.main_label << " (`"
+     << t.main_path << "`)\n\n| bin |";
+  for (const auto& c : t.groups) md << " " << c << " |";
+  md << "\n|---|";
+  for (size_t i = 0; i < t.groups.size(); ++i) md << "---|";
+  md << "\n";
+  for (size_t b = 0; b < t.bins.size(); ++b) {
+    md << "| " << Fixed(t.bins[b].first)
+       << (t.bins[b].first == t.bins[b].second ? "" : " - " + Fixed(t.bins[b].second)) << " |";
+    for (const auto& c : t.groups) {
+      const Cell& cell = t.per_bin.at(c)[b];
+      const auto ci = Wilson(cell.crashes, cell.n);
+      md << " " << cell.crashes << "/" << cell.n << " [" << Fixed(ci.first, 2) << ", "
+         << Fixed(ci.second, 2) << "] (expect failed " << cell.expect_failures << ") |";
     }
+    md << "\n";
   }
-  // worst runs, with the command that replays each exactly
+}
+
+// summary.md's worst runs (errors, crashes, then largest quadrotor deviation), each with the
+// command that replays it exactly.
+void WorstRunsMarkdown(const std::vector<Record>& records, std::ostringstream& md) {
   std::vector<const Record*> worst;
   for (const Record& r : records) worst.push_back(&r);
   std::sort(worst.begin(), worst.end(), [](const Record* a, const Record* b) {
@@ -256,6 +300,20 @@ void WriteSummary(const std::vector<Record>& records, const std::string& dir,
     for (const auto& [path, value] : r.values) md << " --set " << path << "=" << value;
     md << "`\n";
   }
+}
+
+// Writes summary.md: the group table, the crash rate per bin, the worst and the outlier runs.
+void WriteSummaryMarkdown(const std::vector<Record>& records, const SummaryTable& t,
+                          const std::vector<Outlier>& outliers, const std::string& dir) {
+  std::ostringstream md;
+  md << "# Sweep summary\n\n" << records.size() << " runs";
+  if (!records.empty())
+    md << " of `" << records.front().sweep_file << "` (base `" << records.front().base << "`)";
+  md << ". Crash rates with 95 % Wilson intervals; RMSE is the norm of the per-axis payload RMSE "
+        "over runs that did not crash.\n\n";
+  GroupTableMarkdown(t, md);
+  BinTableMarkdown(t, md);
+  WorstRunsMarkdown(records, md);
   md << "\n## Outlier runs (mode accuracy, in view, estimator resets)\n\n"
      << "A finished run is listed when its mode accuracy or in-view fraction lies below, or its "
         "estimator resets above, its controller's median by more than 5 scaled MADs and by more "
@@ -263,66 +321,85 @@ void WriteSummary(const std::vector<Record>& records, const std::string& dir,
   if (outliers.empty()) md << "None.\n";
   for (const Outlier& o : outliers) {
     md << "- run " << o.record->run << " (" << o.record->controller << "): " << o.metric << " "
-       << Fixed(o.value) << " (median " << Fixed(o.median) << ")\n  `" << replay(*o.record)
+       << Fixed(o.value) << " (median " << Fixed(o.median) << ")\n  `" << ReplayCommand(*o.record)
        << "`\n";
   }
   WriteFileChecked(dir + "/summary.md", md.str());
+}
 
-  // crash rate plot, one line per controller
-  if (!main_path.empty()) {
-    Figure fig(1000, 600);
-    PlotPanel p(&fig, cv::Rect(0, 0, 1000, 600),
-                "crash rate (thick, 95% Wilson CI) and expect-failure rate (thin)", main_label,
-                "rate [fraction of runs]");
-    double x0 = bins.front().first, x1 = bins.back().second;
-    if (x1 <= x0) x1 = x0 + 1;
-    const double pad = 0.05 * (x1 - x0);
-    p.SetRange(x0 - pad, x1 + pad, -0.02, 1.02);
-    p.DrawAxes();
-    std::vector<std::pair<std::string, cv::Scalar>> legend;
-    int k = 0;
-    for (const auto& c : controllers) {
-      std::vector<double> x, y, lo, hi, fail;
-      std::vector<bool> segment_break;  // an empty bin lies before this point
-      bool gap = false;
-      for (size_t b = 0; b < bins.size(); ++b) {
-        const Cell& cell = per_bin[c][b];
-        if (cell.n == 0) {
-          gap = true;
-          continue;
-        }
-        segment_break.push_back(gap);
-        gap = false;
-        const auto ci = Wilson(cell.crashes, cell.n);
-        x.push_back(0.5 * (bins[b].first + bins[b].second));
-        y.push_back(1.0 * cell.crashes / cell.n);
-        lo.push_back(ci.first);
-        hi.push_back(ci.second);
-        fail.push_back(1.0 * cell.expect_failures / cell.n);
-      }
-      // lines join neighbouring bins only: an empty bin breaks them
-      std::vector<double> sx, sy, sfail;
-      const auto flush = [&]() {
-        p.Line(sx, sfail, SeriesColour(k), 1);
-        p.Line(sx, sy, SeriesColour(k), 2);
-        sx.clear();
-        sy.clear();
-        sfail.clear();
-      };
-      for (size_t i = 0; i < x.size(); ++i) {
-        if (i > 0 && segment_break[i]) flush();
-        sx.push_back(x[i]);
-        sy.push_back(y[i]);
-        sfail.push_back(fail[i]);
-      }
-      flush();
-      p.ErrorBars(x, y, lo, hi, SeriesColour(k));
-      legend.emplace_back(c, SeriesColour(k));
-      ++k;
+// Draws one group's crash rate per bin (thick, with its Wilson interval) and expect-failure rate
+// (thin); lines join neighbouring bins only, so an empty bin breaks them.
+void DrawGroupRates(PlotPanel* p, const std::vector<Cell>& cells,
+                    const std::vector<std::pair<double, double>>& bins, const cv::Scalar& colour) {
+  std::vector<double> x, y, lo, hi, fail;
+  std::vector<bool> segment_break;  // an empty bin lies before this point
+  bool gap = false;
+  for (size_t b = 0; b < bins.size(); ++b) {
+    const Cell& cell = cells[b];
+    if (cell.n == 0) {
+      gap = true;
+      continue;
     }
-    p.Legend(legend);
-    fig.Write(dir + "/crash_rate", PlotFormat::kPng);
+    segment_break.push_back(gap);
+    gap = false;
+    const auto ci = Wilson(cell.crashes, cell.n);
+    x.push_back(0.5 * (bins[b].first + bins[b].second));
+    y.push_back(1.0 * cell.crashes / cell.n);
+    lo.push_back(ci.first);
+    hi.push_back(ci.second);
+    fail.push_back(1.0 * cell.expect_failures / cell.n);
   }
+  std::vector<double> sx, sy, sfail;
+  const auto flush = [&]() {
+    p->Line(sx, sfail, colour, 1);
+    p->Line(sx, sy, colour, 2);
+    sx.clear();
+    sy.clear();
+    sfail.clear();
+  };
+  for (size_t i = 0; i < x.size(); ++i) {
+    if (i > 0 && segment_break[i]) flush();
+    sx.push_back(x[i]);
+    sy.push_back(y[i]);
+    sfail.push_back(fail[i]);
+  }
+  flush();
+  p->ErrorBars(x, y, lo, hi, colour);
+}
+
+// Writes crash_rate.png: each group's crash rate against the main varied quantity; nothing when
+// no quantity is varied.
+void WriteCrashRatePlot(const SummaryTable& t, const std::string& dir) {
+  if (t.main_path.empty()) return;
+  Figure fig(1000, 600);
+  PlotPanel p(&fig, cv::Rect(0, 0, 1000, 600),
+              "crash rate (thick, 95% Wilson CI) and expect-failure rate (thin)", t.main_label,
+              "rate [fraction of runs]");
+  double x0 = t.bins.front().first, x1 = t.bins.back().second;
+  if (x1 <= x0) x1 = x0 + 1;
+  const double pad = 0.05 * (x1 - x0);
+  p.SetRange(x0 - pad, x1 + pad, -0.02, 1.02);
+  p.DrawAxes();
+  std::vector<std::pair<std::string, cv::Scalar>> legend;
+  int k = 0;
+  for (const auto& c : t.groups) {
+    DrawGroupRates(&p, t.per_bin.at(c), t.bins, SeriesColour(k));
+    legend.emplace_back(c, SeriesColour(k));
+    ++k;
+  }
+  p.Legend(legend);
+  fig.Write(dir + "/crash_rate", PlotFormat::kPng);
+}
+
+}  // namespace
+
+void WriteSummary(const std::vector<Record>& records, const std::string& dir,
+                  const SweepSpec* spec) {
+  const SummaryTable table = Tabulate(records, spec);
+  const std::vector<Outlier> outliers = FindOutliers(records);
+  WriteSummaryJson(records, table, outliers, dir);
+  WriteSummaryMarkdown(records, table, outliers, dir);
+  WriteCrashRatePlot(table, dir);
 }
 
 std::vector<Outlier> FindOutliers(const std::vector<Record>& records) {
