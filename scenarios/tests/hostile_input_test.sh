@@ -152,9 +152,11 @@ expect_exit 1 "crashed \(quadrotor contact with the payload lying on the ground"
 echo "== a run killed with -9 leaves no complete-looking metrics.json"
 "$hpa" run "$base" --out "$out/killed" --quiet || fail "first run failed"
 [ -s "$out/killed/metrics.json" ] || fail "no metrics.json from the first run"
-"$hpa" run "$scen/lissajous_T5.yaml" --camera analytic --out "$out/killed" --quiet > /dev/null 2>&1 &
+"$hpa" run "$scen/lissajous_T5.yaml" --camera analytic --set duration=60 --out "$out/killed" \
+  --quiet > /dev/null 2>&1 &
 pid=$!
-sleep 0.5
+# killed once it has started (the previous run's outputs are gone), however loaded the machine
+for _ in $(seq 600); do [ -e "$out/killed/metrics.json" ] || break; sleep 0.05; done
 kill -9 "$pid"; wait "$pid" 2> /dev/null
 [ ! -e "$out/killed/metrics.json" ] || fail "the killed run left a metrics.json"
 [ ! -e "$out/killed/log.csv" ] || fail "the killed run left a log.csv"
