@@ -1,3 +1,5 @@
+// The analytic camera (sim) against the real detector (flight code) on synthetic frames: the
+// cross-check lives with the scenarios, the only layer that links both.
 #include "hpa/sim/analytic_camera.h"
 
 #include <gtest/gtest.h>
