@@ -10,7 +10,7 @@
 #include <stdexcept>
 #include <string>
 
-#include "../../estimator/tests/synthetic_frames.h"
+#include "estimator/tests/synthetic_frames.h"
 #include "hpa/models/camera_model.h"
 #include "hpa/models/params.h"
 
