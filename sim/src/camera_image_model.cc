@@ -111,8 +111,13 @@ CameraImageModel::CameraImageModel(const Params& params, const CameraImageProfil
       noise_sd_dn_[level] = static_cast<float>(
           std::sqrt(g * level + g * g * profile_.read_noise_e * profile_.read_noise_e));
     }
-    unit_normal_ = UnitNormalTable();
+    unit_normal_ = &UnitNormalTable();  // shared, read-only
   }
+}
+
+void CameraImageModel::PrepareSharedTables(const Params& params) {
+  UnitNormalTable();
+  if (!params.camera_distortion.isZero()) MapsFor(params);
 }
 
 double CameraImageModel::render_fovy_deg() const {
@@ -170,7 +175,7 @@ void CameraImageModel::AddNoise(uint64_t frame_index, const cv::Rect& area, cv::
   if (!profile_.noise) return;
   const size_t mask = kNoiseTableSize - 1;
   const size_t offset = SplitMix64(seed_ ^ SplitMix64(frame_index)) & mask;
-  const float* table = unit_normal_.data();
+  const float* table = unit_normal_->data();
   const float* sd = noise_sd_dn_.data();
   // each value's noise is keyed by its place in the whole frame: a region gets the frame's noise
   const size_t channels = static_cast<size_t>(image->channels());

@@ -16,6 +16,7 @@
 #include "hpa/models/input_error.h"
 #include "hpa/models/params.h"
 #include "hpa/scenarios/runner.h"
+#include "hpa/sim/camera_image_model.h"
 #include "scenarios/src/tools/cli_parse.h"
 #include "scenarios/src/tools/sweep/sweep_internal.h"
 
@@ -243,6 +244,8 @@ int SweepMain(int argc, char** argv) {
               a.jobs);
   std::fflush(stdout);
   ResultsAppender results(out, jsonl, runs.size());
+  // the rendered camera's tables, once here rather than in every forked run
+  sim::CameraImageModel::PrepareSharedTables(params);
   const int stopped_by =
       sweep::RunPool(spec, runs, params, gl_backend, a.jobs, tmp_dir,
                      [&](const std::string& line, bool failed, const SweepRun& run) {

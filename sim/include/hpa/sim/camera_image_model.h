@@ -22,6 +22,10 @@ class CameraImageModel {
   /// Camera intrinsics and distortion from `params`; the profile's optics and sensor; `seed`
   /// keys the noise.
   CameraImageModel(const Params& params, const CameraImageProfile& profile, uint64_t seed);
+  /// Computes the process-wide tables a model of `params` reads (the noise samples, the
+  /// distortion maps), which every model in the process shares: a process that forks workers
+  /// calls it first so that they inherit the tables instead of each computing its own.
+  static void PrepareSharedTables(const Params& params);
 
   /// Focal length (px) of the pinhole render the model expects: the sensor's own focal length
   /// without distortion; with barrel distortion, short enough that the render covers every
@@ -65,7 +69,7 @@ class CameraImageModel {
   cv::Mat map1_, map2_;             // sensor pixel -> render pixel (fixed-point maps for remap)
   cv::Mat blurred_, remapped_;      // reused frame buffers
   std::vector<float> noise_sd_dn_;  // noise std (DN) per 8-bit level: shot + read, times gain
-  std::vector<float> unit_normal_;  // table of N(0, 1) samples the noise is drawn from
+  const std::vector<float>* unit_normal_ = nullptr;  // N(0, 1) samples the noise is drawn from
 };
 
 }  // namespace hpa::sim
