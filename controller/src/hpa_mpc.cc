@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <optional>
 #include <stdexcept>
 
 namespace hpa {
@@ -97,6 +98,48 @@ BodyRateCommand HpaMpc::CommandFromPlan() const {
   return cmd;
 }
 
+// Outside the envelope the plan can be flown in, recover attitude first and plan afresh after:
+// - tumbling faster than the stage model resolves (a 0.1 s stage of piecewise-constant rotor
+//   speeds turns a plan at this rate through more than a radian, so its stage-1 body rate is
+//   no command);
+// - tilted beyond the recovery tilt: a plan there cuts collective thrust, and a rate loop
+//   without airmode (PX4's default) then has no moment left to level the vehicle.
+// The recovery is PX4's attitude loop toward level (body rate = MC_ROLL_P x the tilt error,
+// yaw left alone) at hover thrust, which leaves the rotors the moment to fly it.
+std::optional<BodyRateCommand> HpaMpc::RecoveryCommand(const SystemState& state) const {
+  const Eigen::Vector3d z_B_W = state.q_WB * Eigen::Vector3d::UnitZ();
+  const double tilt_rad = std::acos(std::clamp(z_B_W.z(), -1.0, 1.0));
+  const bool tumbling = settings_.recovery_body_rate_radps > 0.0 &&
+                        state.w_B.norm() > settings_.recovery_body_rate_radps;
+  const bool tipped = settings_.recovery_tilt_rad > 0.0 && tilt_rad > settings_.recovery_tilt_rad;
+  if (!tumbling && !tipped) return std::nullopt;
+  BodyRateCommand command;
+  command.thrust_N = params_.HoverThrustN();
+  // rotation taking body z to world z, in the body frame: axis (z_B x e3) in world
+  const Eigen::Vector3d axis_W = z_B_W.cross(Eigen::Vector3d::UnitZ());
+  if (axis_W.norm() > 1e-9) {
+    const Eigen::Vector3d error_B = state.q_WB.conjugate() * (axis_W.normalized() * tilt_rad);
+    command.w_B_radps = settings_.recovery_attitude_gain_per_s * error_B;
+    command.w_B_radps.z() = 0.0;
+  }
+  return command;
+}
+
+// The taut flow holds on the taut manifold only: hpa_mpc projects x0 onto it (jump map);
+// nonhybrid_mpc starts from the state as measured, as the paper's baseline does.
+StateVector HpaMpc::InitialState(CableMode mode, const SystemState& state) const {
+  const bool taut_hybrid = mode == CableMode::kTaut && settings_.hybrid;
+  StateVector x0 = taut_hybrid ? model_->ProjectToTaut(state.ToVector()) : state.ToVector();
+  if (taut_hybrid && state.payload_lost) {
+    // a lost payload on a taut cable: what is still known is that it hangs on the cable; the
+    // taut model predicts with it at rest below the quadrotor
+    x0.segment<3>(StateIndex::kPayloadPos) =
+        state.p_WQ_W - Eigen::Vector3d(0, 0, params_.cable_length_m);
+    x0.segment<3>(StateIndex::kPayloadVel) = state.v_WQ_W;
+  }
+  return x0;
+}
+
 ControlOutput HpaMpc::Update(const SystemState& state) {
   const auto start = std::chrono::steady_clock::now();
   ControlOutput out;
@@ -115,47 +158,16 @@ ControlOutput HpaMpc::Update(const SystemState& state) {
     return finish();
   }
 
-  // Outside the envelope the plan can be flown in, recover attitude first and plan afresh after:
-  // - tumbling faster than the stage model resolves (a 0.1 s stage of piecewise-constant rotor
-  //   speeds turns a plan at this rate through more than a radian, so its stage-1 body rate is
-  //   no command);
-  // - tilted beyond the recovery tilt: a plan there cuts collective thrust, and a rate loop
-  //   without airmode (PX4's default) then has no moment left to level the vehicle.
-  // The recovery is PX4's attitude loop toward level (body rate = MC_ROLL_P x the tilt error,
-  // yaw left alone) at hover thrust, which leaves the rotors the moment to fly it.
-  const Eigen::Vector3d z_B_W = state.q_WB * Eigen::Vector3d::UnitZ();
-  const double tilt_rad = std::acos(std::clamp(z_B_W.z(), -1.0, 1.0));
-  const bool tumbling = settings_.recovery_body_rate_radps > 0.0 &&
-                        state.w_B.norm() > settings_.recovery_body_rate_radps;
-  const bool tipped = settings_.recovery_tilt_rad > 0.0 && tilt_rad > settings_.recovery_tilt_rad;
-  if (tumbling || tipped) {
+  if (std::optional<BodyRateCommand> recovery = RecoveryCommand(state)) {
     Reset();
     out.status = ControlStatus::kRecovery;
-    out.command = hover;
-    // rotation taking body z to world z, in the body frame: axis (z_B x e3) in world
-    const Eigen::Vector3d axis_W = z_B_W.cross(Eigen::Vector3d::UnitZ());
-    if (axis_W.norm() > 1e-9) {
-      const Eigen::Vector3d error_B = state.q_WB.conjugate() * (axis_W.normalized() * tilt_rad);
-      out.command.w_B_radps = settings_.recovery_attitude_gain_per_s * error_B;
-      out.command.w_B_radps.z() = 0.0;
-    }
+    out.command = *recovery;
     return finish();
   }
 
   const std::vector<InputVector> guess = WarmStart(state.time_s);
   const Ocp ocp = BuildProblem(state, guess);
-  // the taut flow holds on the taut manifold only: hpa_mpc projects x0 onto it (jump map);
-  // nonhybrid_mpc starts from the state as measured, as the paper's baseline does
-  StateVector x0 = ocp.mode == CableMode::kTaut && settings_.hybrid
-                       ? model_->ProjectToTaut(state.ToVector())
-                       : state.ToVector();
-  if (ocp.mode == CableMode::kTaut && settings_.hybrid && state.payload_lost) {
-    // a lost payload on a taut cable: what is still known is that it hangs on the cable; the
-    // taut model predicts with it at rest below the quadrotor
-    x0.segment<3>(StateIndex::kPayloadPos) =
-        state.p_WQ_W - Eigen::Vector3d(0, 0, params_.cable_length_m);
-    x0.segment<3>(StateIndex::kPayloadVel) = state.v_WQ_W;
-  }
+  const StateVector x0 = InitialState(ocp.mode, state);
   const bool had_plan = plan_u_.size() == static_cast<size_t>(ocp.horizon_steps);
 
   OcpSolution solution = solver_->Solve(ocp, x0, guess);

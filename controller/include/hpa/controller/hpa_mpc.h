@@ -3,6 +3,7 @@
 // baseline (always-taut model, payload cost, no perception cost) as Controllers.
 
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -85,6 +86,11 @@ class HpaMpc : public Controller {
 
  private:
   BodyRateCommand CommandFromPlan() const;
+  // PX4's attitude recovery toward level at hover thrust when the state is outside the envelope
+  // a plan can be flown in (tumbling or tipped), else nothing.
+  std::optional<BodyRateCommand> RecoveryCommand(const SystemState& state) const;
+  // The OCP's initial state in `mode` from the estimate (projected onto the taut manifold).
+  StateVector InitialState(CableMode mode, const SystemState& state) const;
 
   Params params_;
   std::shared_ptr<const HybridModel> model_;  // the OCPs' dynamics
