@@ -24,7 +24,7 @@ namespace hpa {
 constexpr int kOcpHorizonSteps = 10;  // N
 constexpr double kOcpStageDtS = 0.1;  // s per stage: horizon 1 s
 // Rows of the stage residual: the sum of the rows of OcpTerms() (checked by a static_assert in
-// ocp.cc). Fixed at compile time so the Gauss-Newton products use fixed-size Eigen kernels.
+// ocp_terms.cc). Fixed at compile time so the Gauss-Newton products use fixed-size Eigen kernels.
 constexpr int kNr = 29;
 
 using ResidualVector = Eigen::Matrix<double, kNr, 1>;
