@@ -11,6 +11,7 @@
 #include "../tests/closed_loop_sim.h"
 #include "box_qp.h"
 #include "condensing.h"
+#include "exact_derivatives.h"
 #include "hpa/controller/hpa_mpc.h"
 
 namespace hpa {
@@ -128,8 +129,23 @@ void BM_HpaMpcNloptSolve(benchmark::State& st) {
 }
 BENCHMARK(BM_HpaMpcNloptSolve)->Unit(benchmark::kMillisecond);
 
-// Parts of one RTI call.
+// Parts of one RTI call. The RK4 step's Jacobians: hand-derived (what the OCP uses) and by
+// forward-mode AD (HybridModel::StepJacobians, the reference the tests compare with).
 void BM_StepJacobians(benchmark::State& st) {
+  WarmScenario sc("rti");
+  const InputVector u = sc.mpc->plan_inputs()[0];
+  StateVector x_next;
+  StateMatrix a;
+  InputMatrix b;
+  for (auto _ : st) {
+    ExactStepJacobians(sc.mpc->model(), sc.state.ToVector(), u, CableMode::kTaut, 0.1, &x_next,
+                       &a, &b);
+    benchmark::DoNotOptimize(a);
+  }
+}
+BENCHMARK(BM_StepJacobians)->Unit(benchmark::kMicrosecond);
+
+void BM_StepJacobiansAutoDiff(benchmark::State& st) {
   WarmScenario sc("rti");
   const InputVector u = sc.mpc->plan_inputs()[0];
   StateVector x_next;
@@ -140,8 +156,10 @@ void BM_StepJacobians(benchmark::State& st) {
     benchmark::DoNotOptimize(a);
   }
 }
-BENCHMARK(BM_StepJacobians)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_StepJacobiansAutoDiff)->Unit(benchmark::kMicrosecond);
 
+// Condensing and box QP of one RTI: arg 0 dense (Condense), arg 1 structured
+// (CondenseStructured), the QP with a kept workspace.
 void BM_CondenseAndQp(benchmark::State& st) {
   WarmScenario sc("rti");
   const Ocp ocp = sc.mpc->BuildProblem(sc.state);
@@ -157,13 +175,20 @@ void BM_CondenseAndQp(benchmark::State& st) {
   }
   Eigen::MatrixXd h;
   Eigen::VectorXd g;
+  Eigen::VectorXd du(kNu * n);
+  CondensingWorkspace condensing;
+  BoxQpWorkspace qp;
   for (auto _ : st) {
-    Condense(lin.a, lin.b, stages, &h, &g);
-    Eigen::VectorXd du = Eigen::VectorXd::Zero(kNu * n);
-    benchmark::DoNotOptimize(SolveBoxQp(h, g, lb, ub, &du));
+    if (st.range(0) == 0) {
+      Condense(lin.a, lin.b, stages, &h, &g);
+    } else {
+      CondenseStructured(lin.a, lin.b, stages, &condensing, &h, &g);
+    }
+    du.setZero();
+    benchmark::DoNotOptimize(SolveBoxQp(h, g, lb, ub, &du, &qp));
   }
 }
-BENCHMARK(BM_CondenseAndQp)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_CondenseAndQp)->Arg(0)->Arg(1)->Unit(benchmark::kMicrosecond);
 
 }  // namespace
 }  // namespace hpa

@@ -252,24 +252,29 @@ double OcpCost(const Ocp& ocp, const StateVector& x0, const std::vector<InputVec
 
 OcpLinearization LinearizeAlong(const Ocp& ocp, const StateVector& x0,
                                 const std::vector<InputVector>& u) {
-  const int n = ocp.horizon_steps;
   OcpLinearization lin;
-  lin.x.resize(n + 1);
-  lin.a.resize(n);
-  lin.b.resize(n);
-  lin.r.resize(n + 1);
-  lin.r_x.resize(n + 1);
-  lin.r_u.resize(n + 1);
-  lin.x[0] = x0;
+  LinearizeAlong(ocp, x0, u, &lin);
+  return lin;
+}
+
+void LinearizeAlong(const Ocp& ocp, const StateVector& x0, const std::vector<InputVector>& u,
+                    OcpLinearization* lin) {
+  const int n = ocp.horizon_steps;
+  lin->x.resize(n + 1);
+  lin->a.resize(n);
+  lin->b.resize(n);
+  lin->r.resize(n + 1);
+  lin->r_x.resize(n + 1);
+  lin->r_u.resize(n + 1);
+  lin->x[0] = x0;
   double cost = 0.0;
   for (int k = 0; k < n; ++k) {
-    StageResidual(ocp, k, lin.x[k], u[k], &lin.r[k], &lin.r_x[k], &lin.r_u[k]);
-    cost += lin.r[k].squaredNorm();
-    ocp.StepJacobians(k, lin.x[k], u[k], &lin.x[k + 1], &lin.a[k], &lin.b[k]);
+    StageResidual(ocp, k, lin->x[k], u[k], &lin->r[k], &lin->r_x[k], &lin->r_u[k]);
+    cost += lin->r[k].squaredNorm();
+    ocp.StepJacobians(k, lin->x[k], u[k], &lin->x[k + 1], &lin->a[k], &lin->b[k]);
   }
-  StageResidual(ocp, n, lin.x[n], InputVector::Zero(), &lin.r[n], &lin.r_x[n], &lin.r_u[n]);
-  lin.cost = cost + lin.r[n].squaredNorm();
-  return lin;
+  StageResidual(ocp, n, lin->x[n], InputVector::Zero(), &lin->r[n], &lin->r_x[n], &lin->r_u[n]);
+  lin->cost = cost + lin->r[n].squaredNorm();
 }
 
 double OcpCostAndGradient(const Ocp& ocp, const StateVector& x0, const std::vector<InputVector>& u,

@@ -235,6 +235,10 @@ struct OcpLinearization {
 OcpLinearization LinearizeAlong(const Ocp& ocp, const StateVector& x0,
                                 const std::vector<InputVector>& u);
 
+/// LinearizeAlong into `lin`, reusing its vectors (no heap allocation once they have N + 1).
+void LinearizeAlong(const Ocp& ocp, const StateVector& x0, const std::vector<InputVector>& u,
+                    OcpLinearization* lin);
+
 /// Cost and its exact gradient d cost / d u (4N, stage-major) by the adjoint of the
 /// single-shooting chain, from LinearizeAlong.
 double OcpCostAndGradient(const Ocp& ocp, const StateVector& x0, const std::vector<InputVector>& u,

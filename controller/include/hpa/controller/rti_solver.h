@@ -8,6 +8,7 @@
 // of the Gauss-Newton Hessian, raised when the QP is not positive definite or no step along
 // its direction decreases the cost. A call never returns a plan costlier than its guess.
 
+#include <memory>
 #include <vector>
 
 #include "hpa/controller/controller.h"
@@ -15,8 +16,15 @@
 
 namespace hpa {
 
-/// Globalisation of the RTI step.
+/// How the RTI builds its QP on the rotor-speed steps (both give the same QP up to rounding).
+enum class RtiCondensing {
+  kDense,       // Condense: every block product dense
+  kStructured,  // CondenseStructured: skips the stage Hessians' and the dynamics' zero blocks
+};
+
+/// Globalisation of the RTI step and its QP.
 struct RtiSettings {
+  RtiCondensing condensing = RtiCondensing::kStructured;
   // Levenberg-Marquardt: H + mu * lm_unit * I, lm_unit = the input-cost curvature
   // r_input / u_hover^2 (so mu = 1 doubles the input regularisation). Tries mu = lm_initial,
   // then multiplies by lm_growth up to lm_max_tries QP solves.
@@ -43,6 +51,30 @@ struct RtiResult {
   int qp_solves = 0;           // QPs solved (1 + LM increases)
   int cost_evaluations = 0;    // line-search simulations
 };
+
+/// Scratch memory of RtiIteration (linearisation, stage models, QP), sized by the first call and
+/// reused by the next ones without heap allocation. Copies start empty (it holds no state).
+class RtiWorkspace {
+ public:
+  RtiWorkspace();
+  ~RtiWorkspace();
+  /// A fresh, empty workspace (the scratch is not copied).
+  RtiWorkspace(const RtiWorkspace&);
+  /// Keeps this workspace's own scratch.
+  RtiWorkspace& operator=(const RtiWorkspace&);
+
+  struct Impl;  // defined in rti_solver.cc
+  /// The scratch itself.
+  Impl& impl() { return *impl_; }
+
+ private:
+  std::unique_ptr<Impl> impl_;
+};
+
+/// RtiIteration writing into `result` (its vectors reused) with its scratch in `workspace`: once
+/// both have seen a call with the same horizon, the call allocates no heap memory.
+void RtiIteration(const Ocp& ocp, const StateVector& x0, const std::vector<InputVector>& u_guess,
+                  const RtiSettings& settings, RtiWorkspace* workspace, RtiResult* result);
 
 /// One Gauss-Newton SQP iteration from u_guess (N inputs; clamped into the bounds first),
 /// globalised per `settings`. Non-finite guess cost: kNonFinite; every QP failing: kQpFailure
