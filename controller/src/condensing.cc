@@ -37,6 +37,13 @@ StageQuadratic GaussNewtonStage(const ResidualVector& r, const ResidualStateJaco
 
 void Condense(const std::vector<StateMatrix>& a, const std::vector<InputMatrix>& b,
               const std::vector<StageQuadratic>& stages, Eigen::MatrixXd* h, Eigen::VectorXd* g) {
+  CondensingWorkspace workspace;
+  Condense(a, b, stages, &workspace, h, g);
+}
+
+void Condense(const std::vector<StateMatrix>& a, const std::vector<InputMatrix>& b,
+              const std::vector<StageQuadratic>& stages, CondensingWorkspace* workspace,
+              Eigen::MatrixXd* h, Eigen::VectorXd* g) {
   const int n = static_cast<int>(a.size());
   h->setZero(kNu * n, kNu * n);
   g->resize(kNu * n);
@@ -53,7 +60,8 @@ void Condense(const std::vector<StateMatrix>& a, const std::vector<InputMatrix>&
   //   G_k = d x_k / d u_j (G_{j+1} = B_j, G_{k+1} = A_k G_k),
   //   W_N = Hxx_N G_N, W_k = Hxx_k G_k + A_k^T W_{k+1},
   //   H_kj = B_k^T W_{k+1} + Hxu_k^T G_k (k > j),  H_jj = Huu_j + B_j^T W_{j+1}.
-  std::vector<InputMatrix> sens(n + 1);
+  std::vector<InputMatrix>& sens = workspace->sens;
+  sens.resize(n + 1);
   for (int j = 0; j < n; ++j) {
     sens[j + 1] = b[j];
     for (int k = j + 1; k < n; ++k) sens[k + 1].noalias() = a[k].lazyProduct(sens[k]);

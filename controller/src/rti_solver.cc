@@ -44,7 +44,7 @@ bool BuildQp(const Ocp& ocp, const StateVector& x0, const RtiSettings& settings,
   if (settings.condensing == RtiCondensing::kStructured) {
     CondenseStructured(w->lin.a, w->lin.b, w->stages, &w->condensing, &w->h, &w->g);
   } else {
-    Condense(w->lin.a, w->lin.b, w->stages, &w->h, &w->g);
+    Condense(w->lin.a, w->lin.b, w->stages, &w->condensing, &w->h, &w->g);
   }
   w->lb.resize(kNu * n);
   w->ub.resize(kNu * n);
