@@ -7,13 +7,6 @@ namespace {
 
 using I = StateIndex;
 
-// Column offsets inside FlowJacobian::acc_x (p_L, v_L, p_Q, v_Q, q).
-constexpr int kAccPayloadPos = 0;
-constexpr int kAccPayloadVel = 3;
-constexpr int kAccQuadPos = 6;
-constexpr int kAccQuadVel = 9;
-constexpr int kAccQuat = 12;
-
 // The thrust vector f R e3 in world and its Jacobians in q (3 x 4) and u (3 x 4).
 struct ThrustVectorJacobian {
   Eigen::Vector3d f_W_N;
@@ -71,22 +64,10 @@ void TautAccelerationJacobian(const Params& p, const StateVector& x, const Thrus
   const Eigen::Vector4d t_q = -mu_kg / m * f.f_q.transpose() * xi_W;
   const Eigen::Vector4d t_u = -mu_kg / m * f.f_u.transpose() * xi_W;
   // d (T xi): xi dT + T d xi
-  const Eigen::Matrix3d txi_r = xi_W * t_r.transpose() + tension_N * xi_r;
-  const Eigen::Matrix3d txi_v = xi_W * t_v.transpose();
-  const Eigen::Matrix<double, 3, 4> txi_q = xi_W * t_q.transpose();
-  const Eigen::Matrix<double, 3, kNu> txi_u = xi_W * t_u.transpose();
-  for (int row : {0, 3}) {
-    // a_L rows: -(T xi) / m_L; a_Q rows: (f + T xi) / m
-    const double s = row == 0 ? -1.0 / m_L : 1.0 / m;
-    j->acc_x.block<3, 3>(row, kAccPayloadPos) = s * txi_r;
-    j->acc_x.block<3, 3>(row, kAccQuadPos) = -s * txi_r;
-    j->acc_x.block<3, 3>(row, kAccPayloadVel) = s * txi_v;
-    j->acc_x.block<3, 3>(row, kAccQuadVel) = -s * txi_v;
-    j->acc_x.block<3, 4>(row, kAccQuat) = s * txi_q;
-    j->acc_u.middleRows<3>(row) = s * txi_u;
-  }
-  j->acc_x.block<3, 4>(3, kAccQuat) += f.f_q / m;
-  j->acc_u.middleRows<3>(3) += f.f_u / m;
+  j->cable_r = xi_W * t_r.transpose() + tension_N * xi_r;
+  j->cable_v = xi_W * t_v.transpose();
+  j->cable_q = xi_W * t_q.transpose();
+  j->cable_u = xi_W * t_u.transpose();
 }
 
 // Attitude kinematics q_dot = 1/2 q (x) [0, w] and Euler's equation J w_dot = M - w x J w.
@@ -118,15 +99,13 @@ void EvaluateFlowJacobian(const Params& params, const Eigen::Matrix4d& allocatio
                           const StateVector& x, const InputVector& u, CableMode mode,
                           FlowJacobian* jacobian) {
   const ThrustVectorJacobian f = ThrustAndMoments(params, allocation, x, u, jacobian);
-  if (mode == CableMode::kTaut) {
-    TautAccelerationJacobian(params, x, f, jacobian);
-  } else {
-    // payload in free fall; quadrotor a_Q = f / m - g e3
-    jacobian->acc_x.setZero();
-    jacobian->acc_u.setZero();
-    jacobian->acc_x.block<3, 4>(3, kAccQuat) = f.f_q / params.quad_mass_kg;
-    jacobian->acc_u.middleRows<3>(3) = f.f_u / params.quad_mass_kg;
-  }
+  jacobian->taut = mode == CableMode::kTaut;
+  jacobian->inv_payload_mass_per_kg = 1.0 / params.payload_mass_kg;
+  jacobian->inv_quad_mass_per_kg = 1.0 / params.quad_mass_kg;
+  jacobian->thrust_q = f.f_q;
+  jacobian->thrust_u = f.f_u;
+  // slack: payload in free fall, no cable force
+  if (jacobian->taut) TautAccelerationJacobian(params, x, f, jacobian);
   AttitudeJacobian(params, x, jacobian);
 }
 
@@ -142,12 +121,26 @@ void ApplyFlowJacobian(const FlowJacobian& j, const StepSensitivity& s, StepSens
   // positions: p_dot = v
   k->middleRows<3>(I::kPayloadPos) = s.middleRows<3>(I::kPayloadVel);
   k->middleRows<3>(I::kQuadPos) = s.middleRows<3>(I::kQuadVel);
-  // accelerations: depend on the first 16 states and u
-  Eigen::Matrix<double, 6, kNxu> acc;
-  acc.noalias() = j.acc_x.lazyProduct(s.topRows<16>());
-  acc.rightCols<kNu>() += j.acc_u;
-  k->middleRows<3>(I::kPayloadVel) = acc.topRows<3>();
-  k->middleRows<3>(I::kQuadVel) = acc.bottomRows<3>();
+  // accelerations from the thrust vector f and the cable force T xi
+  Eigen::Matrix<double, 3, kNxu> force;
+  force.noalias() = j.thrust_q.lazyProduct(s.middleRows<4>(I::kQuat));
+  force.rightCols<kNu>() += j.thrust_u;
+  if (j.taut) {
+    const Eigen::Matrix<double, 3, kNxu> s_r =
+        s.middleRows<3>(I::kPayloadPos) - s.middleRows<3>(I::kQuadPos);
+    const Eigen::Matrix<double, 3, kNxu> s_v =
+        s.middleRows<3>(I::kPayloadVel) - s.middleRows<3>(I::kQuadVel);
+    Eigen::Matrix<double, 3, kNxu> cable;
+    cable.noalias() = j.cable_r.lazyProduct(s_r);
+    cable.noalias() += j.cable_v.lazyProduct(s_v);
+    cable.noalias() += j.cable_q.lazyProduct(s.middleRows<4>(I::kQuat));
+    cable.rightCols<kNu>() += j.cable_u;
+    k->middleRows<3>(I::kPayloadVel) = -j.inv_payload_mass_per_kg * cable;
+    force += cable;
+  } else {
+    k->middleRows<3>(I::kPayloadVel).setZero();
+  }
+  k->middleRows<3>(I::kQuadVel) = j.inv_quad_mass_per_kg * force;
   // attitude and rate
   k->middleRows<4>(I::kQuat).noalias() = j.qdot_q.lazyProduct(s.middleRows<4>(I::kQuat));
   k->middleRows<4>(I::kQuat).noalias() += j.qdot_w.lazyProduct(s.middleRows<3>(I::kBodyRate));
@@ -170,20 +163,24 @@ void ExactStepJacobians(const HybridModel& model, const StateVector& x, const In
   const StateVector x2 = (x + (0.5 * h) * f1).eval();
   const StateVector f2 = model.Derivative(x2, u, mode);
   EvaluateFlowJacobian(p, allocation, x2, u, mode, &j);
-  s = StepSensitivity::Identity() + (0.5 * h) * k1;
+  s.noalias() = (0.5 * h) * k1;
+  s.leftCols<kNx>().diagonal().array() += 1.0;
   ApplyFlowJacobian(j, s, &k2);
   const StateVector x3 = (x + (0.5 * h) * f2).eval();
   const StateVector f3 = model.Derivative(x3, u, mode);
   EvaluateFlowJacobian(p, allocation, x3, u, mode, &j);
-  s = StepSensitivity::Identity() + (0.5 * h) * k2;
+  s.noalias() = (0.5 * h) * k2;
+  s.leftCols<kNx>().diagonal().array() += 1.0;
   ApplyFlowJacobian(j, s, &k3);
   const StateVector x4 = (x + h * f3).eval();
   const StateVector f4 = model.Derivative(x4, u, mode);
   EvaluateFlowJacobian(p, allocation, x4, u, mode, &j);
-  s = StepSensitivity::Identity() + h * k3;
+  s.noalias() = h * k3;
+  s.leftCols<kNx>().diagonal().array() += 1.0;
   ApplyFlowJacobian(j, s, &k4);
   StateVector y = x + (h / 6.0) * (f1 + 2.0 * f2 + 2.0 * f3 + f4);
-  s = StepSensitivity::Identity() + (h / 6.0) * (k1 + 2.0 * k2 + 2.0 * k3 + k4);
+  s.noalias() = (h / 6.0) * (k1 + 2.0 * k2 + 2.0 * k3 + k4);
+  s.leftCols<kNx>().diagonal().array() += 1.0;
   // renormalisation q / |q|: d (q / |q|) = (I - q q^T / |q|^2) / |q| dq
   const double q_norm = y.segment<4>(I::kQuat).norm();
   y.segment<4>(I::kQuat) /= q_norm;

@@ -17,15 +17,24 @@ namespace hpa {
 constexpr int kNxu = kNx + kNu;
 using StepSensitivity = Eigen::Matrix<double, kNx, kNxu>;
 
-/// The non-trivial blocks of the flow Jacobian d x_dot / d(x, u). The rest is structural:
-/// d p_dot / d v = I for payload and quadrotor, zeros elsewhere.
+/// The non-trivial blocks of the flow Jacobian d x_dot / d(x, u), in the flow's own factors. The
+/// rest is structural: d p_dot / d v = I for payload and quadrotor, zeros elsewhere. With T xi
+/// the cable force on the quadrotor (taut; zero in slack) and f = f R e3 the thrust vector:
+/// a_L = -T xi / m_L - g e3, a_Q = (f + T xi) / m - g e3; T xi depends on the state through
+/// r = p_L - p_Q, v = v_L - v_Q and q only.
 struct FlowJacobian {
-  // d (a_L, a_Q) / d (p_L, v_L, p_Q, v_Q, q): accelerations do not depend on the body rate
-  Eigen::Matrix<double, 6, 16> acc_x = Eigen::Matrix<double, 6, 16>::Zero();
-  Eigen::Matrix<double, 6, kNu> acc_u = Eigen::Matrix<double, 6, kNu>::Zero();  // d (a_L, a_Q) / du
-  Eigen::Matrix4d qdot_q = Eigen::Matrix4d::Zero();                             // d q_dot / d q
-  Eigen::Matrix<double, 4, 3> qdot_w = Eigen::Matrix<double, 4, 3>::Zero();     // d q_dot / d w_B
-  Eigen::Matrix3d wdot_w = Eigen::Matrix3d::Zero();                             // d w_dot / d w_B
+  bool taut = true;                                   // the cable-force blocks apply
+  double inv_payload_mass_per_kg = 0.0;               // 1 / m_L
+  double inv_quad_mass_per_kg = 0.0;                  // 1 / m
+  Eigen::Matrix3d cable_r = Eigen::Matrix3d::Zero();  // d (T xi) / dr
+  Eigen::Matrix3d cable_v = Eigen::Matrix3d::Zero();  // d (T xi) / dv
+  Eigen::Matrix<double, 3, 4> cable_q = Eigen::Matrix<double, 3, 4>::Zero();       // d (T xi) / dq
+  Eigen::Matrix<double, 3, kNu> cable_u = Eigen::Matrix<double, 3, kNu>::Zero();   // d (T xi) / du
+  Eigen::Matrix<double, 3, 4> thrust_q = Eigen::Matrix<double, 3, 4>::Zero();      // d f / dq
+  Eigen::Matrix<double, 3, kNu> thrust_u = Eigen::Matrix<double, 3, kNu>::Zero();  // d f / du
+  Eigen::Matrix4d qdot_q = Eigen::Matrix4d::Zero();                                // d q_dot / d q
+  Eigen::Matrix<double, 4, 3> qdot_w = Eigen::Matrix<double, 4, 3>::Zero();      // d q_dot / d w_B
+  Eigen::Matrix3d wdot_w = Eigen::Matrix3d::Zero();                              // d w_dot / d w_B
   Eigen::Matrix<double, 3, kNu> wdot_u = Eigen::Matrix<double, 3, kNu>::Zero();  // d w_dot / du
 };
 
