@@ -118,12 +118,16 @@ void DenseFlowJacobian(const FlowJacobian& jacobian, StateMatrix* a, InputMatrix
 }
 
 void ApplyFlowJacobian(const FlowJacobian& j, const StepSensitivity& s, StepSensitivity* k) {
+  // columns the attitude rows of s can be nonzero in (q, w, u), and the rate rows (w, u)
+  constexpr int kQuatCols = kNxu - I::kQuat, kRateCols = kNxu - I::kBodyRate;
+  const auto s_q = s.block<4, kQuatCols>(I::kQuat, I::kQuat);
+  const auto s_w = s.block<3, kRateCols>(I::kBodyRate, I::kBodyRate);
   // positions: p_dot = v
   k->middleRows<3>(I::kPayloadPos) = s.middleRows<3>(I::kPayloadVel);
   k->middleRows<3>(I::kQuadPos) = s.middleRows<3>(I::kQuadVel);
   // accelerations from the thrust vector f and the cable force T xi
-  Eigen::Matrix<double, 3, kNxu> force;
-  force.noalias() = j.thrust_q.lazyProduct(s.middleRows<4>(I::kQuat));
+  Eigen::Matrix<double, 3, kNxu> force = Eigen::Matrix<double, 3, kNxu>::Zero();
+  force.rightCols<kQuatCols>().noalias() = j.thrust_q.lazyProduct(s_q);
   force.rightCols<kNu>() += j.thrust_u;
   if (j.taut) {
     const Eigen::Matrix<double, 3, kNxu> s_r =
@@ -133,7 +137,7 @@ void ApplyFlowJacobian(const FlowJacobian& j, const StepSensitivity& s, StepSens
     Eigen::Matrix<double, 3, kNxu> cable;
     cable.noalias() = j.cable_r.lazyProduct(s_r);
     cable.noalias() += j.cable_v.lazyProduct(s_v);
-    cable.noalias() += j.cable_q.lazyProduct(s.middleRows<4>(I::kQuat));
+    cable.rightCols<kQuatCols>().noalias() += j.cable_q.lazyProduct(s_q);
     cable.rightCols<kNu>() += j.cable_u;
     k->middleRows<3>(I::kPayloadVel) = -j.inv_payload_mass_per_kg * cable;
     force += cable;
@@ -141,10 +145,12 @@ void ApplyFlowJacobian(const FlowJacobian& j, const StepSensitivity& s, StepSens
     k->middleRows<3>(I::kPayloadVel).setZero();
   }
   k->middleRows<3>(I::kQuadVel) = j.inv_quad_mass_per_kg * force;
-  // attitude and rate
-  k->middleRows<4>(I::kQuat).noalias() = j.qdot_q.lazyProduct(s.middleRows<4>(I::kQuat));
-  k->middleRows<4>(I::kQuat).noalias() += j.qdot_w.lazyProduct(s.middleRows<3>(I::kBodyRate));
-  k->middleRows<3>(I::kBodyRate).noalias() = j.wdot_w.lazyProduct(s.middleRows<3>(I::kBodyRate));
+  // attitude (q, w) and rate (w) rows keep the pattern
+  k->block<4, I::kQuat>(I::kQuat, 0).setZero();
+  k->block<4, kQuatCols>(I::kQuat, I::kQuat).noalias() = j.qdot_q.lazyProduct(s_q);
+  k->block<4, kRateCols>(I::kQuat, I::kBodyRate).noalias() += j.qdot_w.lazyProduct(s_w);
+  k->block<3, I::kBodyRate>(I::kBodyRate, 0).setZero();
+  k->block<3, kRateCols>(I::kBodyRate, I::kBodyRate).noalias() = j.wdot_w.lazyProduct(s_w);
   k->block<3, kNu>(I::kBodyRate, kNx) += j.wdot_u;
 }
 

@@ -22,8 +22,12 @@ struct RtiWorkspace::Impl {
 
 RtiWorkspace::RtiWorkspace() : impl_(std::make_unique<Impl>()) {}
 RtiWorkspace::~RtiWorkspace() = default;
-RtiWorkspace::RtiWorkspace(const RtiWorkspace&) : impl_(std::make_unique<Impl>()) {}
-RtiWorkspace& RtiWorkspace::operator=(const RtiWorkspace&) { return *this; }
+RtiWorkspace::RtiWorkspace(const RtiWorkspace& other)
+    : impl_(std::make_unique<Impl>(*other.impl_)) {}
+RtiWorkspace& RtiWorkspace::operator=(const RtiWorkspace& other) {
+  *impl_ = *other.impl_;
+  return *this;
+}
 
 namespace {
 

@@ -53,14 +53,17 @@ struct RtiResult {
 };
 
 /// Scratch memory of RtiIteration (linearisation, stage models, QP), sized by the first call and
-/// reused by the next ones without heap allocation. Copies start empty (it holds no state).
+/// reused by the next ones without heap allocation. A copy has the same sizes (a copied controller
+/// solves without allocating); the contents are scratch, never read before written.
 class RtiWorkspace {
  public:
+  /// An empty workspace, sized by the first RtiIteration that uses it.
   RtiWorkspace();
+  /// Frees the scratch.
   ~RtiWorkspace();
-  /// A fresh, empty workspace (the scratch is not copied).
+  /// Copies the scratch (sizes and contents).
   RtiWorkspace(const RtiWorkspace&);
-  /// Keeps this workspace's own scratch.
+  /// Copies the scratch (sizes and contents).
   RtiWorkspace& operator=(const RtiWorkspace&);
 
   struct Impl;  // defined in rti_solver.cc
