@@ -5,6 +5,7 @@
 #include "box_qp.h"
 #include "condensing.h"
 #include "hpa/controller/ocp_solver.h"
+#include "riccati_qp.h"
 
 namespace hpa {
 
@@ -14,6 +15,7 @@ struct RtiWorkspace::Impl {
   std::vector<StageQuadratic> stages;  // (N + 1)
   CondensingWorkspace condensing;
   BoxQpWorkspace qp;
+  RiccatiWorkspace riccati;
   Eigen::MatrixXd h, h_reg;        // condensed Hessian, and with the LM term  (4N x 4N)
   Eigen::VectorXd g, lb, ub, du;   // gradient, step bounds, step  (4N)
   std::vector<InputVector> u_try;  // line-search trial  (N)
@@ -45,10 +47,16 @@ bool BuildQp(const Ocp& ocp, const StateVector& x0, const RtiSettings& settings,
   result->cost = w->lin.cost;
   result->x = w->lin.x;
   if (!std::isfinite(w->lin.cost)) return false;
-  if (settings.condensing == RtiCondensing::kStructured) {
-    CondenseStructured(w->lin.a, w->lin.b, w->stages, &w->condensing, &w->h, &w->g);
-  } else {
-    Condense(w->lin.a, w->lin.b, w->stages, &w->condensing, &w->h, &w->g);
+  switch (settings.qp_method) {
+    case RtiQpMethod::kStructuredCondensing:
+      CondenseStructured(w->lin.a, w->lin.b, w->stages, &w->condensing, &w->h, &w->g);
+      break;
+    case RtiQpMethod::kDenseCondensing:
+      Condense(w->lin.a, w->lin.b, w->stages, &w->condensing, &w->h, &w->g);
+      break;
+    case RtiQpMethod::kRiccati:
+      StageQpGradient(w->lin.a, w->lin.b, w->stages, &w->g);  // the stages are the QP
+      break;
   }
   w->lb.resize(kNu * n);
   w->ub.resize(kNu * n);
@@ -57,6 +65,21 @@ bool BuildQp(const Ocp& ocp, const StateVector& x0, const RtiSettings& settings,
     w->ub.segment<kNu>(kNu * k) = ocp.u_max_radps - result->u[k];
   }
   return true;
+}
+
+// The box QP on du with the Levenberg-Marquardt term shift * I on the input Hessian.
+BoxQpResult SolveQp(const RtiSettings& settings, double shift, RtiWorkspace::Impl* w) {
+  if (settings.qp_method == RtiQpMethod::kRiccati) {
+    return SolveRiccatiBoxQp(w->lin.a, w->lin.b, w->stages, shift, w->lb, w->ub, &w->du,
+                             &w->riccati);
+  }
+  const Eigen::MatrixXd* h_qp = &w->h;
+  if (shift > 0.0) {
+    w->h_reg = w->h;
+    w->h_reg.diagonal().array() += shift;
+    h_qp = &w->h_reg;
+  }
+  return SolveBoxQp(*h_qp, w->g, w->lb, w->ub, &w->du, &w->qp);
 }
 
 // Armijo backtracking along w->du from result->u (cost `cost`, directional derivative `slope`):
@@ -108,14 +131,8 @@ void RtiIteration(const Ocp& ocp, const StateVector& x0, const std::vector<Input
   w->du.resize(kNu * n);
   for (int attempt = 0; attempt < settings.lm_max_tries; ++attempt) {
     if (attempt > 0) mu = mu > 0.0 ? mu * settings.lm_growth : settings.lm_first_increase;
-    const Eigen::MatrixXd* h_qp = &w->h;
-    if (mu > 0.0) {
-      w->h_reg = w->h;
-      w->h_reg.diagonal().array() += mu * lm_unit;
-      h_qp = &w->h_reg;
-    }
     w->du.setZero();
-    const BoxQpResult qp = SolveBoxQp(*h_qp, w->g, w->lb, w->ub, &w->du, &w->qp);
+    const BoxQpResult qp = SolveQp(settings, mu * lm_unit, w);
     result->qp_iterations = qp.iterations;
     ++result->qp_solves;
     if (qp.status == BoxQpStatus::kNotPositiveDefinite || qp.status == BoxQpStatus::kNonFinite ||

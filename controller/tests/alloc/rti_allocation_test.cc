@@ -73,19 +73,20 @@ TEST(RtiAllocationTest, CountingAllocatorSeesAllocations) {
   EXPECT_GT(CountAllocations([]() { std::vector<int> v(10); }), 0);
 }
 
-// Lissajous tracking from an offset hover state, taut and slack (L_cam on), both condensings:
+// Lissajous tracking from an offset hover state, taut and slack (L_cam on), every QP method:
 // after two warm-up iterations with the same workspace and result, an RTI step (linearisation,
 // stage models, condensing, box QP, line search) allocates nothing.
 TEST(RtiAllocationTest, SteadyStateStepAllocatesNothing) {
   const Params params;
   const auto ref = MakeLissajousReference(params, LissajousSpec());
   for (CableMode mode : {CableMode::kTaut, CableMode::kSlack}) {
-    for (RtiCondensing condensing : {RtiCondensing::kStructured, RtiCondensing::kDense}) {
+    for (RtiQpMethod method : {RtiQpMethod::kStructuredCondensing, RtiQpMethod::kDenseCondensing,
+                               RtiQpMethod::kRiccati}) {
       const Ocp ocp = BuildOcp(params, *ref, 0.7, mode, 1.0);
       StateVector x0 = HybridModel(params).HoverState(ref->At(0.7).p_WQ_W);
       x0(StateIndex::kQuadPos) += 0.2;
       RtiSettings settings;
-      settings.condensing = condensing;
+      settings.qp_method = method;
       RtiWorkspace workspace;
       RtiResult result;
       std::vector<InputVector> guess(ocp.horizon_steps,
@@ -96,7 +97,7 @@ TEST(RtiAllocationTest, SteadyStateStepAllocatesNothing) {
       }
       const long allocations =
           CountAllocations([&]() { RtiIteration(ocp, x0, guess, settings, &workspace, &result); });
-      EXPECT_EQ(allocations, 0) << ToString(mode) << " condensing " << static_cast<int>(condensing);
+      EXPECT_EQ(allocations, 0) << ToString(mode) << " qp method " << static_cast<int>(method);
       EXPECT_EQ(result.status, ControlStatus::kSuccess);
       EXPECT_GT(result.step, 0.0);
     }

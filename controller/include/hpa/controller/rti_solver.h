@@ -16,15 +16,16 @@
 
 namespace hpa {
 
-/// How the RTI builds its QP on the rotor-speed steps (both give the same QP up to rounding).
-enum class RtiCondensing {
-  kDense,       // Condense: every block product dense
-  kStructured,  // CondenseStructured: skips the stage Hessians' and the dynamics' zero blocks
+/// How the RTI solves its QP on the rotor-speed steps (all give the same step up to rounding).
+enum class RtiQpMethod {
+  kDenseCondensing,       // Condense (every block product dense), then the dense box QP
+  kStructuredCondensing,  // CondenseStructured (skips the zero blocks), then the dense box QP
+  kRiccati,               // no condensing: active-set box QP with Riccati recursions (riccati_qp.h)
 };
 
 /// Globalisation of the RTI step and its QP.
 struct RtiSettings {
-  RtiCondensing condensing = RtiCondensing::kStructured;
+  RtiQpMethod qp_method = RtiQpMethod::kStructuredCondensing;
   // Levenberg-Marquardt: H + mu * lm_unit * I, lm_unit = the input-cost curvature
   // r_input / u_hover^2 (so mu = 1 doubles the input regularisation). Tries mu = lm_initial,
   // then multiplies by lm_growth up to lm_max_tries QP solves.
