@@ -9,9 +9,9 @@ using I = StateIndex;
 
 // The thrust vector f R e3 in world and its Jacobians in q (3 x 4) and u (3 x 4).
 struct ThrustVectorJacobian {
-  Eigen::Vector3d f_W_N;
-  Eigen::Matrix<double, 3, 4> f_q;
-  Eigen::Matrix<double, 3, kNu> f_u;
+  Eigen::Vector3d f_W_N;              // f R e3, world
+  Eigen::Matrix<double, 3, 4> f_q;    // d f / d q
+  Eigen::Matrix<double, 3, kNu> f_u;  // d f / d u
 };
 
 // The rotor map: the moment part of d wrench / du into the rate Jacobian, and the thrust vector.
@@ -38,8 +38,8 @@ ThrustVectorJacobian ThrustAndMoments(const Params& p, const Eigen::Matrix4d& al
   return t;
 }
 
-// Taut accelerations: a_L = -T xi / m_L - g e3, a_Q = (f + T xi) / m - g e3 with the tension
-// T of HybridModel's taut flow; derivatives through T, xi = r / |r| and f.
+// The cable-force blocks of the taut flow (a_L = -T xi / m_L - g e3, a_Q = (f + T xi) / m - g e3):
+// d (T xi) / d (r, v, q, u) with T the tension of HybridModel's taut flow and xi = r / |r|.
 void TautAccelerationJacobian(const Params& p, const StateVector& x, const ThrustVectorJacobian& f,
                               FlowJacobian* j) {
   const double m = p.quad_mass_kg, m_L = p.payload_mass_kg;
@@ -50,16 +50,16 @@ void TautAccelerationJacobian(const Params& p, const StateVector& x, const Thrus
   const double d_m = r_W.norm();
   const Eigen::Vector3d xi_W = r_W / d_m;
   const double v_r_mps = v_W.dot(xi_W);
-  const double v_perp_sq = v_W.squaredNorm() - v_r_mps * v_r_mps;
-  const double tension_N = mu_kg * (v_perp_sq / d_m - xi_W.dot(f.f_W_N) / m + k_d * v_r_mps +
+  const double v_perp_sq_m2ps2 = v_W.squaredNorm() - v_r_mps * v_r_mps;
+  const double tension_N = mu_kg * (v_perp_sq_m2ps2 / d_m - xi_W.dot(f.f_W_N) / m + k_d * v_r_mps +
                                     k_p * (d_m - p.cable_length_m));
   // d xi / d r = (I - xi xi^T) / d, symmetric
   const Eigen::Matrix3d xi_r = (Eigen::Matrix3d::Identity() - xi_W * xi_W.transpose()) / d_m;
   const Eigen::Vector3d v_r_r = xi_r * v_W;  // d v_r / d r
   // gradients of the tension in r, v (= v_L - v_Q), q and u
   const Eigen::Vector3d t_r =
-      mu_kg * (-2.0 * v_r_mps / d_m * v_r_r - v_perp_sq / (d_m * d_m) * xi_W - xi_r * f.f_W_N / m +
-               k_d * v_r_r + k_p * xi_W);
+      mu_kg * (-2.0 * v_r_mps / d_m * v_r_r - v_perp_sq_m2ps2 / (d_m * d_m) * xi_W -
+               xi_r * f.f_W_N / m + k_d * v_r_r + k_p * xi_W);
   const Eigen::Vector3d t_v = mu_kg * (2.0 * (v_W - v_r_mps * xi_W) / d_m + k_d * xi_W);
   const Eigen::Vector4d t_q = -mu_kg / m * f.f_q.transpose() * xi_W;
   const Eigen::Vector4d t_u = -mu_kg / m * f.f_u.transpose() * xi_W;
@@ -160,32 +160,31 @@ void ExactStepJacobians(const HybridModel& model, const StateVector& x, const In
   const Params& p = model.params();
   const Eigen::Matrix4d allocation = AllocationMatrix(p);
   // the stages as HybridModel's RK4 forms them, with their sensitivities s_i = d x_i / d(x, u)
-  const double h = dt_s;
   FlowJacobian j;
   StepSensitivity k1, k2, k3, k4, s;
   const StateVector f1 = model.Derivative(x, u, mode);
   EvaluateFlowJacobian(p, allocation, x, u, mode, &j);
   ApplyFlowJacobian(j, StepSensitivity::Identity(), &k1);
-  const StateVector x2 = (x + (0.5 * h) * f1).eval();
+  const StateVector x2 = (x + (0.5 * dt_s) * f1).eval();
   const StateVector f2 = model.Derivative(x2, u, mode);
   EvaluateFlowJacobian(p, allocation, x2, u, mode, &j);
-  s.noalias() = (0.5 * h) * k1;
+  s.noalias() = (0.5 * dt_s) * k1;
   s.leftCols<kNx>().diagonal().array() += 1.0;
   ApplyFlowJacobian(j, s, &k2);
-  const StateVector x3 = (x + (0.5 * h) * f2).eval();
+  const StateVector x3 = (x + (0.5 * dt_s) * f2).eval();
   const StateVector f3 = model.Derivative(x3, u, mode);
   EvaluateFlowJacobian(p, allocation, x3, u, mode, &j);
-  s.noalias() = (0.5 * h) * k2;
+  s.noalias() = (0.5 * dt_s) * k2;
   s.leftCols<kNx>().diagonal().array() += 1.0;
   ApplyFlowJacobian(j, s, &k3);
-  const StateVector x4 = (x + h * f3).eval();
+  const StateVector x4 = (x + dt_s * f3).eval();
   const StateVector f4 = model.Derivative(x4, u, mode);
   EvaluateFlowJacobian(p, allocation, x4, u, mode, &j);
-  s.noalias() = h * k3;
+  s.noalias() = dt_s * k3;
   s.leftCols<kNx>().diagonal().array() += 1.0;
   ApplyFlowJacobian(j, s, &k4);
-  StateVector y = x + (h / 6.0) * (f1 + 2.0 * f2 + 2.0 * f3 + f4);
-  s.noalias() = (h / 6.0) * (k1 + 2.0 * k2 + 2.0 * k3 + k4);
+  StateVector y = x + (dt_s / 6.0) * (f1 + 2.0 * f2 + 2.0 * f3 + f4);
+  s.noalias() = (dt_s / 6.0) * (k1 + 2.0 * k2 + 2.0 * k3 + k4);
   s.leftCols<kNx>().diagonal().array() += 1.0;
   // renormalisation q / |q|: d (q / |q|) = (I - q q^T / |q|^2) / |q| dq
   const double q_norm = y.segment<4>(I::kQuat).norm();
