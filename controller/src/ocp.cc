@@ -187,28 +187,42 @@ void ScheduleRetaut(const Reference& reference, double t0_s, int stage, Ocp* ocp
 
 Ocp BuildOcp(std::shared_ptr<const HybridModel> model, const Reference& reference, double t0_s,
              CableMode mode, double perception_weight, const OcpWeights& weights) {
-  const Params& params = model->params();
   Ocp ocp;
-  ocp.mode = mode;
-  ocp.perception_weight = perception_weight;
-  ocp.weights = weights;
-  ocp.u_hover_radps = params.HoverMotorSpeedRadps();
-  ocp.u_min_radps = InputVector::Constant(params.motor_speed_min_radps);
-  ocp.u_max_radps = InputVector::Constant(params.motor_speed_max_radps);
-  ocp.R_BC = params.R_BC;
-  ocp.t_BC_B_m = params.t_BC_B_m;
-  ocp.camera_tan_half_fov =
+  BuildOcp(std::move(model), reference, t0_s, mode, perception_weight, weights, &ocp);
+  return ocp;
+}
+
+void BuildOcp(std::shared_ptr<const HybridModel> model, const Reference& reference, double t0_s,
+              CableMode mode, double perception_weight, const OcpWeights& weights, Ocp* ocp) {
+  const Params& params = model->params();
+  // a fresh problem that keeps the vectors' memory
+  std::vector<StateVector> x_ref = std::move(ocp->x_ref);
+  std::vector<InputVector> u_ref = std::move(ocp->u_ref);
+  std::vector<Eigen::Vector2d> deadzones = std::move(ocp->cam_slack_deadzone_stage_m);
+  *ocp = Ocp();
+  ocp->x_ref = std::move(x_ref);
+  ocp->u_ref = std::move(u_ref);
+  ocp->cam_slack_deadzone_stage_m = std::move(deadzones);
+  ocp->cam_slack_deadzone_stage_m.clear();
+  ocp->mode = mode;
+  ocp->perception_weight = perception_weight;
+  ocp->weights = weights;
+  ocp->u_hover_radps = params.HoverMotorSpeedRadps();
+  ocp->u_min_radps = InputVector::Constant(params.motor_speed_min_radps);
+  ocp->u_max_radps = InputVector::Constant(params.motor_speed_max_radps);
+  ocp->R_BC = params.R_BC;
+  ocp->t_BC_B_m = params.t_BC_B_m;
+  ocp->camera_tan_half_fov =
       Eigen::Vector2d(0.5 * params.camera_width_px, 0.5 * params.camera_height_px) /
       params.CameraFocalPx();
-  ocp.x_ref.resize(ocp.horizon_steps + 1);
-  ocp.u_ref.resize(ocp.horizon_steps);
-  for (int k = 0; k <= ocp.horizon_steps; ++k) {
-    const ReferencePoint point = reference.At(t0_s + k * ocp.stage_dt_s);
-    ocp.x_ref[k] = StateReference(params, point, mode);
-    if (k < ocp.horizon_steps) ocp.u_ref[k] = InputReference(params, point, mode);
+  ocp->x_ref.resize(ocp->horizon_steps + 1);
+  ocp->u_ref.resize(ocp->horizon_steps);
+  for (int k = 0; k <= ocp->horizon_steps; ++k) {
+    const ReferencePoint point = reference.At(t0_s + k * ocp->stage_dt_s);
+    ocp->x_ref[k] = StateReference(params, point, mode);
+    if (k < ocp->horizon_steps) ocp->u_ref[k] = InputReference(params, point, mode);
   }
-  ocp.model = std::move(model);
-  return ocp;
+  ocp->model = std::move(model);
 }
 
 Ocp BuildOcp(const Params& params, const Reference& reference, double t0_s, CableMode mode,

@@ -175,6 +175,15 @@ class RtiSolver final : public OcpSolver {
     return {result_.status, result_.u, result_.x, result_.cost};
   }
 
+  void SolveInto(const Ocp& ocp, const StateVector& x0, const std::vector<InputVector>& u_guess,
+                 OcpSolution* solution) override {
+    RtiIteration(ocp, x0, u_guess, settings_, &workspace_, &result_);
+    solution->status = result_.status;
+    solution->u = result_.u;
+    solution->x = result_.x;
+    solution->cost = result_.cost;
+  }
+
   std::unique_ptr<OcpSolver> Clone() const override { return std::make_unique<RtiSolver>(*this); }
 
  private:

@@ -7,6 +7,7 @@
 #include <cstdlib>
 #include <new>
 
+#include "hpa/controller/hpa_mpc.h"
 #include "hpa/controller/rti_solver.h"
 
 namespace {
@@ -101,6 +102,29 @@ TEST(RtiAllocationTest, SteadyStateStepAllocatesNothing) {
       EXPECT_EQ(result.status, ControlStatus::kSuccess);
       EXPECT_GT(result.step, 0.0);
     }
+  }
+}
+
+// The whole controller update (warm start, problem building, RTI, plan swap) of hpa_mpc, taut and
+// slack (re-taut prediction on), allocates nothing once it has run a few times.
+TEST(RtiAllocationTest, SteadyStateMpcUpdateAllocatesNothing) {
+  const Params params;
+  const auto ref = MakeLissajousReference(params, LissajousSpec());
+  for (CableMode mode : {CableMode::kTaut, CableMode::kSlack}) {
+    MpcSettings settings;
+    settings.predict_retaut = true;
+    HpaMpc mpc(params, ref, settings);
+    SystemState s;
+    s.FromVector(HybridModel(params).HoverState(ref->At(0.0).p_WQ_W));
+    s.mode = mode;
+    for (int i = 0; i < 3; ++i) {
+      s.time_s = i / settings.rate_hz;
+      static_cast<void>(mpc.Update(s));
+    }
+    s.time_s = 3 / settings.rate_hz;
+    ControlOutput out;
+    EXPECT_EQ(CountAllocations([&]() { out = mpc.Update(s); }), 0) << ToString(mode);
+    EXPECT_EQ(out.status, ControlStatus::kSuccess) << ToString(mode);
   }
 }
 

@@ -188,6 +188,10 @@ Ocp BuildOcp(std::shared_ptr<const HybridModel> model, const Reference& referenc
              CableMode mode, double perception_weight,
              const OcpWeights& weights = OcpWeights::Tuned());
 
+/// BuildOcp into `ocp`, reusing its vectors (no heap allocation once they have their sizes).
+void BuildOcp(std::shared_ptr<const HybridModel> model, const Reference& reference, double t0_s,
+              CableMode mode, double perception_weight, const OcpWeights& weights, Ocp* ocp);
+
 /// BuildOcp on a HybridModel of its own made from params.
 Ocp BuildOcp(const Params& params, const Reference& reference, double t0_s, CableMode mode,
              double perception_weight, const OcpWeights& weights = OcpWeights::Tuned());
