@@ -11,10 +11,15 @@
 #include "../tests/closed_loop_sim.h"
 #include "box_qp.h"
 #include "condensing.h"
+#include "exact_derivatives.h"
 #include "hpa/controller/hpa_mpc.h"
+#include "riccati_qp.h"
 
 namespace hpa {
 namespace {
+
+// The RTI's default QP method.
+RtiQpMethod RtiQpSettingsDefault() { return RtiSettings().qp_method; }
 
 // A controller and state 3 s into the paper's Lissajous (a = 2, b = 0.5, n = 2, T = 5 s),
 // reached by flying the closed loop on the analytic plant, so the plan is warm.
@@ -24,12 +29,15 @@ struct WarmScenario {
   std::unique_ptr<HpaMpc> mpc;
   SystemState state;
 
-  explicit WarmScenario(const std::string& solver) {
+  explicit WarmScenario(const std::string& solver, RtiQpMethod qp_method = RtiQpSettingsDefault()) {
     ref = MakeLissajousReference(params, LissajousSpec());
     MpcSettings settings;
     settings.solver = solver;
+    settings.solvers.rti.qp_method = qp_method;
     mpc = std::make_unique<HpaMpc>(params, ref, settings);
-    HpaMpc rti(params, ref, MpcSettings());
+    MpcSettings flown;  // RTI with this scenario's QP method
+    flown.solvers.rti.qp_method = qp_method;
+    HpaMpc rti(params, ref, flown);
     testing_util::HybridPlant plant(params, HybridModel(params).HoverState(ref->At(0).p_WQ_W),
                                     CableMode::kTaut);
     testing_util::RunClosedLoop(params, &rti, &plant, 3.0);
@@ -56,6 +64,19 @@ void BM_HpaMpcRtiStep(benchmark::State& st) {
   }
 }
 BENCHMARK(BM_HpaMpcRtiStep)->Unit(benchmark::kMicrosecond);
+
+// BM_HpaMpcRtiStep with each QP method: 0 dense condensing, 1 structured condensing, 2 Riccati.
+void BM_HpaMpcRtiStepQpMethod(benchmark::State& st) {
+  WarmScenario sc("rti", static_cast<RtiQpMethod>(st.range(0)));
+  const HpaMpc saved = *sc.mpc;
+  for (auto _ : st) {
+    st.PauseTiming();
+    *sc.mpc = saved;
+    st.ResumeTiming();
+    benchmark::DoNotOptimize(sc.mpc->Update(sc.state));
+  }
+}
+BENCHMARK(BM_HpaMpcRtiStepQpMethod)->Arg(0)->Arg(1)->Arg(2)->Unit(benchmark::kMicrosecond);
 
 // Thread CPU time in ms (excludes preemption by other processes on a shared machine).
 double ThreadCpuMs() {
@@ -128,8 +149,23 @@ void BM_HpaMpcNloptSolve(benchmark::State& st) {
 }
 BENCHMARK(BM_HpaMpcNloptSolve)->Unit(benchmark::kMillisecond);
 
-// Parts of one RTI call.
+// Parts of one RTI call. The RK4 step's Jacobians: hand-derived (what the OCP uses) and by
+// forward-mode AD (HybridModel::StepJacobians, the reference the tests compare with).
 void BM_StepJacobians(benchmark::State& st) {
+  WarmScenario sc("rti");
+  const InputVector u = sc.mpc->plan_inputs()[0];
+  StateVector x_next;
+  StateMatrix a;
+  InputMatrix b;
+  for (auto _ : st) {
+    ExactStepJacobians(sc.mpc->model(), sc.state.ToVector(), u, CableMode::kTaut, 0.1, &x_next, &a,
+                       &b);
+    benchmark::DoNotOptimize(a);
+  }
+}
+BENCHMARK(BM_StepJacobians)->Unit(benchmark::kMicrosecond);
+
+void BM_StepJacobiansAutoDiff(benchmark::State& st) {
   WarmScenario sc("rti");
   const InputVector u = sc.mpc->plan_inputs()[0];
   StateVector x_next;
@@ -140,8 +176,10 @@ void BM_StepJacobians(benchmark::State& st) {
     benchmark::DoNotOptimize(a);
   }
 }
-BENCHMARK(BM_StepJacobians)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_StepJacobiansAutoDiff)->Unit(benchmark::kMicrosecond);
 
+// The QP of one RTI: arg 0 Condense + dense box QP, arg 1 CondenseStructured + dense box QP,
+// arg 2 the Riccati box QP (no condensing); workspaces kept.
 void BM_CondenseAndQp(benchmark::State& st) {
   WarmScenario sc("rti");
   const Ocp ocp = sc.mpc->BuildProblem(sc.state);
@@ -157,13 +195,25 @@ void BM_CondenseAndQp(benchmark::State& st) {
   }
   Eigen::MatrixXd h;
   Eigen::VectorXd g;
+  Eigen::VectorXd du(kNu * n);
+  CondensingWorkspace condensing;
+  BoxQpWorkspace qp;
+  RiccatiWorkspace riccati;
   for (auto _ : st) {
-    Condense(lin.a, lin.b, stages, &h, &g);
-    Eigen::VectorXd du = Eigen::VectorXd::Zero(kNu * n);
-    benchmark::DoNotOptimize(SolveBoxQp(h, g, lb, ub, &du));
+    du.setZero();
+    if (st.range(0) == 2) {
+      benchmark::DoNotOptimize(SolveRiccatiBoxQp(lin.a, lin.b, stages, 0.0, lb, ub, &du, &riccati));
+      continue;
+    }
+    if (st.range(0) == 0) {
+      Condense(lin.a, lin.b, stages, &condensing, &h, &g);
+    } else {
+      CondenseStructured(lin.a, lin.b, stages, &condensing, &h, &g);
+    }
+    benchmark::DoNotOptimize(SolveBoxQp(h, g, lb, ub, &du, &qp));
   }
 }
-BENCHMARK(BM_CondenseAndQp)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_CondenseAndQp)->Arg(0)->Arg(1)->Arg(2)->Unit(benchmark::kMicrosecond);
 
 }  // namespace
 }  // namespace hpa

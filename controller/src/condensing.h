@@ -31,4 +31,34 @@ StageQuadratic GaussNewtonStage(const ResidualVector& r, const ResidualStateJaco
 void Condense(const std::vector<StateMatrix>& a, const std::vector<InputMatrix>& b,
               const std::vector<StageQuadratic>& stages, Eigen::MatrixXd* h, Eigen::VectorXd* g);
 
+/// One stored entry of a sparse stage Hessian block.
+struct SparseEntry {
+  int row = 0;
+  int col = 0;
+  double value = 0.0;
+};
+
+/// Scratch of Condense and CondenseStructured, kept between calls: sized on the first call, then
+/// reused without allocating.
+struct CondensingWorkspace {
+  std::vector<InputMatrix> sens;              // d x_k / d u_j for one j  (N + 1)
+  std::vector<std::vector<SparseEntry>> hxx;  // nonzeros of each stage's Hxx  (N + 1)
+  std::vector<char> hxu_zero;                 // stage's Hxu is all zero  (N + 1)
+  std::vector<char> attitude_decoupled;       // A_k's pattern, see CondenseStructured  (N)
+};
+
+/// Condense with its scratch in `workspace` (no heap allocation once sized).
+void Condense(const std::vector<StateMatrix>& a, const std::vector<InputMatrix>& b,
+              const std::vector<StageQuadratic>& stages, CondensingWorkspace* workspace,
+              Eigen::MatrixXd* h, Eigen::VectorXd* g);
+
+/// Condense with the same result as `Condense` up to rounding, exploiting the structure of this
+/// OCP: the stage Hessians' zeros (Hxx nearly diagonal, Hxu zero when no residual row couples
+/// states and inputs), and, where A_k has it, the rigid body's pattern: the attitude and rate
+/// rows do not depend on positions and velocities, and the rate rows not on the attitude.
+/// Both are detected from the values (exact zeros), so any A_k and stage model are handled.
+void CondenseStructured(const std::vector<StateMatrix>& a, const std::vector<InputMatrix>& b,
+                        const std::vector<StageQuadratic>& stages, CondensingWorkspace* workspace,
+                        Eigen::MatrixXd* h, Eigen::VectorXd* g);
+
 }  // namespace hpa

@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <optional>
 #include <stdexcept>
 
 namespace hpa {
@@ -32,7 +31,10 @@ HpaMpc::HpaMpc(const HpaMpc& other)
       solver_(other.solver_->Clone()),
       plan_u_(other.plan_u_),
       plan_x_(other.plan_x_),
-      plan_time_s_(other.plan_time_s_) {}
+      plan_time_s_(other.plan_time_s_),
+      guess_(other.guess_),
+      ocp_(other.ocp_),
+      solution_(other.solution_) {}
 
 HpaMpc& HpaMpc::operator=(const HpaMpc& other) {
   if (this != &other) *this = HpaMpc(other);
@@ -45,6 +47,13 @@ void HpaMpc::Reset() {
 }
 
 Ocp HpaMpc::BuildProblem(const SystemState& state, const std::vector<InputVector>& guess) const {
+  Ocp ocp;
+  BuildProblem(state, guess, &ocp);
+  return ocp;
+}
+
+void HpaMpc::BuildProblem(const SystemState& state, const std::vector<InputVector>& guess,
+                          Ocp* ocp) const {
   const CableMode mode = settings_.hybrid ? state.mode : CableMode::kTaut;
   // a lost payload (hybrid only: the paper's baseline has no such notion): the quadrotor is
   // held on its reference, as in slack, and no cost looks at the guessed payload
@@ -52,43 +61,50 @@ Ocp HpaMpc::BuildProblem(const SystemState& state, const std::vector<InputVector
   const double perception = settings_.hybrid && !lost ? settings_.perception_weight : 0.0;
   OcpWeights weights = settings_.weights;
   if (lost) weights.q_load = weights.q_quad;
-  Ocp ocp = BuildOcp(model_, *reference_, state.time_s, mode, perception, weights);
-  SetCameraDeadzone(state, &ocp);
+  BuildOcp(model_, *reference_, state.time_s, mode, perception, weights, ocp);
+  SetCameraDeadzone(state, ocp);
   const bool slack_plan = settings_.hybrid && mode == CableMode::kSlack && !lost;
-  if (!slack_plan) return ocp;
+  if (!slack_plan) return;
   // the plan the slack horizon is predicted along: the caller's guess, else the warm start
-  const std::vector<InputVector> plan = guess.empty() ? WarmStart(state.time_s) : guess;
+  std::vector<InputVector> warm;
+  if (guess.empty()) warm = WarmStart(state.time_s);
+  const std::vector<InputVector>& plan = guess.empty() ? warm : guess;
   const StateVector x0 = state.ToVector();
   if (settings_.predict_retaut) {
     // the mode sequence is fixed for the solve: where the plan meets the guard
-    const int stage = PredictRetautStage(ocp, x0, plan);
-    if (stage > 0) ScheduleRetaut(*reference_, state.time_s, stage, &ocp);
+    const int stage = PredictRetautStage(*ocp, x0, plan);
+    if (stage > 0) ScheduleRetaut(*reference_, state.time_s, stage, ocp);
   }
   // the slack camera term per stage, from that stage's predicted payload
-  if (perception > 0.0) SetCameraDeadzonesAlong(x0, plan, &ocp);
-  return ocp;
+  if (perception > 0.0) SetCameraDeadzonesAlong(x0, plan, ocp);
 }
 
 std::vector<InputVector> HpaMpc::WarmStart(double t_s) const {
+  std::vector<InputVector> u;
+  WarmStart(t_s, &u);
+  return u;
+}
+
+void HpaMpc::WarmStart(double t_s, std::vector<InputVector>* u) const {
   const int n = kOcpHorizonSteps;
   const double dt = kOcpStageDtS;
   const double elapsed_s = t_s - plan_time_s_;
   if (plan_u_.size() != static_cast<size_t>(n) || !std::isfinite(elapsed_s) || elapsed_s < 0.0 ||
       elapsed_s > n * dt) {
-    return std::vector<InputVector>(n, InputVector::Constant(params_.HoverMotorSpeedRadps()));
+    u->assign(n, InputVector::Constant(params_.HoverMotorSpeedRadps()));
+    return;
   }
-  std::vector<InputVector> u(n);
+  u->resize(n);
   for (int k = 0; k < n; ++k) {
     const double tau = (k * dt + elapsed_s) / dt;  // position in the old plan, in stages
     const int i = static_cast<int>(std::floor(tau));
     if (i >= n - 1) {
-      u[k] = plan_u_[n - 1];
+      (*u)[k] = plan_u_[n - 1];
     } else {
       const double frac = tau - i;
-      u[k] = (1.0 - frac) * plan_u_[i] + frac * plan_u_[i + 1];
+      (*u)[k] = (1.0 - frac) * plan_u_[i] + frac * plan_u_[i + 1];
     }
   }
-  return u;
 }
 
 BodyRateCommand HpaMpc::CommandFromPlan() const {
@@ -98,39 +114,40 @@ BodyRateCommand HpaMpc::CommandFromPlan() const {
   return cmd;
 }
 
-// Outside the envelope the plan can be flown in, recover attitude first and plan afresh after:
-// - tumbling faster than the stage model resolves (a 0.1 s stage of piecewise-constant rotor
-//   speeds turns a plan at this rate through more than a radian, so its stage-1 body rate is
-//   no command);
-// - tilted beyond the recovery tilt: a plan there cuts collective thrust, and a rate loop
-//   without airmode (PX4's default) then has no moment left to level the vehicle.
-// The recovery is PX4's attitude loop toward level (body rate = MC_ROLL_P x the tilt error,
-// yaw left alone) at hover thrust, which leaves the rotors the moment to fly it.
-std::optional<BodyRateCommand> HpaMpc::RecoveryCommand(const SystemState& state) const {
+bool HpaMpc::RecoveryCommand(const SystemState& state, BodyRateCommand* command) const {
+  // Outside the envelope the plan can be flown in, recover attitude first and plan afresh after:
+  // - tumbling faster than the stage model resolves (a 0.1 s stage of piecewise-constant rotor
+  //   speeds turns a plan at this rate through more than a radian, so its stage-1 body rate is
+  //   no command);
+  // - tilted beyond the recovery tilt: a plan there cuts collective thrust, and a rate loop
+  //   without airmode (PX4's default) then has no moment left to level the vehicle.
+  // The recovery is PX4's attitude loop toward level (body rate = MC_ROLL_P x the tilt error,
+  // yaw left alone) at hover thrust, which leaves the rotors the moment to fly it.
   const Eigen::Vector3d z_B_W = state.q_WB * Eigen::Vector3d::UnitZ();
   const double tilt_rad = std::acos(std::clamp(z_B_W.z(), -1.0, 1.0));
   const bool tumbling = settings_.recovery_body_rate_radps > 0.0 &&
                         state.w_B.norm() > settings_.recovery_body_rate_radps;
   const bool tipped = settings_.recovery_tilt_rad > 0.0 && tilt_rad > settings_.recovery_tilt_rad;
-  if (!tumbling && !tipped) return std::nullopt;
-  BodyRateCommand command;
-  command.thrust_N = params_.HoverThrustN();
+  if (!tumbling && !tipped) return false;
+  *command = BodyRateCommand();
+  command->thrust_N = params_.HoverThrustN();
   // rotation taking body z to world z, in the body frame: axis (z_B x e3) in world
   const Eigen::Vector3d axis_W = z_B_W.cross(Eigen::Vector3d::UnitZ());
   if (axis_W.norm() > 1e-9) {
     const Eigen::Vector3d error_B = state.q_WB.conjugate() * (axis_W.normalized() * tilt_rad);
-    command.w_B_radps = settings_.recovery_attitude_gain_per_s * error_B;
-    command.w_B_radps.z() = 0.0;
+    command->w_B_radps = settings_.recovery_attitude_gain_per_s * error_B;
+    command->w_B_radps.z() = 0.0;
   }
-  return command;
+  return true;
 }
 
-// The taut flow holds on the taut manifold only: hpa_mpc projects x0 onto it (jump map);
-// nonhybrid_mpc starts from the state as measured, as the paper's baseline does.
-StateVector HpaMpc::InitialState(CableMode mode, const SystemState& state) const {
-  const bool taut_hybrid = mode == CableMode::kTaut && settings_.hybrid;
-  StateVector x0 = taut_hybrid ? model_->ProjectToTaut(state.ToVector()) : state.ToVector();
-  if (taut_hybrid && state.payload_lost) {
+StateVector HpaMpc::InitialState(const SystemState& state, const Ocp& ocp) const {
+  // the taut flow holds on the taut manifold only: hpa_mpc projects x0 onto it (jump map);
+  // nonhybrid_mpc starts from the state as measured, as the paper's baseline does
+  StateVector x0 = ocp.mode == CableMode::kTaut && settings_.hybrid
+                       ? model_->ProjectToTaut(state.ToVector())
+                       : state.ToVector();
+  if (ocp.mode == CableMode::kTaut && settings_.hybrid && state.payload_lost) {
     // a lost payload on a taut cable: what is still known is that it hangs on the cable; the
     // taut model predicts with it at rest below the quadrotor
     x0.segment<3>(StateIndex::kPayloadPos) =
@@ -157,32 +174,27 @@ ControlOutput HpaMpc::Update(const SystemState& state) {
     out.command = hover;
     return finish();
   }
-
-  if (std::optional<BodyRateCommand> recovery = RecoveryCommand(state)) {
+  if (RecoveryCommand(state, &out.command)) {
     Reset();
     out.status = ControlStatus::kRecovery;
-    out.command = *recovery;
     return finish();
   }
 
-  const std::vector<InputVector> guess = WarmStart(state.time_s);
-  const Ocp ocp = BuildProblem(state, guess);
-  const StateVector x0 = InitialState(ocp.mode, state);
-  const bool had_plan = plan_u_.size() == static_cast<size_t>(ocp.horizon_steps);
+  // the scratch members keep their memory from call to call (no allocation in steady state)
+  WarmStart(state.time_s, &guess_);
+  BuildProblem(state, guess_, &ocp_);
+  const StateVector x0 = InitialState(state, ocp_);
+  const bool had_plan = plan_u_.size() == static_cast<size_t>(ocp_.horizon_steps);
 
-  OcpSolution solution = solver_->Solve(ocp, x0, guess);
-  const ControlStatus status = solution.status;
-  std::vector<InputVector> u = std::move(solution.u);
-  std::vector<StateVector> x = std::move(solution.x);
-  double cost = solution.cost;
-
+  solver_->SolveInto(ocp_, x0, guess_, &solution_);
+  const ControlStatus status = solution_.status;
   const bool solved = status == ControlStatus::kSuccess || status == ControlStatus::kMaxIterations;
   if (!solved) {
     // fallback 1: the previous plan shifted; fallback 2: hover
-    u = guess;
-    cost = OcpCost(ocp, x0, u, &x);
-    bool usable = had_plan && std::isfinite(cost);
-    for (const StateVector& xi : x) usable = usable && xi.allFinite();
+    solution_.u = guess_;
+    solution_.cost = OcpCost(ocp_, x0, solution_.u, &solution_.x);
+    bool usable = had_plan && std::isfinite(solution_.cost);
+    for (const StateVector& xi : solution_.x) usable = usable && xi.allFinite();
     if (!usable) {
       Reset();
       out.status = ControlStatus::kFallback;
@@ -190,11 +202,11 @@ ControlOutput HpaMpc::Update(const SystemState& state) {
       return finish();
     }
   }
-  plan_u_ = std::move(u);
-  plan_x_ = std::move(x);
+  plan_u_.swap(solution_.u);
+  plan_x_.swap(solution_.x);
   plan_time_s_ = state.time_s;
   out.status = status;
-  out.cost = cost;
+  out.cost = solution_.cost;
   out.command = CommandFromPlan();
   return finish();
 }

@@ -5,112 +5,191 @@
 #include "box_qp.h"
 #include "condensing.h"
 #include "hpa/controller/ocp_solver.h"
+#include "riccati_qp.h"
 
 namespace hpa {
 
-RtiResult RtiIteration(const Ocp& ocp, const StateVector& x0,
-                       const std::vector<InputVector>& u_guess, const RtiSettings& settings) {
+/// The scratch of one RTI: linearisation, stage models, condensed QP and line-search trials.
+struct RtiWorkspace::Impl {
+  OcpLinearization lin;
+  std::vector<StageQuadratic> stages;  // (N + 1)
+  CondensingWorkspace condensing;
+  BoxQpWorkspace qp;
+  RiccatiWorkspace riccati;
+  Eigen::MatrixXd h, h_reg;        // condensed Hessian, and with the LM term  (4N x 4N)
+  Eigen::VectorXd g, lb, ub, du;   // gradient, step bounds, step  (4N)
+  std::vector<InputVector> u_try;  // line-search trial  (N)
+  std::vector<StateVector> x_try;  // its states  (N + 1)
+};
+
+RtiWorkspace::RtiWorkspace() : impl_(std::make_unique<Impl>()) {}
+RtiWorkspace::~RtiWorkspace() = default;
+RtiWorkspace::RtiWorkspace(const RtiWorkspace& other)
+    : impl_(std::make_unique<Impl>(*other.impl_)) {}
+RtiWorkspace& RtiWorkspace::operator=(const RtiWorkspace& other) {
+  *impl_ = *other.impl_;
+  return *this;
+}
+
+namespace {
+
+// Linearises along result->u (simulated states and cost into result) and builds the condensed
+// Gauss-Newton QP on du with bounds u_min - u <= du <= u_max - u. False: non-finite cost.
+bool BuildQp(const Ocp& ocp, const StateVector& x0, const RtiSettings& settings,
+             RtiWorkspace::Impl* w, RtiResult* result) {
   const int n = ocp.horizon_steps;
-  RtiResult result;
-  result.u.resize(n);
+  LinearizeAlong(ocp, x0, result->u, &w->lin);
+  w->stages.resize(n + 1);
+  for (int k = 0; k <= n; ++k) {
+    w->stages[k] = GaussNewtonStage(w->lin.r[k], w->lin.r_x[k], w->lin.r_u[k]);
+  }
+  result->cost_guess = w->lin.cost;
+  result->cost = w->lin.cost;
+  result->x = w->lin.x;
+  if (!std::isfinite(w->lin.cost)) return false;
+  switch (settings.qp_method) {
+    case RtiQpMethod::kStructuredCondensing:
+      CondenseStructured(w->lin.a, w->lin.b, w->stages, &w->condensing, &w->h, &w->g);
+      break;
+    case RtiQpMethod::kDenseCondensing:
+      Condense(w->lin.a, w->lin.b, w->stages, &w->condensing, &w->h, &w->g);
+      break;
+    case RtiQpMethod::kRiccati:
+      StageQpGradient(w->lin.a, w->lin.b, w->stages, &w->g);  // the stages are the QP
+      break;
+  }
+  w->lb.resize(kNu * n);
+  w->ub.resize(kNu * n);
   for (int k = 0; k < n; ++k) {
-    result.u[k] = u_guess[k].cwiseMax(ocp.u_min_radps).cwiseMin(ocp.u_max_radps);
+    w->lb.segment<kNu>(kNu * k) = ocp.u_min_radps - result->u[k];
+    w->ub.segment<kNu>(kNu * k) = ocp.u_max_radps - result->u[k];
   }
+  return true;
+}
 
-  // linearise along the guess, Gauss-Newton stage models
-  OcpLinearization lin = LinearizeAlong(ocp, x0, result.u);
-  std::vector<StageQuadratic> stages(n + 1);
-  for (int k = 0; k <= n; ++k) stages[k] = GaussNewtonStage(lin.r[k], lin.r_x[k], lin.r_u[k]);
-  const double cost = lin.cost;
-  result.cost_guess = cost;
-  result.x = std::move(lin.x);
-  result.cost = cost;
-  if (!std::isfinite(cost)) {
-    result.status = ControlStatus::kNonFinite;
-    return result;
+// The box QP on du with the Levenberg-Marquardt term shift * I on the input Hessian.
+BoxQpResult SolveQp(const RtiSettings& settings, double shift, RtiWorkspace::Impl* w) {
+  if (settings.qp_method == RtiQpMethod::kRiccati) {
+    return SolveRiccatiBoxQp(w->lin.a, w->lin.b, w->stages, shift, w->lb, w->ub, &w->du,
+                             &w->riccati);
   }
+  const Eigen::MatrixXd* h_qp = &w->h;
+  if (shift > 0.0) {
+    w->h_reg = w->h;
+    w->h_reg.diagonal().array() += shift;
+    h_qp = &w->h_reg;
+  }
+  return SolveBoxQp(*h_qp, w->g, w->lb, w->ub, &w->du, &w->qp);
+}
 
-  // condense; the QP on du has bounds u_min - u <= du <= u_max - u
-  Eigen::MatrixXd h;
-  Eigen::VectorXd g;
-  Condense(lin.a, lin.b, stages, &h, &g);
-  Eigen::VectorXd lb(kNu * n), ub(kNu * n);
+// Armijo backtracking along w->du from result->u (cost `cost`, directional derivative `slope`):
+// true when a step is accepted (result->u, x, cost and step updated).
+bool LineSearch(const Ocp& ocp, const StateVector& x0, const RtiSettings& settings, double cost,
+                double slope, RtiWorkspace::Impl* w, RtiResult* result) {
+  const int n = ocp.horizon_steps;
+  w->u_try.resize(n);
+  for (double alpha = 1.0; alpha >= settings.min_step; alpha *= 0.5) {
+    for (int k = 0; k < n; ++k) {
+      // du respects the box by construction; the min/max only removes rounding at the bounds
+      w->u_try[k] = (result->u[k] + alpha * w->du.segment<kNu>(kNu * k))
+                        .cwiseMax(ocp.u_min_radps)
+                        .cwiseMin(ocp.u_max_radps);
+    }
+    const double cost_try = OcpCost(ocp, x0, w->u_try, &w->x_try);
+    ++result->cost_evaluations;
+    if (std::isfinite(cost_try) && cost_try <= cost + settings.armijo * alpha * slope) {
+      result->u = w->u_try;
+      result->x = w->x_try;
+      result->cost = cost_try;
+      result->step = alpha;
+      return true;
+    }
+  }
+  return false;
+}
+
+}  // namespace
+
+void RtiIteration(const Ocp& ocp, const StateVector& x0, const std::vector<InputVector>& u_guess,
+                  const RtiSettings& settings, RtiWorkspace* workspace, RtiResult* result) {
+  RtiWorkspace::Impl* w = &workspace->impl();
+  const int n = ocp.horizon_steps;
+  *result = RtiResult{ControlStatus::kSuccess, 0, std::move(result->u), std::move(result->x)};
+  result->u.resize(n);
   for (int k = 0; k < n; ++k) {
-    lb.segment<kNu>(kNu * k) = ocp.u_min_radps - result.u[k];
-    ub.segment<kNu>(kNu * k) = ocp.u_max_radps - result.u[k];
+    result->u[k] = u_guess[k].cwiseMax(ocp.u_min_radps).cwiseMin(ocp.u_max_radps);
   }
+  if (!BuildQp(ocp, x0, settings, w, result)) {
+    result->status = ControlStatus::kNonFinite;
+    return;
+  }
+  const double cost = result->cost;
   const double lm_unit = ocp.weights.r_input.mean() / (ocp.u_hover_radps * ocp.u_hover_radps);
-
   // LM loop: QP on the regularised Hessian, then backtracking along its du
   double mu = settings.lm_initial;
   bool any_qp_solved = false;
-  Eigen::MatrixXd h_reg;
-  Eigen::VectorXd du(kNu * n);
-  std::vector<InputVector> u_try(n);
-  std::vector<StateVector> x_try;
+  w->du.resize(kNu * n);
   for (int attempt = 0; attempt < settings.lm_max_tries; ++attempt) {
     if (attempt > 0) mu = mu > 0.0 ? mu * settings.lm_growth : settings.lm_first_increase;
-    const Eigen::MatrixXd* h_qp = &h;
-    if (mu > 0.0) {
-      h_reg = h;
-      h_reg.diagonal().array() += mu * lm_unit;
-      h_qp = &h_reg;
-    }
-    du.setZero();
-    const BoxQpResult qp = SolveBoxQp(*h_qp, g, lb, ub, &du);
-    result.qp_iterations = qp.iterations;
-    ++result.qp_solves;
+    w->du.setZero();
+    const BoxQpResult qp = SolveQp(settings, mu * lm_unit, w);
+    result->qp_iterations = qp.iterations;
+    ++result->qp_solves;
     if (qp.status == BoxQpStatus::kNotPositiveDefinite || qp.status == BoxQpStatus::kNonFinite ||
-        !du.allFinite()) {
+        !w->du.allFinite()) {
       continue;  // more regularisation
     }
     any_qp_solved = true;
     // directional derivative of the cost J = sum |r|^2 along du: 2 g^T du
-    const double slope = 2.0 * g.dot(du);
+    const double slope = 2.0 * w->g.dot(w->du);
     if (!(slope < 0.0)) break;  // no descent direction: the guess is stationary
-    for (double alpha = 1.0; alpha >= settings.min_step; alpha *= 0.5) {
-      for (int k = 0; k < n; ++k) {
-        // du respects the box by construction; the min/max only removes rounding at the bounds
-        u_try[k] = (result.u[k] + alpha * du.segment<kNu>(kNu * k))
-                       .cwiseMax(ocp.u_min_radps)
-                       .cwiseMin(ocp.u_max_radps);
-      }
-      const double cost_try = OcpCost(ocp, x0, u_try, &x_try);
-      ++result.cost_evaluations;
-      if (std::isfinite(cost_try) && cost_try <= cost + settings.armijo * alpha * slope) {
-        result.u = u_try;
-        result.x = x_try;
-        result.cost = cost_try;
-        result.step = alpha;
-        result.lm = mu;
-        result.status = qp.status == BoxQpStatus::kMaxIterations ? ControlStatus::kMaxIterations
-                                                                 : ControlStatus::kSuccess;
-        return result;
-      }
+    if (LineSearch(ocp, x0, settings, cost, slope, w, result)) {
+      result->lm = mu;
+      result->status = qp.status == BoxQpStatus::kMaxIterations ? ControlStatus::kMaxIterations
+                                                                : ControlStatus::kSuccess;
+      return;
     }
   }
-  // no step accepted: keep the guess (already in result.u / x / cost)
-  result.status = any_qp_solved ? ControlStatus::kSuccess : ControlStatus::kQpFailure;
+  // no step accepted: keep the guess (already in result->u / x / cost)
+  result->status = any_qp_solved ? ControlStatus::kSuccess : ControlStatus::kQpFailure;
+}
+
+RtiResult RtiIteration(const Ocp& ocp, const StateVector& x0,
+                       const std::vector<InputVector>& u_guess, const RtiSettings& settings) {
+  RtiWorkspace workspace;
+  RtiResult result;
+  RtiIteration(ocp, x0, u_guess, settings, &workspace, &result);
   return result;
 }
 
 namespace {
 
-// RtiIteration behind the OcpSolver interface.
+// RtiIteration behind the OcpSolver interface, with its scratch kept between solves.
 class RtiSolver final : public OcpSolver {
  public:
   explicit RtiSolver(const RtiSettings& settings) : settings_(settings) {}
 
   OcpSolution Solve(const Ocp& ocp, const StateVector& x0,
                     const std::vector<InputVector>& u_guess) override {
-    RtiResult r = RtiIteration(ocp, x0, u_guess, settings_);
-    return {r.status, std::move(r.u), std::move(r.x), r.cost};
+    RtiIteration(ocp, x0, u_guess, settings_, &workspace_, &result_);
+    return {result_.status, result_.u, result_.x, result_.cost};
+  }
+
+  void SolveInto(const Ocp& ocp, const StateVector& x0, const std::vector<InputVector>& u_guess,
+                 OcpSolution* solution) override {
+    RtiIteration(ocp, x0, u_guess, settings_, &workspace_, &result_);
+    solution->status = result_.status;
+    solution->u = result_.u;
+    solution->x = result_.x;
+    solution->cost = result_.cost;
   }
 
   std::unique_ptr<OcpSolver> Clone() const override { return std::make_unique<RtiSolver>(*this); }
 
  private:
   RtiSettings settings_;
+  RtiWorkspace workspace_;  // scratch, reused by every solve
+  RtiResult result_;        // the last solve's result (its vectors reused)
 };
 
 }  // namespace

@@ -3,7 +3,6 @@
 // baseline (always-taut model, payload cost, no perception cost) as Controllers.
 
 #include <memory>
-#include <optional>
 #include <string>
 #include <vector>
 
@@ -66,11 +65,16 @@ class HpaMpc : public Controller {
   /// interpolation between stages, last input held; exactly one stage when dt has passed),
   /// or hover speeds when there is no plan.
   std::vector<InputVector> WarmStart(double t_s) const;
+  /// WarmStart into `u`, reusing its memory.
+  void WarmStart(double t_s, std::vector<InputVector>* u) const;
 
   /// The OCP this controller would solve for `state` (mode and perception per settings), with
   /// the re-taut predicted from x0 under `guess` when settings.predict_retaut (empty guess: the
   /// warm start at state.time_s).
   Ocp BuildProblem(const SystemState& state, const std::vector<InputVector>& guess = {}) const;
+  /// BuildProblem into `ocp`, reusing its vectors' memory.
+  void BuildProblem(const SystemState& state, const std::vector<InputVector>& guess,
+                    Ocp* ocp) const;
 
   /// Current plan inputs (empty before the first successful Update).  (N)
   const std::vector<InputVector>& plan_inputs() const { return plan_u_; }
@@ -86,11 +90,11 @@ class HpaMpc : public Controller {
 
  private:
   BodyRateCommand CommandFromPlan() const;
-  // PX4's attitude recovery toward level at hover thrust when the state is outside the envelope
-  // a plan can be flown in (tumbling or tipped), else nothing.
-  std::optional<BodyRateCommand> RecoveryCommand(const SystemState& state) const;
-  // The OCP's initial state in `mode` from the estimate (projected onto the taut manifold).
-  StateVector InitialState(CableMode mode, const SystemState& state) const;
+  // The attitude-recovery command when the state is outside the envelope a plan can fly in
+  // (tumbling or tipped per the recovery settings); false when inside it.
+  bool RecoveryCommand(const SystemState& state, BodyRateCommand* command) const;
+  // The OCP's x0 for `state`: projected onto the cable in taut hybrid mode, lost payload placed.
+  StateVector InitialState(const SystemState& state, const Ocp& ocp) const;
 
   Params params_;
   std::shared_ptr<const HybridModel> model_;  // the OCPs' dynamics
@@ -100,6 +104,10 @@ class HpaMpc : public Controller {
   std::vector<InputVector> plan_u_;    // (N)
   std::vector<StateVector> plan_x_;    // (N + 1)
   double plan_time_s_ = 0.0;           // time of plan stage 0
+  // scratch of Update, kept so a steady-state update reuses its memory
+  std::vector<InputVector> guess_;  // warm start  (N)
+  Ocp ocp_;                         // the problem solved
+  OcpSolution solution_;            // the solver's answer; swapped with the plan
 };
 
 }  // namespace hpa

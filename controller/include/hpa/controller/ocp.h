@@ -24,7 +24,7 @@ namespace hpa {
 constexpr int kOcpHorizonSteps = 10;  // N
 constexpr double kOcpStageDtS = 0.1;  // s per stage: horizon 1 s
 // Rows of the stage residual: the sum of the rows of OcpTerms() (checked by a static_assert in
-// ocp.cc). Fixed at compile time so the Gauss-Newton products use fixed-size Eigen kernels.
+// ocp_terms.cc). Fixed at compile time so the Gauss-Newton products use fixed-size Eigen kernels.
 constexpr int kNr = 29;
 
 using ResidualVector = Eigen::Matrix<double, kNr, 1>;
@@ -188,6 +188,10 @@ Ocp BuildOcp(std::shared_ptr<const HybridModel> model, const Reference& referenc
              CableMode mode, double perception_weight,
              const OcpWeights& weights = OcpWeights::Tuned());
 
+/// BuildOcp into `ocp`, reusing its vectors (no heap allocation once they have their sizes).
+void BuildOcp(std::shared_ptr<const HybridModel> model, const Reference& reference, double t0_s,
+              CableMode mode, double perception_weight, const OcpWeights& weights, Ocp* ocp);
+
 /// BuildOcp on a HybridModel of its own made from params.
 Ocp BuildOcp(const Params& params, const Reference& reference, double t0_s, CableMode mode,
              double perception_weight, const OcpWeights& weights = OcpWeights::Tuned());
@@ -234,6 +238,10 @@ struct OcpLinearization {
 /// Simulates u (N inputs) from x0 and linearises dynamics and residuals at every stage.
 OcpLinearization LinearizeAlong(const Ocp& ocp, const StateVector& x0,
                                 const std::vector<InputVector>& u);
+
+/// LinearizeAlong into `lin`, reusing its vectors (no heap allocation once they have N + 1).
+void LinearizeAlong(const Ocp& ocp, const StateVector& x0, const std::vector<InputVector>& u,
+                    OcpLinearization* lin);
 
 /// Cost and its exact gradient d cost / d u (4N, stage-major) by the adjoint of the
 /// single-shooting chain, from LinearizeAlong.

@@ -31,6 +31,12 @@ class OcpSolver {
   /// Solves `ocp` from x0, warm-started at u_guess (N inputs; clamped into the bounds).
   virtual OcpSolution Solve(const Ocp& ocp, const StateVector& x0,
                             const std::vector<InputVector>& u_guess) = 0;
+  /// Solve into `solution`, reusing its vectors' memory (the RTI solver then allocates nothing
+  /// in steady state); the default calls Solve.
+  virtual void SolveInto(const Ocp& ocp, const StateVector& x0,
+                         const std::vector<InputVector>& u_guess, OcpSolution* solution) {
+    *solution = Solve(ocp, x0, u_guess);
+  }
   /// A copy with the same settings and internal state (controllers holding one are copyable).
   virtual std::unique_ptr<OcpSolver> Clone() const = 0;
 };

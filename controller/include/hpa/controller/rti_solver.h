@@ -8,6 +8,7 @@
 // of the Gauss-Newton Hessian, raised when the QP is not positive definite or no step along
 // its direction decreases the cost. A call never returns a plan costlier than its guess.
 
+#include <memory>
 #include <vector>
 
 #include "hpa/controller/controller.h"
@@ -15,8 +16,16 @@
 
 namespace hpa {
 
-/// Globalisation of the RTI step.
+/// How the RTI solves its QP on the rotor-speed steps (all give the same step up to rounding).
+enum class RtiQpMethod {
+  kDenseCondensing,       // Condense (every block product dense), then the dense box QP
+  kStructuredCondensing,  // CondenseStructured (skips the zero blocks), then the dense box QP
+  kRiccati,               // no condensing: active-set box QP with Riccati recursions (riccati_qp.h)
+};
+
+/// Globalisation of the RTI step and its QP.
 struct RtiSettings {
+  RtiQpMethod qp_method = RtiQpMethod::kStructuredCondensing;
   // Levenberg-Marquardt: H + mu * lm_unit * I, lm_unit = the input-cost curvature
   // r_input / u_hover^2 (so mu = 1 doubles the input regularisation). Tries mu = lm_initial,
   // then multiplies by lm_growth up to lm_max_tries QP solves.
@@ -43,6 +52,33 @@ struct RtiResult {
   int qp_solves = 0;           // QPs solved (1 + LM increases)
   int cost_evaluations = 0;    // line-search simulations
 };
+
+/// Scratch memory of RtiIteration (linearisation, stage models, QP), sized by the first call and
+/// reused by the next ones without heap allocation. A copy has the same sizes (a copied controller
+/// solves without allocating); the contents are scratch, never read before written.
+class RtiWorkspace {
+ public:
+  /// An empty workspace, sized by the first RtiIteration that uses it.
+  RtiWorkspace();
+  /// Frees the scratch.
+  ~RtiWorkspace();
+  /// Copies the scratch (sizes and contents).
+  RtiWorkspace(const RtiWorkspace&);
+  /// Copies the scratch (sizes and contents).
+  RtiWorkspace& operator=(const RtiWorkspace&);
+
+  struct Impl;  // defined in rti_solver.cc
+  /// The scratch itself.
+  Impl& impl() { return *impl_; }
+
+ private:
+  std::unique_ptr<Impl> impl_;
+};
+
+/// RtiIteration writing into `result` (its vectors reused) with its scratch in `workspace`: once
+/// both have seen a call with the same horizon, the call allocates no heap memory.
+void RtiIteration(const Ocp& ocp, const StateVector& x0, const std::vector<InputVector>& u_guess,
+                  const RtiSettings& settings, RtiWorkspace* workspace, RtiResult* result);
 
 /// One Gauss-Newton SQP iteration from u_guess (N inputs; clamped into the bounds first),
 /// globalised per `settings`. Non-finite guess cost: kNonFinite; every QP failing: kQpFailure

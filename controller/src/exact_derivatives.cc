@@ -1,0 +1,244 @@
+#include "exact_derivatives.h"
+
+#include "hpa/models/rotor_model.h"
+
+namespace hpa {
+namespace {
+
+using I = StateIndex;
+
+// The thrust vector f R e3 in world and its Jacobians in q (3 x 4) and u (3 x 4).
+struct ThrustVectorJacobian {
+  Eigen::Vector3d f_W_N;              // f R e3, world
+  Eigen::Matrix<double, 3, 4> f_q;    // d f / d q
+  Eigen::Matrix<double, 3, kNu> f_u;  // d f / d u
+};
+
+// The rotor map: the moment part of d wrench / du into the rate Jacobian, and the thrust vector.
+ThrustVectorJacobian ThrustAndMoments(const Params& p, const Eigen::Matrix4d& allocation,
+                                      const StateVector& x, const InputVector& u, FlowJacobian* j) {
+  const double qw = x(I::kQuat), qx = x(I::kQuat + 1), qy = x(I::kQuat + 2), qz = x(I::kQuat + 3);
+  // wrench = allocation * k_f u.^2: d wrench / du = allocation * diag(2 k_f u)
+  const Eigen::Vector4d f_rotor_N = p.k_f_N_per_radps2 * u.array().square().matrix();
+  const double thrust_N = allocation.row(0).dot(f_rotor_N);
+  const Eigen::Matrix4d wrench_u =
+      allocation * (2.0 * p.k_f_N_per_radps2 * u).asDiagonal().toDenseMatrix();
+  for (int i = 0; i < 3; ++i) j->wdot_u.row(i) = wrench_u.row(1 + i) / p.inertia_B_kgm2(i);
+  // body z in world (third column of R(q)) and its derivative in (w, x, y, z)
+  const Eigen::Vector3d z_B_W(2.0 * (qx * qz + qw * qy), 2.0 * (qy * qz - qw * qx),
+                              1.0 - 2.0 * (qx * qx + qy * qy));
+  Eigen::Matrix<double, 3, 4> z_q;
+  z_q << 2.0 * qy, 2.0 * qz, 2.0 * qw, 2.0 * qx,  //
+      -2.0 * qx, -2.0 * qw, 2.0 * qz, 2.0 * qy,   //
+      0.0, -4.0 * qx, -4.0 * qy, 0.0;
+  ThrustVectorJacobian t;
+  t.f_W_N = thrust_N * z_B_W;
+  t.f_q = thrust_N * z_q;
+  t.f_u = z_B_W * wrench_u.row(0);
+  return t;
+}
+
+// The cable-force blocks of the taut flow (a_L = -T xi / m_L - g e3, a_Q = (f + T xi) / m - g e3):
+// d (T xi) / d (r, v, q, u) with T the tension of HybridModel's taut flow and xi = r / |r|.
+void TautAccelerationJacobian(const Params& p, const StateVector& x, const ThrustVectorJacobian& f,
+                              FlowJacobian* j) {
+  const double m = p.quad_mass_kg, m_L = p.payload_mass_kg;
+  const double mu_kg = m * m_L / (m + m_L);
+  const double k_p = HybridModel::kBaumgarteStiffness, k_d = HybridModel::kBaumgarteDamping;
+  const Eigen::Vector3d r_W = x.segment<3>(I::kPayloadPos) - x.segment<3>(I::kQuadPos);
+  const Eigen::Vector3d v_W = x.segment<3>(I::kPayloadVel) - x.segment<3>(I::kQuadVel);
+  const double d_m = r_W.norm();
+  const Eigen::Vector3d xi_W = r_W / d_m;
+  const double v_r_mps = v_W.dot(xi_W);
+  const double v_perp_sq_m2ps2 = v_W.squaredNorm() - v_r_mps * v_r_mps;
+  const double tension_N = mu_kg * (v_perp_sq_m2ps2 / d_m - xi_W.dot(f.f_W_N) / m + k_d * v_r_mps +
+                                    k_p * (d_m - p.cable_length_m));
+  // d xi / d r = (I - xi xi^T) / d, symmetric
+  const Eigen::Matrix3d xi_r = (Eigen::Matrix3d::Identity() - xi_W * xi_W.transpose()) / d_m;
+  const Eigen::Vector3d v_r_r = xi_r * v_W;  // d v_r / d r
+  // gradients of the tension in r, v (= v_L - v_Q), q and u
+  const Eigen::Vector3d t_r =
+      mu_kg * (-2.0 * v_r_mps / d_m * v_r_r - v_perp_sq_m2ps2 / (d_m * d_m) * xi_W -
+               xi_r * f.f_W_N / m + k_d * v_r_r + k_p * xi_W);
+  const Eigen::Vector3d t_v = mu_kg * (2.0 * (v_W - v_r_mps * xi_W) / d_m + k_d * xi_W);
+  const Eigen::Vector4d t_q = -mu_kg / m * f.f_q.transpose() * xi_W;
+  const Eigen::Vector4d t_u = -mu_kg / m * f.f_u.transpose() * xi_W;
+  // d (T xi): xi dT + T d xi
+  j->cable_r = xi_W * t_r.transpose() + tension_N * xi_r;
+  j->cable_v = xi_W * t_v.transpose();
+  j->cable_q = xi_W * t_q.transpose();
+  j->cable_u = xi_W * t_u.transpose();
+}
+
+// Attitude kinematics q_dot = 1/2 q (x) [0, w] and Euler's equation J w_dot = M - w x J w.
+void AttitudeJacobian(const Params& p, const StateVector& x, FlowJacobian* j) {
+  const double qw = x(I::kQuat), qx = x(I::kQuat + 1), qy = x(I::kQuat + 2), qz = x(I::kQuat + 3);
+  const Eigen::Vector3d w = x.segment<3>(I::kBodyRate);
+  j->qdot_q << 0.0, -w(0), -w(1), -w(2),  //
+      w(0), 0.0, w(2), -w(1),             //
+      w(1), -w(2), 0.0, w(0),             //
+      w(2), w(1), -w(0), 0.0;
+  j->qdot_q *= 0.5;
+  j->qdot_w << -qx, -qy, -qz,  //
+      qw, -qz, qy,             //
+      qz, qw, -qx,             //
+      -qy, qx, qw;
+  j->qdot_w *= 0.5;
+  const Eigen::Vector3d& in = p.inertia_B_kgm2;
+  // d (w x J w) / dw
+  Eigen::Matrix3d gyro_w;
+  gyro_w << 0.0, (in(2) - in(1)) * w(2), (in(2) - in(1)) * w(1),  //
+      (in(0) - in(2)) * w(2), 0.0, (in(0) - in(2)) * w(0),        //
+      (in(1) - in(0)) * w(1), (in(1) - in(0)) * w(0), 0.0;
+  for (int i = 0; i < 3; ++i) j->wdot_w.row(i) = -gyro_w.row(i) / in(i);
+}
+
+}  // namespace
+
+void EvaluateFlowJacobian(const Params& params, const Eigen::Matrix4d& allocation,
+                          const StateVector& x, const InputVector& u, CableMode mode,
+                          FlowJacobian* jacobian) {
+  const ThrustVectorJacobian f = ThrustAndMoments(params, allocation, x, u, jacobian);
+  jacobian->taut = mode == CableMode::kTaut;
+  jacobian->inv_payload_mass_per_kg = 1.0 / params.payload_mass_kg;
+  jacobian->inv_quad_mass_per_kg = 1.0 / params.quad_mass_kg;
+  jacobian->thrust_q = f.f_q;
+  jacobian->thrust_u = f.f_u;
+  // slack: payload in free fall, no cable force
+  if (jacobian->taut) TautAccelerationJacobian(params, x, f, jacobian);
+  AttitudeJacobian(params, x, jacobian);
+}
+
+void DenseFlowJacobian(const FlowJacobian& jacobian, StateMatrix* a, InputMatrix* b) {
+  StepSensitivity identity = StepSensitivity::Identity();
+  StepSensitivity k;
+  ApplyFlowJacobian(jacobian, identity, &k);
+  *a = k.leftCols<kNx>();
+  *b = k.rightCols<kNu>();
+}
+
+void ApplyFlowJacobian(const FlowJacobian& j, const StepSensitivity& s, StepSensitivity* k) {
+  // columns the attitude rows of s can be nonzero in (q, w, u), and the rate rows (w, u)
+  constexpr int kQuatCols = kNxu - I::kQuat, kRateCols = kNxu - I::kBodyRate;
+  const auto s_q = s.block<4, kQuatCols>(I::kQuat, I::kQuat);
+  const auto s_w = s.block<3, kRateCols>(I::kBodyRate, I::kBodyRate);
+  // positions: p_dot = v
+  k->middleRows<3>(I::kPayloadPos) = s.middleRows<3>(I::kPayloadVel);
+  k->middleRows<3>(I::kQuadPos) = s.middleRows<3>(I::kQuadVel);
+  // accelerations from the thrust vector f and the cable force T xi
+  Eigen::Matrix<double, 3, kNxu> force = Eigen::Matrix<double, 3, kNxu>::Zero();
+  force.rightCols<kQuatCols>().noalias() = j.thrust_q.lazyProduct(s_q);
+  force.rightCols<kNu>() += j.thrust_u;
+  if (j.taut) {
+    const Eigen::Matrix<double, 3, kNxu> s_r =
+        s.middleRows<3>(I::kPayloadPos) - s.middleRows<3>(I::kQuadPos);
+    const Eigen::Matrix<double, 3, kNxu> s_v =
+        s.middleRows<3>(I::kPayloadVel) - s.middleRows<3>(I::kQuadVel);
+    Eigen::Matrix<double, 3, kNxu> cable;
+    cable.noalias() = j.cable_r.lazyProduct(s_r);
+    cable.noalias() += j.cable_v.lazyProduct(s_v);
+    cable.rightCols<kQuatCols>().noalias() += j.cable_q.lazyProduct(s_q);
+    cable.rightCols<kNu>() += j.cable_u;
+    k->middleRows<3>(I::kPayloadVel) = -j.inv_payload_mass_per_kg * cable;
+    force += cable;
+  } else {
+    k->middleRows<3>(I::kPayloadVel).setZero();
+  }
+  k->middleRows<3>(I::kQuadVel) = j.inv_quad_mass_per_kg * force;
+  // attitude (q, w) and rate (w) rows keep the pattern
+  k->block<4, I::kQuat>(I::kQuat, 0).setZero();
+  k->block<4, kQuatCols>(I::kQuat, I::kQuat).noalias() = j.qdot_q.lazyProduct(s_q);
+  k->block<4, kRateCols>(I::kQuat, I::kBodyRate).noalias() += j.qdot_w.lazyProduct(s_w);
+  k->block<3, I::kBodyRate>(I::kBodyRate, 0).setZero();
+  k->block<3, kRateCols>(I::kBodyRate, I::kBodyRate).noalias() = j.wdot_w.lazyProduct(s_w);
+  k->block<3, kNu>(I::kBodyRate, kNx) += j.wdot_u;
+}
+
+void ExactStepJacobians(const HybridModel& model, const StateVector& x, const InputVector& u,
+                        CableMode mode, double dt_s, StateVector* x_next, StateMatrix* a,
+                        InputMatrix* b) {
+  const Params& p = model.params();
+  const Eigen::Matrix4d allocation = AllocationMatrix(p);
+  // the stages as HybridModel's RK4 forms them, with their sensitivities s_i = d x_i / d(x, u)
+  FlowJacobian j;
+  StepSensitivity k1, k2, k3, k4, s;
+  const StateVector f1 = model.Derivative(x, u, mode);
+  EvaluateFlowJacobian(p, allocation, x, u, mode, &j);
+  ApplyFlowJacobian(j, StepSensitivity::Identity(), &k1);
+  const StateVector x2 = (x + (0.5 * dt_s) * f1).eval();
+  const StateVector f2 = model.Derivative(x2, u, mode);
+  EvaluateFlowJacobian(p, allocation, x2, u, mode, &j);
+  s.noalias() = (0.5 * dt_s) * k1;
+  s.leftCols<kNx>().diagonal().array() += 1.0;
+  ApplyFlowJacobian(j, s, &k2);
+  const StateVector x3 = (x + (0.5 * dt_s) * f2).eval();
+  const StateVector f3 = model.Derivative(x3, u, mode);
+  EvaluateFlowJacobian(p, allocation, x3, u, mode, &j);
+  s.noalias() = (0.5 * dt_s) * k2;
+  s.leftCols<kNx>().diagonal().array() += 1.0;
+  ApplyFlowJacobian(j, s, &k3);
+  const StateVector x4 = (x + dt_s * f3).eval();
+  const StateVector f4 = model.Derivative(x4, u, mode);
+  EvaluateFlowJacobian(p, allocation, x4, u, mode, &j);
+  s.noalias() = dt_s * k3;
+  s.leftCols<kNx>().diagonal().array() += 1.0;
+  ApplyFlowJacobian(j, s, &k4);
+  StateVector y = x + (dt_s / 6.0) * (f1 + 2.0 * f2 + 2.0 * f3 + f4);
+  s.noalias() = (dt_s / 6.0) * (k1 + 2.0 * k2 + 2.0 * k3 + k4);
+  s.leftCols<kNx>().diagonal().array() += 1.0;
+  // renormalisation q / |q|: d (q / |q|) = (I - q q^T / |q|^2) / |q| dq
+  const double q_norm = y.segment<4>(I::kQuat).norm();
+  y.segment<4>(I::kQuat) /= q_norm;
+  const Eigen::Vector4d q_unit = y.segment<4>(I::kQuat);
+  const Eigen::Matrix4d normalise =
+      (Eigen::Matrix4d::Identity() - q_unit * q_unit.transpose()) / q_norm;
+  const Eigen::Matrix<double, 4, kNxu> s_q = normalise * s.middleRows<4>(I::kQuat);
+  s.middleRows<4>(I::kQuat) = s_q;
+  *x_next = y;
+  *a = s.leftCols<kNx>();
+  *b = s.rightCols<kNu>();
+}
+
+StateVector ExactJumpJacobian(const HybridModel& model, const StateVector& x,
+                              StateMatrix* jacobian) {
+  const Params& p = model.params();
+  const double m = p.quad_mass_kg, m_L = p.payload_mass_kg, l = p.cable_length_m;
+  const double mass_kg = m + m_L;
+  const Eigen::Vector3d r_W = x.segment<3>(I::kPayloadPos) - x.segment<3>(I::kQuadPos);
+  const double d_m = r_W.norm();
+  const bool degenerate = !(d_m > 1e-6);
+  const Eigen::Vector3d xi_W = degenerate ? Eigen::Vector3d(0, 0, -1) : Eigen::Vector3d(r_W / d_m);
+  // d xi / d r (zero where the map takes a fixed direction)
+  const Eigen::Matrix3d xi_r =
+      degenerate ? Eigen::Matrix3d::Zero()
+                 : Eigen::Matrix3d((Eigen::Matrix3d::Identity() - xi_W * xi_W.transpose()) / d_m);
+  const double d_taut_m = std::min(std::max(d_m, l - p.slack_epsilon_m), l);
+  const Eigen::Matrix3d id = Eigen::Matrix3d::Identity();
+  jacobian->setIdentity();
+  if (d_taut_m != d_m || degenerate) {
+    // y_Q = c - m_L / M d_taut xi, y_L = c + m / M d_taut xi, c the centre of mass; d_taut fixed
+    const Eigen::Matrix3d lever = d_taut_m * xi_r;
+    jacobian->block<3, 3>(I::kQuadPos, I::kQuadPos) = (m / mass_kg) * id + (m_L / mass_kg) * lever;
+    jacobian->block<3, 3>(I::kQuadPos, I::kPayloadPos) = (m_L / mass_kg) * (id - lever);
+    jacobian->block<3, 3>(I::kPayloadPos, I::kQuadPos) = (m / mass_kg) * (id - lever);
+    jacobian->block<3, 3>(I::kPayloadPos, I::kPayloadPos) =
+        (m_L / mass_kg) * id + (m / mass_kg) * lever;
+  }
+  const Eigen::Vector3d v_W = x.segment<3>(I::kPayloadVel) - x.segment<3>(I::kQuadVel);
+  const double v_rel_mps = v_W.dot(xi_W);
+  if (v_rel_mps > 0.0) {
+    // y_vQ = v_Q + m_L / M (v . xi) xi, y_vL = v_L - m / M (v . xi) xi
+    const Eigen::Matrix3d xx = xi_W * xi_W.transpose();
+    const Eigen::Matrix3d sxi_r = (xi_W * v_W.transpose() + v_rel_mps * id) * xi_r;
+    for (int row : {I::kQuadVel, I::kPayloadVel}) {
+      const double s = row == I::kQuadVel ? m_L / mass_kg : -m / mass_kg;
+      jacobian->block<3, 3>(row, I::kPayloadVel) += s * xx;
+      jacobian->block<3, 3>(row, I::kQuadVel) -= s * xx;
+      jacobian->block<3, 3>(row, I::kPayloadPos) = s * sxi_r;
+      jacobian->block<3, 3>(row, I::kQuadPos) = -s * sxi_r;
+    }
+  }
+  return model.ProjectToTaut(x);
+}
+
+}  // namespace hpa
