@@ -103,12 +103,17 @@ lines = [f"Machine: {cpu}, {sys.argv[3]} cores; this tree {sys.argv[4]}"
          + str(max(len(v) for v in values.values())) + " (ci/bench.sh).", ""]
 head = "| figure | unit | this tree |" + (" reference | this / reference |" if has_ref else "")
 lines += [head, "|---|---|---|" + ("---|---|" if has_ref else "")]
+def median(f, side):
+    return statistics.median(values[(f, side)]) if (f, side) in values else None
+def text(v):
+    return "-" if v is None else f"{v:.4g}"
 for f in figures:
-    this = statistics.median(values[(f, "this")]) if (f, "this") in values else float("nan")
-    row = f"| {f} | {units[f]} | {this:.4g} |"
+    this = median(f, "this")
+    row = f"| {f} | {units[f]} | {text(this)} |"
     if has_ref:
-        ref = statistics.median(values[(f, "ref")]) if (f, "ref") in values else float("nan")
-        row += f" {ref:.4g} | {this / ref:.2f} |"
+        ref = median(f, "ref")
+        ratio = "-" if this is None or ref is None else f"{this / ref:.2f}"
+        row += f" {text(ref)} | {ratio} |"
     lines.append(row)
 open(sys.argv[2], "w").write("\n".join(lines) + "\n")
 print("\n".join(lines))
