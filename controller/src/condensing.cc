@@ -3,6 +3,21 @@
 #include <array>
 
 namespace hpa {
+namespace {
+
+// The condensed gradient by the adjoint: lambda_N = gx_N, g_k = gu_k + B_k^T lambda_{k+1},
+// lambda_k = gx_k + A_k^T lambda_{k+1} (g already sized kNu n).
+void CondensedGradient(const std::vector<StateMatrix>& a, const std::vector<InputMatrix>& b,
+                       const std::vector<StageQuadratic>& stages, Eigen::VectorXd* g) {
+  const int n = static_cast<int>(a.size());
+  StateVector lambda = stages[n].gx;
+  for (int k = n - 1; k >= 0; --k) {
+    g->segment<kNu>(kNu * k).noalias() = stages[k].gu + b[k].transpose() * lambda;
+    lambda = stages[k].gx + a[k].transpose() * lambda;
+  }
+}
+
+}  // namespace
 
 StageQuadratic GaussNewtonStage(const ResidualVector& r, const ResidualStateJacobian& r_x,
                                 const ResidualInputJacobian& r_u) {
@@ -48,13 +63,7 @@ void Condense(const std::vector<StateMatrix>& a, const std::vector<InputMatrix>&
   h->setZero(kNu * n, kNu * n);
   g->resize(kNu * n);
 
-  // gradient by the adjoint: lambda_N = gx_N, g_k = gu_k + B_k^T lambda_{k+1},
-  // lambda_k = gx_k + A_k^T lambda_{k+1}
-  StateVector lambda = stages[n].gx;
-  for (int k = n - 1; k >= 0; --k) {
-    g->segment<kNu>(kNu * k).noalias() = stages[k].gu + b[k].transpose() * lambda;
-    lambda = stages[k].gx + a[k].transpose() * lambda;
-  }
+  CondensedGradient(a, b, stages, g);
 
   // Hessian, one block column j at a time:
   //   G_k = d x_k / d u_j (G_{j+1} = B_j, G_{k+1} = A_k G_k),
@@ -159,12 +168,7 @@ void CondenseStructured(const std::vector<StateMatrix>& a, const std::vector<Inp
   AnalyseStructure(a, stages, ws);
   h->setZero(kNu * n, kNu * n);
   g->resize(kNu * n);
-  // gradient by the adjoint, as Condense
-  StateVector lambda = stages[n].gx;
-  for (int k = n - 1; k >= 0; --k) {
-    g->segment<kNu>(kNu * k).noalias() = stages[k].gu + b[k].transpose() * lambda;
-    lambda = stages[k].gx + a[k].transpose() * lambda;
-  }
+  CondensedGradient(a, b, stages, g);
   // Hessian one block column j at a time, the recursions of Condense
   std::vector<InputMatrix>& sens = ws->sens;
   InputMatrix w, w_next;

@@ -31,7 +31,7 @@ class FlightLink {
   virtual ~FlightLink() = default;
   /// One tick (FlightStack::Step).
   virtual flight::FlightOutputs Step(const flight::FlightInputs& in) = 0;
-  /// The end of the run: delivers `pending` (FlightStack::Finish) and collects the report.
+  /// Ends the run: hands the stack the inputs still pending and returns its final report.
   virtual FlightFinish Finish(const flight::FlightInputs& pending) = 0;
   /// The next frame-ring slot to render into (its index in *slot); nullptr: frames do not
   /// cross (the runner detects in process).

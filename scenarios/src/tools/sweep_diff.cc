@@ -14,6 +14,7 @@
 #include "hpa/scenarios/metric_defs.h"
 #include "hpa/scenarios/metrics.h"
 #include "scenarios/src/tools/cli_parse.h"
+#include "scenarios/src/tools/significant_digits.h"
 
 namespace hpa {
 namespace {
@@ -208,14 +209,6 @@ std::string PairKey(const Run& r, const std::set<std::string>& ignore) {
     if (!ignore.count(k)) key << "|" << k << "=" << v;
   }
   return key.str();
-}
-
-// A number with `digits` significant digits, for the verdicts' reasons.
-std::string Fixed(double v, int digits = 4) {
-  std::ostringstream out;
-  out.precision(digits);
-  out << v;
-  return out.str();
 }
 
 // A run of A with its partner in B.

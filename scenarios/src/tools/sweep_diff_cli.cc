@@ -12,20 +12,13 @@
 #include "hpa/scenarios/plot_canvas.h"
 #include "hpa/scenarios/sweep_diff.h"
 #include "scenarios/src/tools/cli_parse.h"
+#include "scenarios/src/tools/significant_digits.h"
 #include "scenarios/src/tools/sweep/sweep_internal.h"
 
 namespace hpa {
 namespace {
 
 using Json = nlohmann::json;
-
-// A number with `digits` significant digits, for the Markdown table and the plot titles.
-std::string Fixed(double v, int digits = 4) {
-  std::ostringstream out;
-  out.precision(digits);
-  out << v;
-  return out.str();
-}
 
 // A number for diff.json; non-finite values (a metric no pair defines) are null.
 Json NumberOrNull(double v) { return std::isfinite(v) ? Json(v) : Json(); }
