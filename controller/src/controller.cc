@@ -5,6 +5,7 @@
 #include <stdexcept>
 
 #include "hpa/controller/controller_registry.h"
+#include "hpa/controller/rti_solver.h"
 
 namespace hpa {
 namespace {
@@ -57,6 +58,7 @@ std::unique_ptr<Controller> MakeController(const ControllerConfig& config, const
     throw std::invalid_argument("controller.solver: expected one of " + Joined(solvers) +
                                 ", got '" + config.solver + "'");
   }
+  ParseRtiQpMethod(config.qp_method);  // throws naming the known methods
   const ControllerRegistration* registration = FindController(config.type);
   if (registration == nullptr) {
     throw std::invalid_argument("controller.type: expected one of " + Joined(ControllerNames()) +

@@ -218,6 +218,7 @@ std::unique_ptr<Controller> MakeHpaMpcController(const ControllerConfig& config,
   settings.hybrid = true;
   settings.perception_weight = config.perception_weight;
   settings.solver = config.solver;
+  settings.solvers.rti.qp_method = ParseRtiQpMethod(config.qp_method);
   settings.predict_retaut = config.predict_retaut;
   return std::make_unique<HpaMpc>(params, std::move(reference), settings);
 }
@@ -229,6 +230,7 @@ std::unique_ptr<Controller> MakeNonhybridMpcController(const ControllerConfig& c
   settings.hybrid = false;
   settings.perception_weight = config.perception_weight;
   settings.solver = config.solver;
+  settings.solvers.rti.qp_method = ParseRtiQpMethod(config.qp_method);
   return std::make_unique<HpaMpc>(params, std::move(reference), settings);
 }
 

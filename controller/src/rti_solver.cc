@@ -1,6 +1,7 @@
 #include "hpa/controller/rti_solver.h"
 
 #include <cmath>
+#include <stdexcept>
 
 #include "box_qp.h"
 #include "condensing.h"
@@ -193,6 +194,19 @@ class RtiSolver final : public OcpSolver {
 };
 
 }  // namespace
+
+const std::vector<std::string>& RtiQpMethodNames() {
+  static const std::vector<std::string> names = {"structured", "dense", "riccati"};
+  return names;
+}
+
+RtiQpMethod ParseRtiQpMethod(const std::string& name) {
+  if (name == "structured") return RtiQpMethod::kStructuredCondensing;
+  if (name == "dense") return RtiQpMethod::kDenseCondensing;
+  if (name == "riccati") return RtiQpMethod::kRiccati;
+  throw std::invalid_argument(
+      "controller.qp_method: expected one of structured, dense, riccati, got '" + name + "'");
+}
 
 std::unique_ptr<OcpSolver> MakeRtiSolver(const OcpSolverSettings& settings) {
   return std::make_unique<RtiSolver>(settings.rti);

@@ -145,5 +145,25 @@ TEST(StructuredCondensingTest, ClosedLoopMatchesDenseCondensing) {
   }
 }
 
+// A scenario's controller.qp_method names one of the three, and anything else is refused with
+// the key and the known names.
+TEST(StructuredCondensingTest, QpMethodNamesParseAndUnknownOnesAreRefused) {
+  EXPECT_EQ(ParseRtiQpMethod("dense"), RtiQpMethod::kDenseCondensing);
+  EXPECT_EQ(ParseRtiQpMethod("structured"), RtiQpMethod::kStructuredCondensing);
+  EXPECT_EQ(ParseRtiQpMethod("riccati"), RtiQpMethod::kRiccati);
+  EXPECT_EQ(RtiQpMethodNames().size(), 3u);
+  for (const std::string& name : RtiQpMethodNames()) EXPECT_NO_THROW(ParseRtiQpMethod(name));
+  ControllerConfig config;
+  config.qp_method = "hpipm";
+  const Params params;
+  try {
+    MakeController(config, params, MakeLissajousReference(params, LissajousSpec()));
+    FAIL() << "qp_method hpipm was accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("controller.qp_method"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("riccati"), std::string::npos) << e.what();
+  }
+}
+
 }  // namespace
 }  // namespace hpa

@@ -103,6 +103,7 @@ nlohmann::json ConfigToJson(const FlightConfig& c) {
            {{"type", c.controller.type},
             {"perception_weight", c.controller.perception_weight},
             {"solver", c.controller.solver},
+            {"qp_method", c.controller.qp_method},
             {"predict_retaut", c.controller.predict_retaut}}},
           {"estimator", c.estimator},
           {"slack_tension_cue", c.slack_tension_cue},
@@ -145,6 +146,8 @@ FlightConfig ConfigFromJson(const nlohmann::json& j) {
     c.controller.type = cj.at("type").get<std::string>();
     c.controller.perception_weight = cj.at("perception_weight").get<double>();
     c.controller.solver = cj.at("solver").get<std::string>();
+    // absent from the first version-1 stacks' configurations: the default
+    c.controller.qp_method = cj.value("qp_method", ControllerConfig{}.qp_method);
     c.controller.predict_retaut = cj.at("predict_retaut").get<bool>();
     c.estimator = j.at("estimator").get<std::string>();
     c.slack_tension_cue = j.at("slack_tension_cue").get<bool>();

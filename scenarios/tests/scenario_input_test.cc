@@ -48,6 +48,17 @@ TEST(ScenarioInputTest, DuplicateAndComplexKeysAreRefused) {
   EXPECT_NE(LoadError("name: x\nduration: 1\n? [a]\n: 1\n").find("plain name"), std::string::npos);
 }
 
+TEST(ScenarioInputTest, QpMethodIsOneOfTheRtiMethods) {
+  const std::string path = TestTempDir() + "q.yaml";
+  std::ofstream(path) << "name: x\nduration: 1\n";
+  EXPECT_EQ(LoadScenario(path).controller.qp_method, "structured");
+  std::ofstream(path) << "name: x\nduration: 1\ncontroller: {qp_method: riccati}\n";
+  EXPECT_EQ(LoadScenario(path).controller.qp_method, "riccati");
+  const std::string error = LoadError("name: x\nduration: 1\ncontroller: {qp_method: hpipm}\n");
+  EXPECT_NE(error.find("controller.qp_method"), std::string::npos) << error;
+  EXPECT_NE(error.find("dense"), std::string::npos) << error;
+}
+
 TEST(ScenarioInputTest, EstimatorVariantComesFromTheRegistryOrTheController) {
   const std::string path = TestTempDir() + "e.yaml";
   std::ofstream(path) << "name: x\nduration: 1\ncontroller: {type: nonhybrid_mpc}\n";

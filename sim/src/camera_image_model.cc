@@ -6,6 +6,7 @@
 #include <mutex>
 #include <opencv2/imgproc.hpp>
 #include <random>
+#include <thread>
 #include <tuple>
 
 #include "hpa/models/camera_model.h"
@@ -15,19 +16,59 @@ namespace hpa::sim {
 namespace {
 
 constexpr size_t kNoiseTableSize = size_t{1} << 22;  // > one frame's 2.76 M channel samples
+constexpr uint64_t kNoiseTableSeed = 0x5eed;
 
 // Narrowest band over which the fast motion blur fades into the unblurred image (px).
 constexpr int kMinBlurFadePx = 16;
 
-// N(0, 1) samples shared by every model in the process (fixed seed: deterministic).
-const std::vector<float>& UnitNormalTable() {
-  static const std::vector<float> table = [] {
-    std::vector<float> t(kNoiseTableSize);
-    std::mt19937_64 rng(0x5eed);
-    std::normal_distribution<float> normal(0.0f, 1.0f);
-    for (float& v : t) v = normal(rng);
-    return t;
-  }();
+// Splits [0, n) into contiguous parts and runs body(begin, end) on each, one thread per part
+// (the calling thread takes the first). Threads end before it returns, so a process may fork after.
+template <typename Body>
+void ParallelRanges(size_t n, const Body& body) {
+  const size_t parts = std::clamp<size_t>(std::thread::hardware_concurrency(), 1, 4);
+  std::vector<std::thread> threads;
+  for (size_t p = 1; p < parts; ++p) {
+    threads.emplace_back([&body, n, p, parts] { body(n * p / parts, n * (p + 1) / parts); });
+  }
+  body(0, n / parts);
+  for (std::thread& t : threads) t.join();
+}
+
+// std::generate_canonical<float, 24> of one mt19937_64 output, as libstdc++ computes it.
+inline float CanonicalFloat(uint64_t bits) {
+  const float r = static_cast<float>(bits) / 18446744073709551616.0f;  // / 2^64
+  return r >= 1.0f ? std::nextafter(1.0f, 0.0f) : r;
+}
+
+// The values std::normal_distribution<float>(0, 1) draws from mt19937_64(seed), bit for bit
+// (libstdc++'s Marsaglia polar method), computed in two passes: the sequential one draws the
+// uniforms and keeps the accepted pairs; the logarithms and roots, most of the cost, run on
+// every core. The table test compares it with the standard library's own loop.
+std::vector<float> PolarNormalTable(size_t size, uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  struct Pair {
+    float x, y, r2;
+  };
+  std::vector<Pair> pairs((size + 1) / 2);
+  for (Pair& pair : pairs) {
+    float x, y, r2;
+    do {
+      x = static_cast<float>(2.0f * CanonicalFloat(rng()) - 1.0);
+      y = static_cast<float>(2.0f * CanonicalFloat(rng()) - 1.0);
+      r2 = x * x + y * y;
+    } while (r2 > 1.0 || r2 == 0.0);
+    pair = {x, y, r2};
+  }
+  std::vector<float> table(size);
+  ParallelRanges(pairs.size(), [&](size_t begin, size_t end) {
+    for (size_t i = begin; i < end; ++i) {
+      const Pair& pair = pairs[i];
+      const float mult = std::sqrt(-2 * std::log(pair.r2) / pair.r2);
+      // the distribution returns y * mult first and keeps x * mult for the next draw
+      table[2 * i] = pair.y * mult;
+      if (2 * i + 1 < size) table[2 * i + 1] = pair.x * mult;
+    }
+  });
   return table;
 }
 
@@ -50,22 +91,28 @@ const Maps& MapsFor(const Params& params) {
   const int w = params.camera_width_px, h = params.camera_height_px;
   const double f_px = params.CameraFocalPx();
   const double cx = 0.5 * w, cy = 0.5 * h;
-  // undistorted rays of every sensor pixel centre
+  // undistorted rays of every sensor pixel centre, rows split across threads (each row is its
+  // own chain of warm starts, so the split does not change a value)
   cv::Mat undistorted(h, w, CV_32FC2);
-  double need_x = 0.0, need_y = 0.0;  // largest |x_n|, |y_n| the render must cover
-  for (int row = 0; row < h; ++row) {
-    Eigen::Vector2d guess((0.5 - cx) / f_px, (row + 0.5 - cy) / f_px);
-    for (int col = 0; col < w; ++col) {
-      const Eigen::Vector2d x_d((col + 0.5 - cx) / f_px, (row + 0.5 - cy) / f_px);
-      // warm start from the neighbour: a full-frame map is ~1 M solves
-      const Eigen::Vector2d x_u = UndistortNormalised(k, x_d, col == 0 ? nullptr : &guess);
-      guess = x_u;
-      undistorted.at<cv::Vec2f>(row, col) =
-          cv::Vec2f(static_cast<float>(x_u.x()), static_cast<float>(x_u.y()));
-      need_x = std::max(need_x, std::abs(x_u.x()));
-      need_y = std::max(need_y, std::abs(x_u.y()));
+  std::vector<double> row_need_x(h), row_need_y(h);  // largest |x_n|, |y_n| of each row
+  ParallelRanges(h, [&](size_t row_begin, size_t row_end) {
+    for (int row = static_cast<int>(row_begin); row < static_cast<int>(row_end); ++row) {
+      Eigen::Vector2d guess((0.5 - cx) / f_px, (row + 0.5 - cy) / f_px);
+      for (int col = 0; col < w; ++col) {
+        const Eigen::Vector2d x_d((col + 0.5 - cx) / f_px, (row + 0.5 - cy) / f_px);
+        // warm start from the neighbour: a full-frame map is ~1 M solves
+        const Eigen::Vector2d x_u = UndistortNormalised(k, x_d, col == 0 ? nullptr : &guess);
+        guess = x_u;
+        undistorted.at<cv::Vec2f>(row, col) =
+            cv::Vec2f(static_cast<float>(x_u.x()), static_cast<float>(x_u.y()));
+        row_need_x[row] = std::max(row_need_x[row], std::abs(x_u.x()));
+        row_need_y[row] = std::max(row_need_y[row], std::abs(x_u.y()));
+      }
     }
-  }
+  });
+  // the largest |x_n|, |y_n| the render must cover
+  const double need_x = *std::max_element(row_need_x.begin(), row_need_x.end());
+  const double need_y = *std::max_element(row_need_y.begin(), row_need_y.end());
   // the render spans |x_n| <= cx / f_r (half a pixel kept for bilinear interpolation)
   const double render_f_px =
       std::min({f_px, (cx - 1.0) / std::max(need_x, 1e-9), (cy - 1.0) / std::max(need_y, 1e-9)});
@@ -86,6 +133,25 @@ const Maps& MapsFor(const Params& params) {
   return cache.emplace(key, std::move(maps)).first->second;
 }
 
+// Computes the shared tables a model of `params` reads that are not computed yet; both at once
+// when both are needed (the noise table's sequential pass runs beside the maps).
+void BuildSharedTables(const Params& params, bool noise) {
+  const bool distorted = !params.camera_distortion.isZero();
+  if (!distorted || !noise) {
+    if (noise) CameraImageModel::UnitNormalTable();
+    if (distorted) MapsFor(params);
+    return;
+  }
+  std::thread noise_table([] { CameraImageModel::UnitNormalTable(); });
+  try {
+    MapsFor(params);
+  } catch (...) {
+    noise_table.join();
+    throw;
+  }
+  noise_table.join();
+}
+
 }  // namespace
 
 CameraImageModel::CameraImageModel(const Params& params, const CameraImageProfile& profile,
@@ -95,6 +161,7 @@ CameraImageModel::CameraImageModel(const Params& params, const CameraImageProfil
       seed_(seed),
       render_focal_px_(params.CameraFocalPx()),
       distorted_(!params.camera_distortion.isZero()) {
+  BuildSharedTables(params, profile_.noise);
   if (distorted_) {
     const Maps& maps = MapsFor(params);
     render_focal_px_ = maps.render_focal_px;
@@ -115,9 +182,13 @@ CameraImageModel::CameraImageModel(const Params& params, const CameraImageProfil
   }
 }
 
+const std::vector<float>& CameraImageModel::UnitNormalTable() {
+  static const std::vector<float> table = PolarNormalTable(kNoiseTableSize, kNoiseTableSeed);
+  return table;
+}
+
 void CameraImageModel::PrepareSharedTables(const Params& params) {
-  UnitNormalTable();
-  if (!params.camera_distortion.isZero()) MapsFor(params);
+  BuildSharedTables(params, true);
 }
 
 double CameraImageModel::render_fovy_deg() const {

@@ -6,6 +6,7 @@
 #include <sstream>
 
 #include "hpa/controller/controller_registry.h"
+#include "hpa/controller/rti_solver.h"
 #include "hpa/estimator/estimator_registry.h"
 #include "hpa/models/input_error.h"
 #include "hpa/models/param_yaml.h"
@@ -249,6 +250,7 @@ Scenario ParseScenario(const YamlMap& root) {
     const YamlMap c = root.Map("controller");
     s.controller.type = c.Choice("type", ControllerNames(), s.controller.type);
     s.controller.solver = c.Choice("solver", OcpSolverNames(), s.controller.solver);
+    s.controller.qp_method = c.Choice("qp_method", RtiQpMethodNames(), s.controller.qp_method);
     ReadParamTable(c, ControllerParamTable(), &s.controller);
     c.RejectUnknownKeys();
   }

@@ -167,7 +167,11 @@ std::string ParamsSection() {
 // The controller's tuning keys from its declared parameter table.
 std::string ControllerSection() {
   return "## Controller keys (`controller.KEY`)\n\n`type` names a registered controller and "
-         "`solver` a registered OCP solver (above); the others:\n\n" +
+         "`solver` a registered OCP solver (above); `qp_method` is how the `rti` solver solves its "
+         "QP: `structured` (default: condensing that skips the model's zero blocks, then a dense "
+         "box QP), `dense` (plain condensing, the reference) or `riccati` (no condensing: an "
+         "active-set box QP whose subproblems are Riccati recursions); all three give the same "
+         "step up to rounding. The others:\n\n" +
          ParamTableMarkdown(ControllerParamTable(), ControllerConfig{}, "controller.", "default");
 }
 

@@ -35,10 +35,11 @@ struct ControlOutput {
 
 /// Settings of a controller from the scenario's `controller:` block.
 struct ControllerConfig {
-  std::string type = "hpa_mpc";    // hpa_mpc | nonhybrid_mpc | geometric
-  double perception_weight = 1.0;  // scale on the tuned Q_cam; 0 turns L_cam off
-  std::string solver = "rti";      // rti | nlopt (fully converged NMPC solve)
-  bool predict_retaut = false;     // hpa_mpc: predict the slack-to-taut guard in the horizon
+  std::string type = "hpa_mpc";          // hpa_mpc | nonhybrid_mpc | geometric
+  double perception_weight = 1.0;        // scale on the tuned Q_cam; 0 turns L_cam off
+  std::string solver = "rti";            // rti | nlopt (fully converged NMPC solve)
+  std::string qp_method = "structured";  // rti's QP: structured | dense | riccati (RtiQpMethod)
+  bool predict_retaut = false;           // hpa_mpc: predict the slack-to-taut guard in the horizon
 };
 
 /// The declared numeric and boolean keys of ControllerConfig (the `controller:` block); `type`

@@ -21,9 +21,9 @@ struct ReferenceSpec {
   Eigen::Vector3d line_start_W_m = Eigen::Vector3d::Zero();  // (3)
   Eigen::Vector3d line_end_W_m = Eigen::Vector3d::Zero();    // (3)
   double line_duration_s = 1.0;
-  double line_start_time_s = 0.0;  // the line starts moving at this time
-  std::string file;                        // csv: the file the samples were read from
-  std::vector<TrajectorySample> samples;   // csv: the trajectory (LoadTrajectoryCsv)
+  double line_start_time_s = 0.0;         // the line starts moving at this time
+  std::string file;                       // csv: the file the samples were read from
+  std::vector<TrajectorySample> samples;  // csv: the trajectory (LoadTrajectoryCsv)
 };
 
 /// Builds the reference a spec describes (the line delayed to its start time).

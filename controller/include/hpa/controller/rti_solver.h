@@ -9,6 +9,7 @@
 // its direction decreases the cost. A call never returns a plan costlier than its guess.
 
 #include <memory>
+#include <string>
 #include <vector>
 
 #include "hpa/controller/controller.h"
@@ -22,6 +23,13 @@ enum class RtiQpMethod {
   kStructuredCondensing,  // CondenseStructured (skips the zero blocks), then the dense box QP
   kRiccati,               // no condensing: active-set box QP with Riccati recursions (riccati_qp.h)
 };
+
+/// The names of RtiQpMethod as scenarios write them (controller.qp_method): structured, dense,
+/// riccati.
+const std::vector<std::string>& RtiQpMethodNames();
+/// The method named `name` (one of RtiQpMethodNames()); throws std::invalid_argument naming the
+/// known ones.
+RtiQpMethod ParseRtiQpMethod(const std::string& name);
 
 /// Globalisation of the RTI step and its QP.
 struct RtiSettings {

@@ -26,6 +26,9 @@ class CameraImageModel {
   /// distortion maps), which every model in the process shares: a process that forks workers
   /// calls it first so that they inherit the tables instead of each computing its own.
   static void PrepareSharedTables(const Params& params);
+  /// The N(0, 1) samples the noise reads, shared by every model in the process: exactly what
+  /// std::normal_distribution<float>(0, 1) draws from std::mt19937_64(0x5eed), computed once.
+  static const std::vector<float>& UnitNormalTable();
 
   /// Focal length (px) of the pinhole render the model expects: the sensor's own focal length
   /// without distortion; with barrel distortion, short enough that the render covers every
