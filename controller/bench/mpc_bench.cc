@@ -151,30 +151,34 @@ BENCHMARK(BM_HpaMpcNloptSolve)->Unit(benchmark::kMillisecond);
 
 // Parts of one RTI call. The RK4 step's Jacobians: hand-derived (what the OCP uses) and by
 // forward-mode AD (HybridModel::StepJacobians, the reference the tests compare with).
-void BM_StepJacobians(benchmark::State& st) {
+// Times step_jacobians(model, x, u, &x_next, &a, &b) at a warm scenario's state and planned input.
+template <typename StepJacobians>
+void TimeStepJacobians(benchmark::State& st, const StepJacobians& step_jacobians) {
   WarmScenario sc("rti");
   const InputVector u = sc.mpc->plan_inputs()[0];
+  const StateVector x = sc.state.ToVector();
   StateVector x_next;
   StateMatrix a;
   InputMatrix b;
   for (auto _ : st) {
-    ExactStepJacobians(sc.mpc->model(), sc.state.ToVector(), u, CableMode::kTaut, 0.1, &x_next, &a,
-                       &b);
+    step_jacobians(sc.mpc->model(), x, u, &x_next, &a, &b);
     benchmark::DoNotOptimize(a);
   }
+}
+
+void BM_StepJacobians(benchmark::State& st) {
+  TimeStepJacobians(st, [](const HybridModel& model, const StateVector& x, const InputVector& u,
+                           StateVector* x_next, StateMatrix* a, InputMatrix* b) {
+    ExactStepJacobians(model, x, u, CableMode::kTaut, 0.1, x_next, a, b);
+  });
 }
 BENCHMARK(BM_StepJacobians)->Unit(benchmark::kMicrosecond);
 
 void BM_StepJacobiansAutoDiff(benchmark::State& st) {
-  WarmScenario sc("rti");
-  const InputVector u = sc.mpc->plan_inputs()[0];
-  StateVector x_next;
-  StateMatrix a;
-  InputMatrix b;
-  for (auto _ : st) {
-    sc.mpc->model().StepJacobians(sc.state.ToVector(), u, CableMode::kTaut, 0.1, &x_next, &a, &b);
-    benchmark::DoNotOptimize(a);
-  }
+  TimeStepJacobians(st, [](const HybridModel& model, const StateVector& x, const InputVector& u,
+                           StateVector* x_next, StateMatrix* a, InputMatrix* b) {
+    model.StepJacobians(x, u, CableMode::kTaut, 0.1, x_next, a, b);
+  });
 }
 BENCHMARK(BM_StepJacobiansAutoDiff)->Unit(benchmark::kMicrosecond);
 

@@ -333,10 +333,15 @@ Truth World::GetTruth() const {
 
 std::vector<SensorMessage> World::TakeDelivered() {
   std::vector<SensorMessage> out;
-  for (DelayLine<SensorMessage>& line : deliveries_) {
-    while (std::optional<SensorMessage> m = line.PopReady(time_s())) out.push_back(std::move(*m));
-  }
+  TakeDelivered(&out);
   return out;
+}
+
+void World::TakeDelivered(std::vector<SensorMessage>* out) {
+  out->clear();
+  for (DelayLine<SensorMessage>& line : deliveries_) {
+    while (std::optional<SensorMessage> m = line.PopReady(time_s())) out->push_back(std::move(*m));
+  }
 }
 
 void World::AddSensor(std::unique_ptr<Sensor> sensor) {

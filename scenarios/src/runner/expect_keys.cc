@@ -21,7 +21,7 @@ std::string Failure(const std::string& key, double value, const char* op, double
 // metric <= bound (metric > bound fails), per value
 ExpectKey Max(std::string key, std::string metric, std::string unit, std::string description,
               double max, std::function<double(const Metrics&)> read) {
-  ExpectKey k{key, metric, "metric <= bound", unit, description, 1, 0.0, max};
+  ExpectKey k{key, metric, "metric <= bound", unit, description, 1, 0.0, max, false, {}};
   k.check = [key, read](const Metrics& m, const std::vector<double>& bound) {
     const double v = read(m);
     return v > bound[0] ? std::vector<std::string>{Failure(key, v, ">", bound[0])}
@@ -33,7 +33,7 @@ ExpectKey Max(std::string key, std::string metric, std::string unit, std::string
 // metric >= bound (metric < bound fails)
 ExpectKey Min(std::string key, std::string metric, std::string unit, std::string description,
               double min, double max, std::function<double(const Metrics&)> read) {
-  ExpectKey k{key, metric, "metric >= bound", unit, description, 1, min, max};
+  ExpectKey k{key, metric, "metric >= bound", unit, description, 1, min, max, false, {}};
   k.check = [key, read](const Metrics& m, const std::vector<double>& bound) {
     const double v = read(m);
     return v < bound[0] ? std::vector<std::string>{Failure(key, v, "<", bound[0])}
@@ -45,7 +45,7 @@ ExpectKey Min(std::string key, std::string metric, std::string unit, std::string
 // per-axis metric <= bound, each axis named
 ExpectKey AxesMax(std::string key, std::string metric, std::string description,
                   std::function<Eigen::Vector3d(const Metrics&)> read) {
-  ExpectKey k{key, metric, "metric <= bound, per axis", "m", description, 3, 0.0, kBig};
+  ExpectKey k{key, metric, "metric <= bound, per axis", "m", description, 3, 0.0, kBig, false, {}};
   k.check = [key, read](const Metrics& m, const std::vector<double>& bound) {
     static const char* kAxes[3] = {"x", "y", "z"};
     std::vector<std::string> failed;
@@ -68,7 +68,9 @@ std::vector<ExpectKey> BuildTable() {
                 "whether the run must crash (false: any crash fails)",
                 0,
                 0.0,
-                1.0};
+                1.0,
+                false,
+                {}};
     k.check = [](const Metrics& m, const std::vector<double>& bound) {
       const bool expected = bound[0] != 0.0;
       if (expected == m.crashed) return std::vector<std::string>{};
@@ -105,7 +107,9 @@ std::vector<ExpectKey> BuildTable() {
                 "slowest slack detection; a missed slack event fails",
                 1,
                 0.0,
-                kBig};
+                kBig,
+                false,
+                {}};
     k.check = [](const Metrics& m, const std::vector<double>& bound) {
       if (m.slack_events_missed > 0) {
         return std::vector<std::string>{Failure("slack_detection_latency_max (missed slack events)",

@@ -250,7 +250,8 @@ void RunLoop::CameraStep() {
     for (RunRecorder* r : recorders_) r->OnCameraFrame(*capture);
   }
   // the gripper's switch, and a camera without latency, deliver at their capture tick
-  for (sim::SensorMessage& m : world_->TakeDelivered()) KeepTickStartMessage(&m);
+  world_->TakeDelivered(&delivered_);
+  for (sim::SensorMessage& m : delivered_) KeepTickStartMessage(&m);
   for (PayloadDetection& d : camera_detections_) {
     camera_readout_->Delivered(d);
     pending_.detections.push_back(std::move(d));
@@ -353,7 +354,8 @@ void RunLoop::VideoStep(double t, const sim::Truth& truth, const SystemState& st
 // check.
 bool RunLoop::StepWorld() {
   world_->Step();
-  for (sim::SensorMessage& m : world_->TakeDelivered()) {
+  world_->TakeDelivered(&delivered_);
+  for (sim::SensorMessage& m : delivered_) {
     if (auto* imu = std::get_if<ImuSample>(&m)) pending_.imu.push_back(*imu);
     if (auto* vio = std::get_if<VioSample>(&m)) pending_.vio.push_back(*vio);
     if (auto* gyro = std::get_if<GyroSample>(&m)) rate_gyro_ = *gyro;  // the newest counts

@@ -136,8 +136,9 @@ class RunLoop {
   ControlOutput control_;         // the command the rate loop tracks
   flight::FlightInputs pending_;  // what reaches the flight stack at the next tick
 
-  bool mixer_saturated_ = false;         // the rate loop's last allocation fell short
-  std::optional<GyroSample> rate_gyro_;  // the rate gyro's newest sample not yet flown on
+  bool mixer_saturated_ = false;               // the rate loop's last allocation fell short
+  std::vector<sim::SensorMessage> delivered_;  // the world's deliveries of one step (reused)
+  std::optional<GyroSample> rate_gyro_;        // the rate gyro's newest sample not yet flown on
   bool show_progress_ = false;
   int last_progress_pct_ = -1;
 };

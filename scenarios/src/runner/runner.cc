@@ -39,7 +39,7 @@ std::vector<RateRow> ScenarioRateTable(const Scenario& scenario, const Params& p
   world.rates = ScenarioRates(scenario);
   world.profile = scenario.world;
   std::vector<RateRow> rows = {{"physics", 1.0 / sim::World::kPhysicsDt_s, 0.0,
-                                "MuJoCo timestep (sim::World::kPhysicsDt_s)"}};
+                                "MuJoCo timestep (sim::World::kPhysicsDt_s)", ""}};
   for (const sim::SensorDeclaration& s : sim::SensorDeclarations(world)) {
     if (s.name == "payload camera") {
       if (scenario.estimation.ground_truth) continue;  // the flight code reads the truth
@@ -51,17 +51,17 @@ std::vector<RateRow> ScenarioRateTable(const Scenario& scenario, const Params& p
   }
   if (scenario.rate_loop.px4) {
     rows.push_back({"rate loop (PX4's, on the rate gyro)", scenario.rate_loop.params.rate_hz, 0.0,
-                    "rate_loop.rate_hz (PX4's parameters, flight code)"});
+                    "rate_loop.rate_hz (PX4's parameters, flight code)", ""});
   } else {
-    rows.push_back(
-        {"rate loop (body-rate P, on the IMU)", world.rates.imu.rate_hz, 0.0, "RateTable::imu"});
+    rows.push_back({"rate loop (body-rate P, on the IMU)", world.rates.imu.rate_hz, 0.0,
+                    "RateTable::imu", ""});
   }
   rows.push_back({"control (" + scenario.controller.type + ")", controller->RateHz(),
                   latency.compute_s + latency.transport_s,
-                  "the controller's RateHz(); world profile latency.compute_s + transport_s"});
+                  "the controller's RateHz(); world profile latency.compute_s + transport_s", ""});
   rows.push_back(
-      {"estimate to controller", 0.0, latency.estimate_s, "world profile latency.estimate_s"});
-  rows.push_back({"video (--video)", world.rates.video.rate_hz, 0.0, "RateTable::video"});
+      {"estimate to controller", 0.0, latency.estimate_s, "world profile latency.estimate_s", ""});
+  rows.push_back({"video (--video)", world.rates.video.rate_hz, 0.0, "RateTable::video", ""});
   return rows;
 }
 

@@ -129,6 +129,8 @@ class World {
   /// Every sensor message whose latency has passed, sensor by sensor in the list's order, each
   /// sensor's in capture order (what the flight computer receives after this step).
   std::vector<SensorMessage> TakeDelivered();
+  /// TakeDelivered into `out` (cleared first), reusing its memory: no allocation per step.
+  void TakeDelivered(std::vector<SensorMessage>* out);
   /// Adds a sensor after those of MakeSensors (what one line in MakeSensors does, at run time):
   /// it is sampled after every step and delivered after its declared latency. Its rate-table row
   /// is the caller's to print.
