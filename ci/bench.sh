@@ -79,7 +79,8 @@ for ((rep = 1; rep <= reps; ++rep)); do
     sweep_dir=$out/$side/throughput_render
     rm -rf "$sweep_dir"
     start=$(date +%s.%N)
-    (cd "$tree" && "$hpa" sweep scenarios/sweeps/throughput_render.yaml --out "$sweep_dir" --jobs 2 > /dev/null) || true
+    # both builds fly this tree's sweep file (the same runs, however the reference's file reads)
+    (cd "$tree" && "$hpa" sweep "$root/scenarios/sweeps/throughput_render.yaml" --out "$sweep_dir" --jobs 2 > /dev/null) || true
     end=$(date +%s.%N)
     runs=$(wc -l < "$sweep_dir/runs.jsonl")
     python3 -c 'import json,sys; print(json.dumps({"side":sys.argv[1],"figure":"rendered sweep, --jobs 2","value":float(sys.argv[2])*60/(float(sys.argv[4])-float(sys.argv[3])),"unit":"runs/min"}))' \

@@ -5,6 +5,30 @@
 #include <stdexcept>
 
 namespace hpa::sim {
+namespace {
+
+bool reuse_contexts = false;
+
+// The context kept for the next Create (GlContext::Recycle).
+std::unique_ptr<GlContext>& SpareContext() {
+  static std::unique_ptr<GlContext> spare;
+  return spare;
+}
+
+}  // namespace
+
+void GlContext::SetReuse(bool on) {
+  reuse_contexts = on;
+  if (!on) SpareContext().reset();
+}
+
+bool GlContext::reuse() { return reuse_contexts; }
+
+void GlContext::Recycle(std::unique_ptr<GlContext> context) {
+  if (reuse_contexts && context != nullptr && context->backend() == GlBackend::kOsMesa) {
+    SpareContext() = std::move(context);
+  }
+}
 
 std::unique_ptr<GlContext> GlContext::Create(GlBackend backend, int max_width_px,
                                              int max_height_px) {
@@ -18,6 +42,14 @@ std::unique_ptr<GlContext> GlContext::Create(GlBackend backend, int max_width_px
                              " requested, but this process already renders with " +
                              GlBackendName(*process_backend) +
                              " (MuJoCo 2.2 loads its GL functions once per process)");
+  }
+  if (backend == GlBackend::kOsMesa) {
+    std::unique_ptr<GlContext>& spare = SpareContext();
+    if (spare != nullptr && spare->max_width_px() == max_width_px &&
+        spare->max_height_px() == max_height_px) {
+      spare->MakeCurrent();
+      return std::move(spare);
+    }
   }
   std::unique_ptr<GlContext> context = backend == GlBackend::kEgl
                                            ? CreateEglContext()

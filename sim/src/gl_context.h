@@ -36,6 +36,21 @@ class GlContext {
 
   /// What renders: the back end, EGL's platform and GL_RENDERER (makes the context current).
   virtual std::string Description() = 0;
+  /// The largest frame, as passed to Create.
+  virtual int max_width_px() const = 0;
+  /// The largest frame's height, as passed to Create.
+  virtual int max_height_px() const = 0;
+
+  /// Turns context reuse on or off for this process (off by default). While on, Recycle keeps
+  /// an OSMesa context whose renderer is done, and the next Create of the same back end and
+  /// size takes it, with what llvmpipe compiled for it (its shaders): a sweep renders one frame
+  /// before forking so that every run starts with compiled shaders instead of compiling its own.
+  static void SetReuse(bool on);
+  /// Whether reuse is on.
+  static bool reuse();
+  /// Keeps `context` (its MuJoCo resources freed) for the next Create while reuse is on and it
+  /// is an OSMesa context; otherwise destroys it.
+  static void Recycle(std::unique_ptr<GlContext> context);
 };
 
 /// OSMesa context (gl_context_osmesa.cc); called by GlContext::Create only.

@@ -296,6 +296,8 @@ class EglGlContext final : public GlContext {
   }
 
   GlBackend backend() const override { return GlBackend::kEgl; }
+  int max_width_px() const override { return 0; }  // EGL contexts are never reused
+  int max_height_px() const override { return 0; }
 
   std::string Description() override {
     MakeCurrent();

@@ -37,6 +37,8 @@ class OsMesaGlContext final : public GlContext {
   }
 
   GlBackend backend() const override { return GlBackend::kOsMesa; }
+  int max_width_px() const override { return width_px_; }
+  int max_height_px() const override { return height_px_; }
 
   std::string Description() override {
     MakeCurrent();

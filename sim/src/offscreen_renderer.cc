@@ -132,6 +132,7 @@ OffscreenRenderer::~OffscreenRenderer() {
   try {
     gl_->context->MakeCurrent();  // MuJoCo frees the GL objects of the current context
     mjr_freeContext(&gl_->render_context);
+    GlContext::Recycle(std::move(gl_->context));  // kept for the next renderer if reuse is on
   } catch (const std::runtime_error&) {
     // the context cannot be made current: its GL objects go with it
   }

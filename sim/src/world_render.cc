@@ -6,9 +6,11 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdlib>
 #include <opencv2/imgproc.hpp>
 #include <string>
 
+#include "gl_context.h"
 #include "hpa/models/input_error.h"
 #include "hpa/models/seed_streams.h"
 #include "hpa/sim/camera_image_model.h"
@@ -17,6 +19,18 @@
 #include "world_detail.h"
 
 namespace hpa::sim {
+
+bool World::PrewarmRendererForFork(const WorldConfig& config) {
+  if (config.gl_backend != GlBackend::kOsMesa) return false;
+  const char* threads = std::getenv("LP_NUM_THREADS");
+  if (threads != nullptr && std::string(threads) != "0") return false;
+  setenv("LP_NUM_THREADS", "0", 1);  // read when llvmpipe starts: before the first context
+  GlContext::SetReuse(true);
+  World world(config);
+  cv::Mat frame;
+  world.RenderPayloadCamera(&frame);
+  return true;  // the world's renderer recycles its context as the world goes
+}
 
 void World::RandomizeAppearance() {
   // what the camera sees varies, the physics does not: floor shade and checker scale, and the

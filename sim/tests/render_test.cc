@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <vector>
@@ -283,6 +284,32 @@ TEST(RenderTest, ChaseCameraRendersRequestedSize) {
   cv::imwrite(testing::TempDir() + "/chase_camera.png", frame);
   EXPECT_GT(cv::countNonZero(RedMask(frame)), 10) << "payload visible from the chase camera";
   EXPECT_THROW(world.RenderChaseCamera(4000, 10), std::invalid_argument);
+}
+
+// A world whose renderer takes the context another world kept (what every run of a sweep does
+// after PrewarmRendererForFork) renders the same pixels as one with a fresh context, the payload
+// camera and the chase camera alike. Last in this file: it leaves context reuse on.
+TEST(RenderTest, ReusedContextRendersTheSamePixels) {
+  WorldConfig config;
+  config.params = LoadParams(DefaultParamsPath());
+  config.profile.camera.noise = true;
+  SystemState s;
+  s.p_WQ_W = Eigen::Vector3d(0, 0, 1);
+  s.p_WL_W = s.p_WQ_W + Eigen::Vector3d(0.1, 0.05, -std::sqrt(0.25 - 0.01 - 0.0025));
+  const auto frames = [&]() {
+    World world(config);
+    world.SetState(s.ToVector(),
+                   InputVector::Constant(world.world_params().HoverMotorSpeedRadps()));
+    cv::Mat payload;
+    world.RenderPayloadCamera(&payload);
+    return std::make_pair(payload, world.RenderChaseCamera(320, 180));
+  };
+  const auto fresh = frames();
+  EXPECT_TRUE(World::PrewarmRendererForFork(config) || std::getenv("LP_NUM_THREADS") != nullptr);
+  const auto reused = frames();
+  EXPECT_EQ(cv::norm(fresh.first, reused.first, cv::NORM_INF), 0.0);
+  EXPECT_EQ(cv::norm(fresh.second, reused.second, cv::NORM_INF), 0.0);
+  EXPECT_GT(cv::countNonZero(RedMask(reused.first)), 100) << "payload in the reused context's view";
 }
 
 }  // namespace

@@ -17,6 +17,7 @@
 #include "hpa/models/params.h"
 #include "hpa/scenarios/runner.h"
 #include "hpa/sim/camera_image_model.h"
+#include "hpa/sim/world.h"
 #include "scenarios/src/tools/cli_parse.h"
 #include "scenarios/src/tools/sweep/sweep_internal.h"
 
@@ -205,6 +206,23 @@ void FinishSweep(const SweepSpec& spec, const std::string& jsonl, const std::str
   }
 }
 
+// The first rendered run's world renders one frame here, before the workers fork: each of them
+// then starts with a GL context whose shaders are compiled (World::PrewarmRendererForFork).
+void PrewarmRenderer(const SweepSpec& spec, const std::vector<SweepRun>& runs, const Params& params,
+                     sim::GlBackend gl_backend) {
+  for (const SweepRun& run : runs) {
+    const Scenario scenario = sweep::BuildScenario(spec, run);
+    if (scenario.estimation.camera != "render" || scenario.estimation.ground_truth) continue;
+    try {
+      sim::World::PrewarmRendererForFork(WorldConfigOf(scenario, params, gl_backend));
+    } catch (const std::exception& e) {
+      // each run then creates its own context, and reports its own error if it cannot
+      std::fprintf(stderr, "sweep: no shared GL context (%s)\n", e.what());
+    }
+    return;
+  }
+}
+
 }  // namespace
 
 int SweepMain(int argc, char** argv) {
@@ -246,6 +264,7 @@ int SweepMain(int argc, char** argv) {
   ResultsAppender results(out, jsonl, runs.size());
   // the rendered camera's tables, once here rather than in every forked run
   sim::CameraImageModel::PrepareSharedTables(params);
+  PrewarmRenderer(spec, runs, params, gl_backend);
   const int stopped_by =
       sweep::RunPool(spec, runs, params, gl_backend, a.jobs, tmp_dir,
                      [&](const std::string& line, bool failed, const SweepRun& run) {
