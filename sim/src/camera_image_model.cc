@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <future>
 #include <map>
 #include <mutex>
 #include <opencv2/imgproc.hpp>
@@ -161,7 +162,9 @@ CameraImageModel::CameraImageModel(const Params& params, const CameraImageProfil
       seed_(seed),
       render_focal_px_(params.CameraFocalPx()),
       distorted_(!params.camera_distortion.isZero()) {
-  BuildSharedTables(params, profile_.noise);
+  // the noise table is first read when a frame's noise is added: it is computed beside the maps
+  // and, on the first frame, beside the renderer's start (AddNoise waits for it)
+  if (profile_.noise) noise_table_ = std::async(std::launch::async, [] { UnitNormalTable(); });
   if (distorted_) {
     const Maps& maps = MapsFor(params);
     render_focal_px_ = maps.render_focal_px;
@@ -178,7 +181,6 @@ CameraImageModel::CameraImageModel(const Params& params, const CameraImageProfil
       noise_sd_dn_[level] = static_cast<float>(
           std::sqrt(g * level + g * g * profile_.read_noise_e * profile_.read_noise_e));
     }
-    unit_normal_ = &UnitNormalTable();  // shared, read-only
   }
 }
 
@@ -246,7 +248,8 @@ void CameraImageModel::AddNoise(uint64_t frame_index, const cv::Rect& area, cv::
   if (!profile_.noise) return;
   const size_t mask = kNoiseTableSize - 1;
   const size_t offset = SplitMix64(seed_ ^ SplitMix64(frame_index)) & mask;
-  const float* table = unit_normal_->data();
+  if (noise_table_.valid()) noise_table_.wait();
+  const float* table = UnitNormalTable().data();  // shared, read-only
   const float* sd = noise_sd_dn_.data();
   // each value's noise is keyed by its place in the whole frame: a region gets the frame's noise
   const size_t channels = static_cast<size_t>(image->channels());

@@ -7,6 +7,7 @@
 
 #include <Eigen/Core>
 #include <cstdint>
+#include <future>
 #include <opencv2/core.hpp>
 #include <vector>
 
@@ -72,7 +73,7 @@ class CameraImageModel {
   cv::Mat map1_, map2_;             // sensor pixel -> render pixel (fixed-point maps for remap)
   cv::Mat blurred_, remapped_;      // reused frame buffers
   std::vector<float> noise_sd_dn_;  // noise std (DN) per 8-bit level: shot + read, times gain
-  const std::vector<float>* unit_normal_ = nullptr;  // N(0, 1) samples the noise is drawn from
+  std::shared_future<void> noise_table_;  // UnitNormalTable's computation, while it runs
 };
 
 }  // namespace hpa::sim
