@@ -7,6 +7,7 @@
 #include <mutex>
 #include <opencv2/imgproc.hpp>
 #include <random>
+#include <system_error>
 #include <thread>
 #include <tuple>
 
@@ -29,7 +30,11 @@ void ParallelRanges(size_t n, const Body& body) {
   const size_t parts = std::clamp<size_t>(std::thread::hardware_concurrency(), 1, 4);
   std::vector<std::thread> threads;
   for (size_t p = 1; p < parts; ++p) {
-    threads.emplace_back([&body, n, p, parts] { body(n * p / parts, n * (p + 1) / parts); });
+    try {
+      threads.emplace_back([&body, n, p, parts] { body(n * p / parts, n * (p + 1) / parts); });
+    } catch (const std::system_error&) {
+      body(n * p / parts, n * (p + 1) / parts);  // no thread to be had: this part here
+    }
   }
   body(0, n / parts);
   for (std::thread& t : threads) t.join();
@@ -134,25 +139,6 @@ const Maps& MapsFor(const Params& params) {
   return cache.emplace(key, std::move(maps)).first->second;
 }
 
-// Computes the shared tables a model of `params` reads that are not computed yet; both at once
-// when both are needed (the noise table's sequential pass runs beside the maps).
-void BuildSharedTables(const Params& params, bool noise) {
-  const bool distorted = !params.camera_distortion.isZero();
-  if (!distorted || !noise) {
-    if (noise) CameraImageModel::UnitNormalTable();
-    if (distorted) MapsFor(params);
-    return;
-  }
-  std::thread noise_table([] { CameraImageModel::UnitNormalTable(); });
-  try {
-    MapsFor(params);
-  } catch (...) {
-    noise_table.join();
-    throw;
-  }
-  noise_table.join();
-}
-
 }  // namespace
 
 CameraImageModel::CameraImageModel(const Params& params, const CameraImageProfile& profile,
@@ -190,7 +176,19 @@ const std::vector<float>& CameraImageModel::UnitNormalTable() {
 }
 
 void CameraImageModel::PrepareSharedTables(const Params& params) {
-  BuildSharedTables(params, true);
+  if (params.camera_distortion.isZero()) {
+    UnitNormalTable();
+    return;
+  }
+  // both at once: the noise table's sequential pass beside the maps
+  std::thread noise_table([] { UnitNormalTable(); });
+  try {
+    MapsFor(params);
+  } catch (...) {
+    noise_table.join();
+    throw;
+  }
+  noise_table.join();
 }
 
 double CameraImageModel::render_fovy_deg() const {

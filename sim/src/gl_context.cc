@@ -7,7 +7,9 @@
 namespace hpa::sim {
 namespace {
 
-bool reuse_contexts = false;
+std::mutex contexts_mutex;     // guards everything below and Create
+bool reuse_contexts = false;   // GlContext::SetReuse
+bool context_created = false;  // a context was made in this process
 
 // The context kept for the next Create (GlContext::Recycle).
 std::unique_ptr<GlContext>& SpareContext() {
@@ -18,13 +20,23 @@ std::unique_ptr<GlContext>& SpareContext() {
 }  // namespace
 
 void GlContext::SetReuse(bool on) {
+  const std::lock_guard<std::mutex> lock(contexts_mutex);
   reuse_contexts = on;
   if (!on) SpareContext().reset();
 }
 
-bool GlContext::reuse() { return reuse_contexts; }
+bool GlContext::reuse() {
+  const std::lock_guard<std::mutex> lock(contexts_mutex);
+  return reuse_contexts;
+}
+
+bool GlContext::created_any() {
+  const std::lock_guard<std::mutex> lock(contexts_mutex);
+  return context_created;
+}
 
 void GlContext::Recycle(std::unique_ptr<GlContext> context) {
+  const std::lock_guard<std::mutex> lock(contexts_mutex);
   if (reuse_contexts && context != nullptr && context->backend() == GlBackend::kOsMesa) {
     SpareContext() = std::move(context);
   }
@@ -34,9 +46,8 @@ std::unique_ptr<GlContext> GlContext::Create(GlBackend backend, int max_width_px
                                              int max_height_px) {
   // the back end of the process's first context is the only one MuJoCo's GL pointers reach
   // (gl_context.h)
-  static std::mutex mutex;
   static std::optional<GlBackend> process_backend;
-  const std::lock_guard<std::mutex> lock(mutex);
+  const std::lock_guard<std::mutex> lock(contexts_mutex);
   if (process_backend && *process_backend != backend) {
     throw std::runtime_error("GL back end " + GlBackendName(backend) +
                              " requested, but this process already renders with " +
@@ -55,6 +66,7 @@ std::unique_ptr<GlContext> GlContext::Create(GlBackend backend, int max_width_px
                                            ? CreateEglContext()
                                            : CreateOsMesaContext(max_width_px, max_height_px);
   process_backend = backend;
+  context_created = true;
   return context;
 }
 

@@ -48,6 +48,8 @@ class GlContext {
   static void SetReuse(bool on);
   /// Whether reuse is on.
   static bool reuse();
+  /// Whether this process has created a context (llvmpipe has started).
+  static bool created_any();
   /// Keeps `context` (its MuJoCo resources freed) for the next Create while reuse is on and it
   /// is an OSMesa context; otherwise destroys it.
   static void Recycle(std::unique_ptr<GlContext> context);

@@ -24,6 +24,7 @@ bool World::PrewarmRendererForFork(const WorldConfig& config) {
   if (config.gl_backend != GlBackend::kOsMesa) return false;
   const char* threads = std::getenv("LP_NUM_THREADS");
   if (threads != nullptr && std::string(threads) != "0") return false;
+  if (GlContext::created_any()) return false;  // llvmpipe started with its default threads
   setenv("LP_NUM_THREADS", "0", 1);  // read when llvmpipe starts: before the first context
   GlContext::SetReuse(true);
   World world(config);

@@ -103,8 +103,9 @@ class World {
   /// shaders llvmpipe compiled for it, for the process's next renderer of the same size: a
   /// process that forks workers calls it first so that each worker's first frame skips context
   /// creation and shader compilation. OSMesa only, and only where llvmpipe rasterises on the
-  /// calling thread (LP_NUM_THREADS unset, which this sets to 0, or 0): its worker threads do
-  /// not survive fork. Returns whether the context was kept; same pixels either way.
+  /// calling thread (LP_NUM_THREADS unset, which this sets to 0, or 0; and no context made in
+  /// the process before): its worker threads do not survive fork. Returns whether the context
+  /// was kept; same pixels either way.
   static bool PrewarmRendererForFork(const WorldConfig& config);
 
   static constexpr double kPhysicsDt_s = 0.001;  // MuJoCo timestep (s): RateTable::physics_hz
