@@ -180,15 +180,10 @@ void CameraImageModel::PrepareSharedTables(const Params& params) {
     UnitNormalTable();
     return;
   }
-  // both at once: the noise table's sequential pass beside the maps
-  std::thread noise_table([] { UnitNormalTable(); });
-  try {
-    MapsFor(params);
-  } catch (...) {
-    noise_table.join();
-    throw;
-  }
-  noise_table.join();
+  // both at once: the noise table's sequential pass beside the maps (the future waits for it,
+  // also when the maps throw)
+  const std::future<void> noise_table = std::async(std::launch::async, [] { UnitNormalTable(); });
+  MapsFor(params);
 }
 
 double CameraImageModel::render_fovy_deg() const {

@@ -46,8 +46,6 @@ class GlContext {
   /// size takes it, with what llvmpipe compiled for it (its shaders): a sweep renders one frame
   /// before forking so that every run starts with compiled shaders instead of compiling its own.
   static void SetReuse(bool on);
-  /// Whether reuse is on.
-  static bool reuse();
   /// Whether this process has created a context (llvmpipe has started).
   static bool created_any();
   /// Keeps `context` (its MuJoCo resources freed) for the next Create while reuse is on and it
