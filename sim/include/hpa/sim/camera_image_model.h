@@ -16,6 +16,10 @@
 
 namespace hpa::sim {
 
+/// values[i] += sd[values[i]] * unit_normal[i] for n 8-bit values, the sum in float rounded to
+/// nearest (even) and clamped to 0..255 (cv::saturate_cast); `sd` has 256 entries, one per level.
+void AddLevelScaledNoise(uint8_t* values, const float* sd, const float* unit_normal, size_t n);
+
 /// Turns pinhole renders into sensor images. Deterministic: the noise of frame k depends only on
 /// (seed, k); the model owns its buffers and reuses them from frame to frame.
 class CameraImageModel {
