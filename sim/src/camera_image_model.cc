@@ -151,13 +151,18 @@ void AddLevelScaledNoise(uint8_t* values, const float* sd, const float* unit_nor
 #if defined(__SSE2__)
   // four values at a time, the same float operations as the scalar loop below: the sum rounded
   // by cvtps (nearest even, as cv::saturate_cast's cvRound), clamped by the saturating packs
+  const __m128i zero = _mm_setzero_si128();
   for (; i + 4 <= n; i += 4) {
-    const uint8_t v0 = values[i], v1 = values[i + 1], v2 = values[i + 2], v3 = values[i + 3];
-    const __m128 value = _mm_setr_ps(v0, v1, v2, v3);
-    const __m128 sd_of_value = _mm_setr_ps(sd[v0], sd[v1], sd[v2], sd[v3]);
+    int four;
+    std::memcpy(&four, values + i, 4);
+    const __m128i bytes_in = _mm_cvtsi32_si128(four);
+    const __m128 value =
+        _mm_cvtepi32_ps(_mm_unpacklo_epi16(_mm_unpacklo_epi8(bytes_in, zero), zero));
+    const __m128 sd_of_value =
+        _mm_setr_ps(sd[values[i]], sd[values[i + 1]], sd[values[i + 2]], sd[values[i + 3]]);
     const __m128 noisy = _mm_add_ps(value, _mm_mul_ps(sd_of_value, _mm_loadu_ps(unit_normal + i)));
     const __m128i rounded = _mm_cvtps_epi32(noisy);
-    const __m128i bytes = _mm_packus_epi16(_mm_packs_epi32(rounded, rounded), _mm_setzero_si128());
+    const __m128i bytes = _mm_packus_epi16(_mm_packs_epi32(rounded, rounded), zero);
     const int packed = _mm_cvtsi128_si32(bytes);
     std::memcpy(values + i, &packed, 4);
   }
@@ -273,9 +278,21 @@ void CameraImageModel::AddNoise(uint64_t frame_index, const cv::Rect& area, cv::
   const size_t channels = static_cast<size_t>(image->channels());
   const size_t row_values = static_cast<size_t>(image->cols) * channels;
   const size_t area_values = static_cast<size_t>(area.width) * channels;
+  const auto row_start = [&](int row) {
+    return (offset + static_cast<size_t>(row) * row_values + area.x * channels) & mask;
+  };
   for (int row = area.y; row < area.y + area.height; ++row) {
     uint8_t* p = image->ptr<uint8_t>(row) + static_cast<size_t>(area.x) * channels;
-    size_t start = (offset + static_cast<size_t>(row) * row_values + area.x * channels) & mask;
+    size_t start = row_start(row);
+    // the table is far larger than the caches and each row reads a new stretch of it: the next
+    // row's stretch is fetched while this one is worked on
+    if (row + 1 < area.y + area.height) {
+      const size_t next = row_start(row + 1);
+      const size_t next_values = std::min(area_values, kNoiseTableSize - next);
+      for (size_t i = 0; i < next_values; i += 64 / sizeof(float)) {
+        __builtin_prefetch(table + next + i);
+      }
+    }
     // the row's table values are contiguous up to the table's end, then wrap to its start
     for (size_t done = 0; done < area_values;) {
       const size_t n = std::min(area_values - done, kNoiseTableSize - start);
