@@ -52,6 +52,26 @@ void BM_RenderPayloadCamera(benchmark::State& state) {
 }
 BENCHMARK(BM_RenderPayloadCamera)->Unit(benchmark::kMillisecond)->Iterations(50);
 
+// One payload camera frame rendered in the region the runner asks for around the payload (the
+// frustum narrowed to it), with the image model on that region.
+void BM_RenderPayloadCameraRegion(benchmark::State& state) {
+  hpa::sim::World world(Config());
+  cv::Mat bgr;
+  cv::Rect region;
+  world.PayloadImageMotionPx(&region);  // the payload's image, grown for an off-axis sphere
+  const int margin_px = 48;             // the runner's allowance for motion between frames
+  region = cv::Rect(region.x - margin_px, region.y - margin_px, region.width + 2 * margin_px,
+                    region.height + 2 * margin_px);
+  world.RenderPayloadCamera(&bgr, region);
+  for (auto _ : state) {
+    world.Step();
+    world.RenderPayloadCamera(&bgr, region);
+    benchmark::DoNotOptimize(bgr.data);
+  }
+  state.counters["region_px"] = region.area();
+}
+BENCHMARK(BM_RenderPayloadCameraRegion)->Unit(benchmark::kMillisecond)->MinTime(1.0);
+
 // The camera image model (lens distortion, PSF, noise) on a 232 x 232 sensor region of a
 // 1280x720 frame: about the region around a payload 0.5 m below the camera (1.5 ball radii plus
 // the runner's 48 px margin on each side); each iteration a new frame's noise.

@@ -37,6 +37,7 @@ class InProcessFlight final : public FlightLink {
     return f;
   }
   std::string name() const override { return "in_process"; }
+  double control_rate_hz() const override { return stack_.control_rate_hz(); }
 
  private:
   flight::FlightStack stack_;
@@ -108,6 +109,8 @@ class ExternalFlight final : public FlightLink {
                                   std::to_string(flight::kProtocolVersion));
             }
             name_ = j.value("name", "external");
+            const nlohmann::json rate = j.value("control_rate_hz", nlohmann::json());
+            control_rate_hz_ = rate.is_number() ? rate.get<double>() : 0.0;
           } catch (const nlohmann::json::exception& e) {
             throw ProtocolError(std::string("a malformed hello_ack: ") + e.what());
           }
@@ -173,6 +176,7 @@ class ExternalFlight final : public FlightLink {
   }
   bool wants_reference() const override { return true; }
   std::string name() const override { return name_; }
+  double control_rate_hz() const override { return control_rate_hz_; }
 
  private:
   [[noreturn]] void Fail(const std::string& what) const {
@@ -298,6 +302,7 @@ class ExternalFlight final : public FlightLink {
 
   ExternalFlightOptions options_;
   std::string dir_, socket_path_, ring_name_, name_ = "external", exit_note_;
+  double control_rate_hz_ = 0.0;  // from the hello_ack (0: not stated)
   int listen_fd_ = -1;
   pid_t pid_ = 0, pgid_ = 0;
   std::unique_ptr<Channel> channel_;

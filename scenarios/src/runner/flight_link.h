@@ -43,6 +43,9 @@ class FlightLink {
   virtual bool wants_reference() const { return false; }
   /// What flies: "in_process" or the name the separate stack gave in its hello.
   virtual std::string name() const = 0;
+  /// The stack's control rate (Hz) as it states it (a separate stack in its hello_ack; 0: not
+  /// stated): information for sizing the log, the stack decides when it commands.
+  virtual double control_rate_hz() const = 0;
 };
 
 /// The flight stack in this process.

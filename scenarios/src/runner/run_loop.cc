@@ -144,6 +144,13 @@ RunLoop::RunLoop(const Scenario& scenario, const Params& params, const RunOption
     flight_ = StartExternalFlight(flight_config, external);
   }
   metrics->flight_stack = flight_->name();
+  // one log row per control step: sized once (a stack that commands faster than it says only
+  // makes the log grow)
+  const double control_rate_hz = flight_->control_rate_hz();
+  if (std::isfinite(control_rate_hz) && control_rate_hz > 0.0 &&
+      control_rate_hz <= rates.physics_hz) {
+    inputs_.rows.reserve(static_cast<size_t>(std::ceil(scenario.duration_s * control_rate_hz)) + 2);
+  }
   rate_controller_ = std::make_unique<BodyRateController>(params);
   // the profile may fly PX4's rate loop instead, on the world's rate gyro
   if (scenario.rate_loop.px4) {
