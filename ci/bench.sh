@@ -7,9 +7,11 @@
 #   ci/bench.sh [--ref COMMIT] [--reps N] [--out DIR]
 #
 # Figures: mpc_bench (RTI step, step Jacobians, condensing + QP), sim_bench (world step, payload
-# camera render), the closed loop's real-time factor with the analytic camera
-# (scenarios/csv_reference.yaml) and the rendered one (scenarios/hover_gripper_pull.yaml), and
-# sweep throughput with the rendered camera (scenarios/sweeps/throughput_render.yaml, --jobs 2).
+# camera render of the whole frame and of the region around the payload, the camera image model
+# on such a region; a figure a build does not have shows as -), the closed loop's real-time
+# factor with the analytic camera (scenarios/csv_reference.yaml) and the rendered one
+# (scenarios/hover_gripper_pull.yaml), and sweep throughput with the rendered camera
+# (scenarios/sweeps/throughput_render.yaml, --jobs 2).
 # Writes DIR/bench.md (default out/bench) and prints it. Without --ref, this tree alone.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -20,7 +22,7 @@ while [ $# -gt 0 ]; do
     --ref) ref=$2; shift 2 ;;
     --reps) reps=$2; shift 2 ;;
     --out) out=$2; shift 2 ;;
-    -h|--help) sed -n '2,14p' "$0" | sed 's/^# \{0,1\}//'; exit 0 ;;
+    -h|--help) sed -n '2,15p' "$0" | sed 's/^# \{0,1\}//'; exit 0 ;;
     *) echo "ci/bench.sh: unknown argument '$1' (see --help)" >&2; exit 2 ;;
   esac
 done
@@ -67,7 +69,7 @@ for ((rep = 1; rep <= reps; ++rep)); do
     "$(binary "$tree" mpc_bench)" --benchmark_filter='BM_HpaMpcRtiStep$|BM_StepJacobians|BM_CondenseAndQp' \
       --benchmark_min_time=0.5 --benchmark_format=json 2> /dev/null |
       python3 -c 'import json,sys; [print(json.dumps({"side":sys.argv[1],"figure":b["name"],"value":b["real_time"],"unit":b["time_unit"]})) for b in json.load(sys.stdin)["benchmarks"]]' "$side" >> "$raw"
-    "$(binary "$tree" sim_bench)" --benchmark_filter='BM_WorldStep|BM_RenderPayloadCamera' \
+    "$(binary "$tree" sim_bench)" --benchmark_filter='BM_WorldStep|BM_RenderPayloadCamera|BM_CameraImageModelRegion' \
       --benchmark_format=json 2> /dev/null |
       python3 -c 'import json,sys; [print(json.dumps({"side":sys.argv[1],"figure":b["name"],"value":b["real_time"],"unit":b["time_unit"]})) for b in json.load(sys.stdin)["benchmarks"]]' "$side" >> "$raw"
     for scenario in csv_reference hover_gripper_pull; do
