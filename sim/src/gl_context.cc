@@ -25,6 +25,11 @@ void GlContext::SetReuse(bool on) {
   if (!on) SpareContext().reset();
 }
 
+bool GlContext::reuse_on() {
+  const std::lock_guard<std::mutex> lock(contexts_mutex);
+  return reuse_contexts;
+}
+
 bool GlContext::created_any() {
   const std::lock_guard<std::mutex> lock(contexts_mutex);
   return context_created;

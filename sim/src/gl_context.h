@@ -46,6 +46,8 @@ class GlContext {
   /// size takes it, with what llvmpipe compiled for it (its shaders): a sweep renders one frame
   /// before forking so that every run starts with compiled shaders instead of compiling its own.
   static void SetReuse(bool on);
+  /// Whether reuse is on (SetReuse).
+  static bool reuse_on();
   /// Whether this process has created a context (llvmpipe has started).
   static bool created_any();
   /// Keeps `context` (its MuJoCo resources freed) for the next Create while reuse is on and it

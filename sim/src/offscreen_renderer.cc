@@ -2,10 +2,13 @@
 
 #include <GL/gl.h>
 
+#include <cstdint>
 #include <cstring>
+#include <mutex>
 #include <opencv2/imgproc.hpp>
 #include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "gl_context.h"
@@ -23,6 +26,7 @@ struct OffscreenRenderer::Gl {
   void ReadPixels(const mjrRect& viewport, int width_px, cv::Mat* out, cv::Mat* flip_buffer);
 
   std::unique_ptr<GlContext> context;  // OSMesa or EGL
+  uint64_t model_signature = 0;        // RenderSignature of the model the resources were made for
   mjvScene scene;
   mjrContext render_context;
   mjvOption option;
@@ -65,13 +69,72 @@ void NarrowFrustumToArea(const cv::Rect& area, int width_px, int height_px, mjvS
   }
 }
 
+// FNV-1a over `bytes` bytes at `data`, continuing from `hash`.
+uint64_t Fnv1a(const void* data, size_t bytes, uint64_t hash) {
+  const auto* p = static_cast<const unsigned char*>(data);
+  for (size_t i = 0; i < bytes; ++i) hash = (hash ^ p[i]) * 0x100000001b3ull;
+  return hash;
+}
+
+// A hash of everything in `model` that mjr_makeContext and mjv_makeScene read (the visual
+// settings, the extent, the planes' grids, materials and textures), so that two models with the
+// same signature get the same GL resources; 0 for a model with meshes, height fields or skins,
+// whose resources are never shared.
+uint64_t RenderSignature(const mjModel* m) {
+  if (m->nmesh > 0 || m->nhfield > 0 || m->nskin > 0) return 0;
+  uint64_t h = 0xcbf29ce484222325ull;
+  const auto mix = [&h](const void* data, size_t bytes) { h = Fnv1a(data, bytes, h); };
+  mix(&m->vis, sizeof m->vis);
+  mix(&m->stat.extent, sizeof m->stat.extent);
+  mix(&m->ngeom, sizeof m->ngeom);
+  mix(m->geom_type, sizeof(int) * m->ngeom);
+  mix(m->geom_size, sizeof(mjtNum) * 3 * m->ngeom);
+  mix(m->geom_matid, sizeof(int) * m->ngeom);
+  mix(m->geom_dataid, sizeof(int) * m->ngeom);
+  mix(&m->nmat, sizeof m->nmat);
+  mix(m->mat_texid, sizeof(int) * m->nmat);
+  mix(m->mat_texuniform, sizeof(mjtByte) * m->nmat);
+  mix(m->mat_texrepeat, sizeof(float) * 2 * m->nmat);
+  mix(&m->ntex, sizeof m->ntex);
+  mix(m->tex_type, sizeof(int) * m->ntex);
+  mix(m->tex_height, sizeof(int) * m->ntex);
+  mix(m->tex_width, sizeof(int) * m->ntex);
+  mix(m->tex_adr, sizeof(int) * m->ntex);
+  mix(&m->ntexdata, sizeof m->ntexdata);
+  mix(m->tex_rgb, sizeof(mjtByte) * m->ntexdata);
+  return h == 0 ? 1 : h;
+}
+
+std::mutex& KeptGlMutex() {
+  static std::mutex mutex;
+  return mutex;
+}
+
 }  // namespace
+
+std::unique_ptr<OffscreenRenderer::Gl>& OffscreenRenderer::KeptGl() {
+  static std::unique_ptr<Gl> kept;
+  return kept;
+}
+
+void OffscreenRenderer::Release(std::unique_ptr<Gl> gl) {
+  if (gl == nullptr) return;
+  try {
+    gl->context->MakeCurrent();  // MuJoCo frees the GL objects of the current context
+    mjr_freeContext(&gl->render_context);
+    GlContext::Recycle(std::move(gl->context));  // kept for the next renderer if reuse is on
+  } catch (const std::runtime_error&) {
+    // the context cannot be made current: its GL objects go with it
+  }
+  mjv_freeScene(&gl->scene);
+}
 
 std::unique_ptr<OffscreenRenderer::Gl> OffscreenRenderer::Gl::Create(const mjModel* model,
                                                                      GlBackend backend, int max_w,
                                                                      int max_h) {
   auto gl = std::make_unique<Gl>();
   gl->context = GlContext::Create(backend, max_w, max_h);
+  gl->model_signature = RenderSignature(model);
   mjv_defaultScene(&gl->scene);
   mjr_defaultContext(&gl->render_context);
   mjv_defaultOption(&gl->option);
@@ -129,14 +192,19 @@ OffscreenRenderer::OffscreenRenderer(const mjModel* model, GlBackend backend)
 
 OffscreenRenderer::~OffscreenRenderer() {
   if (gl_ == nullptr) return;
-  try {
-    gl_->context->MakeCurrent();  // MuJoCo frees the GL objects of the current context
-    mjr_freeContext(&gl_->render_context);
-    GlContext::Recycle(std::move(gl_->context));  // kept for the next renderer if reuse is on
-  } catch (const std::runtime_error&) {
-    // the context cannot be made current: its GL objects go with it
+  // while reuse is on, the whole state is kept for the next renderer of a model that renders
+  // the same (a sweep's runs): MuJoCo's GL resources are not made again
+  if (GlContext::reuse_on() && gl_->model_signature != 0 &&
+      gl_->context->backend() == GlBackend::kOsMesa) {
+    std::unique_ptr<Gl> previous;
+    {
+      const std::lock_guard<std::mutex> lock(KeptGlMutex());
+      previous = std::exchange(KeptGl(), std::move(gl_));
+    }
+    Release(std::move(previous));
+    return;
   }
-  mjv_freeScene(&gl_->scene);
+  Release(std::move(gl_));
 }
 
 void OffscreenRenderer::SetGeomGroupVisible(int group, bool visible) {
@@ -159,9 +227,24 @@ cv::Mat OffscreenRenderer::Render(mjData* data, int camera_id, int width_px, int
 void OffscreenRenderer::Render(mjData* data, int camera_id, int width_px, int height_px,
                                bool show_tendons, cv::Mat* bgr, const cv::Rect& region) {
   CheckRenderRequest(model_, camera_id, width_px, height_px);
-  // first frame: create the GL context (current from here on) and MuJoCo's GL resources
+  // first frame: the state another renderer kept for a model that renders the same, else a new
+  // GL context (current from here on) and MuJoCo's GL resources
   if (gl_ == nullptr) {
-    gl_ = Gl::Create(model_, backend_, model_->vis.global.offwidth, model_->vis.global.offheight);
+    const int max_w = model_->vis.global.offwidth, max_h = model_->vis.global.offheight;
+    std::unique_ptr<Gl> kept;
+    if (GlContext::reuse_on()) {
+      const std::lock_guard<std::mutex> lock(KeptGlMutex());
+      kept = std::move(KeptGl());
+    }
+    if (kept != nullptr && backend_ == GlBackend::kOsMesa &&
+        kept->model_signature == RenderSignature(model_) &&
+        kept->context->max_width_px() == max_w && kept->context->max_height_px() == max_h) {
+      gl_ = std::move(kept);
+      took_kept_state_ = true;
+    } else {
+      Release(std::move(kept));  // its context (with its compiled shaders) is the one taken next
+      gl_ = Gl::Create(model_, backend_, max_w, max_h);
+    }
   }
   gl_->context->MakeCurrent();  // another renderer may have made its own current since
 

@@ -46,15 +46,22 @@ class OffscreenRenderer {
   /// What renders (back end, EGL platform, GL_RENDERER); "" before the first Render.
   std::string GlDescription();
 
+  /// True once the first Render took the GL state another renderer kept (GlContext::SetReuse:
+  /// its context with MuJoCo's GL resources made for a model that renders the same).
+  bool took_kept_state() const { return took_kept_state_; }
+
  private:
   struct Gl;  // GL context, mjvScene, mjrContext (hidden: keeps GL out of this header)
+  // The GL state a finished renderer kept while reuse is on (at most one; under KeptGlMutex()).
+  static std::unique_ptr<Gl>& KeptGl();
+  // Frees a renderer's GL state: MuJoCo's resources, then the context (recycled if reuse is on).
+  static void Release(std::unique_ptr<Gl> gl);
   const mjModel* model_;
   GlBackend backend_;
   std::unique_ptr<Gl> gl_;
-  cv::Mat flip_buffer_;
-  bool geom_group_visible_[6] = {
-      true,  true,  true,
-      false, false, false};  // multisampled path only: the bottom-up frame turned top-down
+  cv::Mat flip_buffer_;  // multisampled path only: the bottom-up frame turned top-down
+  bool took_kept_state_ = false;
+  bool geom_group_visible_[6] = {true, true, true, false, false, false};
 };
 
 }  // namespace hpa::sim

@@ -13,6 +13,7 @@
 #include "hpa/models/params.h"
 #include "hpa/sim/camera_image_model.h"
 #include "hpa/sim/world.h"
+#include "sim/src/world_internals.h"
 #include "swung_payload.h"
 
 namespace hpa::sim {
@@ -286,9 +287,10 @@ TEST(RenderTest, ChaseCameraRendersRequestedSize) {
   EXPECT_THROW(world.RenderChaseCamera(4000, 10), std::invalid_argument);
 }
 
-// A world whose renderer takes the context another world kept (what every run of a sweep does
-// after PrewarmRendererForFork) renders the same pixels as one with a context of its own, the
-// payload camera and the chase camera alike.
+// A world whose renderer takes the GL state another world kept (what every run of a sweep does
+// after PrewarmRendererForFork: the context with its compiled shaders and MuJoCo's GL resources)
+// renders the same pixels as one with a state of its own, the payload camera and the chase camera
+// alike; a world of a model that renders differently makes its own resources on the kept context.
 TEST(RenderTest, ReusedContextRendersTheSamePixels) {
   WorldConfig config;
   config.params = LoadParams(DefaultParamsPath());
@@ -307,13 +309,27 @@ TEST(RenderTest, ReusedContextRendersTheSamePixels) {
     world->RenderPayloadCamera(&payload);
     return std::make_pair(payload, world->RenderChaseCamera(320, 180));
   };
-  World reused(config);  // its renderer takes the kept context
+  World reused(config);  // its renderer takes the kept state
   World fresh(config);   // that one is taken: this renderer makes its own
   const auto a = frames(&reused);
   const auto b = frames(&fresh);
+  EXPECT_TRUE(WorldInternals::Renderer(reused).took_kept_state());
+  EXPECT_FALSE(WorldInternals::Renderer(fresh).took_kept_state());
   EXPECT_EQ(cv::norm(a.first, b.first, cv::NORM_INF), 0.0);
   EXPECT_EQ(cv::norm(a.second, b.second, cv::NORM_INF), 0.0);
   EXPECT_GT(cv::countNonZero(RedMask(a.first)), 100) << "payload in the reused context's view";
+
+  // a model whose resources differ (a plane of another size: another grid) does not take it
+  std::unique_ptr<World> kept_by = std::make_unique<World>(config);
+  frames(kept_by.get());
+  kept_by.reset();  // keeps its state
+  World other(config);
+  mjModel* model = const_cast<mjModel*>(WorldInternals::Model(other));
+  for (int g = 0; g < model->ngeom; ++g) {
+    if (model->geom_type[g] == mjGEOM_PLANE) model->geom_size[3 * g] *= 0.5;
+  }
+  frames(&other);
+  EXPECT_FALSE(WorldInternals::Renderer(other).took_kept_state());
 }
 
 }  // namespace
