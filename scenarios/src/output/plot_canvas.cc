@@ -9,10 +9,10 @@
 #include <cstdio>
 #include <fstream>
 #include <map>
-#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include "hpa/models/input_error.h"
+#include "media.h"
 
 namespace hpa {
 namespace {
@@ -140,7 +140,7 @@ Figure::Figure(int width_px, int height_px)
 std::string Figure::Write(const std::string& stem, PlotFormat format) const {
   const std::string path = stem + "." + PlotExtension(format);
   if (format == PlotFormat::kPng) {
-    if (!cv::imwrite(path, image_)) throw OutputError(path, "the PNG could not be written");
+    if (!WriteImage(path, image_)) throw OutputError(path, "the PNG could not be written");
   } else {
     cairo_surface_t* surface =
         format == PlotFormat::kSvg

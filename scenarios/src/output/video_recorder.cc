@@ -9,6 +9,7 @@
 
 #include "hpa/models/input_error.h"
 #include "hpa/sim/world.h"
+#include "media.h"
 
 namespace hpa {
 
@@ -43,18 +44,18 @@ VideoRecorder::VideoRecorder(const std::string& path, double rate_hz, bool slack
   CheckVideoPath(path);
   // H.264 (plays in browsers and slides, files several times smaller); MPEG-4 part 2 where the
   // OpenCV build has no H.264 encoder
-  writer_.open(path, cv::VideoWriter::fourcc('a', 'v', 'c', '1'), rate_hz,
-               cv::Size(kWidthPx, kHeightPx));
+  writer_ = OpenVideo(path, "avc1", rate_hz, cv::Size(kWidthPx, kHeightPx));
   codec_ = "avc1";
-  if (!writer_.isOpened()) {
-    writer_.open(path, cv::VideoWriter::fourcc('m', 'p', '4', 'v'), rate_hz,
-                 cv::Size(kWidthPx, kHeightPx));
+  if (writer_ == nullptr) {
+    writer_ = OpenVideo(path, "mp4v", rate_hz, cv::Size(kWidthPx, kHeightPx));
     codec_ = "mp4v";
   }
-  if (!writer_.isOpened()) {
+  if (writer_ == nullptr) {
     throw OutputError(path, "no MP4 writer could open it (the folder and the .mp4 name are fine)");
   }
 }
+
+VideoRecorder::~VideoRecorder() = default;
 
 cv::Mat VideoRecorder::Compose(const cv::Mat& chase_bgr, const cv::Mat& onboard_bgr,
                                const Hud& hud) const {
@@ -86,21 +87,21 @@ cv::Mat VideoRecorder::Compose(const cv::Mat& chase_bgr, const cv::Mat& onboard_
 void VideoRecorder::AddFrame(const cv::Mat& chase_bgr, const cv::Mat& onboard_bgr, const Hud& hud) {
   cv::Mat frame = Compose(chase_bgr, onboard_bgr, hud);
   if (!slack_events_only_) {
-    writer_.write(frame);
+    writer_->Write(frame);
     ++frames_written_;
     return;
   }
   if (hud.true_mode == CableMode::kSlack) {
     // flush what led up to the event, then keep a window after it ends
     for (const cv::Mat& f : pre_buffer_) {
-      writer_.write(f);
+      writer_->Write(f);
       ++frames_written_;
     }
     pre_buffer_.clear();
     keep_until_s_ = hud.time_s + kSlackWindow_s;
   }
   if (hud.time_s <= keep_until_s_) {
-    writer_.write(frame);
+    writer_->Write(frame);
     ++frames_written_;
     return;
   }
@@ -111,7 +112,7 @@ void VideoRecorder::AddFrame(const cv::Mat& chase_bgr, const cv::Mat& onboard_bg
 }
 
 int VideoRecorder::Finish() {
-  writer_.release();
+  writer_->Close();
   // a slack-events video of a run without slack would be an empty file: write nothing
   if (slack_events_only_ && frames_written_ == 0) std::remove(path_.c_str());
   return frames_written_;

@@ -10,7 +10,6 @@
 #include <cstring>
 #include <fstream>
 #include <nlohmann/json.hpp>
-#include <opencv2/imgcodecs.hpp>
 #include <optional>
 #include <string>
 #include <vector>
@@ -24,6 +23,7 @@
 #include "hpa/scenarios/runner.h"
 #include "hpa/scenarios/video_recorder.h"
 #include "hpa/sim/world.h"
+#include "scenarios/src/output/media.h"
 #include "scenarios/src/tools/cli_parse.h"
 
 namespace hpa {
@@ -372,14 +372,15 @@ int RenderFrameMain(int argc, char** argv) {
   options.stop_at_s = at_s;
   options.gl_backend = ParseGlOption(o.gl);
   bool written = false;
+  std::optional<OutputError> write_error;  // the media module could not be loaded
   double frame_time_s = at_s;
   options.at_stop = [&](sim::World& world) {
     frame_time_s = world.time_s();
     const cv::Mat frame = world.RenderPayloadCamera();
     try {
-      written = cv::imwrite(out, frame);
-    } catch (const cv::Exception&) {
-      written = false;  // e.g. an extension OpenCV cannot encode
+      written = WriteImage(out, frame);  // false for an extension OpenCV cannot encode too
+    } catch (const OutputError& e) {
+      write_error = e;
     }
   };
   const RunResult result = RunScenario(scenario, params, options);
@@ -388,6 +389,7 @@ int RenderFrameMain(int argc, char** argv) {
                  result.metrics.run_error->c_str());
     return kExitInternal;
   }
+  if (write_error) throw *write_error;
   if (!written) throw OutputError(out, "the PNG could not be written (does its folder exist?)");
   if (result.metrics.crashed) {
     std::printf("note: the vehicle crashed at t = %.3f s (%s); the frame is from then\n",

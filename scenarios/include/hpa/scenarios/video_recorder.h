@@ -2,14 +2,16 @@
 // MP4 of a run: chase camera with the onboard payload-camera image inset and a heads-up line.
 
 #include <deque>
+#include <memory>
 #include <opencv2/core.hpp>
-#include <opencv2/videoio.hpp>
 #include <string>
 
 #include "hpa/models/state.h"
 #include "hpa/scenarios/runner.h"
 
 namespace hpa {
+
+class VideoSink;
 
 /// Writes frames through OpenCV's video writer (H.264 "avc1", else "mp4v"); optionally only
 /// around slack events.
@@ -34,6 +36,7 @@ class VideoRecorder {
 
   /// Opens the file; throws InputError if it cannot be written.
   VideoRecorder(const std::string& path, double rate_hz, bool slack_events_only);
+  ~VideoRecorder();
 
   /// Adds one frame (chase view kWidthPx x kHeightPx, onboard frame any size, BGR).
   void AddFrame(const cv::Mat& chase_bgr, const cv::Mat& onboard_bgr, const Hud& hud);
@@ -50,7 +53,7 @@ class VideoRecorder {
 
   std::string path_;
   std::string codec_;
-  cv::VideoWriter writer_;
+  std::unique_ptr<VideoSink> writer_;  // OpenCV's video writer, in the media module
   double rate_hz_;
   bool slack_events_only_;
   std::deque<cv::Mat> pre_buffer_;  // frames before a slack event (slack_events_only)
