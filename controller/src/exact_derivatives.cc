@@ -110,11 +110,41 @@ void EvaluateFlowJacobian(const Params& params, const Eigen::Matrix4d& allocatio
 }
 
 void DenseFlowJacobian(const FlowJacobian& jacobian, StateMatrix* a, InputMatrix* b) {
-  StepSensitivity identity = StepSensitivity::Identity();
   StepSensitivity k;
-  ApplyFlowJacobian(jacobian, identity, &k);
+  FlowJacobianMatrix(jacobian, &k);
   *a = k.leftCols<kNx>();
   *b = k.rightCols<kNu>();
+}
+
+void FlowJacobianMatrix(const FlowJacobian& j, StepSensitivity* k) {
+  // ApplyFlowJacobian of the identity: each of its products has a single nonzero term, so the
+  // blocks are placed directly, with the same operations on them (negation, the force sum, the
+  // mass scaling) as there
+  k->setZero();
+  // positions: p_dot = v
+  k->block<3, 3>(I::kPayloadPos, I::kPayloadVel).setIdentity();
+  k->block<3, 3>(I::kQuadPos, I::kQuadVel).setIdentity();
+  // accelerations from the thrust vector f and the cable force T xi
+  Eigen::Matrix<double, 3, kNxu> force = Eigen::Matrix<double, 3, kNxu>::Zero();
+  force.middleCols<4>(I::kQuat) = j.thrust_q;
+  force.rightCols<kNu>() = j.thrust_u;
+  if (j.taut) {
+    Eigen::Matrix<double, 3, kNxu> cable = Eigen::Matrix<double, 3, kNxu>::Zero();
+    cable.middleCols<3>(I::kPayloadPos) = j.cable_r;
+    cable.middleCols<3>(I::kPayloadVel) = j.cable_v;
+    cable.middleCols<3>(I::kQuadPos) = -j.cable_r;
+    cable.middleCols<3>(I::kQuadVel) = -j.cable_v;
+    cable.middleCols<4>(I::kQuat) = j.cable_q;
+    cable.rightCols<kNu>() = j.cable_u;
+    k->middleRows<3>(I::kPayloadVel) = -j.inv_payload_mass_per_kg * cable;
+    force += cable;
+  }
+  k->middleRows<3>(I::kQuadVel) = j.inv_quad_mass_per_kg * force;
+  // attitude (q, w) and rate (w, u) rows
+  k->block<4, 4>(I::kQuat, I::kQuat) = j.qdot_q;
+  k->block<4, 3>(I::kQuat, I::kBodyRate) = j.qdot_w;
+  k->block<3, 3>(I::kBodyRate, I::kBodyRate) = j.wdot_w;
+  k->block<3, kNu>(I::kBodyRate, kNx) = j.wdot_u;
 }
 
 void ApplyFlowJacobian(const FlowJacobian& j, const StepSensitivity& s, StepSensitivity* k) {
@@ -154,34 +184,49 @@ void ApplyFlowJacobian(const FlowJacobian& j, const StepSensitivity& s, StepSens
   k->block<3, kNu>(I::kBodyRate, kNx) += j.wdot_u;
 }
 
+namespace {
+
+// s = I + h k over the rigid body's pattern (the attitude rows' position and velocity columns
+// and the rate rows' attitude columns are left as they are: zero in s and k).
+void StageSensitivity(double h, const StepSensitivity& k, StepSensitivity* s) {
+  constexpr int kQuatCols = kNxu - I::kQuat, kRateCols = kNxu - I::kBodyRate;
+  s->topRows<I::kQuat>().noalias() = h * k.topRows<I::kQuat>();
+  s->block<4, kQuatCols>(I::kQuat, I::kQuat).noalias() =
+      h * k.block<4, kQuatCols>(I::kQuat, I::kQuat);
+  s->bottomRightCorner<kNx - I::kBodyRate, kRateCols>().noalias() =
+      h * k.bottomRightCorner<kNx - I::kBodyRate, kRateCols>();
+  s->leftCols<kNx>().diagonal().array() += 1.0;
+}
+
+}  // namespace
+
 void ExactStepJacobians(const HybridModel& model, const StateVector& x, const InputVector& u,
                         CableMode mode, double dt_s, StateVector* x_next, StateMatrix* a,
                         InputMatrix* b) {
   const Params& p = model.params();
   const Eigen::Matrix4d allocation = AllocationMatrix(p);
-  // the stages as HybridModel's RK4 forms them, with their sensitivities s_i = d x_i / d(x, u)
+  // the stages as HybridModel's RK4 forms them, with their sensitivities s_i = d x_i / d(x, u);
+  // every sensitivity has the rigid body's pattern, whose zeros are set once here
   FlowJacobian j;
-  StepSensitivity k1, k2, k3, k4, s;
+  alignas(16) StepSensitivity k1, k2, k3, k4;
+  alignas(16) StepSensitivity s = StepSensitivity::Zero();
   const StateVector f1 = model.Derivative(x, u, mode);
   EvaluateFlowJacobian(p, allocation, x, u, mode, &j);
-  ApplyFlowJacobian(j, StepSensitivity::Identity(), &k1);
+  FlowJacobianMatrix(j, &k1);  // s_1 = I
   const StateVector x2 = (x + (0.5 * dt_s) * f1).eval();
   const StateVector f2 = model.Derivative(x2, u, mode);
   EvaluateFlowJacobian(p, allocation, x2, u, mode, &j);
-  s.noalias() = (0.5 * dt_s) * k1;
-  s.leftCols<kNx>().diagonal().array() += 1.0;
+  StageSensitivity(0.5 * dt_s, k1, &s);
   ApplyFlowJacobian(j, s, &k2);
   const StateVector x3 = (x + (0.5 * dt_s) * f2).eval();
   const StateVector f3 = model.Derivative(x3, u, mode);
   EvaluateFlowJacobian(p, allocation, x3, u, mode, &j);
-  s.noalias() = (0.5 * dt_s) * k2;
-  s.leftCols<kNx>().diagonal().array() += 1.0;
+  StageSensitivity(0.5 * dt_s, k2, &s);
   ApplyFlowJacobian(j, s, &k3);
   const StateVector x4 = (x + dt_s * f3).eval();
   const StateVector f4 = model.Derivative(x4, u, mode);
   EvaluateFlowJacobian(p, allocation, x4, u, mode, &j);
-  s.noalias() = dt_s * k3;
-  s.leftCols<kNx>().diagonal().array() += 1.0;
+  StageSensitivity(dt_s, k3, &s);
   ApplyFlowJacobian(j, s, &k4);
   StateVector y = x + (dt_s / 6.0) * (f1 + 2.0 * f2 + 2.0 * f3 + f4);
   s.noalias() = (dt_s / 6.0) * (k1 + 2.0 * k2 + 2.0 * k3 + k4);

@@ -46,6 +46,10 @@ void EvaluateFlowJacobian(const Params& params, const Eigen::Matrix4d& allocatio
 /// The flow Jacobian as dense matrices a = d x_dot / dx (19 x 19), b = d x_dot / du (19 x 4).
 void DenseFlowJacobian(const FlowJacobian& jacobian, StateMatrix* a, InputMatrix* b);
 
+/// The flow Jacobian as one sensitivity k = [d x_dot / dx, d x_dot / du] (19 x 23): what
+/// ApplyFlowJacobian gives for s = I, without its products.
+void FlowJacobianMatrix(const FlowJacobian& jacobian, StepSensitivity* k);
+
 /// k = J s + [0 B]: the flow Jacobian applied to a sensitivity (what one RK4 stage needs). s must
 /// have the rigid body's pattern, as the identity and every RK4 stage sensitivity have: its
 /// attitude rows zero in the position and velocity columns, its rate rows zero in those and the
