@@ -38,6 +38,22 @@ struct FlowJacobian {
   Eigen::Matrix<double, 3, kNu> wdot_u = Eigen::Matrix<double, 3, kNu>::Zero();  // d w_dot / du
 };
 
+/// The part of the flow Jacobian that depends on the rotor speeds only (the rotor map), the same
+/// at every RK4 stage of a step.
+struct RotorJacobian {
+  double thrust_N = 0.0;                                                           // collective f
+  Eigen::Matrix<double, 1, kNu> thrust_u = Eigen::Matrix<double, 1, kNu>::Zero();  // d f / du
+  Eigen::Matrix<double, 3, kNu> wdot_u = Eigen::Matrix<double, 3, kNu>::Zero();    // d w_dot / du
+};
+
+/// The rotor map's part of the flow Jacobian at u; allocation: AllocationMatrix(params).
+RotorJacobian EvaluateRotorJacobian(const Params& params, const Eigen::Matrix4d& allocation,
+                                    const InputVector& u);
+
+/// The flow Jacobian at x in `mode`, with the rotor part `rotor` of the input.
+void EvaluateFlowJacobian(const Params& params, const RotorJacobian& rotor, const StateVector& x,
+                          CableMode mode, FlowJacobian* jacobian);
+
 /// The flow Jacobian at (x, u) in `mode`; allocation: AllocationMatrix(params).
 void EvaluateFlowJacobian(const Params& params, const Eigen::Matrix4d& allocation,
                           const StateVector& x, const InputVector& u, CableMode mode,
