@@ -199,14 +199,16 @@ void ApplyFlowJacobian(const FlowJacobian& j, const StepSensitivity& s, StepSens
 namespace {
 
 // s = I + h k over the rigid body's pattern (the attitude rows' position and velocity columns
-// and the rate rows' attitude columns are left as they are: zero in s and k).
-void StageSensitivity(double h, const StepSensitivity& k, StepSensitivity* s) {
+// and the rate rows' attitude columns are left as they are: zero in s and k). k may be an
+// expression (the RK4 sum), evaluated on those blocks only.
+template <typename Sensitivity>
+void SensitivityOnPattern(double h, const Eigen::MatrixBase<Sensitivity>& k, StepSensitivity* s) {
   constexpr int kQuatCols = kNxu - I::kQuat, kRateCols = kNxu - I::kBodyRate;
-  s->topRows<I::kQuat>().noalias() = h * k.topRows<I::kQuat>();
+  s->topRows<I::kQuat>().noalias() = h * k.template topRows<I::kQuat>();
   s->block<4, kQuatCols>(I::kQuat, I::kQuat).noalias() =
-      h * k.block<4, kQuatCols>(I::kQuat, I::kQuat);
+      h * k.template block<4, kQuatCols>(I::kQuat, I::kQuat);
   s->bottomRightCorner<kNx - I::kBodyRate, kRateCols>().noalias() =
-      h * k.bottomRightCorner<kNx - I::kBodyRate, kRateCols>();
+      h * k.template bottomRightCorner<kNx - I::kBodyRate, kRateCols>();
   s->leftCols<kNx>().diagonal().array() += 1.0;
 }
 
@@ -229,29 +231,31 @@ void ExactStepJacobians(const HybridModel& model, const StateVector& x, const In
   const StateVector x2 = (x + (0.5 * dt_s) * f1).eval();
   const StateVector f2 = model.Derivative(x2, u, mode);
   EvaluateFlowJacobian(p, rotor, x2, mode, &j);
-  StageSensitivity(0.5 * dt_s, k1, &s);
+  SensitivityOnPattern(0.5 * dt_s, k1, &s);
   ApplyFlowJacobian(j, s, &k2);
   const StateVector x3 = (x + (0.5 * dt_s) * f2).eval();
   const StateVector f3 = model.Derivative(x3, u, mode);
   EvaluateFlowJacobian(p, rotor, x3, mode, &j);
-  StageSensitivity(0.5 * dt_s, k2, &s);
+  SensitivityOnPattern(0.5 * dt_s, k2, &s);
   ApplyFlowJacobian(j, s, &k3);
   const StateVector x4 = (x + dt_s * f3).eval();
   const StateVector f4 = model.Derivative(x4, u, mode);
   EvaluateFlowJacobian(p, rotor, x4, mode, &j);
-  StageSensitivity(dt_s, k3, &s);
+  SensitivityOnPattern(dt_s, k3, &s);
   ApplyFlowJacobian(j, s, &k4);
   StateVector y = x + (dt_s / 6.0) * (f1 + 2.0 * f2 + 2.0 * f3 + f4);
-  s.noalias() = (dt_s / 6.0) * (k1 + 2.0 * k2 + 2.0 * k3 + k4);
-  s.leftCols<kNx>().diagonal().array() += 1.0;
+  SensitivityOnPattern(dt_s / 6.0, k1 + 2.0 * k2 + 2.0 * k3 + k4, &s);
   // renormalisation q / |q|: d (q / |q|) = (I - q q^T / |q|^2) / |q| dq
   const double q_norm = y.segment<4>(I::kQuat).norm();
   y.segment<4>(I::kQuat) /= q_norm;
   const Eigen::Vector4d q_unit = y.segment<4>(I::kQuat);
   const Eigen::Matrix4d normalise =
       (Eigen::Matrix4d::Identity() - q_unit * q_unit.transpose()) / q_norm;
-  const Eigen::Matrix<double, 4, kNxu> s_q = normalise * s.middleRows<4>(I::kQuat);
-  s.middleRows<4>(I::kQuat) = s_q;
+  // (the attitude rows are zero in the position and velocity columns)
+  constexpr int kQuatCols = kNxu - I::kQuat;
+  const Eigen::Matrix<double, 4, kQuatCols> s_q =
+      normalise.lazyProduct(s.block<4, kQuatCols>(I::kQuat, I::kQuat));
+  s.block<4, kQuatCols>(I::kQuat, I::kQuat) = s_q;
   *x_next = y;
   *a = s.leftCols<kNx>();
   *b = s.rightCols<kNu>();
