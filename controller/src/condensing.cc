@@ -1,6 +1,7 @@
 #include "condensing.h"
 
 #include <array>
+#include <cstdint>
 
 namespace hpa {
 namespace {
@@ -21,8 +22,17 @@ void CondensedGradient(const std::vector<StateMatrix>& a, const std::vector<Inpu
 
 StageQuadratic GaussNewtonStage(const ResidualVector& r, const ResidualStateJacobian& r_x,
                                 const ResidualInputJacobian& r_u) {
+  std::array<std::uint32_t, kNr> every_column;
+  every_column.fill(OcpColumns(0, kNx + kNu));
+  return GaussNewtonStage(r, r_x, r_u, every_column);
+}
+
+StageQuadratic GaussNewtonStage(const ResidualVector& r, const ResidualStateJacobian& r_x,
+                                const ResidualInputJacobian& r_u,
+                                const std::array<std::uint32_t, kNr>& row_columns) {
   // Each residual row touches few of the 23 variables (a state-tracking row one, L_cam six): the
-  // sums H = sum_i j_i^T j_i and g = sum_i j_i r_i run over each row's nonzeros only.
+  // sums H = sum_i j_i^T j_i and g = sum_i j_i r_i run over each row's nonzeros only, looked for
+  // among the row's candidate columns (in increasing order, as a scan of all would find them).
   Eigen::Matrix<double, kNx + kNu, kNx + kNu> h =
       Eigen::Matrix<double, kNx + kNu, kNx + kNu>::Zero();
   Eigen::Matrix<double, kNx + kNu, 1> g = Eigen::Matrix<double, kNx + kNu, 1>::Zero();
@@ -30,11 +40,10 @@ StageQuadratic GaussNewtonStage(const ResidualVector& r, const ResidualStateJaco
   std::array<double, kNx + kNu> vals;
   for (int i = 0; i < kNr; ++i) {
     int n = 0;
-    for (int c = 0; c < kNx; ++c) {
-      if (r_x(i, c) != 0.0) cols[n] = c, vals[n++] = r_x(i, c);
-    }
-    for (int c = 0; c < kNu; ++c) {
-      if (r_u(i, c) != 0.0) cols[n] = kNx + c, vals[n++] = r_u(i, c);
+    for (std::uint32_t m = row_columns[i]; m != 0; m &= m - 1) {
+      const int c = __builtin_ctz(m);  // the lowest candidate column left
+      const double v = c < kNx ? r_x(i, c) : r_u(i, c - kNx);
+      if (v != 0.0) cols[n] = c, vals[n++] = v;
     }
     for (int a = 0; a < n; ++a) {
       g(cols[a]) += vals[a] * r(i);

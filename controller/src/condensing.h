@@ -6,6 +6,8 @@
 // becomes the dense QP  min 1/2 du^T H du + g^T du  over du = [du_0 .. du_{N-1}].
 
 #include <Eigen/Core>
+#include <array>
+#include <cstdint>
 #include <vector>
 
 #include "hpa/controller/ocp.h"
@@ -25,6 +27,13 @@ struct StageQuadratic {
 /// Gauss-Newton model of |r + R_x dx + R_u du|^2 / 2: H = J^T J, g = J^T r.
 StageQuadratic GaussNewtonStage(const ResidualVector& r, const ResidualStateJacobian& r_x,
                                 const ResidualInputJacobian& r_u);
+
+/// GaussNewtonStage where row i of [R_x R_u] is nonzero only in the columns of row_columns[i]
+/// (OcpColumns bits, e.g. OcpResidualColumns()): the same result, found without looking at the
+/// other columns.
+StageQuadratic GaussNewtonStage(const ResidualVector& r, const ResidualStateJacobian& r_x,
+                                const ResidualInputJacobian& r_u,
+                                const std::array<std::uint32_t, kNr>& row_columns);
 
 /// Condenses N stages (a, b: N each; stages: N + 1, the last one terminal, its u-blocks
 /// ignored) into h (4N x 4N) and g (4N). O(N^2) block operations, no dense sensitivity matrix.
