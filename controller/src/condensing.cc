@@ -141,9 +141,15 @@ void MulAt(const StateMatrix& a, bool decoupled, const InputMatrix& x, InputMatr
   out->bottomRows<kRate>().noalias() = a.rightCols<kRate>().transpose().lazyProduct(x);
 }
 
-// out += Hxx x over the stored nonzeros of Hxx.
+// out += Hxx x over the stored nonzeros of Hxx (stored row by row): each row of out is loaded
+// once and takes its row's products in increasing column order.
 void AddSparseTimes(const std::vector<SparseEntry>& m, const InputMatrix& x, InputMatrix* out) {
-  for (const SparseEntry& e : m) out->row(e.row) += e.value * x.row(e.col);
+  for (size_t e = 0; e < m.size();) {
+    const int row = m[e].row;
+    Eigen::Matrix<double, 1, kNu> out_row = out->row(row);
+    for (; e < m.size() && m[e].row == row; ++e) out_row += m[e].value * x.row(m[e].col);
+    out->row(row) = out_row;
+  }
 }
 
 // Sizes the workspace and records each stage's structure.
@@ -158,8 +164,8 @@ void AnalyseStructure(const std::vector<StateMatrix>& a, const std::vector<Stage
     std::vector<SparseEntry>& entries = ws->hxx[k];
     entries.reserve(kNx * kNx);
     entries.clear();
-    for (int c = 0; c < kNx; ++c) {
-      for (int r = 0; r < kNx; ++r) {
+    for (int r = 0; r < kNx; ++r) {
+      for (int c = 0; c < kNx; ++c) {
         if (stages[k].hxx(r, c) != 0.0) entries.push_back({r, c, stages[k].hxx(r, c)});
       }
     }
@@ -175,7 +181,7 @@ void CondenseStructured(const std::vector<StateMatrix>& a, const std::vector<Inp
                         Eigen::MatrixXd* h, Eigen::VectorXd* g) {
   const int n = static_cast<int>(a.size());
   AnalyseStructure(a, stages, ws);
-  h->setZero(kNu * n, kNu * n);
+  h->resize(kNu * n, kNu * n);  // every block is written below
   g->resize(kNu * n);
   CondensedGradient(a, b, stages, g);
   // Hessian one block column j at a time, the recursions of Condense

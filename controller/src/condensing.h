@@ -51,7 +51,7 @@ struct SparseEntry {
 /// reused without allocating.
 struct CondensingWorkspace {
   std::vector<InputMatrix> sens;              // d x_k / d u_j for one j  (N + 1)
-  std::vector<std::vector<SparseEntry>> hxx;  // nonzeros of each stage's Hxx  (N + 1)
+  std::vector<std::vector<SparseEntry>> hxx;  // nonzeros of each stage's Hxx, by row  (N + 1)
   std::vector<char> hxu_zero;                 // stage's Hxu is all zero  (N + 1)
   std::vector<char> attitude_decoupled;       // A_k's pattern, see CondenseStructured  (N)
 };
