@@ -205,7 +205,7 @@ void BM_GaussNewtonStages(benchmark::State& st) {
   std::vector<StageQuadratic> stages(ocp.horizon_steps + 1);
   for (auto _ : st) {
     for (int k = 0; k <= ocp.horizon_steps; ++k) {
-      stages[k] = GaussNewtonStage(lin.r[k], lin.r_x[k], lin.r_u[k], OcpResidualColumns());
+      GaussNewtonStage(lin.r[k], lin.r_x[k], lin.r_u[k], OcpResidualColumns(), &stages[k]);
     }
     benchmark::DoNotOptimize(stages.data());
   }

@@ -24,12 +24,14 @@ StageQuadratic GaussNewtonStage(const ResidualVector& r, const ResidualStateJaco
                                 const ResidualInputJacobian& r_u) {
   std::array<std::uint32_t, kNr> every_column;
   every_column.fill(OcpColumns(0, kNx + kNu));
-  return GaussNewtonStage(r, r_x, r_u, every_column);
+  StageQuadratic s;
+  GaussNewtonStage(r, r_x, r_u, every_column, &s);
+  return s;
 }
 
-StageQuadratic GaussNewtonStage(const ResidualVector& r, const ResidualStateJacobian& r_x,
-                                const ResidualInputJacobian& r_u,
-                                const std::array<std::uint32_t, kNr>& row_columns) {
+void GaussNewtonStage(const ResidualVector& r, const ResidualStateJacobian& r_x,
+                      const ResidualInputJacobian& r_u,
+                      const std::array<std::uint32_t, kNr>& row_columns, StageQuadratic* s) {
   // Each residual row touches few of the 23 variables (a state-tracking row one, L_cam six): the
   // sums H = sum_i j_i^T j_i and g = sum_i j_i r_i run over each row's nonzeros only, looked for
   // among the row's candidate columns (in increasing order, as a scan of all would find them).
@@ -50,13 +52,11 @@ StageQuadratic GaussNewtonStage(const ResidualVector& r, const ResidualStateJaco
       for (int b = 0; b < n; ++b) h(cols[a], cols[b]) += vals[a] * vals[b];
     }
   }
-  StageQuadratic s;
-  s.hxx = h.topLeftCorner<kNx, kNx>();
-  s.hxu = h.topRightCorner<kNx, kNu>();
-  s.huu = h.bottomRightCorner<kNu, kNu>();
-  s.gx = g.head<kNx>();
-  s.gu = g.tail<kNu>();
-  return s;
+  s->hxx = h.topLeftCorner<kNx, kNx>();
+  s->hxu = h.topRightCorner<kNx, kNu>();
+  s->huu = h.bottomRightCorner<kNu, kNu>();
+  s->gx = g.head<kNx>();
+  s->gu = g.tail<kNu>();
 }
 
 void Condense(const std::vector<StateMatrix>& a, const std::vector<InputMatrix>& b,

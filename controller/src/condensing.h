@@ -28,12 +28,12 @@ struct StageQuadratic {
 StageQuadratic GaussNewtonStage(const ResidualVector& r, const ResidualStateJacobian& r_x,
                                 const ResidualInputJacobian& r_u);
 
-/// GaussNewtonStage where row i of [R_x R_u] is nonzero only in the columns of row_columns[i]
-/// (OcpColumns bits, e.g. OcpResidualColumns()): the same result, found without looking at the
-/// other columns.
-StageQuadratic GaussNewtonStage(const ResidualVector& r, const ResidualStateJacobian& r_x,
-                                const ResidualInputJacobian& r_u,
-                                const std::array<std::uint32_t, kNr>& row_columns);
+/// GaussNewtonStage into `stage` (every member written), where row i of [R_x R_u] is nonzero only
+/// in the columns of row_columns[i] (OcpColumns bits, e.g. OcpResidualColumns()): the same
+/// result, found without looking at the other columns.
+void GaussNewtonStage(const ResidualVector& r, const ResidualStateJacobian& r_x,
+                      const ResidualInputJacobian& r_u,
+                      const std::array<std::uint32_t, kNr>& row_columns, StageQuadratic* stage);
 
 /// Condenses N stages (a, b: N each; stages: N + 1, the last one terminal, its u-blocks
 /// ignored) into h (4N x 4N) and g (4N). O(N^2) block operations, no dense sensitivity matrix.

@@ -149,8 +149,8 @@ TEST(StructuredCondensingTest, DeclaredColumnsHoldTheJacobians) {
             }
           }
           const StageQuadratic full = GaussNewtonStage(lin.r[k], lin.r_x[k], lin.r_u[k]);
-          const StageQuadratic declared =
-              GaussNewtonStage(lin.r[k], lin.r_x[k], lin.r_u[k], OcpResidualColumns());
+          StageQuadratic declared;
+          GaussNewtonStage(lin.r[k], lin.r_x[k], lin.r_u[k], OcpResidualColumns(), &declared);
           EXPECT_EQ(declared.hxx, full.hxx);
           EXPECT_EQ(declared.hxu, full.hxu);
           EXPECT_EQ(declared.huu, full.huu);
