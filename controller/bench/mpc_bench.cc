@@ -182,6 +182,36 @@ void BM_StepJacobiansAutoDiff(benchmark::State& st) {
 }
 BENCHMARK(BM_StepJacobiansAutoDiff)->Unit(benchmark::kMicrosecond);
 
+// The linearisation of one RTI (simulated states, step Jacobians, stage residuals and their
+// Jacobians) along the warm start, into kept vectors.
+void BM_LinearizeAlong(benchmark::State& st) {
+  WarmScenario sc("rti");
+  const Ocp ocp = sc.mpc->BuildProblem(sc.state);
+  const std::vector<InputVector> u = sc.mpc->WarmStart(sc.state.time_s);
+  OcpLinearization lin;
+  for (auto _ : st) {
+    LinearizeAlong(ocp, sc.state.ToVector(), u, &lin);
+    benchmark::DoNotOptimize(lin.cost);
+  }
+}
+BENCHMARK(BM_LinearizeAlong)->Unit(benchmark::kMicrosecond);
+
+// The Gauss-Newton stage models of one RTI (N + 1 stages) from its linearisation.
+void BM_GaussNewtonStages(benchmark::State& st) {
+  WarmScenario sc("rti");
+  const Ocp ocp = sc.mpc->BuildProblem(sc.state);
+  const OcpLinearization lin =
+      LinearizeAlong(ocp, sc.state.ToVector(), sc.mpc->WarmStart(sc.state.time_s));
+  std::vector<StageQuadratic> stages(ocp.horizon_steps + 1);
+  for (auto _ : st) {
+    for (int k = 0; k <= ocp.horizon_steps; ++k) {
+      GaussNewtonStage(lin.r[k], lin.r_x[k], lin.r_u[k], OcpResidualColumns(), &stages[k]);
+    }
+    benchmark::DoNotOptimize(stages.data());
+  }
+}
+BENCHMARK(BM_GaussNewtonStages)->Unit(benchmark::kMicrosecond);
+
 // The QP of one RTI: arg 0 Condense + dense box QP, arg 1 CondenseStructured + dense box QP,
 // arg 2 the Riccati box QP (no condensing); workspaces kept.
 void BM_CondenseAndQp(benchmark::State& st) {

@@ -1,6 +1,7 @@
 #include "condensing.h"
 
 #include <array>
+#include <cstdint>
 
 namespace hpa {
 namespace {
@@ -21,8 +22,19 @@ void CondensedGradient(const std::vector<StateMatrix>& a, const std::vector<Inpu
 
 StageQuadratic GaussNewtonStage(const ResidualVector& r, const ResidualStateJacobian& r_x,
                                 const ResidualInputJacobian& r_u) {
+  std::array<std::uint32_t, kNr> every_column;
+  every_column.fill(OcpColumns(0, kNx + kNu));
+  StageQuadratic s;
+  GaussNewtonStage(r, r_x, r_u, every_column, &s);
+  return s;
+}
+
+void GaussNewtonStage(const ResidualVector& r, const ResidualStateJacobian& r_x,
+                      const ResidualInputJacobian& r_u,
+                      const std::array<std::uint32_t, kNr>& row_columns, StageQuadratic* s) {
   // Each residual row touches few of the 23 variables (a state-tracking row one, L_cam six): the
-  // sums H = sum_i j_i^T j_i and g = sum_i j_i r_i run over each row's nonzeros only.
+  // sums H = sum_i j_i^T j_i and g = sum_i j_i r_i run over each row's nonzeros only, looked for
+  // among the row's candidate columns (in increasing order, as a scan of all would find them).
   Eigen::Matrix<double, kNx + kNu, kNx + kNu> h =
       Eigen::Matrix<double, kNx + kNu, kNx + kNu>::Zero();
   Eigen::Matrix<double, kNx + kNu, 1> g = Eigen::Matrix<double, kNx + kNu, 1>::Zero();
@@ -30,24 +42,21 @@ StageQuadratic GaussNewtonStage(const ResidualVector& r, const ResidualStateJaco
   std::array<double, kNx + kNu> vals;
   for (int i = 0; i < kNr; ++i) {
     int n = 0;
-    for (int c = 0; c < kNx; ++c) {
-      if (r_x(i, c) != 0.0) cols[n] = c, vals[n++] = r_x(i, c);
-    }
-    for (int c = 0; c < kNu; ++c) {
-      if (r_u(i, c) != 0.0) cols[n] = kNx + c, vals[n++] = r_u(i, c);
+    for (std::uint32_t m = row_columns[i]; m != 0; m &= m - 1) {
+      const int c = __builtin_ctz(m);  // the lowest candidate column left
+      const double v = c < kNx ? r_x(i, c) : r_u(i, c - kNx);
+      if (v != 0.0) cols[n] = c, vals[n++] = v;
     }
     for (int a = 0; a < n; ++a) {
       g(cols[a]) += vals[a] * r(i);
       for (int b = 0; b < n; ++b) h(cols[a], cols[b]) += vals[a] * vals[b];
     }
   }
-  StageQuadratic s;
-  s.hxx = h.topLeftCorner<kNx, kNx>();
-  s.hxu = h.topRightCorner<kNx, kNu>();
-  s.huu = h.bottomRightCorner<kNu, kNu>();
-  s.gx = g.head<kNx>();
-  s.gu = g.tail<kNu>();
-  return s;
+  s->hxx = h.topLeftCorner<kNx, kNx>();
+  s->hxu = h.topRightCorner<kNx, kNu>();
+  s->huu = h.bottomRightCorner<kNu, kNu>();
+  s->gx = g.head<kNx>();
+  s->gu = g.tail<kNu>();
 }
 
 void Condense(const std::vector<StateMatrix>& a, const std::vector<InputMatrix>& b,
@@ -132,9 +141,15 @@ void MulAt(const StateMatrix& a, bool decoupled, const InputMatrix& x, InputMatr
   out->bottomRows<kRate>().noalias() = a.rightCols<kRate>().transpose().lazyProduct(x);
 }
 
-// out += Hxx x over the stored nonzeros of Hxx.
+// out += Hxx x over the stored nonzeros of Hxx (stored row by row): each row of out is loaded
+// once and takes its row's products in increasing column order.
 void AddSparseTimes(const std::vector<SparseEntry>& m, const InputMatrix& x, InputMatrix* out) {
-  for (const SparseEntry& e : m) out->row(e.row) += e.value * x.row(e.col);
+  for (size_t e = 0; e < m.size();) {
+    const int row = m[e].row;
+    Eigen::Matrix<double, 1, kNu> out_row = out->row(row);
+    for (; e < m.size() && m[e].row == row; ++e) out_row += m[e].value * x.row(m[e].col);
+    out->row(row) = out_row;
+  }
 }
 
 // Sizes the workspace and records each stage's structure.
@@ -149,8 +164,8 @@ void AnalyseStructure(const std::vector<StateMatrix>& a, const std::vector<Stage
     std::vector<SparseEntry>& entries = ws->hxx[k];
     entries.reserve(kNx * kNx);
     entries.clear();
-    for (int c = 0; c < kNx; ++c) {
-      for (int r = 0; r < kNx; ++r) {
+    for (int r = 0; r < kNx; ++r) {
+      for (int c = 0; c < kNx; ++c) {
         if (stages[k].hxx(r, c) != 0.0) entries.push_back({r, c, stages[k].hxx(r, c)});
       }
     }
@@ -166,7 +181,7 @@ void CondenseStructured(const std::vector<StateMatrix>& a, const std::vector<Inp
                         Eigen::MatrixXd* h, Eigen::VectorXd* g) {
   const int n = static_cast<int>(a.size());
   AnalyseStructure(a, stages, ws);
-  h->setZero(kNu * n, kNu * n);
+  h->resize(kNu * n, kNu * n);  // every block is written below
   g->resize(kNu * n);
   CondensedGradient(a, b, stages, g);
   // Hessian one block column j at a time, the recursions of Condense

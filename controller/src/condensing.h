@@ -6,6 +6,8 @@
 // becomes the dense QP  min 1/2 du^T H du + g^T du  over du = [du_0 .. du_{N-1}].
 
 #include <Eigen/Core>
+#include <array>
+#include <cstdint>
 #include <vector>
 
 #include "hpa/controller/ocp.h"
@@ -26,6 +28,13 @@ struct StageQuadratic {
 StageQuadratic GaussNewtonStage(const ResidualVector& r, const ResidualStateJacobian& r_x,
                                 const ResidualInputJacobian& r_u);
 
+/// GaussNewtonStage into `stage` (every member written), where row i of [R_x R_u] is nonzero only
+/// in the columns of row_columns[i] (OcpColumns bits, e.g. OcpResidualColumns()): the same
+/// result, found without looking at the other columns.
+void GaussNewtonStage(const ResidualVector& r, const ResidualStateJacobian& r_x,
+                      const ResidualInputJacobian& r_u,
+                      const std::array<std::uint32_t, kNr>& row_columns, StageQuadratic* stage);
+
 /// Condenses N stages (a, b: N each; stages: N + 1, the last one terminal, its u-blocks
 /// ignored) into h (4N x 4N) and g (4N). O(N^2) block operations, no dense sensitivity matrix.
 void Condense(const std::vector<StateMatrix>& a, const std::vector<InputMatrix>& b,
@@ -42,7 +51,7 @@ struct SparseEntry {
 /// reused without allocating.
 struct CondensingWorkspace {
   std::vector<InputMatrix> sens;              // d x_k / d u_j for one j  (N + 1)
-  std::vector<std::vector<SparseEntry>> hxx;  // nonzeros of each stage's Hxx  (N + 1)
+  std::vector<std::vector<SparseEntry>> hxx;  // nonzeros of each stage's Hxx, by row  (N + 1)
   std::vector<char> hxu_zero;                 // stage's Hxu is all zero  (N + 1)
   std::vector<char> attitude_decoupled;       // A_k's pattern, see CondenseStructured  (N)
 };

@@ -14,16 +14,9 @@ struct ThrustVectorJacobian {
   Eigen::Matrix<double, 3, kNu> f_u;  // d f / d u
 };
 
-// The rotor map: the moment part of d wrench / du into the rate Jacobian, and the thrust vector.
-ThrustVectorJacobian ThrustAndMoments(const Params& p, const Eigen::Matrix4d& allocation,
-                                      const StateVector& x, const InputVector& u, FlowJacobian* j) {
+// The thrust vector f R e3 and its Jacobians from the rotor part at the state's attitude.
+ThrustVectorJacobian ThrustVector(const RotorJacobian& rotor, const StateVector& x) {
   const double qw = x(I::kQuat), qx = x(I::kQuat + 1), qy = x(I::kQuat + 2), qz = x(I::kQuat + 3);
-  // wrench = allocation * k_f u.^2: d wrench / du = allocation * diag(2 k_f u)
-  const Eigen::Vector4d f_rotor_N = p.k_f_N_per_radps2 * u.array().square().matrix();
-  const double thrust_N = allocation.row(0).dot(f_rotor_N);
-  const Eigen::Matrix4d wrench_u =
-      allocation * (2.0 * p.k_f_N_per_radps2 * u).asDiagonal().toDenseMatrix();
-  for (int i = 0; i < 3; ++i) j->wdot_u.row(i) = wrench_u.row(1 + i) / p.inertia_B_kgm2(i);
   // body z in world (third column of R(q)) and its derivative in (w, x, y, z)
   const Eigen::Vector3d z_B_W(2.0 * (qx * qz + qw * qy), 2.0 * (qy * qz - qw * qx),
                               1.0 - 2.0 * (qx * qx + qy * qy));
@@ -32,9 +25,9 @@ ThrustVectorJacobian ThrustAndMoments(const Params& p, const Eigen::Matrix4d& al
       -2.0 * qx, -2.0 * qw, 2.0 * qz, 2.0 * qy,   //
       0.0, -4.0 * qx, -4.0 * qy, 0.0;
   ThrustVectorJacobian t;
-  t.f_W_N = thrust_N * z_B_W;
-  t.f_q = thrust_N * z_q;
-  t.f_u = z_B_W * wrench_u.row(0);
+  t.f_W_N = rotor.thrust_N * z_B_W;
+  t.f_q = rotor.thrust_N * z_q;
+  t.f_u = z_B_W * rotor.thrust_u;
   return t;
 }
 
@@ -95,26 +88,75 @@ void AttitudeJacobian(const Params& p, const StateVector& x, FlowJacobian* j) {
 
 }  // namespace
 
-void EvaluateFlowJacobian(const Params& params, const Eigen::Matrix4d& allocation,
-                          const StateVector& x, const InputVector& u, CableMode mode,
-                          FlowJacobian* jacobian) {
-  const ThrustVectorJacobian f = ThrustAndMoments(params, allocation, x, u, jacobian);
+RotorJacobian EvaluateRotorJacobian(const Params& params, const Eigen::Matrix4d& allocation,
+                                    const InputVector& u) {
+  // wrench = allocation * k_f u.^2: d wrench / du = allocation * diag(2 k_f u)
+  const Eigen::Vector4d f_rotor_N = params.k_f_N_per_radps2 * u.array().square().matrix();
+  const Eigen::Matrix4d wrench_u =
+      allocation * (2.0 * params.k_f_N_per_radps2 * u).asDiagonal().toDenseMatrix();
+  RotorJacobian rotor;
+  rotor.thrust_N = allocation.row(0).dot(f_rotor_N);
+  rotor.thrust_u = wrench_u.row(0);
+  for (int i = 0; i < 3; ++i) rotor.wdot_u.row(i) = wrench_u.row(1 + i) / params.inertia_B_kgm2(i);
+  return rotor;
+}
+
+void EvaluateFlowJacobian(const Params& params, const RotorJacobian& rotor, const StateVector& x,
+                          CableMode mode, FlowJacobian* jacobian) {
+  const ThrustVectorJacobian f = ThrustVector(rotor, x);
   jacobian->taut = mode == CableMode::kTaut;
   jacobian->inv_payload_mass_per_kg = 1.0 / params.payload_mass_kg;
   jacobian->inv_quad_mass_per_kg = 1.0 / params.quad_mass_kg;
   jacobian->thrust_q = f.f_q;
   jacobian->thrust_u = f.f_u;
+  jacobian->wdot_u = rotor.wdot_u;
   // slack: payload in free fall, no cable force
   if (jacobian->taut) TautAccelerationJacobian(params, x, f, jacobian);
   AttitudeJacobian(params, x, jacobian);
 }
 
+void EvaluateFlowJacobian(const Params& params, const Eigen::Matrix4d& allocation,
+                          const StateVector& x, const InputVector& u, CableMode mode,
+                          FlowJacobian* jacobian) {
+  EvaluateFlowJacobian(params, EvaluateRotorJacobian(params, allocation, u), x, mode, jacobian);
+}
+
 void DenseFlowJacobian(const FlowJacobian& jacobian, StateMatrix* a, InputMatrix* b) {
-  StepSensitivity identity = StepSensitivity::Identity();
   StepSensitivity k;
-  ApplyFlowJacobian(jacobian, identity, &k);
+  FlowJacobianMatrix(jacobian, &k);
   *a = k.leftCols<kNx>();
   *b = k.rightCols<kNu>();
+}
+
+void FlowJacobianMatrix(const FlowJacobian& j, StepSensitivity* k) {
+  // ApplyFlowJacobian of the identity: each of its products has a single nonzero term, so the
+  // blocks are placed directly, with the same operations on them (negation, the force sum, the
+  // mass scaling) as there
+  k->setZero();
+  // positions: p_dot = v
+  k->block<3, 3>(I::kPayloadPos, I::kPayloadVel).setIdentity();
+  k->block<3, 3>(I::kQuadPos, I::kQuadVel).setIdentity();
+  // accelerations from the thrust vector f and the cable force T xi
+  Eigen::Matrix<double, 3, kNxu> force = Eigen::Matrix<double, 3, kNxu>::Zero();
+  force.middleCols<4>(I::kQuat) = j.thrust_q;
+  force.rightCols<kNu>() = j.thrust_u;
+  if (j.taut) {
+    Eigen::Matrix<double, 3, kNxu> cable = Eigen::Matrix<double, 3, kNxu>::Zero();
+    cable.middleCols<3>(I::kPayloadPos) = j.cable_r;
+    cable.middleCols<3>(I::kPayloadVel) = j.cable_v;
+    cable.middleCols<3>(I::kQuadPos) = -j.cable_r;
+    cable.middleCols<3>(I::kQuadVel) = -j.cable_v;
+    cable.middleCols<4>(I::kQuat) = j.cable_q;
+    cable.rightCols<kNu>() = j.cable_u;
+    k->middleRows<3>(I::kPayloadVel) = -j.inv_payload_mass_per_kg * cable;
+    force += cable;
+  }
+  k->middleRows<3>(I::kQuadVel) = j.inv_quad_mass_per_kg * force;
+  // attitude (q, w) and rate (w, u) rows
+  k->block<4, 4>(I::kQuat, I::kQuat) = j.qdot_q;
+  k->block<4, 3>(I::kQuat, I::kBodyRate) = j.qdot_w;
+  k->block<3, 3>(I::kBodyRate, I::kBodyRate) = j.wdot_w;
+  k->block<3, kNu>(I::kBodyRate, kNx) = j.wdot_u;
 }
 
 void ApplyFlowJacobian(const FlowJacobian& j, const StepSensitivity& s, StepSensitivity* k) {
@@ -154,46 +196,66 @@ void ApplyFlowJacobian(const FlowJacobian& j, const StepSensitivity& s, StepSens
   k->block<3, kNu>(I::kBodyRate, kNx) += j.wdot_u;
 }
 
+namespace {
+
+// s = I + h k over the rigid body's pattern (the attitude rows' position and velocity columns
+// and the rate rows' attitude columns are left as they are: zero in s and k). k may be an
+// expression (the RK4 sum), evaluated on those blocks only.
+template <typename Sensitivity>
+void SensitivityOnPattern(double h, const Eigen::MatrixBase<Sensitivity>& k, StepSensitivity* s) {
+  constexpr int kQuatCols = kNxu - I::kQuat, kRateCols = kNxu - I::kBodyRate;
+  s->topRows<I::kQuat>().noalias() = h * k.template topRows<I::kQuat>();
+  s->block<4, kQuatCols>(I::kQuat, I::kQuat).noalias() =
+      h * k.template block<4, kQuatCols>(I::kQuat, I::kQuat);
+  s->bottomRightCorner<kNx - I::kBodyRate, kRateCols>().noalias() =
+      h * k.template bottomRightCorner<kNx - I::kBodyRate, kRateCols>();
+  s->leftCols<kNx>().diagonal().array() += 1.0;
+}
+
+}  // namespace
+
 void ExactStepJacobians(const HybridModel& model, const StateVector& x, const InputVector& u,
                         CableMode mode, double dt_s, StateVector* x_next, StateMatrix* a,
                         InputMatrix* b) {
   const Params& p = model.params();
-  const Eigen::Matrix4d allocation = AllocationMatrix(p);
-  // the stages as HybridModel's RK4 forms them, with their sensitivities s_i = d x_i / d(x, u)
+  // u is held over the step: the rotor map's part of the flow Jacobian is the same at every stage
+  const RotorJacobian rotor = EvaluateRotorJacobian(p, AllocationMatrix(p), u);
+  // the stages as HybridModel's RK4 forms them, with their sensitivities s_i = d x_i / d(x, u);
+  // every sensitivity has the rigid body's pattern, whose zeros are set once here
   FlowJacobian j;
-  StepSensitivity k1, k2, k3, k4, s;
+  alignas(16) StepSensitivity k1, k2, k3, k4;
+  alignas(16) StepSensitivity s = StepSensitivity::Zero();
   const StateVector f1 = model.Derivative(x, u, mode);
-  EvaluateFlowJacobian(p, allocation, x, u, mode, &j);
-  ApplyFlowJacobian(j, StepSensitivity::Identity(), &k1);
+  EvaluateFlowJacobian(p, rotor, x, mode, &j);
+  FlowJacobianMatrix(j, &k1);  // s_1 = I
   const StateVector x2 = (x + (0.5 * dt_s) * f1).eval();
   const StateVector f2 = model.Derivative(x2, u, mode);
-  EvaluateFlowJacobian(p, allocation, x2, u, mode, &j);
-  s.noalias() = (0.5 * dt_s) * k1;
-  s.leftCols<kNx>().diagonal().array() += 1.0;
+  EvaluateFlowJacobian(p, rotor, x2, mode, &j);
+  SensitivityOnPattern(0.5 * dt_s, k1, &s);
   ApplyFlowJacobian(j, s, &k2);
   const StateVector x3 = (x + (0.5 * dt_s) * f2).eval();
   const StateVector f3 = model.Derivative(x3, u, mode);
-  EvaluateFlowJacobian(p, allocation, x3, u, mode, &j);
-  s.noalias() = (0.5 * dt_s) * k2;
-  s.leftCols<kNx>().diagonal().array() += 1.0;
+  EvaluateFlowJacobian(p, rotor, x3, mode, &j);
+  SensitivityOnPattern(0.5 * dt_s, k2, &s);
   ApplyFlowJacobian(j, s, &k3);
   const StateVector x4 = (x + dt_s * f3).eval();
   const StateVector f4 = model.Derivative(x4, u, mode);
-  EvaluateFlowJacobian(p, allocation, x4, u, mode, &j);
-  s.noalias() = dt_s * k3;
-  s.leftCols<kNx>().diagonal().array() += 1.0;
+  EvaluateFlowJacobian(p, rotor, x4, mode, &j);
+  SensitivityOnPattern(dt_s, k3, &s);
   ApplyFlowJacobian(j, s, &k4);
   StateVector y = x + (dt_s / 6.0) * (f1 + 2.0 * f2 + 2.0 * f3 + f4);
-  s.noalias() = (dt_s / 6.0) * (k1 + 2.0 * k2 + 2.0 * k3 + k4);
-  s.leftCols<kNx>().diagonal().array() += 1.0;
+  SensitivityOnPattern(dt_s / 6.0, k1 + 2.0 * k2 + 2.0 * k3 + k4, &s);
   // renormalisation q / |q|: d (q / |q|) = (I - q q^T / |q|^2) / |q| dq
   const double q_norm = y.segment<4>(I::kQuat).norm();
   y.segment<4>(I::kQuat) /= q_norm;
   const Eigen::Vector4d q_unit = y.segment<4>(I::kQuat);
   const Eigen::Matrix4d normalise =
       (Eigen::Matrix4d::Identity() - q_unit * q_unit.transpose()) / q_norm;
-  const Eigen::Matrix<double, 4, kNxu> s_q = normalise * s.middleRows<4>(I::kQuat);
-  s.middleRows<4>(I::kQuat) = s_q;
+  // (the attitude rows are zero in the position and velocity columns)
+  constexpr int kQuatCols = kNxu - I::kQuat;
+  const Eigen::Matrix<double, 4, kQuatCols> s_q =
+      normalise.lazyProduct(s.block<4, kQuatCols>(I::kQuat, I::kQuat));
+  s.block<4, kQuatCols>(I::kQuat, I::kQuat) = s_q;
   *x_next = y;
   *a = s.leftCols<kNx>();
   *b = s.rightCols<kNu>();

@@ -38,6 +38,22 @@ struct FlowJacobian {
   Eigen::Matrix<double, 3, kNu> wdot_u = Eigen::Matrix<double, 3, kNu>::Zero();  // d w_dot / du
 };
 
+/// The part of the flow Jacobian that depends on the rotor speeds only (the rotor map), the same
+/// at every RK4 stage of a step.
+struct RotorJacobian {
+  double thrust_N = 0.0;                                                           // collective f
+  Eigen::Matrix<double, 1, kNu> thrust_u = Eigen::Matrix<double, 1, kNu>::Zero();  // d f / du
+  Eigen::Matrix<double, 3, kNu> wdot_u = Eigen::Matrix<double, 3, kNu>::Zero();    // d w_dot / du
+};
+
+/// The rotor map's part of the flow Jacobian at u; allocation: AllocationMatrix(params).
+RotorJacobian EvaluateRotorJacobian(const Params& params, const Eigen::Matrix4d& allocation,
+                                    const InputVector& u);
+
+/// The flow Jacobian at x in `mode`, with the rotor part `rotor` of the input.
+void EvaluateFlowJacobian(const Params& params, const RotorJacobian& rotor, const StateVector& x,
+                          CableMode mode, FlowJacobian* jacobian);
+
 /// The flow Jacobian at (x, u) in `mode`; allocation: AllocationMatrix(params).
 void EvaluateFlowJacobian(const Params& params, const Eigen::Matrix4d& allocation,
                           const StateVector& x, const InputVector& u, CableMode mode,
@@ -45,6 +61,10 @@ void EvaluateFlowJacobian(const Params& params, const Eigen::Matrix4d& allocatio
 
 /// The flow Jacobian as dense matrices a = d x_dot / dx (19 x 19), b = d x_dot / du (19 x 4).
 void DenseFlowJacobian(const FlowJacobian& jacobian, StateMatrix* a, InputMatrix* b);
+
+/// The flow Jacobian as one sensitivity k = [d x_dot / dx, d x_dot / du] (19 x 23): what
+/// ApplyFlowJacobian gives for s = I, without its products.
+void FlowJacobianMatrix(const FlowJacobian& jacobian, StepSensitivity* k);
 
 /// k = J s + [0 B]: the flow Jacobian applied to a sensitivity (what one RK4 stage needs). s must
 /// have the rigid body's pattern, as the identity and every RK4 stage sensitivity have: its

@@ -173,26 +173,32 @@ constexpr std::array<OcpTerm, kCount> WithOffsets(const OcpTerm (&terms)[kCount]
   return out;
 }
 
-// The stage cost: one line per term (name, rows, terminal role, weight, scale, residual).
+// The stage cost: one line per term (name, rows, terminal role, weight, scale, residual,
+// columns).
 // m L_load + (1 - m) L_quad is the six state-tracking terms with their per-mode weights.
 constexpr OcpTermAtTerminal kTerminalFactor = OcpTermAtTerminal::kTimesTerminalFactor;
 constexpr OcpTerm kTermList[] = {
     {"payload_position", 3, kTerminalFactor, &StateWeight<I::kPayloadPos, 3>, nullptr,
-     &StateError<I::kPayloadPos, 3>},
+     &StateError<I::kPayloadPos, 3>, OcpColumns(I::kPayloadPos, 3)},
     {"payload_velocity", 3, kTerminalFactor, &StateWeight<I::kPayloadVel, 3>, nullptr,
-     &StateError<I::kPayloadVel, 3>},
+     &StateError<I::kPayloadVel, 3>, OcpColumns(I::kPayloadVel, 3)},
     {"quad_position", 3, kTerminalFactor, &StateWeight<I::kQuadPos, 3>, nullptr,
-     &StateError<I::kQuadPos, 3>},
+     &StateError<I::kQuadPos, 3>, OcpColumns(I::kQuadPos, 3)},
     {"quad_velocity", 3, kTerminalFactor, &StateWeight<I::kQuadVel, 3>, nullptr,
-     &StateError<I::kQuadVel, 3>},
-    {"attitude", 4, kTerminalFactor, &StateWeight<I::kQuat, 4>, nullptr, &AttitudeError},
+     &StateError<I::kQuadVel, 3>, OcpColumns(I::kQuadVel, 3)},
+    {"attitude", 4, kTerminalFactor, &StateWeight<I::kQuat, 4>, nullptr, &AttitudeError,
+     OcpColumns(I::kQuat, 4)},
     {"body_rate", 3, kTerminalFactor, &StateWeight<I::kBodyRate, 3>, nullptr,
-     &StateError<I::kBodyRate, 3>},
-    {"input", kNu, OcpTermAtTerminal::kOmitted, &InputWeight, nullptr, &InputError},
-    {"perception", 2, kTerminalFactor, &PerceptionWeight, &PerceptionScale, &PerceptionError},
-    {"tilt_limit", 1, OcpTermAtTerminal::kAsStage, &TiltWeight, nullptr, &TiltExcess},
+     &StateError<I::kBodyRate, 3>, OcpColumns(I::kBodyRate, 3)},
+    {"input", kNu, OcpTermAtTerminal::kOmitted, &InputWeight, nullptr, &InputError,
+     OcpColumns(kNx, kNu)},
+    // the attitude columns only with the camera at the state's attitude
+    {"perception", 2, kTerminalFactor, &PerceptionWeight, &PerceptionScale, &PerceptionError,
+     OcpColumns(I::kPayloadPos, 3) | OcpColumns(I::kQuadPos, 3) | OcpColumns(I::kQuat, 4)},
+    {"tilt_limit", 1, OcpTermAtTerminal::kAsStage, &TiltWeight, nullptr, &TiltExcess,
+     OcpColumns(I::kQuat + 1, 2)},
     {"body_rate_limit", 3, OcpTermAtTerminal::kAsStage, &BodyRateLimitWeight, nullptr,
-     &BodyRateExcess},
+     &BodyRateExcess, OcpColumns(I::kBodyRate, 3)},
 };
 constexpr auto kTerms = WithOffsets(kTermList);
 static_assert(kTerms.back().offset + kTerms.back().rows == kNr,
@@ -224,6 +230,17 @@ void EvaluateTerm(const Ocp& ocp, const OcpTerm& term, int k, const StateVector&
 const std::vector<OcpTerm>& OcpTerms() {
   static const std::vector<OcpTerm> terms(kTerms.begin(), kTerms.end());
   return terms;
+}
+
+const std::array<std::uint32_t, kNr>& OcpResidualColumns() {
+  static const std::array<std::uint32_t, kNr> columns = [] {
+    std::array<std::uint32_t, kNr> c{};
+    for (const OcpTerm& term : kTerms) {
+      for (int i = 0; i < term.rows; ++i) c[term.offset + i] = term.columns;
+    }
+    return c;
+  }();
+  return columns;
 }
 
 const OcpTerm* FindOcpTerm(std::string_view name) {

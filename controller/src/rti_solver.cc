@@ -42,7 +42,8 @@ bool BuildQp(const Ocp& ocp, const StateVector& x0, const RtiSettings& settings,
   LinearizeAlong(ocp, x0, result->u, &w->lin);
   w->stages.resize(n + 1);
   for (int k = 0; k <= n; ++k) {
-    w->stages[k] = GaussNewtonStage(w->lin.r[k], w->lin.r_x[k], w->lin.r_u[k]);
+    GaussNewtonStage(w->lin.r[k], w->lin.r_x[k], w->lin.r_u[k], OcpResidualColumns(),
+                     &w->stages[k]);
   }
   result->cost_guess = w->lin.cost;
   result->cost = w->lin.cost;

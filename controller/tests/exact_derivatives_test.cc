@@ -94,6 +94,31 @@ TEST(ExactDerivativesTest, FlowJacobianMatchesAutoDiff) {
   }
 }
 
+// FlowJacobianMatrix places the blocks that ApplyFlowJacobian of the identity computes, and
+// EvaluateRotorJacobian's part is the one EvaluateFlowJacobian from u uses: bit for bit (the
+// RK4 step Jacobians take k1 and the rotor part that way).
+TEST(ExactDerivativesTest, FlowJacobianMatrixIsTheFlowJacobianOfTheIdentity) {
+  const Params params;
+  std::mt19937 rng(3);
+  for (CableMode mode : {CableMode::kTaut, CableMode::kSlack}) {
+    for (int trial = 0; trial < 20; ++trial) {
+      StateVector x;
+      InputVector u;
+      RandomStateAndInput(params, &rng, &x, &u);
+      FlowJacobian j, j_rotor;
+      EvaluateFlowJacobian(params, AllocationMatrix(params), x, u, mode, &j);
+      EvaluateFlowJacobian(params, EvaluateRotorJacobian(params, AllocationMatrix(params), u), x,
+                           mode, &j_rotor);
+      StepSensitivity k_applied, k_placed, k_rotor;
+      ApplyFlowJacobian(j, StepSensitivity::Identity(), &k_applied);
+      FlowJacobianMatrix(j, &k_placed);
+      FlowJacobianMatrix(j_rotor, &k_rotor);
+      EXPECT_EQ(k_placed, k_applied) << ToString(mode) << " trial " << trial;
+      EXPECT_EQ(k_rotor, k_placed) << ToString(mode) << " trial " << trial;
+    }
+  }
+}
+
 TEST(ExactDerivativesTest, StepJacobiansMatchAutoDiffAndCentralDifferences) {
   const Params params;
   const HybridModel model(params);

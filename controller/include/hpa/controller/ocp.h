@@ -10,6 +10,8 @@
 
 #include <Eigen/Core>
 #include <algorithm>
+#include <array>
+#include <cstdint>
 #include <memory>
 #include <string_view>
 #include <vector>
@@ -141,11 +143,24 @@ struct OcpTerm {
   OcpTermWeightFunction weight = nullptr;                       // per-mode diagonal weight
   OcpTermScaleFunction scale = nullptr;                         // nullptr: no extra scale
   OcpTermResidualFunction residual = nullptr;                   // weighted residual, Jacobians
+  // the columns of [x, u] the term's Jacobian rows may be nonzero in, any stage and mode: bit c
+  // is state c for c < kNx, input c - kNx (OcpColumns)
+  std::uint32_t columns = 0;
   int offset = 0;  // first row in the stage residual, computed from the list order
 };
 
+/// Bit mask of `count` columns of [x, u] from `first` (a state index, or kNx + an input index).
+constexpr std::uint32_t OcpColumns(int first, int count) {
+  return ((std::uint32_t{1} << count) - 1) << first;
+}
+static_assert(kNx + kNu <= 32, "OcpTerm::columns has one bit per column of [x, u]");
+
 /// The terms of the stage cost, in residual order (their rows add up to kNr).
 const std::vector<OcpTerm>& OcpTerms();
+
+/// Per row of the stage residual, the columns of [x, u] its Jacobian row may be nonzero in (its
+/// term's OcpTerm::columns).
+const std::array<std::uint32_t, kNr>& OcpResidualColumns();
 
 /// The term named `name`, or nullptr.
 const OcpTerm* FindOcpTerm(std::string_view name);
