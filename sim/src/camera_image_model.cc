@@ -53,33 +53,35 @@ inline float CanonicalFloat(uint64_t bits) {
 
 // The values std::normal_distribution<float>(0, 1) draws from mt19937_64(seed), bit for bit
 // (libstdc++'s Marsaglia polar method), computed in two passes: the sequential one draws the
-// uniforms and keeps the accepted pairs; the logarithms and roots, most of the cost, run on
-// every core. The table test compares it with the standard library's own loop.
+// uniforms and keeps each accepted pair (x, y) in the table where its two values go; the
+// logarithms and roots, most of the cost, run on every core and scale the pairs in place (r2 is
+// recomputed there by the same float operations). The table test compares it with the standard
+// library's own loop.
 std::vector<float> PolarNormalTable(size_t size, uint64_t seed) {
   std::mt19937_64 rng(seed);
-  struct Pair {
-    float x, y, r2;
-  };
-  std::vector<Pair> pairs((size + 1) / 2);
-  for (Pair& pair : pairs) {
+  const size_t pairs = (size + 1) / 2;
+  std::vector<float> table(2 * pairs);
+  for (size_t i = 0; i < pairs; ++i) {
     float x, y, r2;
     do {
       x = static_cast<float>(2.0f * CanonicalFloat(rng()) - 1.0);
       y = static_cast<float>(2.0f * CanonicalFloat(rng()) - 1.0);
       r2 = x * x + y * y;
     } while (r2 > 1.0 || r2 == 0.0);
-    pair = {x, y, r2};
+    // the distribution returns y * mult first and keeps x * mult for the next draw
+    table[2 * i] = y;
+    table[2 * i + 1] = x;
   }
-  std::vector<float> table(size);
-  ParallelRanges(pairs.size(), [&](size_t begin, size_t end) {
+  ParallelRanges(pairs, [&](size_t begin, size_t end) {
     for (size_t i = begin; i < end; ++i) {
-      const Pair& pair = pairs[i];
-      const float mult = std::sqrt(-2 * std::log(pair.r2) / pair.r2);
-      // the distribution returns y * mult first and keeps x * mult for the next draw
-      table[2 * i] = pair.y * mult;
-      if (2 * i + 1 < size) table[2 * i + 1] = pair.x * mult;
+      const float y = table[2 * i], x = table[2 * i + 1];
+      const float r2 = x * x + y * y;
+      const float mult = std::sqrt(-2 * std::log(r2) / r2);
+      table[2 * i] = y * mult;
+      table[2 * i + 1] = x * mult;
     }
   });
+  table.resize(size);
   return table;
 }
 
