@@ -223,6 +223,10 @@ void ExactStepJacobians(const HybridModel& model, const StateVector& x, const In
   // the stages as HybridModel's RK4 forms them, with their sensitivities s_i = d x_i / d(x, u);
   // every sensitivity has the rigid body's pattern, whose zeros are set once here
   FlowJacobian j;
+  // 16-byte aligned: Eigen chooses between its vectorised and scalar paths for a block by where
+  // the block starts, and the two sum some products in different orders; fixed alignment keeps
+  // the values independent of where the compiler places these (19 x 23 is not a multiple of 16
+  // bytes, so Eigen itself does not align them)
   alignas(16) StepSensitivity k1, k2, k3, k4;
   alignas(16) StepSensitivity s = StepSensitivity::Zero();
   const StateVector f1 = model.Derivative(x, u, mode);

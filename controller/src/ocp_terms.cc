@@ -236,7 +236,9 @@ const std::array<std::uint32_t, kNr>& OcpResidualColumns() {
   static const std::array<std::uint32_t, kNr> columns = [] {
     std::array<std::uint32_t, kNr> c{};
     for (const OcpTerm& term : kTerms) {
-      for (int i = 0; i < term.rows; ++i) c[term.offset + i] = term.columns;
+      // a term that declares no columns is looked at in all of them
+      const std::uint32_t columns = term.columns != 0 ? term.columns : OcpColumns(0, kNx + kNu);
+      for (int i = 0; i < term.rows; ++i) c[term.offset + i] = columns;
     }
     return c;
   }();

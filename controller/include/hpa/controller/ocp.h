@@ -144,7 +144,7 @@ struct OcpTerm {
   OcpTermScaleFunction scale = nullptr;                         // nullptr: no extra scale
   OcpTermResidualFunction residual = nullptr;                   // weighted residual, Jacobians
   // the columns of [x, u] the term's Jacobian rows may be nonzero in, any stage and mode: bit c
-  // is state c for c < kNx, input c - kNx (OcpColumns)
+  // is state c for c < kNx, input c - kNx (OcpColumns); 0: not declared, any column
   std::uint32_t columns = 0;
   int offset = 0;  // first row in the stage residual, computed from the list order
 };
