@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cerrno>
+#include <charconv>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -307,22 +308,46 @@ void WriteLogCsv(const std::string& path, const std::vector<LogRow>& rows) {
   out << ",ref_pL_x,ref_pL_y,ref_pL_z,ref_pQ_x,ref_pQ_y,ref_pQ_z"
       << ",cmd_w_x,cmd_w_y,cmd_w_z,cmd_thrust_N,status,solve_ms,cost,tension_N,gripper"
       << ",est_rejected_updates,est_resets,mixer_saturated\n";
-  out << std::setprecision(7);
+  // each row formatted into one buffer: std::to_chars with precision 7 writes what
+  // `out << std::setprecision(7) << value` (printf's %.7g) writes, without the stream's locale
+  // and formatting machinery on every value
+  std::string line;
+  const auto add = [&line](double value) {
+    char buf[32];
+    const std::to_chars_result r =
+        std::to_chars(buf, buf + sizeof buf, value, std::chars_format::general, 7);
+    line.push_back(',');
+    line.append(buf, r.ptr);
+  };
+  const auto add_int = [&line](long value) {
+    line.push_back(',');
+    line += std::to_string(value);
+  };
   for (const LogRow& r : rows) {
-    out << r.time_s;
+    line.clear();
+    add(r.time_s);
+    line.erase(0, 1);  // no comma before the first column
     for (const SystemState* s : {&r.truth, &r.estimate}) {
       const StateVector x = s->ToVector();
-      for (int i = 0; i < kNx; ++i) out << "," << x(i);
-      out << "," << (s->mode == CableMode::kTaut ? 1 : 0);
+      for (int i = 0; i < kNx; ++i) add(x(i));
+      add_int(s->mode == CableMode::kTaut ? 1 : 0);
     }
     const auto& ref = r.reference;
-    out << "," << ref.p_WL_W.x() << "," << ref.p_WL_W.y() << "," << ref.p_WL_W.z() << ","
-        << ref.p_WQ_W.x() << "," << ref.p_WQ_W.y() << "," << ref.p_WQ_W.z();
-    out << "," << r.command.w_B_radps.x() << "," << r.command.w_B_radps.y() << ","
-        << r.command.w_B_radps.z() << "," << r.command.thrust_N << "," << ToString(r.status) << ","
-        << r.solve_time_ms << "," << r.cost << "," << r.cable_tension_N << ","
-        << (r.gripper_active ? 1 : 0) << "," << r.estimator_rejected_updates << ","
-        << r.estimator_resets << "," << (r.mixer_saturated ? 1 : 0) << "\n";
+    for (int i = 0; i < 3; ++i) add(ref.p_WL_W(i));
+    for (int i = 0; i < 3; ++i) add(ref.p_WQ_W(i));
+    for (int i = 0; i < 3; ++i) add(r.command.w_B_radps(i));
+    add(r.command.thrust_N);
+    line.push_back(',');
+    line += ToString(r.status);
+    add(r.solve_time_ms);
+    add(r.cost);
+    add(r.cable_tension_N);
+    add_int(r.gripper_active ? 1 : 0);
+    add_int(r.estimator_rejected_updates);
+    add_int(r.estimator_resets);
+    add_int(r.mixer_saturated ? 1 : 0);
+    line.push_back('\n');
+    out << line;
   }
   out.flush();
   if (!out) throw OutputError(path, "disk full?");
