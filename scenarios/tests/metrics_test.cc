@@ -3,6 +3,12 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <iomanip>
+#include <limits>
+#include <sstream>
+#include <string>
 
 namespace hpa {
 namespace {
@@ -120,6 +126,40 @@ TEST(MetricsTest, QuantilesAndJson) {
         "\"slack_detection_latency_s\"", "\"retaut\"", "\"mpc_solve_ms\"", "\"expect\""}) {
     EXPECT_NE(json.find(key), std::string::npos) << key;
   }
+}
+
+// log.csv's numbers are what a stream with setprecision(7) writes (printf's %.7g): exponents,
+// rounding to 7 digits, integers, negative zero, non-finite values.
+TEST(MetricsTest, LogCsvWritesNumbersAsSevenDigitGeneralFormat) {
+  const double values[] = {0.0,
+                           -0.0,
+                           1.0 / 3.0,
+                           -2.5e-7,
+                           1234567.89,
+                           9.9999996e12,
+                           1e-5,
+                           42.0,
+                           std::numeric_limits<double>::infinity(),
+                           std::numeric_limits<double>::quiet_NaN()};
+  std::vector<LogRow> rows;
+  for (double v : values) {
+    LogRow r;
+    r.time_s = v;
+    r.cost = v;
+    rows.push_back(r);
+  }
+  const std::string path = ::testing::TempDir() + "/log_format.csv";
+  WriteLogCsv(path, rows);
+  std::ifstream in(path);
+  std::string line;
+  std::getline(in, line);  // header
+  for (double v : values) {
+    ASSERT_TRUE(std::getline(in, line));
+    std::ostringstream expected;
+    expected << std::setprecision(7) << v;
+    EXPECT_EQ(line.substr(0, line.find(',')), expected.str()) << line;
+  }
+  std::remove(path.c_str());
 }
 
 }  // namespace

@@ -9,7 +9,6 @@
 #include <cstdio>
 #include <cstring>
 #include <fstream>
-#include <iomanip>
 #include <nlohmann/json.hpp>
 #include <sstream>
 
@@ -312,12 +311,15 @@ void WriteLogCsv(const std::string& path, const std::vector<LogRow>& rows) {
   // `out << std::setprecision(7) << value` (printf's %.7g) writes, without the stream's locale
   // and formatting machinery on every value
   std::string line;
-  const auto add = [&line](double value) {
+  const auto number = [&line](double value) {
     char buf[32];
     const std::to_chars_result r =
         std::to_chars(buf, buf + sizeof buf, value, std::chars_format::general, 7);
-    line.push_back(',');
     line.append(buf, r.ptr);
+  };
+  const auto add = [&line, &number](double value) {
+    line.push_back(',');
+    number(value);
   };
   const auto add_int = [&line](long value) {
     line.push_back(',');
@@ -325,8 +327,7 @@ void WriteLogCsv(const std::string& path, const std::vector<LogRow>& rows) {
   };
   for (const LogRow& r : rows) {
     line.clear();
-    add(r.time_s);
-    line.erase(0, 1);  // no comma before the first column
+    number(r.time_s);
     for (const SystemState* s : {&r.truth, &r.estimate}) {
       const StateVector x = s->ToVector();
       for (int i = 0; i < kNx; ++i) add(x(i));
