@@ -1,10 +1,125 @@
 #include "hpa/flight/flight_stack.h"
 
+#include <atomic>
+#include <chrono>
+#include <condition_variable>
+#include <cstdint>
+#include <exception>
+#include <mutex>
+#include <stdexcept>
+#include <thread>
+
 #include "hpa/estimator/estimator.h"
 #include "hpa/estimator/estimator_registry.h"
 #include "hpa/estimator/payload_detector.h"
 
 namespace hpa::flight {
+
+// The controller's updates on a thread of their own, in the order they were submitted; their
+// results taken in the same order. The controller is touched by this thread only while it runs.
+class ControlThread {
+ public:
+  explicit ControlThread(Controller* controller)
+      : controller_(controller), slots_(kInitialSlots), thread_([this] { Loop(); }) {}
+
+  // Finishes the updates already submitted (their results are dropped), then joins.
+  ~ControlThread() {
+    {
+      const std::lock_guard<std::mutex> lock(mutex_);
+      stop_ = true;
+    }
+    work_cv_.notify_one();
+    thread_.join();
+  }
+
+  ControlThread(const ControlThread&) = delete;
+  ControlThread& operator=(const ControlThread&) = delete;
+
+  // Queues Update(state).
+  void Submit(const SystemState& state) {
+    {
+      std::unique_lock<std::mutex> lock(mutex_);
+      if (submitted_ - awaited_ == slots_.size()) {
+        // every slot holds a result not yet taken: once the thread is idle, twice the slots,
+        // each pending one at its place in the larger ring
+        done_cv_.wait(lock, [&] { return computed_.load() == submitted_; });
+        std::vector<Slot> larger(2 * slots_.size());
+        for (uint64_t n = awaited_; n < submitted_; ++n) {
+          larger[n % larger.size()] = std::move(slots_[n % slots_.size()]);
+        }
+        slots_ = std::move(larger);
+      }
+      slots_[submitted_ % slots_.size()].state = state;
+      ++submitted_;
+    }
+    work_cv_.notify_one();
+  }
+
+  // The oldest result not yet taken (waits for it); rethrows the controller's exception.
+  ControlOutput Await() {
+    if (awaited_ == submitted_) {
+      throw std::logic_error("FlightStack::AwaitCommand: no control step is pending");
+    }
+    // the result is usually near: a short spin before sleeping on the condition variable
+    const auto spin_until = std::chrono::steady_clock::now() + std::chrono::microseconds(100);
+    for (int i = 0; computed_.load(std::memory_order_acquire) <= awaited_; ++i) {
+      if ((i & 63) == 63 && std::chrono::steady_clock::now() > spin_until) break;
+    }
+    Slot taken;
+    {
+      std::unique_lock<std::mutex> lock(mutex_);
+      done_cv_.wait(lock, [&] { return computed_.load() > awaited_; });
+      taken = std::move(slots_[awaited_ % slots_.size()]);
+      ++awaited_;
+    }
+    if (taken.error) std::rethrow_exception(taken.error);
+    return taken.output;
+  }
+
+ private:
+  // One submitted update: its input, then its output or what it threw.
+  struct Slot {
+    SystemState state;
+    ControlOutput output;
+    std::exception_ptr error;
+  };
+  static constexpr size_t kInitialSlots = 4;
+
+  void Loop() {
+    std::unique_lock<std::mutex> lock(mutex_);
+    for (;;) {
+      work_cv_.wait(lock, [&] { return stop_ || computed_.load() < submitted_; });
+      if (computed_.load() == submitted_) return;  // stopped with nothing left
+      const uint64_t n = computed_.load();
+      const SystemState state = slots_[n % slots_.size()].state;
+      lock.unlock();
+      ControlOutput output;
+      std::exception_ptr error;
+      try {
+        output = controller_->Update(state);
+      } catch (...) {
+        error = std::current_exception();
+      }
+      lock.lock();
+      Slot& slot = slots_[n % slots_.size()];
+      slot.output = std::move(output);
+      slot.error = error;
+      computed_.store(n + 1, std::memory_order_release);
+      done_cv_.notify_one();
+    }
+  }
+
+  Controller* controller_;
+  std::mutex mutex_;
+  std::condition_variable work_cv_;  // a new update or the stop
+  std::condition_variable done_cv_;  // an update finished
+  std::vector<Slot> slots_;          // ring: update n in slot n % size
+  uint64_t submitted_ = 0;           // updates queued (written under mutex_)
+  std::atomic<uint64_t> computed_{0};  // updates finished (written under mutex_)
+  uint64_t awaited_ = 0;             // results taken (the submitting thread only)
+  bool stop_ = false;
+  std::thread thread_;  // last: starts once the members above exist
+};
 
 PayloadDetection DetectFrame(const PayloadDetector& detector, const CameraFrame& frame) {
   if (frame.region.area() > 0 && !frame.region_bgr.empty()) {
@@ -28,6 +143,7 @@ FlightStack::FlightStack(const FlightConfig& config)
         MakeEstimator(config.estimator, estimator_config, config.params, config.initial_state);
     detector_ = std::make_unique<PayloadDetector>(config.params);
   }
+  if (config.control_thread) control_thread_ = std::make_unique<ControlThread>(controller_.get());
 }
 
 FlightStack::~FlightStack() = default;
@@ -89,7 +205,12 @@ FlightOutputs FlightStack::Step(const FlightInputs& in) {
     }
     if (control_due) {
       out.has_command = true;
-      out.command = controller_->Update(controller_state);
+      if (control_thread_) {
+        control_thread_->Submit(controller_state);
+        out.command_pending = true;
+      } else {
+        out.command = controller_->Update(controller_state);
+      }
     }
   }
   if (detector_) out.camera_roi = detector_->RegionAround(last_detection_, kRegionMarginPx);
@@ -100,6 +221,13 @@ FlightOutputs FlightStack::Step(const FlightInputs& in) {
   }
   clock_.Advance();
   return out;
+}
+
+ControlOutput FlightStack::AwaitCommand() {
+  if (!control_thread_) {
+    throw std::logic_error("FlightStack::AwaitCommand: the controller runs on the caller's thread");
+  }
+  return control_thread_->Await();
 }
 
 HealthFields FlightStack::EstimatorHealth() const {

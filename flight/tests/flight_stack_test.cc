@@ -9,6 +9,7 @@
 #include <cmath>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 #include "estimator/tests/synthetic_frames.h"
 #include "hpa/models/camera_model.h"
@@ -273,6 +274,53 @@ TEST(FlightStackTest, DetectFrameFallsBackToTheWholeFrame) {
   EXPECT_EQ(d.time_s, 2.5);
   // 3 mm: the detector's bound on exact synthetic frames (payload_detector_test.cc)
   EXPECT_LT((d.p_CL_C - p_CL_C).norm(), 3e-3);
+}
+
+TEST(FlightStackTest, ControlThreadGivesTheCallersThreadsCommandsInOrder) {
+  // hpa_mpc from a displaced start (its plan moves every step); the threaded stack's commands
+  // are taken in batches of up to seven, so that more are pending than its ring first holds
+  FlightConfig config = HoverConfig("hpa_mpc");
+  config.initial_state.p_WQ_W += Eigen::Vector3d(0.05, -0.03, 0.02);
+  config.initial_state.p_WL_W += Eigen::Vector3d(0.05, -0.03, 0.02);
+  FlightStack inline_stack(config);
+  config.control_thread = true;
+  FlightStack threaded_stack(config);
+  EXPECT_THROW(threaded_stack.AwaitCommand(), std::logic_error);
+  EXPECT_THROW(inline_stack.AwaitCommand(), std::logic_error);
+  const SystemState truth = HoverState(config.params);
+  std::vector<ControlOutput> expected;
+  int taken = 0, pending = 0, batch = 1;
+  const auto take = [&] {
+    for (; pending > 0; --pending, ++taken) {
+      const ControlOutput got = threaded_stack.AwaitCommand();
+      ASSERT_LT(taken, static_cast<int>(expected.size()));
+      const ControlOutput& want = expected[taken];
+      EXPECT_EQ(got.command.w_B_radps, want.command.w_B_radps) << "command " << taken;
+      EXPECT_EQ(got.command.thrust_N, want.command.thrust_N) << "command " << taken;
+      EXPECT_EQ(got.status, want.status) << "command " << taken;
+      EXPECT_EQ(got.cost, want.cost) << "command " << taken;
+    }
+  };
+  for (long tick = 0; tick < 400; ++tick) {
+    const FlightInputs in = HoverInputs(config.params, truth, tick);
+    const FlightOutputs a = inline_stack.Step(in);
+    const FlightOutputs b = threaded_stack.Step(in);
+    ASSERT_EQ(a.has_command, b.has_command) << "tick " << tick;
+    EXPECT_FALSE(a.command_pending);
+    EXPECT_EQ(b.command_pending, b.has_command);
+    EXPECT_EQ(a.estimate.p_WL_W, b.estimate.p_WL_W) << "tick " << tick;
+    if (a.has_command) {
+      expected.push_back(a.command);
+      ++pending;
+    }
+    if (pending == batch) {
+      take();
+      batch = batch % 7 + 1;  // 1, 2, ..., 7, 1, ...
+    }
+  }
+  take();
+  EXPECT_EQ(taken, 60);  // 150 Hz for 0.4 s
+  EXPECT_THROW(threaded_stack.AwaitCommand(), std::logic_error);
 }
 
 }  // namespace

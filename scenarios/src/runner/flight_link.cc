@@ -29,6 +29,7 @@ class InProcessFlight final : public FlightLink {
  public:
   explicit InProcessFlight(const flight::FlightConfig& config) : stack_(config) {}
   flight::FlightOutputs Step(const flight::FlightInputs& in) override { return stack_.Step(in); }
+  ControlOutput AwaitCommand() override { return stack_.AwaitCommand(); }
   FlightFinish Finish(const flight::FlightInputs& pending) override {
     FlightFinish f;
     f.frames_detected = stack_.Finish(pending);

@@ -6,6 +6,7 @@
 
 #include <memory>
 #include <opencv2/core.hpp>
+#include <stdexcept>
 #include <string>
 
 #include "hpa/flight/protocol.h"
@@ -31,6 +32,10 @@ class FlightLink {
   virtual ~FlightLink() = default;
   /// One tick (FlightStack::Step).
   virtual flight::FlightOutputs Step(const flight::FlightInputs& in) = 0;
+  /// The command of the oldest control step that answered command_pending (waits for it).
+  virtual ControlOutput AwaitCommand() {
+    throw std::logic_error("this flight stack answers every command at its step");
+  }
   /// Ends the run: hands the stack the inputs still pending and returns its final report.
   virtual FlightFinish Finish(const flight::FlightInputs& pending) = 0;
   /// The next frame-ring slot to render into (its index in *slot); nullptr: frames do not

@@ -118,8 +118,9 @@ RunLoop::RunLoop(const Scenario& scenario, const Params& params, const RunOption
   reference_ = MakeReference(scenario, params);
   CheckReferenceAboveGround(*reference_, scenario.duration_s, params);
   world_->Reset(InitialState(*reference_, world_->world_params()));
-  const flight::FlightConfig flight_config =
+  flight::FlightConfig flight_config =
       FlightConfigOf(scenario, params, InitialState(*reference_, params));
+  flight_config.control_thread = options.control_thread && options.flight_stack.empty();
   if (options.flight_stack.empty()) {
     flight_ = MakeInProcessFlight(flight_config);
   } else {
@@ -182,7 +183,7 @@ RunLoop::RunLoop(const Scenario& scenario, const Params& params, const RunOption
   // was computed from (world profile); the estimate's own latency is the flight stack's
   const sim::LatencyProfile& latency = scenario.world.latency;
   commands_in_flight_ =
-      std::make_unique<DelayLine<ControlOutput>>(latency.compute_s + latency.transport_s);
+      std::make_unique<DelayLine<CommandInFlight>>(latency.compute_s + latency.transport_s);
   control_.command.thrust_N = params.HoverThrustN();
   show_progress_ = options.progress && isatty(STDERR_FILENO);
 }
@@ -232,7 +233,7 @@ bool RunLoop::Tick() {
     need_truth();
     ControlStep(t, truth, state, out);
   }
-  while (auto arrived = commands_in_flight_->PopReady(t)) control_ = *arrived;
+  while (auto arrived = commands_in_flight_->PopReady(t)) control_ = TakeCommand(&*arrived);
   RateLoopStep(state, rate_due);
   if (video_due) VideoStep(t, truth, state);
 
@@ -298,20 +299,26 @@ std::optional<PayloadDetection> FlightCameraReadout::Detect(const cv::Mat& bgr,
   return detector_->Detect(bgr, time_s);
 }
 
-// The flight stack's control step; its command reaches the rate loop after compute + transport.
+namespace {
+// A log row's command fields.
+void FillCommand(const ControlOutput& computed, LogRow* row) {
+  row->command = computed.command;
+  row->status = computed.status;
+  row->solve_time_ms = computed.solve_time_ms;
+  row->cost = computed.cost;
+}
+}  // namespace
+
+// The flight stack's control step; its command reaches the rate loop after compute + transport
+// (one computed on the control thread is logged then, when it is taken).
 void RunLoop::ControlStep(double t, const sim::Truth& truth, const SystemState& state,
                           const flight::FlightOutputs& out) {
-  const ControlOutput& computed = out.command;
-  commands_in_flight_->Push(t, computed);
+  commands_in_flight_->Push(t, CommandInFlight{out.command, out.command_pending});
   LogRow row;
   row.time_s = t;
   row.truth = truth.state;
   row.estimate = state;
   row.reference = reference_->At(t);
-  row.command = computed.command;
-  row.status = computed.status;
-  row.solve_time_ms = computed.solve_time_ms;
-  row.cost = computed.cost;
   row.cable_tension_N = truth.cable_tension_N;
   row.gripper_active = world_->gripper_active();
   row.mixer_saturated = mixer_saturated_;
@@ -319,7 +326,24 @@ void RunLoop::ControlStep(double t, const sim::Truth& truth, const SystemState& 
     row.estimator_rejected_updates = out.estimator_rejected_updates;
     row.estimator_resets = out.estimator_resets;
   }
+  if (out.command_pending) {
+    rows_awaiting_command_.push_back(std::move(row));  // logged when its command is taken
+    return;
+  }
+  FillCommand(out.command, &row);
   for (RunRecorder* r : recorders_) r->OnControlStep(row);
+}
+
+// A command reaching the rate loop: one computed on the control thread is taken now (waiting
+// for it if need be) and its log row, held until now, logged.
+ControlOutput RunLoop::TakeCommand(CommandInFlight* command) {
+  if (!command->pending) return std::move(command->output);
+  LogRow row = std::move(rows_awaiting_command_.front());
+  rows_awaiting_command_.pop_front();
+  const ControlOutput output = flight_->AwaitCommand();  // a throw drops the row, as in process
+  FillCommand(output, &row);
+  for (RunRecorder* r : recorders_) r->OnControlStep(row);
+  return output;
 }
 
 // The body-rate loop: PX4's runs on each new sample of its gyro (none yet at the first tick: the
@@ -392,6 +416,18 @@ void RunLoop::Finish(RunResult* result) {
   // delivered) and its estimator's health
   for (sim::SensorMessage& m : world_->TakeInFlight()) KeepTickStartMessage(&m);
   for (flight::CameraFrame& f : camera_frames_) pending_.frames.push_back(std::move(f));
+  // the commands still on the control thread: computed and logged, as the run computed them
+  while (!rows_awaiting_command_.empty()) {
+    LogRow row = std::move(rows_awaiting_command_.front());
+    rows_awaiting_command_.pop_front();
+    try {
+      FillCommand(flight_->AwaitCommand(), &row);
+      for (RunRecorder* r : recorders_) r->OnControlStep(row);
+    } catch (const std::exception& e) {
+      const std::string what = std::string("at the end of the run: ") + e.what();
+      metrics.run_error = metrics.run_error ? *metrics.run_error + "; " + what : what;
+    }
+  }
   try {
     const FlightFinish finish = flight_->Finish(pending_);
     if (!ground_truth_) {

@@ -3,6 +3,7 @@
 // (estimator, controller, rate loop) and the per-tick steps, each a method of its own.
 
 #include <chrono>
+#include <deque>
 #include <memory>
 #include <opencv2/core.hpp>
 #include <vector>
@@ -87,6 +88,11 @@ class RunLoop {
 
  private:
   using Clock = std::chrono::steady_clock;
+  // a command between the flight stack and the rate loop
+  struct CommandInFlight {
+    ControlOutput output;
+    bool pending = false;  // on the control thread: taken with AwaitCommand on delivery
+  };
 
   bool Tick();  // one physics tick; false: the run ends here
   void ApplyDueEvents(double t);
@@ -94,6 +100,7 @@ class RunLoop {
   void KeepTickStartMessage(sim::SensorMessage* message);
   void ControlStep(double t, const sim::Truth& truth, const SystemState& state,
                    const flight::FlightOutputs& out);
+  ControlOutput TakeCommand(CommandInFlight* command);
   void RateLoopStep(const SystemState& state, bool rate_due);
   void VideoStep(double t, const sim::Truth& truth, const SystemState& state);
   bool StepWorld();  // false: crashed
@@ -128,7 +135,8 @@ class RunLoop {
   size_t next_event_ = 0;
 
   // what is in flight between the loops
-  std::unique_ptr<DelayLine<ControlOutput>> commands_in_flight_;  // compute + transport
+  std::unique_ptr<DelayLine<CommandInFlight>> commands_in_flight_;  // compute + transport
+  std::deque<LogRow> rows_awaiting_command_;  // log rows of the pending commands, oldest first
   // the camera's messages delivered by a step, joining the flight stack's inputs at the next
   // tick after that tick's capture (whose region is around the detections delivered before)
   std::vector<PayloadDetection> camera_detections_;

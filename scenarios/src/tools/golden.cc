@@ -7,6 +7,7 @@
 #include <iostream>
 #include <nlohmann/json.hpp>
 #include <sstream>
+#include <thread>
 
 #include "hpa/models/data_dir.h"
 #include "hpa/models/input_error.h"
@@ -139,7 +140,10 @@ Json CurrentMetrics(const std::string& name, const GoldenOptions& options, const
     return ParseJson(ReadText(path, "the metrics of " + name), path);
   }
   const Scenario scenario = LoadScenario(ScenariosDir() + "/" + name + ".yaml");
-  const RunResult result = RunScenario(scenario, params, RunOptions{});
+  RunOptions run_options;
+  // the controller beside the simulation, as `hpa run` flies it (the same metrics either way)
+  run_options.control_thread = std::thread::hardware_concurrency() >= 2;
+  const RunResult result = RunScenario(scenario, params, run_options);
   return Json::parse(MetricsToJson(result.metrics));
 }
 

@@ -12,6 +12,7 @@
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "hpa/models/input_error.h"
@@ -222,7 +223,7 @@ int RunMain(int argc, char** argv) {
   ScenarioOptions o;
   std::string out_dir, controller, video, flight_stack, plot_format = "png";
   double flight_timeout_s = 10.0;
-  bool slack_events = false, plots = false;
+  bool slack_events = false, plots = false, no_control_thread = false;
   CLI::App app{"Runs one scenario; writes DIR/metrics.json and DIR/log.csv.", "hpa run"};
   AddScenarioOptions(app, &o, true, true);
   app.add_option("--out", out_dir, "output folder (default out/<scenario name>)");
@@ -243,6 +244,10 @@ int RunMain(int argc, char** argv) {
                  "with --flight-stack: seconds to wait for its reply to one tick before the run "
                  "stops with a run error")
       ->check(CLI::Range(0.001, 3600.0));
+  app.add_flag("--no-control-thread", no_control_thread,
+               "compute the in-process controller's commands on the simulation's thread (the "
+               "same run; by default they are computed on a second core while the simulation "
+               "steps on, until the command is due)");
   if (const auto code = ParseCommandLine(app, argc, argv)) return *code;
   const PlotFormat format = ParsePlotFormat(plot_format);
   const Params params = LoadParamsOf(o);
@@ -261,6 +266,7 @@ int RunMain(int argc, char** argv) {
   options.gl_backend = ParseGlOption(o.gl);
   options.flight_stack = flight_stack;
   options.flight_step_timeout_s = flight_timeout_s;
+  options.control_thread = !no_control_thread && std::thread::hardware_concurrency() >= 2;
   if (slack_events && video.empty()) video = out_dir + "/slack_events.mp4";
   std::unique_ptr<VideoTickRecorder> recorder;
   if (!video.empty()) {
@@ -292,6 +298,9 @@ int CompareMain(int argc, char** argv) {
   app.add_flag("--video-slack-events", slack_events, "a slack-event video per run");
   app.add_option("--plot-format", plot_format, "png | svg | pdf: the comparison plot's format")
       ->default_str("png");
+  bool no_control_thread = false;
+  app.add_flag("--no-control-thread", no_control_thread,
+               "compute the controllers' commands on the simulation's thread (the same runs)");
   if (const auto code = ParseCommandLine(app, argc, argv)) return *code;
   const PlotFormat format = ParsePlotFormat(plot_format);
   const Params params = LoadParamsOf(o);
@@ -315,6 +324,7 @@ int CompareMain(int argc, char** argv) {
     RunOptions options;
     options.progress = !o.quiet;
     options.gl_backend = ParseGlOption(o.gl);
+    options.control_thread = !no_control_thread && std::thread::hardware_concurrency() >= 2;
     const std::string video = slack_events ? dir + "/slack_events.mp4" : "";
     std::unique_ptr<VideoTickRecorder> recorder;
     if (slack_events) {

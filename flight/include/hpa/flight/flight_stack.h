@@ -27,6 +27,8 @@ class PayloadDetector;
 
 namespace hpa::flight {
 
+class ControlThread;
+
 /// Everything the flight stack is built from: the flight code's model of its vehicle and task.
 struct FlightConfig {
   Params params;                     // the flight code's params (not the world's mismatch)
@@ -38,6 +40,10 @@ struct FlightConfig {
   double estimate_latency_s = 0.0;   // the controller reads an estimate this old
   double tick_hz = 1000.0;           // the lockstep clock's rate (the simulator's physics rate)
   SystemState initial_state;         // where the estimator starts
+  // the controller's update runs on a thread of its own, beside the simulation, its command
+  // taken with AwaitCommand (the same command: only when it is computed changes); in process
+  // only, not part of the lockstep protocol
+  bool control_thread = false;
 };
 
 /// The rate loop's last allocation: the thrust the mixer made, not the one commanded.
@@ -80,8 +86,9 @@ struct FlightInputs {
 
 /// What the flight computer answers at one tick.
 struct FlightOutputs {
-  bool has_command = false;  // a control step ran at this tick
-  ControlOutput command;     // its command (has_command)
+  bool has_command = false;      // a control step ran at this tick
+  bool command_pending = false;  // it runs on the control thread: AwaitCommand gives `command`
+  ControlOutput command;         // its command (has_command and not command_pending)
   bool has_estimate = false;
   SystemState estimate;                // the state the flight code acts on now (has_estimate)
   int estimator_rejected_updates = 0;  // estimator health after this tick (0 with ground truth)
@@ -104,8 +111,12 @@ class FlightStack {
   FlightStack& operator=(const FlightStack&) = delete;
 
   /// One tick: delivers `in`'s messages, then estimates and, when its control loop fires,
-  /// computes a command. Call once per tick of the clock, from tick 0.
+  /// computes a command (with config().control_thread: starts computing it, command_pending).
+  /// Call once per tick of the clock, from tick 0.
   FlightOutputs Step(const FlightInputs& in);
+  /// The command of the oldest pending control step, once computed (waits for it); rethrows
+  /// what the controller threw. Throws std::logic_error when none is pending.
+  ControlOutput AwaitCommand();
   /// Delivers `in`'s sensor messages only; returns how many of its frames had the payload.
   int Deliver(const FlightInputs& in);
   /// The end of a run: delivers `in`'s sensor messages (those of the last physics step) and
@@ -128,6 +139,7 @@ class FlightStack {
   SystemState delayed_state_;  // latest estimate old enough to have reached the controller
   bool have_delayed_state_ = false;
   PayloadDetection last_detection_;  // the region of the next frame's search is around it
+  std::unique_ptr<ControlThread> control_thread_;  // config_.control_thread only
 };
 
 /// Detects the payload in a frame: in its region of interest first, in the whole frame when the

@@ -51,6 +51,10 @@ struct RunOptions {
   // this process); it speaks the lockstep protocol (docs/protocol.md)
   std::string flight_stack;
   double flight_step_timeout_s = 10.0;  // longest wait for its reply to one tick
+  // the in-process controller's update on a thread of its own, beside the simulation (the same
+  // commands and metrics; a run uses a second core): its log row reaches OnControlStep when its
+  // command reaches the rate loop, compute + transport later, rows still in order
+  bool control_thread = false;
 };
 
 /// The rate table a scenario runs with: the defaults, the scenario's camera latency.
