@@ -2,6 +2,7 @@
 
 #include <GL/osmesa.h>
 
+#include <cstdlib>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -55,6 +56,13 @@ class OsMesaGlContext final : public GlContext {
 }  // namespace
 
 std::unique_ptr<GlContext> CreateOsMesaContext(int max_width_px, int max_height_px) {
+  // llvmpipe rasterizes on the calling thread unless LP_NUM_THREADS says otherwise: on the
+  // regions the payload camera reads, handing tiles to its worker threads costs more than they
+  // save, and they compete with the control thread and a sweep's other workers. The pixels are
+  // the same (each tile is rasterized the same by whichever thread). Read when Mesa makes its
+  // screen, at the first context.
+  static const bool kThreadsChosen = [] { return setenv("LP_NUM_THREADS", "0", 0) == 0; }();
+  (void)kThreadsChosen;
   return std::make_unique<OsMesaGlContext>(max_width_px, max_height_px);
 }
 
