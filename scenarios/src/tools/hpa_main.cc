@@ -35,6 +35,7 @@ usage:
                         [--video FILE.mp4] [--video-slack-events] [--plots] [--quiet]
                         [--gl osmesa|egl] [--params FILE] [--set PATH=VALUE]...
                         [--plot-format png|svg|pdf] [--flight-stack "CMD"] [--flight-timeout S]
+                        [--no-control-thread]
       Runs one scenario; writes DIR/metrics.json, DIR/log.csv (one row per control step) and
       DIR/run.json (what it ran), plus plots with --plots (--plot-format png|svg|pdf, each with
       its CSV) and an MP4 with --video (--video-slack-events keeps only
@@ -45,9 +46,11 @@ usage:
       print such replay commands. --flight-stack flies a separate flight stack (hpa-flight, or
       your own, e.g. python3 examples/python/hover_controller.py) in lockstep over
       docs/protocol.md's protocol; --flight-timeout bounds its reply to one tick (default 10 s).
+      In process, the controller's command is computed on a second core while the simulation
+      steps on until it is due (the same run); --no-control-thread computes it in line.
   hpa compare SCENARIO.yaml --out DIR [--controllers A,B] [--camera render|analytic]
                         [--seed N] [--video-slack-events] [--quiet] [--gl osmesa|egl]
-                        [--params FILE] [--set PATH=VALUE]...
+                        [--params FILE] [--set PATH=VALUE]... [--no-control-thread]
       Runs the scenario once per controller (default hpa_mpc,nonhybrid_mpc) into DIR/<type>/
       and writes DIR/comparison.png and DIR/comparison.md (each controller's metrics and their
       differences to the first); with --video-slack-events, a slack-event video per run.
