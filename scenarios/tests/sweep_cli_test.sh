@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
 # Sweep checks (docs/design.md section 6): shards through GNU parallel merge to exactly the unsharded
 # sweep; resume after a killed sweep loses nothing and repeats nothing; a worker that dies is
-# recorded as an error and the others go on; the time limit kills a hung run; --keep-logs keeps
-# the worst runs' logs.
+# recorded as an error and the others go on; a worker's runs after its first equal runs in fresh
+# workers; the time limit kills a hung run; --keep-logs keeps the worst runs' logs.
 # usage: sweep_cli_test.sh HPA_BIN SCENARIOS_DIR OUT_DIR
 set -uo pipefail
 hpa=$1; scen=$2; out=$3
@@ -93,6 +93,17 @@ replay = json.load(open(sys.argv[3]))
 for key in ["payload_rmse_m", "quad_position_deviation_max_m", "slack_time_s"]:
     assert record["metrics"][key] == replay[key], (key, record["metrics"][key], replay[key])
 PY
+
+echo "== a worker flies one run after another as a fresh process flies it"
+# rendered camera and onboard estimator, mixed controllers: with --jobs 1 one worker flies all
+# four runs (its GL context, tables and caches carried from run to run), with --jobs 4 each run
+# has a worker of its own
+printf 'base: base.yaml\nruns: 2\nseed: 11\nvary:\n  estimation.ground_truth: {list: [false]}\n  estimation.camera: {list: [render]}\n  events.0.impulse.2: {uniform: [0.05, 0.3]}\n  controller.type: {grid: [hpa_mpc, geometric]}\n' > "$out/reuse.yaml"
+"$hpa" sweep "$out/reuse.yaml" --out "$out/one_worker" --jobs 1 > /dev/null 2>&1 || fail "one-worker sweep failed"
+"$hpa" sweep "$out/reuse.yaml" --out "$out/own_workers" --jobs 4 > /dev/null 2>&1 || fail "four-worker sweep failed"
+[ "$(count_runs "$out/one_worker/runs.jsonl")" -eq 4 ] || fail "one-worker sweep: $(count_runs "$out/one_worker/runs.jsonl") runs, expected 4"
+diff <(strip "$out/one_worker/runs.jsonl") <(strip "$out/own_workers/runs.jsonl") \
+  || fail "runs flown one after another by one worker differ from runs with a worker each"
 
 echo "== resume after killing the sweep: nothing lost, nothing repeated"
 cat > "$out/slow.yaml" <<'YAML'

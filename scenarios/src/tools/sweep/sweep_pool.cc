@@ -1,17 +1,24 @@
-// The sweep's worker pool: each run in a forked process (a crash or a hang costs one run, not
-// the sweep), up to --jobs at once, a time limit per run, workers that die with the sweep.
+// The sweep's worker pool: up to --jobs forked worker processes, each flying the runs it is
+// handed one at a time (a crash or a hang costs one run and that worker, which is replaced, not
+// the sweep), a time limit per run, workers that die with the sweep.
 
+#include <poll.h>
 #include <signal.h>
 #include <sys/prctl.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <cerrno>
 #include <chrono>
+#include <cstdint>
 #include <cstdio>
 #include <cstring>
 #include <fstream>
 #include <nlohmann/json.hpp>
-#include <thread>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <vector>
 
 #include "hpa/scenarios/metrics.h"
 #include "hpa/scenarios/runner.h"
@@ -59,88 +66,217 @@ bool RecordFailed(const std::string& line) {
 
 }  // namespace
 
+namespace {
+
+// Reads exactly n bytes (false: end of file or an error).
+bool ReadFully(int fd, void* data, size_t n) {
+  auto* p = static_cast<char*>(data);
+  while (n > 0) {
+    const ssize_t r = read(fd, p, n);
+    if (r < 0 && errno == EINTR) continue;
+    if (r <= 0) return false;
+    p += r;
+    n -= static_cast<size_t>(r);
+  }
+  return true;
+}
+
+// Writes exactly n bytes (false: an error, e.g. the reader is gone).
+bool WriteFully(int fd, const void* data, size_t n) {
+  const auto* p = static_cast<const char*>(data);
+  while (n > 0) {
+    const ssize_t w = write(fd, p, n);
+    if (w < 0 && errno == EINTR) continue;
+    if (w <= 0) return false;
+    p += w;
+    n -= static_cast<size_t>(w);
+  }
+  return true;
+}
+
+// Ignores SIGPIPE while it lives: a worker that died makes the write of its next run fail
+// instead of killing the sweep.
+class IgnoreSigpipe {
+ public:
+  IgnoreSigpipe() : previous_(signal(SIGPIPE, SIG_IGN)) {}
+  ~IgnoreSigpipe() { signal(SIGPIPE, previous_); }
+  IgnoreSigpipe(const IgnoreSigpipe&) = delete;
+  IgnoreSigpipe& operator=(const IgnoreSigpipe&) = delete;
+
+ private:
+  void (*previous_)(int);
+};
+
+// One worker process: the pipe its runs go down, the pipe it says "done" on, and its run.
+struct Worker {
+  pid_t pid = -1;
+  int to_worker = -1, from_worker = -1;  // the parent's ends
+  std::optional<size_t> run;             // position in `runs` of the run it flies
+  Clock::time_point start;               // when that run was handed to it
+};
+
+}  // namespace
+
 int RunPool(
     const SweepSpec& spec, const std::vector<SweepRun>& runs, const Params& params,
     sim::GlBackend gl_backend, int jobs, const std::string& tmp_dir,
     const std::function<void(const std::string& line, bool failed, const SweepRun&)>& record) {
   const pid_t parent_pid = getpid();
+  const IgnoreSigpipe ignore_sigpipe;
   size_t next = 0;
-  struct Child {
-    pid_t pid;
-    size_t run;
-    Clock::time_point start;
+  std::vector<Worker> workers;
+  // ends a worker: closes its pipes and reaps it (killed first when `kill_it`); its status
+  const auto end_worker = [&](Worker& w, bool kill_it) {
+    if (kill_it) kill(w.pid, SIGKILL);
+    close(w.to_worker);
+    close(w.from_worker);
+    int status = 0;
+    while (waitpid(w.pid, &status, 0) < 0 && errno == EINTR) {
+    }
+    return status;
   };
-  std::vector<Child> children;
+  const auto path_of = [&](size_t position) {
+    return tmp_dir + "/" + std::to_string(runs[position].index) + ".json";
+  };
   // a stop: the workers die with their runs unrecorded (resume runs them again)
   const auto stop = [&]() {
-    for (const Child& child : children) kill(child.pid, SIGKILL);
-    for (const Child& child : children) {
-      int status = 0;
-      waitpid(child.pid, &status, 0);
-      std::remove((tmp_dir + "/" + std::to_string(runs[child.run].index) + ".json").c_str());
+    for (Worker& w : workers) {
+      end_worker(w, true);
+      if (w.run) std::remove(path_of(*w.run).c_str());
     }
-    children.clear();
+    workers.clear();
     return StopRequested();
   };
-  while (next < runs.size() || !children.empty()) {
-    if (StopRequested() != 0) return stop();
-    // start workers up to --jobs
-    while (next < runs.size() && static_cast<int>(children.size()) < jobs) {
-      const SweepRun& run = runs[next];
-      std::fflush(nullptr);
-      const pid_t pid = fork();
-      if (pid < 0) throw std::runtime_error("fork failed");
-      if (pid == 0) {
-        // a worker dies with the sweep (kill -9 of the parent included)
-        prctl(PR_SET_PDEATHSIG, SIGKILL);
-        if (getppid() != parent_pid) _exit(1);
-        const std::string line = RunOne(spec, run, params, gl_backend);
-        const std::string path = tmp_dir + "/" + std::to_string(run.index) + ".json";
-        std::ofstream(path) << line;
-        _exit(0);
-      }
-      children.push_back({pid, next, Clock::now()});
-      ++next;
+  // a worker forked from this process: it flies the runs it is handed, one at a time, until
+  // its pipe closes
+  const auto start_worker = [&]() {
+    int down[2], up[2];
+    if (pipe(down) != 0) throw std::runtime_error("pipe failed");
+    if (pipe(up) != 0) {
+      close(down[0]);
+      close(down[1]);
+      throw std::runtime_error("pipe failed");
     }
-    // collect finished, crashed or timed-out workers
-    bool progressed = false;
-    for (size_t c = 0; c < children.size();) {
-      if (StopRequested() != 0) return stop();
-      int status = 0;
-      const SweepRun& run = runs[children[c].run];
-      const pid_t r = waitpid(children[c].pid, &status, WNOHANG);
-      const double age_s = std::chrono::duration<double>(Clock::now() - children[c].start).count();
-      if (r == 0 && age_s > spec.time_limit_s) {
-        kill(children[c].pid, SIGKILL);
-        waitpid(children[c].pid, &status, 0);
-        std::remove((tmp_dir + "/" + std::to_string(run.index) + ".json").c_str());
-        record(RecordLine(
-                   spec, run, ControllerOf(spec, run),
-                   "killed after the time limit of " + FormatNumber(spec.time_limit_s) + " s", ""),
-               true, run);
-      } else if (r == 0) {
-        ++c;
-        continue;
-      } else {
-        const std::string path = tmp_dir + "/" + std::to_string(run.index) + ".json";
-        std::ifstream in(path);
+    std::fflush(nullptr);
+    const pid_t pid = fork();
+    if (pid < 0) throw std::runtime_error("fork failed");
+    if (pid == 0) {
+      // a worker dies with the sweep (kill -9 of the parent included)
+      prctl(PR_SET_PDEATHSIG, SIGKILL);
+      if (getppid() != parent_pid) _exit(1);
+      // the other workers' pipes are not this one's: their ends close when they die
+      for (const Worker& other : workers) {
+        close(other.to_worker);
+        close(other.from_worker);
+      }
+      close(down[1]);
+      close(up[0]);
+      uint64_t position = 0;
+      while (ReadFully(down[0], &position, sizeof position)) {
+        const SweepRun& run = runs[position];
+        const std::string line = RunOne(spec, run, params, gl_backend);
+        {
+          std::ofstream out(path_of(position));
+          out << line;
+        }
+        if (!WriteFully(up[1], &position, sizeof position)) _exit(1);
+      }
+      _exit(0);
+    }
+    close(down[0]);
+    close(up[1]);
+    Worker w;
+    w.pid = pid;
+    w.to_worker = down[1];
+    w.from_worker = up[0];
+    workers.push_back(w);
+  };
+
+  while (next < runs.size() || !workers.empty()) {
+    if (StopRequested() != 0) return stop();
+    // every idle worker gets the next run; workers are started up to --jobs while runs remain
+    for (Worker& w : workers) {
+      if (!w.run && next < runs.size()) {
+        const uint64_t position = next;
+        if (WriteFully(w.to_worker, &position, sizeof position)) {
+          w.run = next++;
+          w.start = Clock::now();
+        }
+      }
+    }
+    while (next < runs.size() && static_cast<int>(workers.size()) < jobs) {
+      start_worker();
+      Worker& w = workers.back();
+      const uint64_t position = next;
+      if (!WriteFully(w.to_worker, &position, sizeof position)) break;  // it died: reaped below
+      w.run = next++;
+      w.start = Clock::now();
+    }
+    // wait for a worker to answer (or die), at most 20 ms: stops and time limits are checked
+    std::vector<pollfd> fds;
+    for (const Worker& w : workers) fds.push_back({w.from_worker, POLLIN, 0});
+    if (poll(fds.data(), fds.size(), 20) < 0 && errno != EINTR) {
+      throw std::runtime_error(std::string("poll failed: ") + std::strerror(errno));
+    }
+    if (StopRequested() != 0) return stop();
+    for (size_t i = 0; i < workers.size();) {
+      Worker& w = workers[i];
+      const short revents = fds[i].revents;
+      uint64_t done = 0;
+      if ((revents & POLLIN) != 0 && ReadFully(w.from_worker, &done, sizeof done) && w.run &&
+          done == *w.run) {
+        // its run finished: the record it wrote
+        std::ifstream in(path_of(*w.run));
         std::string line;
-        if (WIFEXITED(status) && WEXITSTATUS(status) == 0 && std::getline(in, line) &&
-            !line.empty()) {
+        const SweepRun& run = runs[*w.run];
+        if (std::getline(in, line) && !line.empty()) {
           record(line, RecordFailed(line), run);
         } else {
+          record(RecordLine(spec, run, ControllerOf(spec, run), "worker wrote no record", ""), true,
+                 run);
+        }
+        std::remove(path_of(*w.run).c_str());
+        w.run.reset();
+        if (next >= runs.size()) {
+          end_worker(w, false);  // nothing left for it: its pipe closes and it exits
+          workers.erase(workers.begin() + static_cast<long>(i));
+          fds.erase(fds.begin() + static_cast<long>(i));
+          continue;
+        }
+        ++i;
+        continue;
+      }
+      if ((revents & (POLLIN | POLLHUP | POLLERR)) != 0) {
+        // it died (end of file on its pipe), with its run unfinished
+        const int status = end_worker(w, true);
+        if (w.run) {
+          const SweepRun& run = runs[*w.run];
           const std::string why =
               WIFSIGNALED(status)
                   ? std::string("worker killed by signal ") + strsignal(WTERMSIG(status))
                   : "worker exited with status " + std::to_string(WEXITSTATUS(status));
           record(RecordLine(spec, run, ControllerOf(spec, run), why, ""), true, run);
+          std::remove(path_of(*w.run).c_str());
         }
-        std::remove(path.c_str());
+        workers.erase(workers.begin() + static_cast<long>(i));
+        fds.erase(fds.begin() + static_cast<long>(i));
+        continue;
       }
-      children.erase(children.begin() + c);
-      progressed = true;
+      if (w.run && std::chrono::duration<double>(Clock::now() - w.start).count() >
+                       spec.time_limit_s) {
+        end_worker(w, true);
+        const SweepRun& run = runs[*w.run];
+        std::remove(path_of(*w.run).c_str());
+        record(RecordLine(
+                   spec, run, ControllerOf(spec, run),
+                   "killed after the time limit of " + FormatNumber(spec.time_limit_s) + " s", ""),
+               true, run);
+        workers.erase(workers.begin() + static_cast<long>(i));
+        fds.erase(fds.begin() + static_cast<long>(i));
+        continue;
+      }
+      ++i;
     }
-    if (!progressed) std::this_thread::sleep_for(std::chrono::milliseconds(20));
   }
   return 0;
 }
