@@ -53,7 +53,8 @@ struct RunOptions {
   double flight_step_timeout_s = 10.0;  // longest wait for its reply to one tick
   // the in-process controller's update on a thread of its own, beside the simulation (the same
   // commands and metrics; a run uses a second core): its log row reaches OnControlStep when its
-  // command reaches the rate loop, compute + transport later, rows still in order
+  // command reaches the rate loop, compute + transport later, rows still in order; a controller
+  // that throws ends the run then, not at the tick it was called
   bool control_thread = false;
 };
 
