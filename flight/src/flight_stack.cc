@@ -63,6 +63,9 @@ class ControlThread {
     // the result is usually near: a short spin before sleeping on the condition variable
     const auto spin_until = std::chrono::steady_clock::now() + std::chrono::microseconds(100);
     for (int i = 0; computed_.load(std::memory_order_acquire) <= awaited_; ++i) {
+#if defined(__x86_64__)
+      __builtin_ia32_pause();  // a spin-wait hint: the other hardware thread runs meanwhile
+#endif
       if ((i & 63) == 63 && std::chrono::steady_clock::now() > spin_until) break;
     }
     Slot taken;

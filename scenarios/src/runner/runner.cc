@@ -9,6 +9,7 @@
 #include <deque>
 #include <random>
 #include <sstream>
+#include <thread>
 
 #include "hpa/sim/world.h"
 #include "scenarios/src/runner/run_loop.h"
@@ -21,6 +22,8 @@ volatile std::sig_atomic_t g_stop_signal = 0;  // set from a signal handler
 int runner::StopSignal() { return g_stop_signal; }
 
 void RequestStop(int signal_number) { g_stop_signal = signal_number; }
+
+bool ControlThreadPays() { return std::thread::hardware_concurrency() >= 2; }
 
 int StopRequested() { return g_stop_signal; }
 

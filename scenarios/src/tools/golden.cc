@@ -7,7 +7,6 @@
 #include <iostream>
 #include <nlohmann/json.hpp>
 #include <sstream>
-#include <thread>
 
 #include "hpa/models/data_dir.h"
 #include "hpa/models/input_error.h"
@@ -142,7 +141,7 @@ Json CurrentMetrics(const std::string& name, const GoldenOptions& options, const
   const Scenario scenario = LoadScenario(ScenariosDir() + "/" + name + ".yaml");
   RunOptions run_options;
   // the controller beside the simulation, as `hpa run` flies it (the same metrics either way)
-  run_options.control_thread = std::thread::hardware_concurrency() >= 2;
+  run_options.control_thread = ControlThreadPays();
   const RunResult result = RunScenario(scenario, params, run_options);
   return Json::parse(MetricsToJson(result.metrics));
 }

@@ -12,7 +12,6 @@
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
-#include <thread>
 #include <vector>
 
 #include "hpa/models/input_error.h"
@@ -266,7 +265,7 @@ int RunMain(int argc, char** argv) {
   options.gl_backend = ParseGlOption(o.gl);
   options.flight_stack = flight_stack;
   options.flight_step_timeout_s = flight_timeout_s;
-  options.control_thread = !no_control_thread && std::thread::hardware_concurrency() >= 2;
+  options.control_thread = !no_control_thread && ControlThreadPays();
   if (slack_events && video.empty()) video = out_dir + "/slack_events.mp4";
   std::unique_ptr<VideoTickRecorder> recorder;
   if (!video.empty()) {
@@ -324,7 +323,7 @@ int CompareMain(int argc, char** argv) {
     RunOptions options;
     options.progress = !o.quiet;
     options.gl_backend = ParseGlOption(o.gl);
-    options.control_thread = !no_control_thread && std::thread::hardware_concurrency() >= 2;
+    options.control_thread = !no_control_thread && ControlThreadPays();
     const std::string video = slack_events ? dir + "/slack_events.mp4" : "";
     std::unique_ptr<VideoTickRecorder> recorder;
     if (slack_events) {

@@ -87,6 +87,9 @@ void RequestStop(int signal_number);
 /// The signal a stop was requested with (RequestStop), or 0.
 int StopRequested();
 
+/// Whether RunOptions::control_thread pays on this machine: it has a second core to run on.
+bool ControlThreadPays();
+
 /// Runs a scenario to its end (or to a crash, or stop_at_s) and computes its metrics and the
 /// expect check. Throws InputError for bad input found while setting up (MJCF, params).
 RunResult RunScenario(const Scenario& scenario, const Params& params, const RunOptions& options);
