@@ -68,30 +68,28 @@ bool RecordFailed(const std::string& line) {
 
 namespace {
 
-// Reads exactly n bytes (false: end of file or an error).
-bool ReadFully(int fd, void* data, size_t n) {
-  auto* p = static_cast<char*>(data);
+// Moves exactly n bytes between fd and p with `transfer` (read or write), again after a
+// signal; false at the end of the file or on an error.
+template <typename Byte, typename Transfer>
+bool TransferFully(int fd, Byte* p, size_t n, Transfer transfer) {
   while (n > 0) {
-    const ssize_t r = read(fd, p, n);
-    if (r < 0 && errno == EINTR) continue;
-    if (r <= 0) return false;
-    p += r;
-    n -= static_cast<size_t>(r);
+    const ssize_t done = transfer(fd, p, n);
+    if (done < 0 && errno == EINTR) continue;
+    if (done <= 0) return false;
+    p += done;
+    n -= static_cast<size_t>(done);
   }
   return true;
 }
 
+// Reads exactly n bytes (false: end of file or an error).
+bool ReadFully(int fd, void* data, size_t n) {
+  return TransferFully(fd, static_cast<char*>(data), n, ::read);
+}
+
 // Writes exactly n bytes (false: an error, e.g. the reader is gone).
 bool WriteFully(int fd, const void* data, size_t n) {
-  const auto* p = static_cast<const char*>(data);
-  while (n > 0) {
-    const ssize_t w = write(fd, p, n);
-    if (w < 0 && errno == EINTR) continue;
-    if (w <= 0) return false;
-    p += w;
-    n -= static_cast<size_t>(w);
-  }
-  return true;
+  return TransferFully(fd, static_cast<const char*>(data), n, ::write);
 }
 
 // Ignores SIGPIPE while it lives: a worker that died makes the write of its next run fail
