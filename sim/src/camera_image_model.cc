@@ -89,6 +89,7 @@ struct Maps {
   double render_focal_px;
   cv::Mat map1, map2;    // fixed-point maps for cv::remap
   cv::Mat map_x, map_y;  // the same in float: which render pixels a sensor region reads
+  MapOrder x_order = MapOrder::kNone, y_order = MapOrder::kNone;  // as checked on every value
 };
 
 // Render focal length and the sensor -> render remap for one camera; cached per calibration.
@@ -143,10 +144,48 @@ const Maps& MapsFor(const Params& params) {
   cv::convertMaps(map_x, map_y, maps.map1, maps.map2, CV_16SC2);
   maps.map_x = map_x;
   maps.map_y = map_y;
+  // a lens whose distortion keeps the pixel order lets a region's bounds be read off its edges
+  maps.x_order = CheckedMapOrder(map_x, MapOrder::kIncreasingAlongRows);
+  maps.y_order = CheckedMapOrder(map_y, MapOrder::kIncreasingDownColumns);
   return cache.emplace(key, std::move(maps)).first->second;
 }
 
 }  // namespace
+
+MapOrder CheckedMapOrder(const cv::Mat& map, MapOrder order) {
+  if (order == MapOrder::kNone) return order;
+  // each value against its left neighbour (along rows) or the one above it (down columns)
+  const bool along_rows = order == MapOrder::kIncreasingAlongRows;
+  for (int row = along_rows ? 0 : 1; row < map.rows; ++row) {
+    const float* v = map.ptr<float>(row);
+    const float* before = along_rows ? v - 1 : map.ptr<float>(row - 1);
+    for (int col = along_rows ? 1 : 0; col < map.cols; ++col) {
+      if (!(v[col] >= before[col])) return MapOrder::kNone;
+    }
+  }
+  return order;
+}
+
+void MapRange(const cv::Mat& map, const cv::Rect& area, MapOrder order, double* min, double* max) {
+  if (order == MapOrder::kNone) {
+    cv::minMaxLoc(map(area), min, max);
+    return;
+  }
+  // the first and last column (x along rows) or row (y down columns) hold the extremes
+  const bool along_rows = order == MapOrder::kIncreasingAlongRows;
+  float lo = map.at<float>(area.y, area.x), hi = lo;
+  const int n = along_rows ? area.height : area.width;
+  for (int i = 0; i < n; ++i) {
+    const float first =
+        along_rows ? map.at<float>(area.y + i, area.x) : map.at<float>(area.y, area.x + i);
+    const float last = along_rows ? map.at<float>(area.y + i, area.x + area.width - 1)
+                                  : map.at<float>(area.y + area.height - 1, area.x + i);
+    lo = std::min(lo, first);
+    hi = std::max(hi, last);
+  }
+  *min = lo;
+  *max = hi;
+}
 
 void AddLevelScaledNoise(uint8_t* values, const float* sd, const float* unit_normal, size_t n) {
   size_t i = 0;
@@ -191,6 +230,8 @@ CameraImageModel::CameraImageModel(const Params& params, const CameraImageProfil
     map2_ = maps.map2;
     map_x_ = maps.map_x;
     map_y_ = maps.map_y;
+    map_x_order_ = maps.x_order;
+    map_y_order_ = maps.y_order;
   }
   if (profile_.noise) {
     // DN per electron at this gain; variance in DN^2 = g * level + (g * read noise)^2
@@ -246,8 +287,8 @@ cv::Rect CameraImageModel::RenderRegion(const cv::Rect& sensor_region,
   cv::Rect needed = grown;
   if (distorted_ && grown.area() > 0) {
     double min_x, max_x, min_y, max_y;
-    cv::minMaxLoc(map_x_(grown), &min_x, &max_x);
-    cv::minMaxLoc(map_y_(grown), &min_y, &max_y);
+    MapRange(map_x_, grown, map_x_order_, &min_x, &max_x);
+    MapRange(map_y_, grown, map_y_order_, &min_y, &max_y);
     // bilinear interpolation reads the pixel after the floor
     needed = cv::Rect(
         cv::Point(static_cast<int>(std::floor(min_x)) - 1, static_cast<int>(std::floor(min_y)) - 1),

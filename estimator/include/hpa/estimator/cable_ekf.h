@@ -3,9 +3,9 @@
 // by the commanded thrust and the attitude, measurement of the payload position in the body frame.
 
 #include <Eigen/Core>
-#include <deque>
 
 #include "hpa/estimator/filter_status.h"
+#include "hpa/estimator/history_ring.h"
 #include "hpa/models/params.h"
 
 namespace hpa {
@@ -93,7 +93,7 @@ class CableEkf {
   double time_s_;
   CableVector x_;
   CableMatrix covariance_;
-  std::deque<Entry> history_;       // one entry per prediction, oldest first
+  HistoryRing<Entry> history_;      // one entry per prediction, oldest first
   int consecutive_rejections_ = 0;  // gate rejections in a row
   FilterCounts counts_;
 };

@@ -20,6 +20,18 @@ namespace hpa::sim {
 /// nearest (even) and clamped to 0..255 (cv::saturate_cast); `sd` has 256 entries, one per level.
 void AddLevelScaledNoise(uint8_t* values, const float* sd, const float* unit_normal, size_t n);
 
+/// How a float remap map's values are ordered: never decreasing along each row (an x map), down
+/// each column (a y map), or neither.
+enum class MapOrder { kNone, kIncreasingAlongRows, kIncreasingDownColumns };
+
+/// `order` if every value of the CV_32FC1 `map` keeps it, else kNone.
+MapOrder CheckedMapOrder(const cv::Mat& map, MapOrder order);
+
+/// The least and greatest value of the CV_32FC1 `map` over `area` (non-empty, inside the map).
+/// An ordered map's extremes lie on the area's first and last column (or row), and only those
+/// are read: the same values as cv::minMaxLoc over the whole area.
+void MapRange(const cv::Mat& map, const cv::Rect& area, MapOrder order, double* min, double* max);
+
 /// Turns pinhole renders into sensor images. Deterministic: the noise of frame k depends only on
 /// (seed, k); the model owns its buffers and reuses them from frame to frame.
 class CameraImageModel {
@@ -61,6 +73,13 @@ class CameraImageModel {
   cv::Rect RenderRegion(const cv::Rect& sensor_region, const Eigen::Vector2d& blur_px) const;
 
   const CameraImageProfile& profile() const { return profile_; }
+  /// Render pixel x and y (CV_32FC1, sensor size) each sensor pixel reads; empty without
+  /// distortion.
+  const cv::Mat& map_x() const { return map_x_; }
+  const cv::Mat& map_y() const { return map_y_; }
+  /// The orders of map_x() and map_y() (kNone unless checked for every value).
+  MapOrder map_x_order() const { return map_x_order_; }
+  MapOrder map_y_order() const { return map_y_order_; }
 
  private:
   void Remap(const cv::Mat& pinhole, const cv::Rect& area, cv::Mat* out);
@@ -73,7 +92,8 @@ class CameraImageModel {
   uint64_t seed_;
   double render_focal_px_;
   bool distorted_;
-  cv::Mat map_x_, map_y_;           // the same in float (render regions)
+  cv::Mat map_x_, map_y_;  // the same in float (render regions)
+  MapOrder map_x_order_ = MapOrder::kNone, map_y_order_ = MapOrder::kNone;  // checked orders
   cv::Mat map1_, map2_;             // sensor pixel -> render pixel (fixed-point maps for remap)
   cv::Mat blurred_, remapped_;      // reused frame buffers
   std::vector<float> noise_sd_dn_;  // noise std (DN) per 8-bit level: shot + read, times gain
