@@ -6,6 +6,7 @@
 #include <optional>
 #include <vector>
 
+#include "hpa/estimator/payload_masks.h"
 #include "hpa/models/camera_model.h"
 
 namespace hpa {
@@ -61,18 +62,6 @@ bool PlausibleSize(const Ellipse& fitted, double min_semi_minor_px, int width_px
   return std::isfinite(fitted.semi_major_px) && std::isfinite(fitted.semi_minor_px) &&
          !(fitted.semi_minor_px < min_semi_minor_px) &&
          !(fitted.semi_major_px > 2.0 * std::max(width_px, height_px));
-}
-
-// Red mask of the frame part `bgr_area`: saturated pixels in the two red hue bands. Its HSV image
-// stays in *hsv for the occluder mask; all outputs are reused buffers.
-void RedMask(const cv::Mat& bgr_area, const PayloadDetectorConfig& config, cv::Mat* hsv,
-             cv::Mat* mask_low, cv::Mat* mask_high, cv::Mat* mask) {
-  cv::cvtColor(bgr_area, *hsv, cv::COLOR_BGR2HSV);
-  cv::inRange(*hsv, cv::Scalar(0, config.saturation_min, config.value_min),
-              cv::Scalar(config.hue_max_low, 255, 255), *mask_low);
-  cv::inRange(*hsv, cv::Scalar(config.hue_min_high, config.saturation_min, config.value_min),
-              cv::Scalar(180, 255, 255), *mask_high);
-  cv::bitwise_or(*mask_low, *mask_high, *mask);
 }
 
 // Index of the contour of largest area (the payload is the largest red object in view) and that
@@ -252,10 +241,16 @@ PayloadDetection PayloadDetector::DetectInArea(const cv::Mat& bgr, const cv::Rec
   }
   const cv::Point origin = area.tl();  // work images cover `area`; their (0, 0) is here
 
-  // red mask, then its largest blob; frame-sized buffers are members: reused from call to call,
-  // no per-frame allocation
-  RedMask(bgr(area), config_, &buffers_.hsv, &buffers_.mask_low, &buffers_.mask_high,
-          &buffers_.mask);
+  // red mask and occluder mask (very dark pixels: the cable seen from a camera next to it is a
+  // black wedge), then the red mask's largest blob; frame-sized buffers are members: reused from
+  // call to call, no per-frame allocation
+  PayloadMaskThresholds thresholds;
+  thresholds.hue_max_low = config_.hue_max_low;
+  thresholds.hue_min_high = config_.hue_min_high;
+  thresholds.saturation_min = config_.saturation_min;
+  thresholds.value_min = config_.value_min;
+  thresholds.occluder_value_max = config_.occluder_value_max;
+  PayloadMasks(bgr(area), thresholds, &buffers_.mask, &buffers_.occluder);
   std::vector<std::vector<cv::Point>> contours;
   cv::findContours(buffers_.mask, contours, cv::RETR_EXTERNAL, cv::CHAIN_APPROX_NONE, origin);
   if (contours.empty()) return NotFound(time_s, "no payload in view");
@@ -264,11 +259,8 @@ PayloadDetection PayloadDetector::DetectInArea(const cv::Mat& bgr, const cv::Rec
   const std::vector<cv::Point>& contour = contours[best];
   if (best_area_px2 < config_.min_area_px2) return NotFound(time_s, "too small");
 
-  // occluders: very dark pixels (the cable seen from a camera next to it is a black wedge);
-  // where they touch the blob, its outline is not the sphere's and must not be fitted
-  cv::Mat& occluder = buffers_.occluder;
-  cv::inRange(buffers_.hsv, cv::Scalar(0, 0, 0), cv::Scalar(180, 255, config_.occluder_value_max),
-              occluder);
+  // where occluders touch the blob, its outline is not the sphere's and must not be fitted
+  const cv::Mat& occluder = buffers_.occluder;
   const cv::Rect image_rect(0, 0, width, height);
   const int grow_px = config_.occluder_grow_px;
   const cv::Rect blob_rect = cv::boundingRect(contour);

@@ -70,7 +70,7 @@ class PayloadDetector {
   PayloadDetectorConfig config_;
   mutable std::vector<cv::Point2f> undistorted_;  // outline in the ideal image, reused
   struct Buffers {                                // frame-sized working images, reused
-    cv::Mat hsv, mask_low, mask_high, mask, occluder, occluded_near;
+    cv::Mat mask, occluder, occluded_near;        // red mask, dark pixels, grown near the blob
   };
   mutable Buffers buffers_;
 };

@@ -1,0 +1,85 @@
+// The detector's one-pass masks are OpenCV's HSV conversion and inRange, pixel for pixel, on
+// every 8-bit BGR colour, for the detector's thresholds and for bands that reach every branch of
+// the hue formula.
+#include "hpa/estimator/payload_masks.h"
+
+#include <gtest/gtest.h>
+
+#include <opencv2/imgproc.hpp>
+#include <vector>
+
+#include "hpa/estimator/payload_detector.h"
+
+namespace hpa {
+namespace {
+
+// Every BGR colour once: a 4096 x 4096 image.
+cv::Mat EveryColour() {
+  cv::Mat bgr(4096, 4096, CV_8UC3);
+  for (int i = 0; i < (1 << 24); ++i) {
+    cv::Vec3b& p = bgr.at<cv::Vec3b>(i >> 12, i & 4095);
+    p = cv::Vec3b(static_cast<uchar>(i & 255), static_cast<uchar>((i >> 8) & 255),
+                  static_cast<uchar>(i >> 16));
+  }
+  return bgr;
+}
+
+// The masks as cv::cvtColor and cv::inRange give them.
+void OpenCvMasks(const cv::Mat& bgr, const PayloadMaskThresholds& t, cv::Mat* red,
+                 cv::Mat* occluder) {
+  cv::Mat hsv, low, high;
+  cv::cvtColor(bgr, hsv, cv::COLOR_BGR2HSV);
+  cv::inRange(hsv, cv::Scalar(0, t.saturation_min, t.value_min),
+              cv::Scalar(t.hue_max_low, 255, 255), low);
+  cv::inRange(hsv, cv::Scalar(t.hue_min_high, t.saturation_min, t.value_min),
+              cv::Scalar(180, 255, 255), high);
+  cv::bitwise_or(low, high, *red);
+  cv::inRange(hsv, cv::Scalar(0, 0, 0), cv::Scalar(180, 255, t.occluder_value_max), *occluder);
+}
+
+TEST(PayloadMasksTest, EqualOpenCvsHsvMasksOnEveryColour) {
+  const cv::Mat bgr = EveryColour();
+  const PayloadDetectorConfig detector;
+  PayloadMaskThresholds shipped;
+  shipped.hue_max_low = detector.hue_max_low;
+  shipped.hue_min_high = detector.hue_min_high;
+  shipped.saturation_min = detector.saturation_min;
+  shipped.value_min = detector.value_min;
+  shipped.occluder_value_max = detector.occluder_value_max;
+  // wide bands: hues from the green and blue branches, every saturation and value
+  PayloadMaskThresholds wide;
+  wide.hue_max_low = 75;
+  wide.hue_min_high = 120;
+  wide.saturation_min = 0;
+  wide.value_min = 0;
+  wide.occluder_value_max = 254;
+  PayloadMaskThresholds narrow_high;
+  narrow_high.hue_max_low = 0;
+  narrow_high.hue_min_high = 180;
+  narrow_high.saturation_min = 255;
+  narrow_high.value_min = 255;
+  narrow_high.occluder_value_max = 0;
+  for (const PayloadMaskThresholds& t : {shipped, wide, narrow_high}) {
+    cv::Mat red, occluder, want_red, want_occluder;
+    PayloadMasks(bgr, t, &red, &occluder);
+    OpenCvMasks(bgr, t, &want_red, &want_occluder);
+    EXPECT_EQ(cv::countNonZero(red != want_red), 0) << "red, hue_max_low " << t.hue_max_low;
+    EXPECT_EQ(cv::countNonZero(occluder != want_occluder), 0)
+        << "occluder, value max " << t.occluder_value_max;
+    EXPECT_GT(cv::countNonZero(want_red), 0) << "the band selects some colours";
+  }
+}
+
+// On a sub-image the masks cover the sub-image only, at its own size.
+TEST(PayloadMasksTest, SubImageGivesMasksOfItsSize) {
+  cv::Mat bgr(40, 60, CV_8UC3, cv::Scalar(30, 30, 200));      // red
+  bgr(cv::Rect(0, 0, 60, 20)).setTo(cv::Scalar(10, 10, 10));  // dark top half
+  cv::Mat red, occluder;
+  PayloadMasks(bgr(cv::Rect(10, 10, 30, 20)), PayloadMaskThresholds(), &red, &occluder);
+  ASSERT_EQ(red.size(), cv::Size(30, 20));
+  EXPECT_EQ(cv::countNonZero(red), 30 * 10);
+  EXPECT_EQ(cv::countNonZero(occluder), 30 * 10);
+}
+
+}  // namespace
+}  // namespace hpa
