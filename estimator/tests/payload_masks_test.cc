@@ -13,12 +13,13 @@
 namespace hpa {
 namespace {
 
-// Every BGR colour once: a 4096 x 4096 image.
-cv::Mat EveryColour() {
-  cv::Mat bgr(4096, 4096, CV_8UC3);
+// Every BGR colour at least once, in rows of width_px (the last row padded with black).
+cv::Mat EveryColour(int width_px) {
+  const int rows = ((1 << 24) + width_px - 1) / width_px;
+  cv::Mat bgr(rows, width_px, CV_8UC3, cv::Scalar::all(0));
   for (int i = 0; i < (1 << 24); ++i) {
-    cv::Vec3b& p = bgr.at<cv::Vec3b>(i >> 12, i & 4095);
-    p = cv::Vec3b(static_cast<uchar>(i & 255), static_cast<uchar>((i >> 8) & 255),
+    bgr.at<cv::Vec3b>(i / width_px, i % width_px) =
+        cv::Vec3b(static_cast<uchar>(i & 255), static_cast<uchar>((i >> 8) & 255),
                   static_cast<uchar>(i >> 16));
   }
   return bgr;
@@ -37,8 +38,8 @@ void OpenCvMasks(const cv::Mat& bgr, const PayloadMaskThresholds& t, cv::Mat* re
   cv::inRange(hsv, cv::Scalar(0, 0, 0), cv::Scalar(180, 255, t.occluder_value_max), *occluder);
 }
 
+// Rows of 4096 pixels go through the sixteen-at-a-time pass, rows of 15 through the scalar one.
 TEST(PayloadMasksTest, EqualOpenCvsHsvMasksOnEveryColour) {
-  const cv::Mat bgr = EveryColour();
   const PayloadDetectorConfig detector;
   PayloadMaskThresholds shipped;
   shipped.hue_max_low = detector.hue_max_low;
@@ -59,14 +60,18 @@ TEST(PayloadMasksTest, EqualOpenCvsHsvMasksOnEveryColour) {
   narrow_high.saturation_min = 255;
   narrow_high.value_min = 255;
   narrow_high.occluder_value_max = 0;
-  for (const PayloadMaskThresholds& t : {shipped, wide, narrow_high}) {
-    cv::Mat red, occluder, want_red, want_occluder;
-    PayloadMasks(bgr, t, &red, &occluder);
-    OpenCvMasks(bgr, t, &want_red, &want_occluder);
-    EXPECT_EQ(cv::countNonZero(red != want_red), 0) << "red, hue_max_low " << t.hue_max_low;
-    EXPECT_EQ(cv::countNonZero(occluder != want_occluder), 0)
-        << "occluder, value max " << t.occluder_value_max;
-    EXPECT_GT(cv::countNonZero(want_red), 0) << "the band selects some colours";
+  for (const int width_px : {4096, 15}) {
+    const cv::Mat bgr = EveryColour(width_px);
+    for (const PayloadMaskThresholds& t : {shipped, wide, narrow_high}) {
+      cv::Mat red, occluder, want_red, want_occluder;
+      PayloadMasks(bgr, t, &red, &occluder);
+      OpenCvMasks(bgr, t, &want_red, &want_occluder);
+      EXPECT_EQ(cv::countNonZero(red != want_red), 0)
+          << "red, rows of " << width_px << ", hue_max_low " << t.hue_max_low;
+      EXPECT_EQ(cv::countNonZero(occluder != want_occluder), 0)
+          << "occluder, rows of " << width_px << ", value max " << t.occluder_value_max;
+      EXPECT_GT(cv::countNonZero(want_red), 0) << "the band selects some colours";
+    }
   }
 }
 
