@@ -38,24 +38,35 @@ void PayloadMasks(const cv::Mat& bgr, const PayloadMaskThresholds& thresholds, c
   const int round = 1 << (kHsvShift - 1);
   const int s_min = thresholds.saturation_min, v_min = thresholds.value_min;
   const int dark_max = thresholds.occluder_value_max;
-  // a saturation of at least s_min needs diff * 255 > (s_min - 1) * v (OpenCV's rounded table
-  // adds less than 0.6 to diff * 255 / v): the first pass marks the pixels that pass that and the
-  // value threshold, and the occluders, with integer operations, sixteen pixels at a time; the
-  // second computes the exact saturation and hue of the marked ones (the payload's pixels, a few
-  // of the floor's)
-  const int s_bound = s_min - 1;
-  const int any_saturation = s_min <= 0 ? 1 : 0;  // every pixel's saturation passes
+  // OpenCV's saturation and hue of one pixel against the red bands: 255 or 0
+  const auto exact_red = [&](const uint8_t* px) -> uint8_t {
+    const int b = px[0], g = px[1], r = px[2];
+    const int v = std::max({b, g, r});
+    const int diff = v - std::min({b, g, r});
+    if (v < v_min) return 0;
+    const int s = (diff * tables.saturation_div[v] + round) >> kHsvShift;
+    if (s < s_min) return 0;
+    // the hue by the channel that holds the maximum (red first, then green)
+    int h = v == r ? g - b : v == g ? b - r + 2 * diff : r - g + 4 * diff;
+    h = (h * tables.hue_div[diff] + round) >> kHsvShift;
+    h = std::min(h + (h < 0 ? 180 : 0), 255);
+    return (h <= thresholds.hue_max_low || (h >= thresholds.hue_min_high && h <= 180)) ? 255 : 0;
+  };
   for (int row = 0; row < bgr.rows; ++row) {
     const uint8_t* p = bgr.ptr<uint8_t>(row);
     uint8_t* red_row = red->ptr<uint8_t>(row);
     uint8_t* dark_row = occluder->ptr<uint8_t>(row);
     int col = 0;
 #if CV_SIMD128
-    // sixteen pixels at a time: the same integer tests (diff * 255 and s_bound * v fit in 16 bits)
+    // sixteen pixels at a time: the occluders, and whether any pixel's value passes and its
+    // saturation can (at least s_min needs diff * 255 > (s_min - 1) * v: OpenCV's rounded table
+    // adds less than 0.6 to diff * 255 / v; both sides fit in 16 bits); the exact test runs only
+    // on such a block (the payload's pixels, a few of the floor's)
     const cv::v_uint8x16 dark_max_x = cv::v_setall_u8(static_cast<uint8_t>(dark_max));
     const cv::v_uint8x16 v_min_x = cv::v_setall_u8(static_cast<uint8_t>(v_min));
     const cv::v_uint16x8 k255 = cv::v_setall_u16(255);
-    const cv::v_uint16x8 s_bound_x = cv::v_setall_u16(static_cast<uint16_t>(std::max(s_bound, 0)));
+    const cv::v_uint16x8 s_bound_x =
+        cv::v_setall_u16(static_cast<uint16_t>(std::max(s_min - 1, 0)));
     for (; col + 16 <= bgr.cols; col += 16) {
       cv::v_uint8x16 b, g, r;
       cv::v_load_deinterleave(p + 3 * col, b, g, r);
@@ -63,7 +74,7 @@ void PayloadMasks(const cv::Mat& bgr, const PayloadMaskThresholds& thresholds, c
       const cv::v_uint8x16 diff = v - cv::v_min(cv::v_min(b, g), r);
       cv::v_store(dark_row + col, v <= dark_max_x);
       cv::v_uint8x16 candidate = v >= v_min_x;
-      if (!any_saturation) {
+      if (s_min > 0) {
         cv::v_uint16x8 diff_lo, diff_hi, v_lo, v_hi;
         cv::v_expand(diff, diff_lo, diff_hi);
         cv::v_expand(v, v_lo, v_hi);
@@ -71,32 +82,16 @@ void PayloadMasks(const cv::Mat& bgr, const PayloadMaskThresholds& thresholds, c
         const cv::v_uint16x8 hi = (diff_hi * k255) > (v_hi * s_bound_x);
         candidate = candidate & cv::v_pack(lo, hi);  // 0xffff saturates to 0xff
       }
-      cv::v_store(red_row + col, candidate);
+      if (!cv::v_check_any(candidate)) {
+        cv::v_store(red_row + col, cv::v_setzero_u8());
+        continue;
+      }
+      for (int k = col; k < col + 16; ++k) red_row[k] = exact_red(p + 3 * k);
     }
 #endif
     for (; col < bgr.cols; ++col) {
-      const int b = p[3 * col], g = p[3 * col + 1], r = p[3 * col + 2];
-      const int v = std::max(std::max(b, g), r);
-      const int diff = v - std::min(std::min(b, g), r);
-      dark_row[col] = v <= dark_max ? 255 : 0;
-      red_row[col] = (v >= v_min) & (any_saturation | (diff * 255 > s_bound * v)) ? 255 : 0;
-    }
-    for (int col = 0; col < bgr.cols; ++col) {
-      if (red_row[col] == 0) continue;
-      const int b = p[3 * col], g = p[3 * col + 1], r = p[3 * col + 2];
-      const int v = std::max({b, g, r});
-      const int diff = v - std::min({b, g, r});
-      const int s = (diff * tables.saturation_div[v] + round) >> kHsvShift;
-      uint8_t is_red = 0;
-      if (s >= s_min) {
-        // OpenCV's hue: by the channel that holds the maximum (red first, then green)
-        int h = v == r ? g - b : v == g ? b - r + 2 * diff : r - g + 4 * diff;
-        h = (h * tables.hue_div[diff] + round) >> kHsvShift;
-        h = std::min(h + (h < 0 ? 180 : 0), 255);
-        is_red =
-            (h <= thresholds.hue_max_low || (h >= thresholds.hue_min_high && h <= 180)) ? 255 : 0;
-      }
-      red_row[col] = is_red;
+      dark_row[col] = std::max({p[3 * col], p[3 * col + 1], p[3 * col + 2]}) <= dark_max ? 255 : 0;
+      red_row[col] = exact_red(p + 3 * col);
     }
   }
 }
