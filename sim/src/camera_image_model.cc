@@ -260,6 +260,18 @@ void CameraImageModel::PrepareSharedTables(const Params& params) {
   MapsFor(params);
 }
 
+void CameraImageModel::PrepareTablesFor(const Params& params, const CameraImageProfile& profile) {
+  if (profile.noise && params.camera_distortion.isZero()) {
+    UnitNormalTable();
+    return;
+  }
+  if (profile.noise) {
+    PrepareSharedTables(params);
+    return;
+  }
+  if (!params.camera_distortion.isZero()) MapsFor(params);
+}
+
 double CameraImageModel::render_fovy_deg() const {
   return 2.0 * std::atan(0.5 * params_.camera_height_px / render_focal_px_) * 180.0 / M_PI;
 }

@@ -217,18 +217,9 @@ std::string OffscreenRenderer::GlDescription() {
   return gl_ == nullptr ? "" : gl_->context->Description();
 }
 
-cv::Mat OffscreenRenderer::Render(mjData* data, int camera_id, int width_px, int height_px,
-                                  bool show_tendons) {
-  cv::Mat bgr;
-  Render(data, camera_id, width_px, height_px, show_tendons, &bgr);
-  return bgr;
-}
-
-void OffscreenRenderer::Render(mjData* data, int camera_id, int width_px, int height_px,
-                               bool show_tendons, cv::Mat* bgr, const cv::Rect& region) {
-  CheckRenderRequest(model_, camera_id, width_px, height_px);
-  // first frame: the state another renderer kept for a model that renders the same, else a new
-  // GL context (current from here on) and MuJoCo's GL resources
+void OffscreenRenderer::Prepare() {
+  // the first time: the state another renderer kept for a model that renders the same, else a
+  // new GL context (current from here on) and MuJoCo's GL resources
   if (gl_ == nullptr) {
     const int max_w = model_->vis.global.offwidth, max_h = model_->vis.global.offheight;
     std::unique_ptr<Gl> kept;
@@ -247,6 +238,19 @@ void OffscreenRenderer::Render(mjData* data, int camera_id, int width_px, int he
     }
   }
   gl_->context->MakeCurrent();  // another renderer may have made its own current since
+}
+
+cv::Mat OffscreenRenderer::Render(mjData* data, int camera_id, int width_px, int height_px,
+                                  bool show_tendons) {
+  cv::Mat bgr;
+  Render(data, camera_id, width_px, height_px, show_tendons, &bgr);
+  return bgr;
+}
+
+void OffscreenRenderer::Render(mjData* data, int camera_id, int width_px, int height_px,
+                               bool show_tendons, cv::Mat* bgr, const cv::Rect& region) {
+  CheckRenderRequest(model_, camera_id, width_px, height_px);
+  Prepare();
 
   // scene from the current kinematics, seen from the fixed camera
   gl_->camera.type = mjCAMERA_FIXED;

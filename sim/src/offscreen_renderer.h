@@ -36,6 +36,11 @@ class OffscreenRenderer {
   void Render(mjData* data, int camera_id, int width_px, int height_px, bool show_tendons,
               cv::Mat* bgr, const cv::Rect& region = cv::Rect());
 
+  /// Makes the GL state now (a kept one if reuse allows, else a new context and MuJoCo's GL
+  /// resources), as the first Render would, and leaves its context current; nothing if it exists.
+  /// Throws as Render does.
+  void Prepare();
+
   /// Whether geoms of `group` (0..5) are drawn by the following Render calls (MuJoCo's
   /// defaults: groups 0-2 drawn, 3-5 not).
   void SetGeomGroupVisible(int group, bool visible);

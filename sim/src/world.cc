@@ -91,6 +91,14 @@ World::World(const WorldConfig& config)
   ApplyWorldParams();
   if (config_.randomize_appearance) RandomizeAppearance();
   renderer_ = std::make_unique<OffscreenRenderer>(model_, config_.gl_backend);
+  // the rendered camera's shared tables (noise samples, distortion maps) are computed beside the
+  // rest of the start (this world, the flight stack, the GL context); its first frame waits
+  if (config_.camera.kind == CameraKind::kRendered) {
+    camera_tables_ =
+        std::async(std::launch::async, [params = world_params_, profile = config_.profile.camera] {
+          CameraImageModel::PrepareTablesFor(params, profile);
+        });
+  }
 
   // start hovering 1 m up, payload hanging
   SystemState initial;

@@ -117,6 +117,9 @@ void World::RenderPayloadCamera(cv::Mat* bgr, const cv::Rect& region) {
   };
   const CameraImageProfile& profile = config_.profile.camera;
   if (camera_image_ == nullptr) {
+    // the GL state first, while the tables may still be computed; then the model on them
+    renderer_->Prepare();
+    if (camera_tables_.valid()) camera_tables_.get();
     camera_image_ = std::make_unique<CameraImageModel>(
         world_params_, profile, DeriveSeed(config_.seed, SeedStream::kCameraImage));
     // the render is a pinhole image wide enough to cover the distorted sensor

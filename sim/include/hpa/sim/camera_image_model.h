@@ -43,6 +43,10 @@ class CameraImageModel {
   /// distortion maps), which every model in the process shares: a process that forks workers
   /// calls it first so that they inherit the tables instead of each computing its own.
   static void PrepareSharedTables(const Params& params);
+  /// Computes the shared tables a model of `params` and `profile` reads (the noise samples if the
+  /// profile adds noise, the maps if the lens distorts), so that a caller may compute them on
+  /// another thread before the model is made; the model then finds them ready.
+  static void PrepareTablesFor(const Params& params, const CameraImageProfile& profile);
   /// The N(0, 1) samples the noise reads, shared by every model in the process: exactly what
   /// std::normal_distribution<float>(0, 1) draws from std::mt19937_64(0x5eed), computed once.
   static const std::vector<float>& UnitNormalTable();
