@@ -305,9 +305,9 @@ class World {
   CrashStatus crash_;
   std::unique_ptr<OffscreenRenderer> renderer_;
   std::unique_ptr<CameraImageModel> camera_image_;  // created with the first payload frame
-  std::future<void> camera_tables_;  // its shared tables, computed from construction on
-  mjData_* subframe_data_ = nullptr;                // kinematics of exposure sub-frames
-  cv::Mat pinhole_, subframe_, subframe_sum_;       // reused frame buffers
+  std::future<void> camera_tables_;            // its shared tables, computed from construction on
+  mjData_* subframe_data_ = nullptr;           // kinematics of exposure sub-frames
+  cv::Mat pinhole_, subframe_, subframe_sum_;  // reused frame buffers
   CameraFrameTiming camera_timing_;
 
   // realism profile state
