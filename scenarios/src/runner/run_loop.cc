@@ -152,6 +152,15 @@ RunLoop::RunLoop(const Scenario& scenario, const Params& params, const RunOption
       control_rate_hz <= rates.physics_hz) {
     inputs_.rows.reserve(static_cast<size_t>(std::ceil(scenario.duration_s * control_rate_hz)) + 2);
   }
+  // and one record per camera frame
+  const size_t frames =
+      static_cast<size_t>(std::ceil(scenario.duration_s * rates.camera.rate_hz)) + 2;
+  inputs_.payload_in_fov_per_frame.reserve(frames);
+  if (render_camera_) {
+    inputs_.render_ms.reserve(frames);
+    inputs_.image_model_ms.reserve(frames);
+    inputs_.detector_ms.reserve(frames);
+  }
   rate_controller_ = std::make_unique<BodyRateController>(params);
   // the profile may fly PX4's rate loop instead, on the world's rate gyro
   if (scenario.rate_loop.px4) {
@@ -224,7 +233,7 @@ bool RunLoop::Tick() {
     pending_.reference = {r.p_WL_W, r.v_WL_W, r.a_WL_W};
   }
   const flight::FlightOutputs out = flight_->Step(pending_);
-  pending_ = flight::FlightInputs();
+  pending_.Clear();  // the lists keep their storage from tick to tick
   inputs_.detections += out.frames_detected;
   camera_readout_->SetStackRegion(out.camera_roi);  // the region of its next frame
   SystemState state = out.estimate;

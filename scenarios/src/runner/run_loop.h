@@ -3,7 +3,6 @@
 // (estimator, controller, rate loop) and the per-tick steps, each a method of its own.
 
 #include <chrono>
-#include <deque>
 #include <memory>
 #include <opencv2/core.hpp>
 #include <vector>
@@ -12,6 +11,7 @@
 #include "hpa/controller/px4_rate_controller.h"
 #include "hpa/estimator/payload_detector.h"
 #include "hpa/models/lockstep.h"
+#include "hpa/models/ring_queue.h"
 #include "hpa/scenarios/runner.h"
 #include "hpa/sim/world.h"
 #include "scenarios/src/runner/flight_link.h"
@@ -136,7 +136,7 @@ class RunLoop {
 
   // what is in flight between the loops
   std::unique_ptr<DelayLine<CommandInFlight>> commands_in_flight_;  // compute + transport
-  std::deque<LogRow> rows_awaiting_command_;  // log rows of the pending commands, oldest first
+  RingQueue<LogRow> rows_awaiting_command_;  // log rows of the pending commands, oldest first
   // the camera's messages delivered by a step, joining the flight stack's inputs at the next
   // tick after that tick's capture (whose region is around the detections delivered before)
   std::vector<PayloadDetection> camera_detections_;

@@ -5,8 +5,8 @@
 #include <Eigen/Core>
 
 #include "hpa/estimator/filter_status.h"
-#include "hpa/estimator/history_ring.h"
 #include "hpa/models/params.h"
+#include "hpa/models/ring_queue.h"
 
 namespace hpa {
 
@@ -93,7 +93,7 @@ class CableEkf {
   double time_s_;
   CableVector x_;
   CableMatrix covariance_;
-  HistoryRing<Entry> history_;      // one entry per prediction, oldest first
+  RingQueue<Entry> history_;      // one entry per prediction, oldest first
   int consecutive_rejections_ = 0;  // gate rejections in a row
   FilterCounts counts_;
 };

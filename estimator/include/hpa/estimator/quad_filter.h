@@ -7,8 +7,8 @@
 #include <optional>
 
 #include "hpa/estimator/filter_status.h"
-#include "hpa/estimator/history_ring.h"
 #include "hpa/models/params.h"
+#include "hpa/models/ring_queue.h"
 #include "hpa/models/sensor_types.h"
 #include "hpa/models/state.h"
 
@@ -96,7 +96,7 @@ class QuadFilter {
   QuadFilterState state_;
   Matrix15d covariance_;
   std::optional<ImuSample> last_imu_;
-  HistoryRing<Entry> history_;      // one entry per IMU sample, oldest first
+  RingQueue<Entry> history_;      // one entry per IMU sample, oldest first
   int consecutive_rejections_ = 0;  // VIO gate rejections in a row
   FilterCounts counts_;
 };

@@ -82,6 +82,20 @@ struct FlightInputs {
   bool need_estimate = false;                // the simulator reads the estimate at this tick
   bool gripper_active = false;               // a gripper holds the payload (information only)
   ReferenceSample reference;                 // the payload reference now (information only)
+
+  /// Back to a tick with no inputs (as a default FlightInputs), the lists keeping their storage.
+  void Clear() {
+    time_s = 0.0;
+    allocation.reset();
+    imu.clear();
+    vio.clear();
+    detections.clear();
+    frames.clear();
+    truth.reset();
+    need_estimate = false;
+    gripper_active = false;
+    reference = ReferenceSample();
+  }
 };
 
 /// What the flight computer answers at one tick.

@@ -4,11 +4,12 @@
 // scenario runner, the simulated world and the closed-loop tests alike; no MuJoCo here.
 
 #include <cmath>
-#include <deque>
 #include <optional>
 #include <string>
 #include <utility>
 #include <vector>
+
+#include "hpa/models/ring_queue.h"
 
 namespace hpa {
 
@@ -92,7 +93,8 @@ class LockstepClock {
 };
 
 /// The one latency mechanism of every sensor: items captured at a time are delivered, in
-/// capture order, once latency_s has passed on the clock.
+/// capture order, once latency_s has passed on the clock. Its queue reuses its slots: a line in
+/// steady state allocates nothing.
 template <class T>
 class DelayLine {
  public:
@@ -100,7 +102,9 @@ class DelayLine {
   explicit DelayLine(double latency_s) : latency_s_(latency_s) {}
 
   /// Queues an item captured at capture_time_s.
-  void Push(double capture_time_s, T item) { queue_.emplace_back(capture_time_s, std::move(item)); }
+  void Push(double capture_time_s, T item) {
+    queue_.push_back(std::make_pair(capture_time_s, std::move(item)));
+  }
 
   /// The oldest item whose delivery time (capture + latency) is at or before now_s, if any.
   std::optional<T> PopReady(double now_s) {
@@ -115,10 +119,15 @@ class DelayLine {
   }
 
   /// Drops everything queued.
-  void Clear() { queue_.clear(); }
+  void Clear() {
+    while (size() > 0) DropOldest();
+  }
   /// Drops the oldest item (a bounded queue whose reader fell behind).
   void DropOldest() {
-    if (!queue_.empty()) queue_.pop_front();
+    if (queue_.empty()) return;
+    [[maybe_unused]] const T dropped =
+        std::move(queue_.front().second);  // the slot keeps none of it
+    queue_.pop_front();
   }
   /// Items waiting.
   size_t size() const { return queue_.size(); }
@@ -126,7 +135,7 @@ class DelayLine {
 
  private:
   double latency_s_;
-  std::deque<std::pair<double, T>> queue_;
+  RingQueue<std::pair<double, T>> queue_;  // (capture time, item), oldest first
 };
 
 }  // namespace hpa

@@ -1,6 +1,5 @@
-// HistoryRing: a queue in order across the ring's wrap and its growth, searched by
-// std::upper_bound, with its slots reused.
-#include "hpa/estimator/history_ring.h"
+// RingQueue: a queue in order across the ring's wrap and its growth, searched by std::upper_bound.
+#include "hpa/models/ring_queue.h"
 
 #include <gtest/gtest.h>
 
@@ -11,8 +10,8 @@ namespace hpa {
 namespace {
 
 // The ring against std::deque through pushes and pops that wrap it and make it grow.
-TEST(HistoryRingTest, KeepsTheOrderOfADequeAcrossWrapAndGrowth) {
-  HistoryRing<int> ring;
+TEST(RingQueueTest, KeepsTheOrderOfADequeAcrossWrapAndGrowth) {
+  RingQueue<int> ring;
   std::deque<int> expected;
   int next = 0;
   for (int round = 0; round < 200; ++round) {
@@ -38,8 +37,8 @@ TEST(HistoryRingTest, KeepsTheOrderOfADequeAcrossWrapAndGrowth) {
 }
 
 // std::upper_bound over a wrapped ring finds what it finds in a deque of the same values.
-TEST(HistoryRingTest, UpperBoundSearchesTheWrappedRing) {
-  HistoryRing<double> ring;
+TEST(RingQueueTest, UpperBoundSearchesTheWrappedRing) {
+  RingQueue<double> ring;
   std::deque<double> expected;
   for (int i = 0; i < 40; ++i) {
     ring.push_back(0.1 * i);

@@ -1,7 +1,8 @@
 #pragma once
-// A filter's history of past states: appended at the back, dropped from the front, read by
-// index and searched by time. Its storage is reused in a ring and only grows (doubling) when
-// more entries are kept at once than ever before, so a filter in steady state allocates nothing.
+// A queue of values appended at the back, dropped from the front and read by index (a filter's
+// history of past states, a sensor's messages in flight). Its storage is reused in a ring and only
+// grows (doubling) when more entries are kept at once than ever before, so a loop in steady state
+// allocates nothing.
 
 #include <cstddef>
 #include <iterator>
@@ -12,7 +13,7 @@ namespace hpa {
 
 /// A double-ended queue of T in a ring of reused slots (push at the back, pop at the front).
 template <typename T>
-class HistoryRing {
+class RingQueue {
  public:
   /// A random-access iterator over the entries, oldest first (std::upper_bound searches them).
   class const_iterator {
@@ -24,7 +25,7 @@ class HistoryRing {
     using reference = const T&;
 
     const_iterator() = default;
-    const_iterator(const HistoryRing* ring, size_t index) : ring_(ring), index_(index) {}
+    const_iterator(const RingQueue* ring, size_t index) : ring_(ring), index_(index) {}
     reference operator*() const { return (*ring_)[index_]; }
     pointer operator->() const { return &(*ring_)[index_]; }
     reference operator[](difference_type n) const { return (*ring_)[index_ + n]; }
@@ -47,7 +48,7 @@ class HistoryRing {
     bool operator>=(const const_iterator& o) const { return index_ >= o.index_; }
 
    private:
-    const HistoryRing* ring_ = nullptr;
+    const RingQueue* ring_ = nullptr;
     size_t index_ = 0;  // entries from the oldest
   };
 
@@ -69,12 +70,13 @@ class HistoryRing {
     slots_[(head_ + size_) & mask_] = std::move(value);
     ++size_;
   }
-  /// Drops the oldest entry (its slot is reused, not freed).
+  /// Drops the oldest entry; its slot keeps the value until reused (move it out first to free
+  /// what it holds).
   void pop_front() {
     head_ = (head_ + 1) & mask_;
     --size_;
   }
-  /// Drops every entry (the slots stay).
+  /// Drops every entry (the slots are kept, as pop_front keeps them).
   void clear() { head_ = size_ = 0; }
 
  private:
