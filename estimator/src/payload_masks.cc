@@ -52,6 +52,9 @@ void PayloadMasks(const cv::Mat& bgr, const PayloadMaskThresholds& thresholds, c
     h = std::min(h + (h < 0 ? 180 : 0), 255);
     return (h <= thresholds.hue_max_low || (h >= thresholds.hue_min_high && h <= 180)) ? 255 : 0;
   };
+  // the vector pass holds its thresholds in bytes (and s_min - 1 in 16 bits)
+  const bool vector_pass =
+      v_min >= 0 && v_min <= 255 && dark_max >= 0 && dark_max <= 255 && s_min <= 256;
   for (int row = 0; row < bgr.rows; ++row) {
     const uint8_t* p = bgr.ptr<uint8_t>(row);
     uint8_t* red_row = red->ptr<uint8_t>(row);
@@ -67,7 +70,7 @@ void PayloadMasks(const cv::Mat& bgr, const PayloadMaskThresholds& thresholds, c
     const cv::v_uint16x8 k255 = cv::v_setall_u16(255);
     const cv::v_uint16x8 s_bound_x =
         cv::v_setall_u16(static_cast<uint16_t>(std::max(s_min - 1, 0)));
-    for (; col + 16 <= bgr.cols; col += 16) {
+    for (; vector_pass && col + 16 <= bgr.cols; col += 16) {
       cv::v_uint8x16 b, g, r;
       cv::v_load_deinterleave(p + 3 * col, b, g, r);
       const cv::v_uint8x16 v = cv::v_max(cv::v_max(b, g), r);

@@ -1,6 +1,6 @@
 // The detector's one-pass masks are OpenCV's HSV conversion and inRange, pixel for pixel, on
-// every 8-bit BGR colour, for the detector's thresholds and for bands that reach every branch of
-// the hue formula.
+// every 8-bit BGR colour, for the detector's thresholds, for bands that reach every branch of the
+// hue formula and for thresholds beyond the 8-bit range.
 #include "hpa/estimator/payload_masks.h"
 
 #include <gtest/gtest.h>
@@ -40,13 +40,7 @@ void OpenCvMasks(const cv::Mat& bgr, const PayloadMaskThresholds& t, cv::Mat* re
 
 // Rows of 4096 pixels go through the sixteen-at-a-time pass, rows of 15 through the scalar one.
 TEST(PayloadMasksTest, EqualOpenCvsHsvMasksOnEveryColour) {
-  const PayloadDetectorConfig detector;
-  PayloadMaskThresholds shipped;
-  shipped.hue_max_low = detector.hue_max_low;
-  shipped.hue_min_high = detector.hue_min_high;
-  shipped.saturation_min = detector.saturation_min;
-  shipped.value_min = detector.value_min;
-  shipped.occluder_value_max = detector.occluder_value_max;
+  const PayloadMaskThresholds shipped = MaskThresholds(PayloadDetectorConfig());
   // wide bands: hues from the green and blue branches, every saturation and value
   PayloadMaskThresholds wide;
   wide.hue_max_low = 75;
@@ -60,9 +54,14 @@ TEST(PayloadMasksTest, EqualOpenCvsHsvMasksOnEveryColour) {
   narrow_high.saturation_min = 255;
   narrow_high.value_min = 255;
   narrow_high.occluder_value_max = 0;
+  // thresholds outside 0..255: every value passes, every pixel is an occluder
+  PayloadMaskThresholds beyond;
+  beyond.saturation_min = -3;
+  beyond.value_min = -10;
+  beyond.occluder_value_max = 300;
   for (const int width_px : {4096, 15}) {
     const cv::Mat bgr = EveryColour(width_px);
-    for (const PayloadMaskThresholds& t : {shipped, wide, narrow_high}) {
+    for (const PayloadMaskThresholds& t : {shipped, wide, narrow_high, beyond}) {
       cv::Mat red, occluder, want_red, want_occluder;
       PayloadMasks(bgr, t, &red, &occluder);
       OpenCvMasks(bgr, t, &want_red, &want_occluder);

@@ -7,6 +7,7 @@
 #include <optional>
 #include <vector>
 
+#include "hpa/estimator/payload_masks.h"
 #include "hpa/models/camera_model.h"
 #include "hpa/models/params.h"
 #include "hpa/models/sensor_types.h"
@@ -31,6 +32,9 @@ struct PayloadDetectorConfig {
   double min_radial_offset_px = 2.0;  // closer to the principal point: major axis from the fit
   double edge_bias_px = 0.5;          // contour runs through edge pixel centres: add to axes
 };
+
+/// The thresholds of the detector's red and occluder masks.
+PayloadMaskThresholds MaskThresholds(const PayloadDetectorConfig& config);
 
 /// Red-sphere detector on 1280x720 BGR frames of a camera with the lens distortion of
 /// Params::camera_distortion; deterministic. The centre and radius it reports are in the ideal

@@ -24,8 +24,10 @@ class RingQueue {
     using pointer = const T*;
     using reference = const T&;
 
+    /// A singular iterator; the `index`-th entry of `ring` from the oldest.
     const_iterator() = default;
     const_iterator(const RingQueue* ring, size_t index) : ring_(ring), index_(index) {}
+    // the random-access iterator's operators, on the index
     reference operator*() const { return (*ring_)[index_]; }
     pointer operator->() const { return &(*ring_)[index_]; }
     reference operator[](difference_type n) const { return (*ring_)[index_ + n]; }
@@ -52,15 +54,18 @@ class RingQueue {
     size_t index_ = 0;  // entries from the oldest
   };
 
+  /// Entries kept; whether there are none.
   size_t size() const { return size_; }
   bool empty() const { return size_ == 0; }
   /// The i-th entry from the oldest (i < size()).
   T& operator[](size_t i) { return slots_[(head_ + i) & mask_]; }
   const T& operator[](size_t i) const { return slots_[(head_ + i) & mask_]; }
+  /// The oldest and the newest entry (not empty()).
   T& front() { return (*this)[0]; }
   const T& front() const { return (*this)[0]; }
   T& back() { return (*this)[size_ - 1]; }
   const T& back() const { return (*this)[size_ - 1]; }
+  /// The oldest entry and one past the newest.
   const_iterator begin() const { return const_iterator(this, 0); }
   const_iterator end() const { return const_iterator(this, size_); }
 
