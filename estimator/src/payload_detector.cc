@@ -232,16 +232,6 @@ cv::Rect PayloadDetector::RegionAround(const PayloadDetection& last, double marg
          cv::Rect(0, 0, params_.camera_width_px, params_.camera_height_px);
 }
 
-PayloadMaskThresholds MaskThresholds(const PayloadDetectorConfig& config) {
-  PayloadMaskThresholds t;
-  t.hue_max_low = config.hue_max_low;
-  t.hue_min_high = config.hue_min_high;
-  t.saturation_min = config.saturation_min;
-  t.value_min = config.value_min;
-  t.occluder_value_max = config.occluder_value_max;
-  return t;
-}
-
 PayloadDetection PayloadDetector::DetectInArea(const cv::Mat& bgr, const cv::Rect& area,
                                                double time_s, bool* inside_area) const {
   const int width = params_.camera_width_px, height = params_.camera_height_px;
@@ -254,7 +244,7 @@ PayloadDetection PayloadDetector::DetectInArea(const cv::Mat& bgr, const cv::Rec
   // red mask and occluder mask (very dark pixels: the cable seen from a camera next to it is a
   // black wedge), then the red mask's largest blob; frame-sized buffers are members: reused from
   // call to call, no per-frame allocation
-  PayloadMasks(bgr(area), MaskThresholds(config_), &buffers_.mask, &buffers_.occluder);
+  PayloadMasks(bgr(area), config_.masks, &buffers_.mask, &buffers_.occluder);
   std::vector<std::vector<cv::Point>> contours;
   cv::findContours(buffers_.mask, contours, cv::RETR_EXTERNAL, cv::CHAIN_APPROX_NONE, origin);
   if (contours.empty()) return NotFound(time_s, "no payload in view");

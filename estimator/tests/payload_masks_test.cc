@@ -40,7 +40,7 @@ void OpenCvMasks(const cv::Mat& bgr, const PayloadMaskThresholds& t, cv::Mat* re
 
 // Rows of 4096 pixels go through the sixteen-at-a-time pass, rows of 15 through the scalar one.
 TEST(PayloadMasksTest, EqualOpenCvsHsvMasksOnEveryColour) {
-  const PayloadMaskThresholds shipped = MaskThresholds(PayloadDetectorConfig());
+  const PayloadMaskThresholds shipped = PayloadDetectorConfig().masks;
   // wide bands: hues from the green and blue branches, every saturation and value
   PayloadMaskThresholds wide;
   wide.hue_max_low = 75;

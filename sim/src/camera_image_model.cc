@@ -250,26 +250,22 @@ const std::vector<float>& CameraImageModel::UnitNormalTable() {
 }
 
 void CameraImageModel::PrepareSharedTables(const Params& params) {
-  if (params.camera_distortion.isZero()) {
-    UnitNormalTable();
+  CameraImageProfile with_noise;
+  with_noise.noise = true;
+  PrepareTablesFor(params, with_noise);
+}
+
+void CameraImageModel::PrepareTablesFor(const Params& params, const CameraImageProfile& profile) {
+  const bool distorted = !params.camera_distortion.isZero();
+  if (!profile.noise || !distorted) {
+    if (profile.noise) UnitNormalTable();
+    if (distorted) MapsFor(params);
     return;
   }
   // both at once: the noise table's sequential pass beside the maps (the future waits for it,
   // also when the maps throw)
   const std::future<void> noise_table = std::async(std::launch::async, [] { UnitNormalTable(); });
   MapsFor(params);
-}
-
-void CameraImageModel::PrepareTablesFor(const Params& params, const CameraImageProfile& profile) {
-  if (profile.noise && params.camera_distortion.isZero()) {
-    UnitNormalTable();
-    return;
-  }
-  if (profile.noise) {
-    PrepareSharedTables(params);
-    return;
-  }
-  if (!params.camera_distortion.isZero()) MapsFor(params);
 }
 
 double CameraImageModel::render_fovy_deg() const {

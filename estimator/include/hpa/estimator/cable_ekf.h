@@ -93,7 +93,7 @@ class CableEkf {
   double time_s_;
   CableVector x_;
   CableMatrix covariance_;
-  RingQueue<Entry> history_;      // one entry per prediction, oldest first
+  RingQueue<Entry> history_;        // one entry per prediction, oldest first
   int consecutive_rejections_ = 0;  // gate rejections in a row
   FilterCounts counts_;
 };

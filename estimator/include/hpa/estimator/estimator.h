@@ -5,12 +5,12 @@
 #include <memory>
 
 #include "hpa/estimator/cable_ekf.h"
-#include "hpa/models/detection_noise.h"
 #include "hpa/estimator/estimator_health.h"
 #include "hpa/estimator/mode_detector.h"
 #include "hpa/estimator/payload_tracker.h"
 #include "hpa/estimator/quad_filter.h"
 #include "hpa/estimator/tension_cue.h"
+#include "hpa/models/detection_noise.h"
 #include "hpa/models/params.h"
 #include "hpa/models/sensor_types.h"
 #include "hpa/models/state.h"

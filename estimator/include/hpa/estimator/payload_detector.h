@@ -16,14 +16,10 @@ namespace hpa {
 
 /// Thresholds of the detector; the defaults were tuned on synthetic and rendered 1280x720 frames.
 struct PayloadDetectorConfig {
-  int hue_max_low = 10;               // red hue band [0, hue_max_low] U [hue_min_high, 180]
-  int hue_min_high = 170;             // (OpenCV hue is 0..180)
-  int saturation_min = 110;           // the grey floor has saturation ~0, the payload ~255
-  int value_min = 40;                 // the shaded side of the sphere stays above this
+  PayloadMaskThresholds masks;        // red hue band, saturation and value; the occluders' value
   double min_area_px2 = 200.0;        // smaller: "too small" (radius 8 px = payload 2.3 m away)
   double min_iou = 0.90;              // blob vs fitted ellipse (clipped to the image)
   double min_visible_outline = 0.60;  // share of the fitted outline inside the image
-  int occluder_value_max = 50;        // darker pixels occlude (the cable; floor is >= 75)
   int occluder_grow_px = 3;           // outline points this close to an occluder are not fitted
   double min_fit_share = 0.25;        // share of the blob's outline left to fit, at least
   int min_fit_points = 16;            // outline points left to fit, at least
@@ -32,9 +28,6 @@ struct PayloadDetectorConfig {
   double min_radial_offset_px = 2.0;  // closer to the principal point: major axis from the fit
   double edge_bias_px = 0.5;          // contour runs through edge pixel centres: add to axes
 };
-
-/// The thresholds of the detector's red and occluder masks.
-PayloadMaskThresholds MaskThresholds(const PayloadDetectorConfig& config);
 
 /// Red-sphere detector on 1280x720 BGR frames of a camera with the lens distortion of
 /// Params::camera_distortion; deterministic. The centre and radius it reports are in the ideal

@@ -9,13 +9,14 @@
 
 namespace hpa {
 
-/// Thresholds of the two masks (OpenCV's 8-bit HSV: hue 0..180, saturation and value 0..255).
+/// Thresholds of the two masks (OpenCV's 8-bit HSV: hue 0..180, saturation and value 0..255);
+/// the defaults are the detector's, tuned on synthetic and rendered 1280x720 frames.
 struct PayloadMaskThresholds {
-  int hue_max_low = 10;         // red: hue in [0, hue_max_low] or [hue_min_high, 180]
-  int hue_min_high = 170;       //
-  int saturation_min = 110;     // red: saturation at least this
-  int value_min = 40;           // red: value at least this
-  int occluder_value_max = 50;  // occluder: value at most this
+  int hue_max_low = 10;         // red hue band [0, hue_max_low] U [hue_min_high, 180]
+  int hue_min_high = 170;       // (OpenCV hue is 0..180)
+  int saturation_min = 110;     // the grey floor has saturation ~0, the payload ~255
+  int value_min = 40;           // the shaded side of the sphere stays above this
+  int occluder_value_max = 50;  // darker pixels occlude (the cable; floor is >= 75)
 };
 
 /// Writes the red mask and the occluder mask (CV_8UC1, 255 where set, 0 elsewhere; the size of

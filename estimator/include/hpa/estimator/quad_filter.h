@@ -96,7 +96,7 @@ class QuadFilter {
   QuadFilterState state_;
   Matrix15d covariance_;
   std::optional<ImuSample> last_imu_;
-  RingQueue<Entry> history_;      // one entry per IMU sample, oldest first
+  RingQueue<Entry> history_;        // one entry per IMU sample, oldest first
   int consecutive_rejections_ = 0;  // VIO gate rejections in a row
   FilterCounts counts_;
 };
