@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "gl_context.h"
+#include "scene_culling.h"
 
 namespace hpa::sim {
 
@@ -211,6 +212,8 @@ void OffscreenRenderer::SetGeomGroupVisible(int group, bool visible) {
   if (group >= 0 && group < mjNGROUP) geom_group_visible_[group] = visible;
 }
 
+void OffscreenRenderer::SetCullHiddenGeoms(bool cull) { cull_hidden_geoms_ = cull; }
+
 bool OffscreenRenderer::initialized() const { return gl_ != nullptr; }
 
 std::string OffscreenRenderer::GlDescription() {
@@ -266,6 +269,11 @@ void OffscreenRenderer::Render(mjData* data, int camera_id, int width_px, int he
   if (area.area() == 0) return;
   // only `area` of the frame: the frustum narrowed to it, so its pixels are the frame's
   if (area != frame) NarrowFrustumToArea(area, width_px, height_px, &gl_->scene);
+  // what the frame cannot show is left out: no pixel changes, llvmpipe has fewer triangles
+  last_culled_geoms_ =
+      cull_hidden_geoms_
+          ? CullHiddenGeoms(model_, static_cast<double>(area.width) / area.height, &gl_->scene)
+          : 0;
   const mjrRect viewport = {0, 0, area.width, area.height};
   mjr_render(viewport, &gl_->scene, &gl_->render_context);
   cv::Mat out = (*bgr)(area);

@@ -45,6 +45,13 @@ class OffscreenRenderer {
   /// defaults: groups 0-2 drawn, 3-5 not).
   void SetGeomGroupVisible(int group, bool visible);
 
+  /// Whether Render leaves out the geoms the frame cannot show (scene_culling.h): on by default;
+  /// the frame is the same either way, only faster.
+  void SetCullHiddenGeoms(bool cull);
+
+  /// How many geoms the last Render left out.
+  int last_culled_geoms() const { return last_culled_geoms_; }
+
   /// True once the GL context exists (after the first Render).
   bool initialized() const;
 
@@ -66,6 +73,8 @@ class OffscreenRenderer {
   std::unique_ptr<Gl> gl_;
   cv::Mat flip_buffer_;  // multisampled path only: the bottom-up frame turned top-down
   bool took_kept_state_ = false;
+  bool cull_hidden_geoms_ = true;
+  int last_culled_geoms_ = 0;
   bool geom_group_visible_[6] = {true, true, true, false, false, false};
 };
 

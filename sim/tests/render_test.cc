@@ -287,6 +287,50 @@ TEST(RenderTest, ChaseCameraRendersRequestedSize) {
   EXPECT_THROW(world.RenderChaseCamera(4000, 10), std::invalid_argument);
 }
 
+// Leaving out the geoms a frame cannot show (the quadrotor's body and rotors behind the camera,
+// the sites, the slack cable's catenary behind the payload, what lies outside a region) changes
+// no pixel: the payload camera's whole frame and regions and the chase camera, culling on and off.
+TEST(RenderTest, CullingHiddenGeomsChangesNoPixel) {
+  WorldConfig config;
+  config.params = LoadParams(DefaultParamsPath());
+  config.profile.camera.noise = true;
+  World world(config);
+  OffscreenRenderer& renderer = WorldInternals::Renderer(world);
+  const double hover = world.world_params().HoverMotorSpeedRadps();
+  SystemState slack;  // payload lifted 0.25 m and aside: the cable hangs as a catenary
+  slack.p_WQ_W = Eigen::Vector3d(0, 0, 1);
+  slack.p_WL_W = Eigen::Vector3d(0.1, 0.05, 0.75);
+  SystemState slack_below = slack;  // straight below: the catenary hangs behind the payload
+  slack_below.p_WL_W = Eigen::Vector3d(0.0, 0.005, 0.75);
+  int culled_max = 0;
+  for (const SystemState& s : {slack, slack_below, testing_poses::SwungPayload(false),
+                               testing_poses::SwungPayload(true)}) {
+    world.SetState(s.ToVector(), InputVector::Constant(hover));
+    const auto ideal =
+        ProjectToPixels(world.world_params(), PayloadInCamera_C(world.world_params(), s));
+    ASSERT_TRUE(ideal.has_value());
+    const cv::Point c(static_cast<int>(ideal->x()), static_cast<int>(ideal->y()));
+    for (const cv::Rect region :
+         {cv::Rect(), cv::Rect(c.x - 150, c.y - 150, 300, 300),
+          cv::Rect(c.x - 60, c.y - 60, 120, 120), cv::Rect(0, 0, 200, 150)}) {
+      cv::Mat culled = cv::Mat::zeros(720, 1280, CV_8UC3), all = culled.clone();
+      renderer.SetCullHiddenGeoms(true);
+      world.RenderPayloadCamera(&culled, region);
+      culled_max = std::max(culled_max, renderer.last_culled_geoms());
+      renderer.SetCullHiddenGeoms(false);
+      world.RenderPayloadCamera(&all, region);
+      EXPECT_EQ(renderer.last_culled_geoms(), 0);
+      EXPECT_EQ(cv::norm(culled, all, cv::NORM_INF), 0.0) << region;
+    }
+    renderer.SetCullHiddenGeoms(true);
+    const cv::Mat chase_culled = world.RenderChaseCamera(320, 180);
+    renderer.SetCullHiddenGeoms(false);
+    EXPECT_EQ(cv::norm(chase_culled, world.RenderChaseCamera(320, 180), cv::NORM_INF), 0.0);
+  }
+  std::printf("[measured] at most %d geoms culled from a frame\n", culled_max);
+  EXPECT_GE(culled_max, 20);  // the catenary's segments behind the payload among them
+}
+
 // A world whose renderer takes the GL state another world kept (what every run of a sweep does
 // after PrewarmRendererForFork: the context with its compiled shaders and MuJoCo's GL resources)
 // renders the same pixels as one with a state of its own, the payload camera and the chase camera
