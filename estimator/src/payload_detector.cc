@@ -218,12 +218,23 @@ std::optional<PayloadDetection> PayloadDetector::DetectInRegion(const cv::Mat& b
   return d;
 }
 
-cv::Rect PayloadDetector::RegionAround(const PayloadDetection& last, double margin_px) const {
+cv::Rect PayloadDetector::RegionAround(const PayloadDetection& last, double margin_px,
+                                       const PayloadDetection& previous) const {
   if (!last.found || !last.centre_px.allFinite() || !std::isfinite(last.radius_px)) return {};
   // the last ideal-image centre, where the lens puts it, and a half size of the ball's radius
   // (grown for the ellipse of an off-axis ball) plus the motion allowed between frames
-  const Eigen::Vector2d c = DistortPixel(params_, last.centre_px);
-  const double half = 1.5 * last.radius_px + margin_px;
+  Eigen::Vector2d c = DistortPixel(params_, last.centre_px);
+  double allowance_px = margin_px;
+  // with the frame before (consecutive frames are evenly spaced), the ball moves on as it moved:
+  // the centre predicted, half the margin plus half the motion left for its change
+  if (previous.found && previous.centre_px.allFinite() && previous.time_s < last.time_s) {
+    const Eigen::Vector2d motion_px = c - DistortPixel(params_, previous.centre_px);
+    if (motion_px.allFinite()) {
+      c += motion_px;
+      allowance_px = 0.5 * margin_px + 0.5 * motion_px.norm();
+    }
+  }
+  const double half = 1.5 * last.radius_px + allowance_px;
   if (!c.allFinite() || !(half > 0.0) || half > params_.camera_width_px) return {};
   const int x0 = static_cast<int>(std::floor(c.x() - half));
   const int y0 = static_cast<int>(std::floor(c.y() - half));

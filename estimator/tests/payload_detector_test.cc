@@ -176,5 +176,37 @@ TEST(PayloadDetectorTest, RepeatedDetectionsOfOneFrameAgree) {
   }
 }
 
+// The region for the next frame: around the last detection with the whole margin; with the frame
+// before it, around the centre moved on by the last motion, with half the margin plus half that
+// motion (a ball moving evenly stays as centred in a smaller region).
+TEST(PayloadDetectorTest, RegionFollowsTheBallsMotion) {
+  const Params p = LoadParams(DefaultParamsPath());  // with the lens: regions are real pixels
+  const PayloadDetector detector(p);
+  PayloadDetection previous, last;
+  previous.found = last.found = true;
+  previous.time_s = 1.0;
+  last.time_s = 1.0 + 1.0 / 30.0;
+  previous.radius_px = last.radius_px = 40.0;
+  previous.centre_px = Eigen::Vector2d(600, 350);  // near the principal point: little distortion
+  last.centre_px = Eigen::Vector2d(620, 350);
+  const cv::Rect alone = detector.RegionAround(last, 48.0);
+  const cv::Rect moving = detector.RegionAround(last, 48.0, previous);
+  const auto centre = [](const cv::Rect& r) { return 0.5 * (r.tl() + r.br()); };
+  const Eigen::Vector2d last_px = DistortPixel(p, last.centre_px);
+  const Eigen::Vector2d next_px = 2.0 * last_px - DistortPixel(p, previous.centre_px);
+  EXPECT_NEAR(centre(alone).x, last_px.x(), 1.0);
+  EXPECT_NEAR(centre(moving).x, next_px.x(), 1.0);
+  EXPECT_NEAR(centre(moving).y, next_px.y(), 1.0);
+  // 1.5 radii plus 48 px against 1.5 radii plus 24 px and half the ~20 px motion, each side
+  EXPECT_NEAR(alone.width, 2 * (60 + 48), 2);
+  EXPECT_NEAR(moving.width, 2 * (60 + 24 + 0.5 * (next_px - last_px).norm()), 2);
+  // a previous frame that found nothing, or a later one, gives the region around the last alone
+  previous.found = false;
+  EXPECT_EQ(detector.RegionAround(last, 48.0, previous), alone);
+  previous.found = true;
+  previous.time_s = last.time_s;
+  EXPECT_EQ(detector.RegionAround(last, 48.0, previous), alone);
+}
+
 }  // namespace
 }  // namespace hpa

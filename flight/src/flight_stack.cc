@@ -159,6 +159,7 @@ int FlightStack::Deliver(const FlightInputs& in) {
   for (const PayloadDetection& d : in.detections) estimator_->OnPayloadDetection(d);
   int found = 0;
   for (const CameraFrame& frame : in.frames) {
+    previous_detection_ = std::move(last_detection_);
     last_detection_ = DetectFrame(*detector_, frame);
     found += last_detection_.found ? 1 : 0;
     estimator_->OnPayloadDetection(last_detection_);
@@ -173,6 +174,7 @@ int FlightStack::Finish(const FlightInputs& in) {
   int found = 0;
   for (const CameraFrame& frame : in.frames) {
     if (!detector_) break;
+    previous_detection_ = std::move(last_detection_);
     last_detection_ = DetectFrame(*detector_, frame);
     found += last_detection_.found ? 1 : 0;
   }
@@ -216,7 +218,7 @@ FlightOutputs FlightStack::Step(const FlightInputs& in) {
       }
     }
   }
-  if (detector_) out.camera_roi = detector_->RegionAround(last_detection_, kRegionMarginPx);
+  if (detector_) out.camera_roi = detector_->RegionAround(last_detection_, kRegionMarginPx, previous_detection_);
   if (estimator_) {
     const hpa::EstimatorHealth health = estimator_->Health();
     out.estimator_rejected_updates = health.RejectedUpdates();

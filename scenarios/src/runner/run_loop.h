@@ -4,6 +4,7 @@
 
 #include <chrono>
 #include <memory>
+#include <utility>
 #include <opencv2/core.hpp>
 #include <vector>
 
@@ -54,14 +55,18 @@ class FlightCameraReadout final : public sim::CameraReadout {
                                          double time_s) override;
   cv::Mat* NextFrameSlot(int* slot) override { return flight_->NextFrameSlot(slot); }
   /// A detection reached the flight stack: the next in-process region is around it.
-  void Delivered(const PayloadDetection& detection) { last_detection_ = detection; }
+  void Delivered(const PayloadDetection& detection) {
+    previous_detection_ = std::move(last_detection_);
+    last_detection_ = detection;
+  }
   /// The region of interest a separate stack asked for with its last reply.
   void SetStackRegion(const cv::Rect& roi) { stack_roi_ = roi; }
 
  private:
   FlightLink* flight_;
   const PayloadDetector* detector_;
-  PayloadDetection last_detection_;  // the last delivered
+  PayloadDetection last_detection_;      // the last delivered
+  PayloadDetection previous_detection_;  // the one before it
   cv::Rect stack_roi_;
 };
 

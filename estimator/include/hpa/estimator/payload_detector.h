@@ -50,10 +50,12 @@ class PayloadDetector {
   std::optional<PayloadDetection> DetectInRegion(const cv::Mat& bgr, const cv::Rect& region,
                                                  double time_s) const;
 
-  /// Region of the real image around a previous detection: its centre through the lens, half a
-  /// side of 1.5 ball radii plus margin_px (how far the ball may move between frames); empty
-  /// when `last` found nothing.
-  cv::Rect RegionAround(const PayloadDetection& last, double margin_px) const;
+  /// Region of the real image for the frame after `last`: around its centre through the lens,
+  /// half a side of 1.5 ball radii plus margin_px (how far the ball may move between frames);
+  /// when `previous` (the frame before `last`) found the ball too, around the centre moved on by
+  /// the last motion, with half the margin plus half that motion. Empty when `last` found nothing.
+  cv::Rect RegionAround(const PayloadDetection& last, double margin_px,
+                        const PayloadDetection& previous = PayloadDetection()) const;
 
   const PayloadDetectorConfig& config() const { return config_; }
 

@@ -152,7 +152,8 @@ class FlightStack {
   DelayLine<SystemState> estimates_in_flight_;
   SystemState delayed_state_;  // latest estimate old enough to have reached the controller
   bool have_delayed_state_ = false;
-  PayloadDetection last_detection_;  // the region of the next frame's search is around it
+  PayloadDetection last_detection_;      // the region of the next frame's search is around it
+  PayloadDetection previous_detection_;  // the frame's before: the ball's motion between them
   std::unique_ptr<ControlThread> control_thread_;  // config_.control_thread only
 };
 
