@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <vector>
 
 namespace hpa::sim {
 namespace {
@@ -29,8 +28,8 @@ constexpr double kMarginM = 1e-6;
 
 // The point `extent`'s point i in the eye's frame (x right, y up, z into the scene).
 Vec3 InEye(const Vec3& p, const ViewFrustum& f) {
-  const Vec3 d = Sub(p, f.eye_m);
-  return {Dot(d, f.right), Dot(d, f.up), Dot(d, f.forward)};
+  const Vec3 d = Sub(p, f.eye_W);
+  return {Dot(d, f.right_W), Dot(d, f.up_W), Dot(d, f.forward_W)};
 }
 
 }  // namespace
@@ -45,14 +44,14 @@ GeomExtent ExtentOf(const mjvGeom& geom) {
   switch (geom.type) {
     case mjGEOM_SPHERE:
     case mjGEOM_ELLIPSOID:  // the unit sphere scaled by size
-      e.points_m[0] = pos;
+      e.points_W[0] = pos;
       e.count = 1;
       e.radius_m = std::max({s0, s1, s2});
       break;
     case mjGEOM_CAPSULE:   // cylinder of half-length size[2] with hemispherical ends
     case mjGEOM_CYLINDER:  // inside the capsule of its radius and half-length
-      e.points_m[0] = along(Axis(geom, 2), -s2);
-      e.points_m[1] = along(Axis(geom, 2), s2);
+      e.points_W[0] = along(Axis(geom, 2), -s2);
+      e.points_W[1] = along(Axis(geom, 2), s2);
       e.count = 2;
       e.radius_m = std::max(s0, s1);
       break;
@@ -60,7 +59,7 @@ GeomExtent ExtentOf(const mjvGeom& geom) {
       const Vec3 x = Axis(geom, 0), y = Axis(geom, 1), z = Axis(geom, 2);
       for (int i = 0; i < 8; ++i) {
         const double a = (i & 1) ? s0 : -s0, b = (i & 2) ? s1 : -s1, c = (i & 4) ? s2 : -s2;
-        e.points_m[i] = {pos[0] + a * x[0] + b * y[0] + c * z[0],
+        e.points_W[i] = {pos[0] + a * x[0] + b * y[0] + c * z[0],
                          pos[1] + a * x[1] + b * y[1] + c * z[1],
                          pos[2] + a * x[2] + b * y[2] + c * z[2]};
       }
@@ -78,16 +77,16 @@ ViewFrustum FrustumOf(const mjvScene& scene, double aspect) {
   const mjvGLCamera cam = mjv_averageCamera(scene.camera, scene.camera + 1);
   ViewFrustum f;
   // mjr_lookAt's axes
-  f.eye_m = FromFloat(cam.pos);
-  f.forward = Normalized(FromFloat(cam.forward));
-  f.right = Normalized(Cross(f.forward, FromFloat(cam.up)));
-  f.up = Normalized(Cross(f.right, f.forward));
+  f.eye_W = FromFloat(cam.pos);
+  f.forward_W = Normalized(FromFloat(cam.forward));
+  f.right_W = Normalized(Cross(f.forward_W, FromFloat(cam.up)));
+  f.up_W = Normalized(Cross(f.right_W, f.forward_W));
   // setView's frustum: the width follows the viewport's aspect ratio
   const double half_width = 0.5 * aspect * (cam.frustum_top - cam.frustum_bottom);
-  f.left = cam.frustum_center - half_width;
-  f.right_edge = cam.frustum_center + half_width;
-  f.bottom = cam.frustum_bottom;
-  f.top = cam.frustum_top;
+  f.near_left_m = cam.frustum_center - half_width;
+  f.near_right_m = cam.frustum_center + half_width;
+  f.near_bottom_m = cam.frustum_bottom;
+  f.near_top_m = cam.frustum_top;
   f.near_m = cam.frustum_near;
   f.far_m = cam.frustum_far;
   return f;
@@ -99,14 +98,14 @@ bool OutsideFrustum(const GeomExtent& extent, const ViewFrustum& f) {
   // inside when n . p + offset >= 0
   const double n = f.near_m;
   const double planes[6][4] = {
-      {0, 0, 1, -f.near_m},     {0, 0, -1, f.far_m},  {n, 0, -f.left, 0},
-      {-n, 0, f.right_edge, 0}, {0, n, -f.bottom, 0}, {0, -n, f.top, 0},
+      {0, 0, 1, -f.near_m},       {0, 0, -1, f.far_m},         {n, 0, -f.near_left_m, 0},
+      {-n, 0, f.near_right_m, 0}, {0, n, -f.near_bottom_m, 0}, {0, -n, f.near_top_m, 0},
   };
   for (const auto& plane : planes) {
     const double norm = std::sqrt(plane[0] * plane[0] + plane[1] * plane[1] + plane[2] * plane[2]);
     bool all_outside = true;
     for (int i = 0; i < extent.count && all_outside; ++i) {
-      const Vec3 p = InEye(extent.points_m[i], f);
+      const Vec3 p = InEye(extent.points_W[i], f);
       const double distance =
           (plane[0] * p[0] + plane[1] * p[1] + plane[2] * p[2] + plane[3]) / norm;
       all_outside = distance < -(extent.radius_m + kMarginM);
@@ -137,7 +136,7 @@ Occluder OccluderOf(const mjvGeom& geom, int geom_index, const ViewFrustum& f, i
       c[2] + outer >= f.far_m - kMarginM) {
     return o;
   }
-  o.centre_m = centre;
+  o.centre_W = centre;
   o.inner_radius_m = inner * std::min({geom.size[0], geom.size[1], geom.size[2]});
   o.geom_index = geom_index;
   return o;
@@ -149,21 +148,21 @@ bool HiddenBy(const GeomExtent& extent, const Occluder& o, const ViewFrustum& f)
   // inside the ball: the ray to each point enters the occluder's mesh first
   bool inside = true;
   for (int i = 0; i < extent.count && inside; ++i) {
-    const Vec3 d = Sub(extent.points_m[i], o.centre_m);
+    const Vec3 d = Sub(extent.points_W[i], o.centre_W);
     inside = std::sqrt(Dot(d, d)) + w <= rho - kMarginM;
   }
   if (inside) return true;
   // behind it: inside the cone of rays through the ball and beyond the plane of the circle
   // where the cone touches it (the side of the ball the eye sees lies before that plane), a
   // convex set, so the points' hull is in it when each point's ball of radius w is
-  const Vec3 to_centre = Sub(o.centre_m, f.eye_m);
+  const Vec3 to_centre = Sub(o.centre_W, f.eye_W);
   const double distance = std::sqrt(Dot(to_centre, to_centre));
   if (!(distance > rho)) return false;
   const Vec3 axis = {to_centre[0] / distance, to_centre[1] / distance, to_centre[2] / distance};
   const double cone_half_angle = std::asin(rho / distance);
   const double touch_plane_m = (distance * distance - rho * rho) / distance;
   for (int i = 0; i < extent.count; ++i) {
-    const Vec3 v = Sub(extent.points_m[i], f.eye_m);
+    const Vec3 v = Sub(extent.points_W[i], f.eye_W);
     const double along = Dot(v, axis), length = std::sqrt(Dot(v, v));
     if (along < touch_plane_m + w + kMarginM || length <= w) return false;
     const double angle = std::acos(std::clamp(along / length, -1.0, 1.0));
@@ -181,12 +180,13 @@ int CullHiddenGeoms(const mjModel* model, double aspect, mjvScene* scene) {
     return 0;
   }
   const ViewFrustum f = FrustumOf(*scene, aspect);
-  thread_local std::vector<Occluder> occluders;
-  occluders.clear();
-  for (int i = 0; i < scene->ngeom; ++i) {
+  // the first few opaque spheres occlude (fewer occluders only cull less)
+  std::array<Occluder, 8> occluders;
+  size_t occluder_count = 0;
+  for (int i = 0; i < scene->ngeom && occluder_count < occluders.size(); ++i) {
     const Occluder o = OccluderOf(scene->geoms[i], i, f, model->vis.quality.numslices,
                                   model->vis.quality.numstacks);
-    if (o.inner_radius_m > 0.0) occluders.push_back(o);
+    if (o.inner_radius_m > 0.0) occluders[occluder_count++] = o;
   }
   int kept = 0;
   for (int i = 0; i < scene->ngeom; ++i) {
@@ -195,9 +195,8 @@ int CullHiddenGeoms(const mjModel* model, double aspect, mjvScene* scene) {
     if (geom.label[0] == 0) {  // a label is drawn beside its geom's place
       const GeomExtent extent = ExtentOf(geom);
       hidden = OutsideFrustum(extent, f);
-      for (const Occluder& o : occluders) {
-        if (hidden) break;
-        hidden = o.geom_index != i && HiddenBy(extent, o, f);
+      for (size_t k = 0; k < occluder_count && !hidden; ++k) {
+        hidden = occluders[k].geom_index != i && HiddenBy(extent, occluders[k], f);
       }
     }
     if (!hidden) {

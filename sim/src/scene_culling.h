@@ -13,7 +13,7 @@ namespace hpa::sim {
 /// A convex hull of up to eight points grown by a radius, containing everything MuJoCo 2.2 draws
 /// for one scene geom (its built-in meshes' vertices lie on the geom's surface).
 struct GeomExtent {
-  std::array<std::array<double, 3>, 8> points_m{};  // in the model frame
+  std::array<std::array<double, 3>, 8> points_W{};  // in the model frame
   int count = 0;                                    // 0: unknown extent, never culled
   double radius_m = 0.0;
 };
@@ -25,9 +25,11 @@ GeomExtent ExtentOf(const mjvGeom& geom);
 /// The view the scene's geoms are drawn in: the eye, its axes and the frustum at the near plane,
 /// as mjr_render sets them for a viewport of width / height = aspect.
 struct ViewFrustum {
-  std::array<double, 3> eye_m{}, right{}, up{}, forward{};  // forward: into the scene
-  double left = 0, right_edge = 0, bottom = 0, top = 0;     // at the near plane
-  double near_m = 0, far_m = 0;
+  std::array<double, 3> eye_W{};                         // the eye in the model (world) frame
+  std::array<double, 3> right_W{}, up_W{}, forward_W{};  // its unit axes; forward into the scene
+  double near_left_m = 0, near_right_m = 0;              // the frustum's edges at the near plane
+  double near_bottom_m = 0, near_top_m = 0;
+  double near_m = 0, far_m = 0;  // clip distances along forward
 };
 
 /// The frustum mjr_render draws `scene` in (its mono camera, the average of both eyes) into a
@@ -39,14 +41,14 @@ bool OutsideFrustum(const GeomExtent& extent, const ViewFrustum& frustum);
 
 /// An opaque sphere seen from the eye: the ball its drawn polyhedron surely contains.
 struct Occluder {
-  std::array<double, 3> centre_m{};
+  std::array<double, 3> centre_W{};
   double inner_radius_m = 0.0;  // inside the polyhedron MuJoCo draws
   int geom_index = -1;          // the occluding geom itself, never culled by itself
 };
 
 /// The ball the built-in sphere mesh (quality.numslices x numstacks) scaled by `geom` surely
 /// contains, if `geom` is an opaque sphere or ellipsoid whose front the frustum shows whole;
-/// nullopt-like (inner_radius_m 0) otherwise.
+/// an occluder of inner_radius_m 0 (one that hides nothing) otherwise.
 Occluder OccluderOf(const mjvGeom& geom, int geom_index, const ViewFrustum& frustum, int numslices,
                     int numstacks);
 
@@ -56,7 +58,8 @@ bool HiddenBy(const GeomExtent& extent, const Occluder& occluder, const ViewFrus
 
 /// Drops from `scene` the geoms a viewport of aspect width / height cannot show (outside the
 /// frustum, or inside or behind an opaque sphere), keeping the others in their order; returns how
-/// many it dropped. Does nothing for stereo, wireframe, segmentation or a model transform.
+/// many it dropped. Does nothing with stereo, reflections, shadows, wireframe, segmentation or a
+/// model transform (other views, or not filled surfaces).
 int CullHiddenGeoms(const mjModel* model, double aspect, mjvScene* scene);
 
 }  // namespace hpa::sim

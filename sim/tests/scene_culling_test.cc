@@ -53,21 +53,21 @@ mjvGeom MakeGeom(int type, const Vec3& pos, const Vec3& size, float alpha = 1.0f
 // Whether point p (model frame) projects inside the frustum: between the near and far planes and
 // within the four side planes.
 bool InsideFrustum(const Vec3& p, const ViewFrustum& f) {
-  const Vec3 d = Sub(p, f.eye_m);
-  const double x = Dot(d, f.right), y = Dot(d, f.up), z = Dot(d, f.forward);
-  return z >= f.near_m && z <= f.far_m && x * f.near_m >= f.left * z &&
-         x * f.near_m <= f.right_edge * z && y * f.near_m >= f.bottom * z &&
-         y * f.near_m <= f.top * z;
+  const Vec3 d = Sub(p, f.eye_W);
+  const double x = Dot(d, f.right_W), y = Dot(d, f.up_W), z = Dot(d, f.forward_W);
+  return z >= f.near_m && z <= f.far_m && x * f.near_m >= f.near_left_m * z &&
+         x * f.near_m <= f.near_right_m * z && y * f.near_m >= f.near_bottom_m * z &&
+         y * f.near_m <= f.near_top_m * z;
 }
 
 // Random points of the extent: on its hull's segment (or box) grown by its radius.
 Vec3 SamplePoint(const GeomExtent& e, std::mt19937_64& rng) {
   std::uniform_real_distribution<double> u(0.0, 1.0);
   std::normal_distribution<double> n(0.0, 1.0);
-  Vec3 base = e.points_m[0];
+  Vec3 base = e.points_W[0];
   if (e.count == 2) {
     const double t = u(rng);
-    for (int k = 0; k < 3; ++k) base[k] += t * (e.points_m[1][k] - e.points_m[0][k]);
+    for (int k = 0; k < 3; ++k) base[k] += t * (e.points_W[1][k] - e.points_W[0][k]);
   }
   Vec3 dir = {n(rng), n(rng), n(rng)};
   const double norm = std::sqrt(Dot(dir, dir));
@@ -156,7 +156,7 @@ TEST(SceneCullingTest, HiddenGeomsAreBehindOrInsideTheOccluder) {
     }
     ++hidden;
     for (int s = 0; s < 50; ++s) {
-      ASSERT_TRUE(RayHidden(SamplePoint(e, rng), f.eye_m, o.centre_m, o.inner_radius_m)) << trial;
+      ASSERT_TRUE(RayHidden(SamplePoint(e, rng), f.eye_W, o.centre_W, o.inner_radius_m)) << trial;
     }
   }
   EXPECT_GT(hidden, 500);
