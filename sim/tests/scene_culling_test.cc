@@ -190,7 +190,8 @@ TEST(SceneCullingTest, OnlyOpaqueSpheresWithTheirFrontInViewOcclude) {
 // (pi/2) k / (numstacks/2), numslices vertices each, poles closed by triangles. Each face's plane
 // lies at least the occluder's inner radius (before its 1 % rasterisation margin) from the centre.
 TEST(SceneCullingTest, InnerBallLiesInsideMujocosSphereMesh) {
-  for (const auto& [slices, stacks] : {std::pair{28, 16}, std::pair{8, 6}, std::pair{64, 32}}) {
+  for (const auto& tessellation : {std::pair{28, 16}, std::pair{8, 6}, std::pair{64, 32}}) {
+    const int slices = tessellation.first, stacks = tessellation.second;
     const mjvScene scene = DownwardScene();
     const ViewFrustum f = FrustumOf(scene, 1.0);
     const Occluder o =
