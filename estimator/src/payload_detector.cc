@@ -218,8 +218,9 @@ std::optional<PayloadDetection> PayloadDetector::DetectInRegion(const cv::Mat& b
   return d;
 }
 
-cv::Rect PayloadDetector::RegionAround(const PayloadDetection& last, double margin_px,
-                                       const PayloadDetection& previous) const {
+cv::Rect PayloadDetector::RegionAround(const RecentDetections& recent, double margin_px) const {
+  const PayloadDetection& last = recent.last;
+  const PayloadDetection& previous = recent.previous;
   if (!last.found || !last.centre_px.allFinite() || !std::isfinite(last.radius_px)) return {};
   // the last ideal-image centre, where the lens puts it, and a half size of the ball's radius
   // (grown for the ellipse of an off-axis ball) plus the motion allowed between frames

@@ -178,7 +178,8 @@ TEST(PayloadDetectorTest, RepeatedDetectionsOfOneFrameAgree) {
 
 // The region for the next frame: around the last detection with the whole margin; with the frame
 // before it, around the centre moved on by the last motion, with half the margin plus half that
-// motion (a ball moving evenly stays as centred in a smaller region).
+// motion (a ball moving evenly stays as centred in a smaller region). Regions are whole pixels
+// (floor of the corner, ceil of the size): centres within 1 px, sizes within 2 px.
 TEST(PayloadDetectorTest, RegionFollowsTheBallsMotion) {
   const Params p = LoadParams(DefaultParamsPath());  // with the lens: regions are real pixels
   const PayloadDetector detector(p);
@@ -189,8 +190,14 @@ TEST(PayloadDetectorTest, RegionFollowsTheBallsMotion) {
   previous.radius_px = last.radius_px = 40.0;
   previous.centre_px = Eigen::Vector2d(600, 350);  // near the principal point: little distortion
   last.centre_px = Eigen::Vector2d(620, 350);
-  const cv::Rect alone = detector.RegionAround(last, 48.0);
-  const cv::Rect moving = detector.RegionAround(last, 48.0, previous);
+  const auto region = [&](const PayloadDetection& before, const PayloadDetection& now) {
+    RecentDetections recent;
+    recent.Push(before);
+    recent.Push(now);
+    return detector.RegionAround(recent, 48.0);
+  };
+  const cv::Rect alone = region(PayloadDetection(), last);  // nothing found the frame before
+  const cv::Rect moving = region(previous, last);
   const auto centre = [](const cv::Rect& r) { return 0.5 * (r.tl() + r.br()); };
   const Eigen::Vector2d last_px = DistortPixel(p, last.centre_px);
   const Eigen::Vector2d next_px = 2.0 * last_px - DistortPixel(p, previous.centre_px);
@@ -200,12 +207,11 @@ TEST(PayloadDetectorTest, RegionFollowsTheBallsMotion) {
   // 1.5 radii plus 48 px against 1.5 radii plus 24 px and half the ~20 px motion, each side
   EXPECT_NEAR(alone.width, 2 * (60 + 48), 2);
   EXPECT_NEAR(moving.width, 2 * (60 + 24 + 0.5 * (next_px - last_px).norm()), 2);
-  // a previous frame that found nothing, or a later one, gives the region around the last alone
-  previous.found = false;
-  EXPECT_EQ(detector.RegionAround(last, 48.0, previous), alone);
-  previous.found = true;
+  // a previous detection no older than the last gives the region around the last alone
   previous.time_s = last.time_s;
-  EXPECT_EQ(detector.RegionAround(last, 48.0, previous), alone);
+  EXPECT_EQ(region(previous, last), alone);
+  // nothing found now: no region, whatever came before
+  EXPECT_EQ(region(last, PayloadDetection()), cv::Rect());
 }
 
 }  // namespace

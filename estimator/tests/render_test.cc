@@ -177,7 +177,9 @@ class RenderedDetectorTest : public ::testing::Test {
       return;
     }
     // the region around this detection gives exactly this detection whenever it decides
-    const cv::Rect around = detector.RegionAround(d, 48.0);
+    RecentDetections recent;
+    recent.Push(d);
+    const cv::Rect around = detector.RegionAround(recent, 48.0);
     if (const auto in_region = detector.DetectInRegion(frame, around, 0.0)) {
       ++survey->region_decided;
       EXPECT_EQ(in_region->p_CL_C, d.p_CL_C) << "region " << around;

@@ -159,10 +159,9 @@ int FlightStack::Deliver(const FlightInputs& in) {
   for (const PayloadDetection& d : in.detections) estimator_->OnPayloadDetection(d);
   int found = 0;
   for (const CameraFrame& frame : in.frames) {
-    previous_detection_ = std::move(last_detection_);
-    last_detection_ = DetectFrame(*detector_, frame);
-    found += last_detection_.found ? 1 : 0;
-    estimator_->OnPayloadDetection(last_detection_);
+    recent_detections_.Push(DetectFrame(*detector_, frame));
+    found += recent_detections_.last.found ? 1 : 0;
+    estimator_->OnPayloadDetection(recent_detections_.last);
   }
   return found;
 }
@@ -174,9 +173,8 @@ int FlightStack::Finish(const FlightInputs& in) {
   int found = 0;
   for (const CameraFrame& frame : in.frames) {
     if (!detector_) break;
-    previous_detection_ = std::move(last_detection_);
-    last_detection_ = DetectFrame(*detector_, frame);
-    found += last_detection_.found ? 1 : 0;
+    recent_detections_.Push(DetectFrame(*detector_, frame));
+    found += recent_detections_.last.found ? 1 : 0;
   }
   return found;
 }
@@ -218,7 +216,7 @@ FlightOutputs FlightStack::Step(const FlightInputs& in) {
       }
     }
   }
-  if (detector_) out.camera_roi = detector_->RegionAround(last_detection_, kRegionMarginPx, previous_detection_);
+  if (detector_) out.camera_roi = detector_->RegionAround(recent_detections_, kRegionMarginPx);
   if (estimator_) {
     const hpa::EstimatorHealth health = estimator_->Health();
     out.estimator_rejected_updates = health.RejectedUpdates();

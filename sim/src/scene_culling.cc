@@ -115,27 +115,28 @@ bool OutsideFrustum(const GeomExtent& extent, const ViewFrustum& f) {
   return false;
 }
 
-Occluder OccluderOf(const mjvGeom& geom, int geom_index, const ViewFrustum& f, int numslices,
-                    int numstacks) {
-  Occluder o;
-  if (geom.type != mjGEOM_SPHERE && geom.type != mjGEOM_ELLIPSOID) return o;
-  if (!(geom.rgba[3] >= 0.995f) || geom.label[0] != 0) return o;  // mjr_render blends below
-  if (numslices < 3 || numstacks < 2) return o;
+std::optional<Occluder> OccluderOf(const mjvGeom& geom, int geom_index, const ViewFrustum& f,
+                                   int numslices, int numstacks) {
+  if (geom.type != mjGEOM_SPHERE && geom.type != mjGEOM_ELLIPSOID) return std::nullopt;
+  if (!(geom.rgba[3] >= 0.995f) || geom.label[0] != 0)
+    return std::nullopt;  // mjr_render blends below
+  if (numslices < 3 || numstacks < 2) return std::nullopt;
   // every face of the unit UV sphere (numstacks / 2 stacks a hemisphere) has its vertices within
   // half a stack plus half a slice of its centre direction c, so each of its points p has
   // p . c >= cos of that: the mesh holds the ball of that radius; 1 % less for rasterisation
   const double half_stack = 0.5 * M_PI / std::max(1, numstacks / 2) / 2.0;
   const double half_slice = M_PI / numslices;
   const double inner = 0.99 * std::cos(half_stack + half_slice);
-  if (!(inner > 0.0)) return o;
+  if (!(inner > 0.0)) return std::nullopt;
   const double outer = std::max({geom.size[0], geom.size[1], geom.size[2]});
   const Vec3 centre = FromFloat(geom.pos);
   const Vec3 c = InEye(centre, f);
   // the front must be drawn whole: the eye outside, nothing of it cut by the near or far plane
   if (std::sqrt(Dot(c, c)) <= outer || c[2] - outer <= f.near_m + kMarginM ||
       c[2] + outer >= f.far_m - kMarginM) {
-    return o;
+    return std::nullopt;
   }
+  Occluder o;
   o.centre_W = centre;
   o.inner_radius_m = inner * std::min({geom.size[0], geom.size[1], geom.size[2]});
   o.geom_index = geom_index;
@@ -143,7 +144,7 @@ Occluder OccluderOf(const mjvGeom& geom, int geom_index, const ViewFrustum& f, i
 }
 
 bool HiddenBy(const GeomExtent& extent, const Occluder& o, const ViewFrustum& f) {
-  if (extent.count == 0 || !(o.inner_radius_m > 0.0)) return false;
+  if (extent.count == 0) return false;
   const double rho = o.inner_radius_m, w = extent.radius_m;
   // inside the ball: the ray to each point enters the occluder's mesh first
   bool inside = true;
@@ -184,9 +185,9 @@ int CullHiddenGeoms(const mjModel* model, double aspect, mjvScene* scene) {
   std::array<Occluder, 8> occluders;
   size_t occluder_count = 0;
   for (int i = 0; i < scene->ngeom && occluder_count < occluders.size(); ++i) {
-    const Occluder o = OccluderOf(scene->geoms[i], i, f, model->vis.quality.numslices,
-                                  model->vis.quality.numstacks);
-    if (o.inner_radius_m > 0.0) occluders[occluder_count++] = o;
+    const std::optional<Occluder> o = OccluderOf(
+        scene->geoms[i], i, f, model->vis.quality.numslices, model->vis.quality.numstacks);
+    if (o) occluders[occluder_count++] = *o;
   }
   int kept = 0;
   for (int i = 0; i < scene->ngeom; ++i) {

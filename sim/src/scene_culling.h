@@ -7,6 +7,7 @@
 #include <mujoco/mujoco.h>
 
 #include <array>
+#include <optional>
 
 namespace hpa::sim {
 
@@ -47,10 +48,9 @@ struct Occluder {
 };
 
 /// The ball the built-in sphere mesh (quality.numslices x numstacks) scaled by `geom` surely
-/// contains, if `geom` is an opaque sphere or ellipsoid whose front the frustum shows whole;
-/// an occluder of inner_radius_m 0 (one that hides nothing) otherwise.
-Occluder OccluderOf(const mjvGeom& geom, int geom_index, const ViewFrustum& frustum, int numslices,
-                    int numstacks);
+/// contains, if `geom` is an opaque sphere or ellipsoid whose front the frustum shows whole.
+std::optional<Occluder> OccluderOf(const mjvGeom& geom, int geom_index, const ViewFrustum& frustum,
+                                   int numslices, int numstacks);
 
 /// True when every point of `extent` is inside `occluder`'s ball, or lies behind it on a ray
 /// from the eye that passes through the ball: no pixel can show it (the occluder is nearer).

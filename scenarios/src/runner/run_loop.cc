@@ -297,8 +297,7 @@ void RunLoop::KeepTickStartMessage(sim::SensorMessage* message) {
 
 cv::Rect FlightCameraReadout::Region() {
   return SendsFrames() ? stack_roi_
-                       : detector_->RegionAround(last_detection_, flight::kRegionMarginPx,
-                                                 previous_detection_);
+                       : detector_->RegionAround(recent_, flight::kRegionMarginPx);
 }
 
 // In process: DetectInRegion on a region (its result equals the whole frame's when it gives

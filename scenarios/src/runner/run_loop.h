@@ -4,7 +4,6 @@
 
 #include <chrono>
 #include <memory>
-#include <utility>
 #include <opencv2/core.hpp>
 #include <vector>
 
@@ -55,18 +54,14 @@ class FlightCameraReadout final : public sim::CameraReadout {
                                          double time_s) override;
   cv::Mat* NextFrameSlot(int* slot) override { return flight_->NextFrameSlot(slot); }
   /// A detection reached the flight stack: the next in-process region is around it.
-  void Delivered(const PayloadDetection& detection) {
-    previous_detection_ = std::move(last_detection_);
-    last_detection_ = detection;
-  }
+  void Delivered(const PayloadDetection& detection) { recent_.Push(detection); }
   /// The region of interest a separate stack asked for with its last reply.
   void SetStackRegion(const cv::Rect& roi) { stack_roi_ = roi; }
 
  private:
   FlightLink* flight_;
   const PayloadDetector* detector_;
-  PayloadDetection last_detection_;      // the last delivered
-  PayloadDetection previous_detection_;  // the one before it
+  RecentDetections recent_;  // the last two delivered
   cv::Rect stack_roi_;
 };
 

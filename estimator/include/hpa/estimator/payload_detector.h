@@ -5,6 +5,7 @@
 #include <Eigen/Core>
 #include <opencv2/core.hpp>
 #include <optional>
+#include <utility>
 #include <vector>
 
 #include "hpa/estimator/payload_masks.h"
@@ -29,6 +30,17 @@ struct PayloadDetectorConfig {
   double edge_bias_px = 0.5;          // contour runs through edge pixel centres: add to axes
 };
 
+/// The detections of the last two frames: what the next frame's region of interest follows.
+struct RecentDetections {
+  PayloadDetection previous;  // the frame's before the last (found = false until two frames)
+  PayloadDetection last;      // the last frame's
+  /// The next frame's detection: the last one becomes the previous.
+  void Push(PayloadDetection next) {
+    previous = std::move(last);
+    last = std::move(next);
+  }
+};
+
 /// Red-sphere detector on 1280x720 BGR frames of a camera with the lens distortion of
 /// Params::camera_distortion; deterministic. The centre and radius it reports are in the ideal
 /// (undistorted, pinhole) image.
@@ -50,12 +62,11 @@ class PayloadDetector {
   std::optional<PayloadDetection> DetectInRegion(const cv::Mat& bgr, const cv::Rect& region,
                                                  double time_s) const;
 
-  /// Region of the real image for the frame after `last`: around its centre through the lens,
-  /// half a side of 1.5 ball radii plus margin_px (how far the ball may move between frames);
-  /// when `previous` (the frame before `last`) found the ball too, around the centre moved on by
-  /// the last motion, with half the margin plus half that motion. Empty when `last` found nothing.
-  cv::Rect RegionAround(const PayloadDetection& last, double margin_px,
-                        const PayloadDetection& previous = PayloadDetection()) const;
+  /// Region of the real image for the frame after `recent.last`: around its centre through the
+  /// lens, half a side of 1.5 ball radii plus margin_px (how far the ball may move between
+  /// frames); when the frame before found the ball too, around the centre moved on by the last
+  /// motion, with half the margin plus half that motion. Empty when the last frame found nothing.
+  cv::Rect RegionAround(const RecentDetections& recent, double margin_px) const;
 
   const PayloadDetectorConfig& config() const { return config_; }
 

@@ -15,6 +15,7 @@
 
 #include "hpa/controller/controller.h"
 #include "hpa/controller/reference_spec.h"
+#include "hpa/estimator/payload_detector.h"
 #include "hpa/models/lockstep.h"
 #include "hpa/models/params.h"
 #include "hpa/models/sensor_types.h"
@@ -22,7 +23,6 @@
 
 namespace hpa {
 class Estimator;
-class PayloadDetector;
 }  // namespace hpa
 
 namespace hpa::flight {
@@ -152,8 +152,7 @@ class FlightStack {
   DelayLine<SystemState> estimates_in_flight_;
   SystemState delayed_state_;  // latest estimate old enough to have reached the controller
   bool have_delayed_state_ = false;
-  PayloadDetection last_detection_;      // the region of the next frame's search is around it
-  PayloadDetection previous_detection_;  // the frame's before: the ball's motion between them
+  RecentDetections recent_detections_;  // the region of the next frame's search follows them
   std::unique_ptr<ControlThread> control_thread_;  // config_.control_thread only
 };
 
