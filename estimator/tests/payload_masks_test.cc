@@ -41,24 +41,13 @@ void OpenCvMasks(const cv::Mat& bgr, const PayloadMaskThresholds& t, cv::Mat* re
 // Rows of 4096 pixels go through the sixteen-at-a-time pass, rows of 15 through the scalar one.
 TEST(PayloadMasksTest, EqualOpenCvsHsvMasksOnEveryColour) {
   const PayloadMaskThresholds shipped = PayloadDetectorConfig().masks;
+  // fields in order: hue_max_low, hue_min_high, saturation_min, value_min, occluder_value_max
   // wide bands: hues from the green and blue branches, every saturation and value
-  PayloadMaskThresholds wide;
-  wide.hue_max_low = 75;
-  wide.hue_min_high = 120;
-  wide.saturation_min = 0;
-  wide.value_min = 0;
-  wide.occluder_value_max = 254;
-  PayloadMaskThresholds narrow_high;
-  narrow_high.hue_max_low = 0;
-  narrow_high.hue_min_high = 180;
-  narrow_high.saturation_min = 255;
-  narrow_high.value_min = 255;
-  narrow_high.occluder_value_max = 0;
+  const PayloadMaskThresholds wide{75, 120, 0, 0, 254};
+  // the narrowest: only full saturation and value, hue 0 or 180, no occluder
+  const PayloadMaskThresholds narrow_high{0, 180, 255, 255, 0};
   // thresholds outside 0..255: every value passes, every pixel is an occluder
-  PayloadMaskThresholds beyond;
-  beyond.saturation_min = -3;
-  beyond.value_min = -10;
-  beyond.occluder_value_max = 300;
+  const PayloadMaskThresholds beyond{10, 170, -3, -10, 300};
   for (const int width_px : {4096, 15}) {
     const cv::Mat bgr = EveryColour(width_px);
     for (const PayloadMaskThresholds& t : {shipped, wide, narrow_high, beyond}) {
