@@ -192,16 +192,26 @@ int RunPool(
 
   while (next < runs.size() || !workers.empty()) {
     if (StopRequested() != 0) return stop();
-    // every idle worker gets the next run; workers are started up to --jobs while runs remain
-    for (Worker& w : workers) {
-      if (!w.run && next < runs.size()) {
+    // every idle worker gets the next run, or ends when none is left (two workers that finish
+    // in one round may both be idle with one run left); workers are started up to --jobs while
+    // runs remain
+    for (size_t i = 0; i < workers.size();) {
+      Worker& w = workers[i];
+      if (!w.run && next >= runs.size()) {
+        end_worker(w, false);  // its pipe closes and it exits
+        workers.erase(workers.begin() + static_cast<long>(i));
+        continue;
+      }
+      if (!w.run) {
         const uint64_t position = next;
         if (WriteFully(w.to_worker, &position, sizeof position)) {
           w.run = next++;
           w.start = Clock::now();
         }
       }
+      ++i;
     }
+    if (next >= runs.size() && workers.empty()) break;
     while (next < runs.size() && static_cast<int>(workers.size()) < jobs) {
       start_worker();
       Worker& w = workers.back();
@@ -234,13 +244,7 @@ int RunPool(
                  run);
         }
         std::remove(path_of(*w.run).c_str());
-        w.run.reset();
-        if (next >= runs.size()) {
-          end_worker(w, false);  // nothing left for it: its pipe closes and it exits
-          workers.erase(workers.begin() + static_cast<long>(i));
-          fds.erase(fds.begin() + static_cast<long>(i));
-          continue;
-        }
+        w.run.reset();  // idle: the next round hands it a run or ends it
         ++i;
         continue;
       }
