@@ -9,7 +9,7 @@ foreach(file
     person_moves_payload person_moves_payload_no_perception
     ci/hover_gripper_pull_nonhybrid ci/line_impulse_nonhybrid ci/lissajous_T5_onboard
     ci/hover_hpa_mpc_truth ci/gripper_pull_truth ci/impulse_top_contact ci/wind_impulse_chaotic
-    ci/impulse_draw73 ci/impulse_draw21 csv_reference)
+    ci/impulse_draw73 ci/impulse_draw21 ci/impulse_nan_draw csv_reference)
   string(REPLACE "/" "_" name ${file})
   add_test(NAME scenario.${name}
            COMMAND ${HPA_BIN} run ${SCEN}/${file}.yaml --out ${SCEN_OUT}/${name} --quiet)

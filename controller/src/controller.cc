@@ -18,6 +18,24 @@ std::string Joined(const std::vector<std::string>& names) {
 
 }  // namespace
 
+BodyRateCommand LevelOutCommand(const Params& params, const Eigen::Quaterniond& q_WB,
+                                double attitude_gain_per_s) {
+  BodyRateCommand command;
+  command.thrust_N = params.HoverThrustN();
+  if (!q_WB.coeffs().allFinite() || q_WB.norm() < 1e-9) return command;
+  const Eigen::Quaterniond q = q_WB.normalized();
+  const Eigen::Vector3d z_B_W = q * Eigen::Vector3d::UnitZ();
+  const double tilt_rad = std::acos(std::clamp(z_B_W.z(), -1.0, 1.0));
+  // rotation taking body z to world z, in the body frame: axis (z_B x e3) in world
+  const Eigen::Vector3d axis_W = z_B_W.cross(Eigen::Vector3d::UnitZ());
+  if (axis_W.norm() > 1e-9) {
+    const Eigen::Vector3d error_B = q.conjugate() * (axis_W.normalized() * tilt_rad);
+    command.w_B_radps = attitude_gain_per_s * error_B;
+    command.w_B_radps.z() = 0.0;
+  }
+  return command;
+}
+
 const char* ToString(ControlStatus status) {
   switch (status) {
     case ControlStatus::kSuccess:

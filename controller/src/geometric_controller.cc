@@ -19,7 +19,7 @@ ControlOutput GeometricController::Update(const SystemState& state) {
   ControlOutput out;
   if (!state.AllFinite() || !std::isfinite(state.time_s)) {
     out.status = ControlStatus::kNonFinite;
-    out.command.thrust_N = params_.HoverThrustN();
+    out.command = LevelOutCommand(params_, state.q_WB);
     return out;
   }
   const ReferencePoint ref = reference_->At(state.time_s);

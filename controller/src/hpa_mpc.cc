@@ -56,12 +56,14 @@ void HpaMpc::BuildProblem(const SystemState& state, const std::vector<InputVecto
                           Ocp* ocp) const {
   const CableMode mode = settings_.hybrid ? state.mode : CableMode::kTaut;
   // a lost payload (hybrid only: the paper's baseline has no such notion): the quadrotor is
-  // held on its reference, as in slack, and no cost looks at the guessed payload
-  const bool lost = settings_.hybrid && state.payload_lost;
+  // held on its reference, as in slack, and no cost looks at the guessed payload; a supported
+  // one lost from view is still looked for where it was last seen
+  const bool lost = settings_.hybrid && state.payload_lost && !state.payload_supported;
   const double perception = settings_.hybrid && !lost ? settings_.perception_weight : 0.0;
   OcpWeights weights = settings_.weights;
   if (lost) weights.q_load = weights.q_quad;
   BuildOcp(model_, *reference_, state.time_s, mode, perception, weights, ocp);
+  ocp->payload_supported = mode == CableMode::kSlack && state.payload_supported;
   SetCameraDeadzone(state, ocp);
   const bool slack_plan = settings_.hybrid && mode == CableMode::kSlack && !lost;
   if (!slack_plan) return;
@@ -129,15 +131,7 @@ bool HpaMpc::RecoveryCommand(const SystemState& state, BodyRateCommand* command)
                         state.w_B.norm() > settings_.recovery_body_rate_radps;
   const bool tipped = settings_.recovery_tilt_rad > 0.0 && tilt_rad > settings_.recovery_tilt_rad;
   if (!tumbling && !tipped) return false;
-  *command = BodyRateCommand();
-  command->thrust_N = params_.HoverThrustN();
-  // rotation taking body z to world z, in the body frame: axis (z_B x e3) in world
-  const Eigen::Vector3d axis_W = z_B_W.cross(Eigen::Vector3d::UnitZ());
-  if (axis_W.norm() > 1e-9) {
-    const Eigen::Vector3d error_B = state.q_WB.conjugate() * (axis_W.normalized() * tilt_rad);
-    command->w_B_radps = settings_.recovery_attitude_gain_per_s * error_B;
-    command->w_B_radps.z() = 0.0;
-  }
+  *command = LevelOutCommand(params_, state.q_WB, settings_.recovery_attitude_gain_per_s);
   return true;
 }
 
@@ -165,13 +159,10 @@ ControlOutput HpaMpc::Update(const SystemState& state) {
         std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
     return out;
   };
-  BodyRateCommand hover;
-  hover.thrust_N = params_.HoverThrustN();
-
-  // non-finite state: safe level hover, plan kept
+  // non-finite state: level out at hover thrust (on the attitude if it is finite), plan kept
   if (!state.AllFinite() || !std::isfinite(state.time_s)) {
     out.status = ControlStatus::kNonFinite;
-    out.command = hover;
+    out.command = LevelOutCommand(params_, state.q_WB, settings_.recovery_attitude_gain_per_s);
     return finish();
   }
   if (RecoveryCommand(state, &out.command)) {
@@ -190,7 +181,7 @@ ControlOutput HpaMpc::Update(const SystemState& state) {
   const ControlStatus status = solution_.status;
   const bool solved = status == ControlStatus::kSuccess || status == ControlStatus::kMaxIterations;
   if (!solved) {
-    // fallback 1: the previous plan shifted; fallback 2: hover
+    // fallback 1: the previous plan shifted; fallback 2: level out at hover thrust
     solution_.u = guess_;
     solution_.cost = OcpCost(ocp_, x0, solution_.u, &solution_.x);
     bool usable = had_plan && std::isfinite(solution_.cost);
@@ -198,7 +189,7 @@ ControlOutput HpaMpc::Update(const SystemState& state) {
     if (!usable) {
       Reset();
       out.status = ControlStatus::kFallback;
-      out.command = hover;
+      out.command = LevelOutCommand(params_, state.q_WB, settings_.recovery_attitude_gain_per_s);
       return finish();
     }
   }

@@ -11,22 +11,62 @@ namespace hpa {
 namespace ocp_internal {
 
 // The payload's offset from the quadrotor d = x_L - x_Q as L_cam sees it at stage k. In a slack
-// stage the free-fall prediction cannot take the payload beyond the cable's length l: a payload
-// predicted outside the cable's sphere is seen on it, in the direction of its predicted offset
-// (x_Q + l d / |d|, where the cable stops and swings it). Without this the held free fall puts
-// the payload metres below and beside the vehicle after a second, and L_cam chases that point.
+// stage the model's free fall cannot take the payload beyond the cable's length l:
+// - a payload in free flight predicted outside the cable's sphere is seen on it, in the
+//   direction of its predicted offset (x_Q + l d / |d|, where the cable stops and swings it).
+//   Without this the free fall puts a thrown payload metres below and beside the vehicle after a
+//   second, and L_cam rolls the vehicle toward that point.
+// - a supported payload (ocp.payload_supported: held by a hand or a gripper) does not fall: the
+//   model's fall 1/2 g t_k^2 is taken back, and a payload then outside the sphere keeps its
+//   horizontal offset h with its depth bounded by the sphere, (h, sign(d_z) sqrt(l^2 - |h|^2)),
+//   or l h / |h| at the equator when |h| >= l (continuous with it). Projected on the sphere
+//   instead, a payload held beside the vehicle would be seen swinging under it, and L_cam would
+//   never follow it.
 // When d_d is not null it receives d(seen) / d(d) (3 x 3).
 Eigen::Vector3d SeenPayloadOffset(const Ocp& ocp, int k, const Eigen::Vector3d& d_W,
                                   Eigen::Matrix3d* d_d) {
   const double l = ocp.model->params().cable_length_m;
-  const double n = d_W.norm();
-  if (ocp.StageMode(k) != CableMode::kSlack || !(n > l)) {
+  if (ocp.StageMode(k) != CableMode::kSlack) {
     if (d_d != nullptr) d_d->setIdentity();
     return d_W;
   }
-  const Eigen::Vector3d e = d_W / n;
-  if (d_d != nullptr) *d_d = (l / n) * (Eigen::Matrix3d::Identity() - e * e.transpose());
-  return l * e;
+  if (!ocp.payload_supported) {
+    const double n = d_W.norm();
+    if (!(n > l)) {
+      if (d_d != nullptr) d_d->setIdentity();
+      return d_W;
+    }
+    const Eigen::Vector3d e = d_W / n;
+    if (d_d != nullptr) *d_d = (l / n) * (Eigen::Matrix3d::Identity() - e * e.transpose());
+    return l * e;
+  }
+  const double t_k_s = k * ocp.stage_dt_s;
+  const Eigen::Vector3d held_W =
+      d_W + Eigen::Vector3d(0, 0, 0.5 * ocp.model->params().gravity_mps2 * t_k_s * t_k_s);
+  if (!(held_W.norm() > l)) {
+    if (d_d != nullptr) d_d->setIdentity();
+    return held_W;
+  }
+  const Eigen::Vector2d h = held_W.head<2>();
+  const double h_norm = h.norm();
+  if (d_d != nullptr) d_d->setZero();
+  if (h_norm >= l) {
+    // d(l h / |h|) / dh = (l / |h|) (I - e e^T)
+    const Eigen::Vector2d e = h / h_norm;
+    if (d_d != nullptr) {
+      d_d->topLeftCorner<2, 2>() = (l / h_norm) * (Eigen::Matrix2d::Identity() - e * e.transpose());
+    }
+    return Eigen::Vector3d(l * e.x(), l * e.y(), 0.0);
+  }
+  const double sign = held_W.z() < 0.0 ? -1.0 : 1.0;
+  const double depth_m = std::sqrt(l * l - h_norm * h_norm);
+  if (d_d != nullptr) {
+    // d z / dh = -sign h / depth, bounded near the equator where the slope grows without bound
+    constexpr double kMinDepthForSlopeM = 1e-3;
+    d_d->topLeftCorner<2, 2>().setIdentity();
+    d_d->block<1, 2>(2, 0) = -sign * h.transpose() / std::max(depth_m, kMinDepthForSlopeM);
+  }
+  return Eigen::Vector3d(h.x(), h.y(), sign * depth_m);
 }
 
 Eigen::Matrix<double, 3, 4> CameraPointQuatJacobian(const Ocp& ocp, const Eigen::Vector3d& d_W,
@@ -146,14 +186,22 @@ void SetCameraDeadzonesAlong(const StateVector& x0, const std::vector<InputVecto
   const Eigen::Vector2d off = Eigen::Vector2d::Constant(std::numeric_limits<double>::infinity());
   ocp->cam_slack_deadzone_stage_m.assign(n + 1, off);
   ocp->cam_slack_deadzone_stage_m[0] = ocp->cam_slack_deadzone_m;
+  // a supported payload stays at the depth it is held at: every stage keeps stage 0's dead zone
+  if (ocp->payload_supported) {
+    ocp->cam_slack_deadzone_stage_m.assign(n + 1, ocp->cam_slack_deadzone_m);
+    return;
+  }
   StateVector x = x0;
   for (int k = 0; k < n && k < static_cast<int>(u.size()); ++k) {
     x = ocp->Step(k, x, u[k]);
     if (ocp->StageMode(k + 1) != CableMode::kSlack) continue;  // a scheduled re-taut
     const double depth_m = CostPayloadInCamera(*ocp, k + 1, x).z();
-    if (depth_m >= kCamMinDepthM) {
-      ocp->cam_slack_deadzone_stage_m[k + 1] = fraction * depth_m * ocp->camera_tan_half_fov;
+    if (depth_m < kCamMinDepthM) {
+      // a free payload predicted to come up to the lens plane: L_cam off over the whole horizon
+      ocp->cam_slack_deadzone_stage_m.assign(n + 1, off);
+      return;
     }
+    ocp->cam_slack_deadzone_stage_m[k + 1] = fraction * depth_m * ocp->camera_tan_half_fov;
   }
 }
 

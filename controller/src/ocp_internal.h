@@ -11,12 +11,9 @@ namespace ocp_internal {
 
 constexpr double kCamMinDepthM = 0.12;  // slack L_cam off nearer the lens plane (thrown payload)
 
-// The payload's offset from the quadrotor d = x_L - x_Q as L_cam sees it at stage k. In a slack
-// stage the free-fall prediction cannot take the payload beyond the cable's length l: a payload
-// predicted outside the cable's sphere is seen on it, in the direction of its predicted offset
-// (x_Q + l d / |d|, where the cable stops and swings it). Without this the held free fall puts
-// the payload metres below and beside the vehicle after a second, and L_cam chases that point.
-// When d_d is not null it receives d(seen) / d(d) (3 x 3).
+// The payload's offset from the quadrotor d = x_L - x_Q as L_cam sees it at stage k: in a slack
+// stage no farther than the cable's length, and without the model's free fall when the payload
+// is supported (ocp.cc). When d_d is not null it receives d(seen) / d(d).
 Eigen::Vector3d SeenPayloadOffset(const Ocp& ocp, int k, const Eigen::Vector3d& d_W,
                                   Eigen::Matrix3d* d_d);
 

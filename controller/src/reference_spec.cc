@@ -19,8 +19,22 @@ class DelayedReference : public Reference {
 
 }  // namespace
 
+namespace {
+
+// The Lissajous family: the Lissajous itself and its circle and figure-eight spellings.
+bool IsLissajousFamily(const ReferenceSpec& r) {
+  return r.type == "lissajous" || r.type == "circle" || r.type == "figure_eight";
+}
+
+}  // namespace
+
+double RmseFromS(const ReferenceSpec& r) {
+  // a Lissajous ramps its rate up over its first `ramp` seconds; the others start as they fly
+  return IsLissajousFamily(r) ? r.lissajous.ramp_s : 0.0;
+}
+
 std::shared_ptr<Reference> MakeReference(const ReferenceSpec& r, const Params& params) {
-  if (r.type == "lissajous" || r.type == "circle" || r.type == "figure_eight") {
+  if (IsLissajousFamily(r)) {
     return MakeLissajousReference(params, r.lissajous);
   }
   if (r.type == "csv") return MakeSampledReference(params, r.samples);

@@ -2,12 +2,11 @@
 
 #include <gtest/gtest.h>
 
-#include "hpa/controller/controller_registry.h"
-
 #include <cstdio>
 #include <limits>
 
 #include "closed_loop_sim.h"
+#include "hpa/controller/controller_registry.h"
 #include "hpa/controller/geometric_controller.h"
 
 namespace hpa {
@@ -135,6 +134,28 @@ TEST(HpaMpcTest, NonFiniteStateGivesSafeHover) {
     EXPECT_EQ(out.status, ControlStatus::kNonFinite) << type;
     EXPECT_TRUE(out.command.w_B_radps.isZero(0.0)) << type;
     EXPECT_DOUBLE_EQ(out.command.thrust_N, params.HoverThrustN()) << type;
+  }
+}
+
+TEST(HpaMpcTest, AnUnusableEstimateLevelsTheVehicle) {
+  // a NaN payload on a vehicle tilted 14 deg in roll and pitch: every registered controller
+  // commands a body rate toward level (PX4's attitude gain times the tilt error) at hover thrust
+  const Params params;
+  for (const std::string& type : ControllerNames()) {
+    ControllerConfig config;
+    config.type = type;
+    auto c = MakeController(config, params, HoverRef(params));
+    SystemState s = HoverAt(params, Eigen::Vector3d(0, 0, 1.5));
+    const double tilt_rad = 14.0 * M_PI / 180.0;
+    s.q_WB = Eigen::AngleAxisd(tilt_rad, Eigen::Vector3d(1, 1, 0).normalized());
+    s.p_WL_W.x() = std::numeric_limits<double>::quiet_NaN();
+    const ControlOutput out = c->Update(s);
+    EXPECT_EQ(out.status, ControlStatus::kNonFinite) << type;
+    EXPECT_DOUBLE_EQ(out.command.thrust_N, params.HoverThrustN()) << type;
+    // the rate undoes the tilt: about the tilt axis, against it, at gain x tilt
+    const Eigen::Vector3d expected_B =
+        -kPx4AttitudeGainPerS * tilt_rad * Eigen::Vector3d(1, 1, 0).normalized();
+    EXPECT_LT((out.command.w_B_radps - expected_B).norm(), 1e-9) << type;
   }
 }
 

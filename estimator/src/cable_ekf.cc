@@ -58,6 +58,11 @@ CableVector CableEkf::Derivative(const CableVector& x, const Eigen::Vector3d& fo
 void CableEkf::Propagate(double dt_s, double thrust_N, const Eigen::Matrix3d& R_WB, CableVector* x,
                          CableMatrix* covariance) const {
   if (dt_s <= 0) return;
+  if (dt_s > config_.max_step_s) {
+    const int steps = static_cast<int>(std::ceil(dt_s / config_.max_step_s));
+    for (int i = 0; i < steps; ++i) Propagate(dt_s / steps, thrust_N, R_WB, x, covariance);
+    return;
+  }
   const double m_kg = params_.quad_mass_kg, l_m = params_.cable_length_m;
   const Eigen::Vector3d u_N = thrust_N * R_WB.col(2);
   const Eigen::Vector3d xi = x->head<3>(), xi_dot = x->tail<3>();

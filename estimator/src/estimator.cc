@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <deque>
+#include <optional>
 
 namespace hpa {
 namespace {
@@ -31,6 +32,7 @@ class CableEstimator final : public Estimator {
         tracker_(params, config.payload_tracker),
         tension_cue_(params, config.tension_cue,
                      InitialMode(hybrid, params, initial) == CableMode::kSlack),
+        support_(params, config.support_detector),
         thrust_N_(params.HoverThrustN()),
         mode_(InitialMode(hybrid, params, initial)),
         initial_time_s_(initial.time_s) {
@@ -42,6 +44,81 @@ class CableEstimator final : public Estimator {
 
   void OnImu(const ImuSample& imu) override {
     if (quad_.Predict(imu) != FilterStatus::kOk) return;
+    TrackImu(imu);
+    CheckHealth();
+  }
+
+  void OnVio(const VioSample& vio) override {
+    quad_.UpdateVio(vio);
+    if (vio.p_WB_W.allFinite() && vio.v_WB_W.allFinite() && vio.q_WB.coeffs().allFinite() &&
+        std::isfinite(vio.time_s)) {
+      last_vio_ = vio;
+    }
+    CheckHealth();
+  }
+
+  void OnAllocatedThrust(double thrust_N) override {
+    if (std::isfinite(thrust_N)) {
+      thrust_N_ = thrust_N;
+    } else {
+      ++thrust_commands_non_finite_;
+    }
+  }
+
+  void OnPayloadDetection(const PayloadDetection& detection) override {
+    TakeDetection(detection);
+    CheckHealth();
+  }
+
+  SystemState Estimate(double time_s) const override {
+    const QuadFilterState& quad = quad_.state();
+    SystemState out;
+    out.time_s = time_s;
+    // short extrapolation if the caller asks slightly ahead of the last IMU sample
+    const double ahead_s = std::clamp(time_s - quad.time_s, 0.0, config_.max_extrapolation_s);
+    out.p_WQ_W = quad.p_WB_W + quad.v_WB_W * ahead_s;
+    out.v_WQ_W = quad.v_WB_W;
+    out.q_WB = quad.q_WB;
+    out.w_B = quad.w_B_radps;
+    out.mode = hybrid_ ? mode_ : CableMode::kTaut;
+    out.payload_visible = payload_visible_;
+    const double unseen_s = time_s - (seen_ ? last_seen_time_s_ : initial_time_s_);
+    out.payload_lost = unseen_s > config_.payload_lost_after_s;
+    out.payload_lost =
+        PayloadAt(time_s, out.p_WQ_W, out.v_WQ_W, &out.p_WL_W, &out.v_WL_W) || out.payload_lost;
+    out.payload_supported = out.mode == CableMode::kSlack && support_.supported();
+    if (!out.p_WL_W.allFinite() || !out.v_WL_W.allFinite()) {
+      // unreachable after CheckHealth; the controller still never sees a non-finite payload
+      out.p_WL_W = out.p_WQ_W - Eigen::Vector3d(0, 0, params_.cable_length_m);
+      out.v_WL_W = out.v_WQ_W;
+      out.payload_lost = true;
+    }
+    return out;
+  }
+
+  EstimatorHealth Health() const override {
+    EstimatorHealth health;
+    health.quad_filter = quad_.counts();
+    health.cable_ekf = cable_.counts();
+    health.payload_tracker = tracker_.counts();
+    health.detections_lost = detections_lost_;
+    health.detections_non_finite = detections_non_finite_;
+    health.thrust_commands_non_finite = thrust_commands_non_finite_;
+    health.slack_entries = slack_entries_;
+    health.slack_entries_by_tension = slack_entries_by_tension_;
+    health.retaut_restarts = retaut_restarts_;
+    health.retaut_restarts_by_tension = retaut_restarts_by_tension_;
+    health.cable_reinitialisations = cable_reinitialisations_;
+    health.health_resets = health_resets_;
+    health.slack = hybrid_ && mode_ == CableMode::kSlack;
+    health.filtered_cable_length_m = mode_detector_.filtered_length_m();
+    return health;
+  }
+
+ private:
+  // The cable EKF, the tension cue and the slack hit check on one IMU sample the quadrotor
+  // filter has taken.
+  void TrackImu(const ImuSample& imu) {
     // while slack the taut process model does not hold: the cable EKF restarts at re-taut
     if (mode_ == CableMode::kTaut) {
       cable_.Predict(imu.time_s, thrust_N_, quad_.state().q_WB.toRotationMatrix());
@@ -57,6 +134,15 @@ class CableEstimator final : public Estimator {
     if (hybrid_ && config_.tension_cue.enabled) {
       if (mode_ == CableMode::kSlack) track();
       UpdateTensionCue(imu, p_WL_W);
+      // slack and out of sight, the tension back: the cable is taut again without a detection
+      // (not for a payload last seen held up: a hand that holds it keeps the cable slack, and
+      // the vehicle's own manoeuvres then move the tension estimate)
+      const double unseen_s = imu.time_s - (seen_ ? last_seen_time_s_ : initial_time_s_);
+      if (tracked && mode_ == CableMode::kSlack && !tension_cue_.slack() && !support_.supported() &&
+          unseen_s > config_.tension_retaut_unseen_s) {
+        RestartCableFromTracker(p_WL_W, v_WL_W);
+        return;
+      }
     }
     if (hybrid_ && mode_ == CableMode::kSlack && !tracker_hit_vehicle_) {
       // free fall through the vehicle: the payload has hit it, the prediction no longer holds
@@ -70,17 +156,8 @@ class CableEstimator final : public Estimator {
     }
   }
 
-  void OnVio(const VioSample& vio) override { quad_.UpdateVio(vio); }
-
-  void OnAllocatedThrust(double thrust_N) override {
-    if (std::isfinite(thrust_N)) {
-      thrust_N_ = thrust_N;
-    } else {
-      ++thrust_commands_non_finite_;
-    }
-  }
-
-  void OnPayloadDetection(const PayloadDetection& detection) override {
+  // One camera frame's result: the mode decision, then the filter the mode says.
+  void TakeDetection(const PayloadDetection& detection) {
     payload_visible_ = detection.found;
     if (!detection.found) {
       ++detections_lost_;
@@ -124,12 +201,20 @@ class CableEstimator final : public Estimator {
     if (mode_ == CableMode::kSlack) {
       if (previous == CableMode::kTaut) {
         EnterSlack(d, last, cov_W, entered_by_tension);
+        if (!entered_by_tension) {
+          support_.Clear();
+          slack_entered_at_s_ = d.time_s;
+        }
       } else {
         tracker_.Update(d.time_s, d.p_WL_W, cov_W);
       }
+      // only frames captured since the cable unloaded (a push's frames before it are not free)
+      if (d.time_s >= slack_entered_at_s_) support_.Add(d.time_s, d.p_WL_W.z());
       return;
     }
-    if (previous == CableMode::kSlack) {
+    // the cable EKF was frozen while slack, also while a tension-cue slack waited for its
+    // first detection: back to taut it restarts from this detection
+    if (previous == CableMode::kSlack || entered_by_tension) {
       RestartCableAtRetaut(d);
       return;
     }
@@ -137,61 +222,106 @@ class CableEstimator final : public Estimator {
     UpdateTautCable(d);
   }
 
-  SystemState Estimate(double time_s) const override {
-    const QuadFilterState& quad = quad_.state();
-    SystemState out;
-    out.time_s = time_s;
-    // short extrapolation if the caller asks slightly ahead of the last IMU sample
-    const double ahead_s = std::clamp(time_s - quad.time_s, 0.0, config_.max_extrapolation_s);
-    out.p_WQ_W = quad.p_WB_W + quad.v_WB_W * ahead_s;
-    out.v_WQ_W = quad.v_WB_W;
-    out.q_WB = quad.q_WB;
-    out.w_B = quad.w_B_radps;
-    out.mode = hybrid_ ? mode_ : CableMode::kTaut;
-    out.payload_visible = payload_visible_;
-    const double unseen_s = time_s - (seen_ ? last_seen_time_s_ : initial_time_s_);
-    out.payload_lost = unseen_s > config_.payload_lost_after_s;
+  // The payload at time_s for a quadrotor at p_WQ_W, v_WQ_W, by the variant and the mode; true
+  // when the slack prediction has run into the vehicle (the payload is then lost).
+  bool PayloadAt(double time_s, const Eigen::Vector3d& p_WQ_W, const Eigen::Vector3d& v_WQ_W,
+                 Eigen::Vector3d* p_WL_W, Eigen::Vector3d* v_WL_W) const {
     const double measured_age_s = time_s - measured_time_s_;
     if (!hybrid_ && taut_payload_ == TautPayload::kMeasured && has_measured_ &&
         measured_age_s <= config_.measured_payload_max_age_s) {
       // as measured (a payload lifted along the cable is an error the controller sees),
       // carried from the capture time to now at the measured velocity
-      out.p_WL_W = measured_p_WL_W_ + measured_v_WL_W_ * std::max(0.0, measured_age_s);
-      out.v_WL_W = measured_v_WL_W_;
-    } else if (out.mode == CableMode::kTaut) {
-      out.p_WL_W = out.p_WQ_W + params_.cable_length_m * cable_.xi_W();
-      out.v_WL_W = out.v_WQ_W + params_.cable_length_m * cable_.xi_dot_W();
-    } else {
-      tracker_.PredictTo(time_s, &out.p_WL_W, &out.v_WL_W);
-      out.payload_lost = out.payload_lost || tracker_hit_vehicle_;
-      // the cable cannot stretch: between the true re-taut and its detection, free fall would
-      // carry the payload past the sphere |x_L - x_Q| = l; hold it on the sphere instead
-      const Eigen::Vector3d d = out.p_WL_W - out.p_WQ_W;
-      if (d.norm() > params_.cable_length_m) {
-        const Eigen::Vector3d xi = d.normalized();
-        out.p_WL_W = out.p_WQ_W + params_.cable_length_m * xi;
-        const double outward_mps = (out.v_WL_W - out.v_WQ_W).dot(xi);
-        if (outward_mps > 0) out.v_WL_W -= outward_mps * xi;
-      }
+      *p_WL_W = measured_p_WL_W_ + measured_v_WL_W_ * std::max(0.0, measured_age_s);
+      *v_WL_W = measured_v_WL_W_;
+      return false;
     }
-    return out;
+    if (!hybrid_ || mode_ == CableMode::kTaut) {
+      *p_WL_W = p_WQ_W + params_.cable_length_m * cable_.xi_W();
+      *v_WL_W = v_WQ_W + params_.cable_length_m * cable_.xi_dot_W();
+      return false;
+    }
+    tracker_.PredictTo(time_s, p_WL_W, v_WL_W);
+    if (support_.supported() && !payload_visible_) {
+      // held up and out of view: where it was last seen (a hand does not let it fall)
+      *p_WL_W = tracker_.state().head<3>();
+      v_WL_W->setZero();
+    }
+    // the cable cannot stretch: between the true re-taut and its detection, free fall would
+    // carry the payload past the sphere |x_L - x_Q| = l; hold it on the sphere instead
+    const Eigen::Vector3d d = *p_WL_W - p_WQ_W;
+    if (d.norm() > params_.cable_length_m) {
+      const Eigen::Vector3d xi = d.normalized();
+      *p_WL_W = p_WQ_W + params_.cable_length_m * xi;
+      const double outward_mps = (*v_WL_W - v_WQ_W).dot(xi);
+      if (outward_mps > 0) *v_WL_W -= outward_mps * xi;
+    }
+    return tracker_hit_vehicle_;
   }
 
-  EstimatorHealth Health() const override {
-    EstimatorHealth health;
-    health.quad_filter = quad_.counts();
-    health.cable_ekf = cable_.counts();
-    health.payload_tracker = tracker_.counts();
-    health.detections_lost = detections_lost_;
-    health.detections_non_finite = detections_non_finite_;
-    health.thrust_commands_non_finite = thrust_commands_non_finite_;
-    health.slack_entries = slack_entries_;
-    health.slack_entries_by_tension = slack_entries_by_tension_;
-    health.retaut_restarts = retaut_restarts_;
-    health.cable_reinitialisations = cable_reinitialisations_;
-    health.slack = hybrid_ && mode_ == CableMode::kSlack;
-    health.filtered_cable_length_m = mode_detector_.filtered_length_m();
-    return health;
+  // The health check every input ends with: a state no filter may hand on (non-finite, a payload
+  // faster relative to the vehicle than any push gives it, a cable stretched past its length
+  // and the detector's error) re-initialises the filter that holds it, counted by cause.
+  void CheckHealth() {
+    const QuadFilterState& quad = quad_.state();
+    if (!quad.p_WB_W.allFinite() || !quad.v_WB_W.allFinite() || !quad.q_WB.coeffs().allFinite() ||
+        !quad.w_B_radps.allFinite() || !quad_.covariance().allFinite()) {
+      if (!last_vio_) return;  // nothing to start from yet; Estimate falls back to the hover
+      ++health_resets_.quad_non_finite;
+      QuadFilterState from_vio;
+      from_vio.time_s = last_vio_->time_s;
+      from_vio.p_WB_W = last_vio_->p_WB_W;
+      from_vio.v_WB_W = last_vio_->v_WB_W;
+      from_vio.q_WB = last_vio_->q_WB;
+      quad_ = QuadFilter(params_, config_.quad_filter, from_vio);
+    }
+    Eigen::Vector3d p_WL_W, v_WL_W;
+    PayloadAt(quad.time_s, quad.p_WB_W, quad.v_WB_W, &p_WL_W, &v_WL_W);
+    if (hybrid_ && mode_ == CableMode::kSlack) {
+      // the tracker's own velocity: the sphere's hold in PayloadAt would hide a wild one
+      Eigen::Vector3d tracked_p_WL_W;
+      tracker_.PredictTo(quad.time_s, &tracked_p_WL_W, &v_WL_W);
+    }
+    const Eigen::Vector3d d_W = p_WL_W - quad.p_WB_W;
+    if (!p_WL_W.allFinite() || !v_WL_W.allFinite() || !cable_.covariance().allFinite() ||
+        !tracker_.covariance().allFinite()) {
+      ++health_resets_.payload_non_finite;
+    } else if ((v_WL_W - quad.v_WB_W).norm() > config_.max_payload_relative_speed_mps) {
+      ++health_resets_.payload_speed;
+    } else if (d_W.norm() > params_.cable_length_m + config_.max_cable_stretch_m) {
+      ++health_resets_.cable_length;
+    } else {
+      return;
+    }
+    ResetPayloadFromDetections(quad);
+  }
+
+  // The payload filters restarted from what the camera last saw: the newest detection's offset
+  // from the vehicle if it is recent, else the payload hanging under the vehicle; at the
+  // vehicle's velocity either way (a speed the detections cannot give).
+  void ResetPayloadFromDetections(const QuadFilterState& quad) {
+    const double l_m = params_.cable_length_m;
+    Eigen::Vector3d d_W(0, 0, -l_m);
+    const bool recent = has_last_detection_ &&
+                        quad.time_s - last_detection_time_s_ <= config_.payload_lost_after_s &&
+                        last_p_BL_B_.norm() > 1e-6;
+    if (recent) {
+      d_W = quad.q_WB * last_p_BL_B_;
+      if (d_W.norm() > l_m) d_W *= l_m / d_W.norm();
+    }
+    CableMatrix cable_cov = CableMatrix::Zero();
+    cable_cov.diagonal() << Eigen::Vector3d::Constant(std::pow(config_.retaut_xi_std, 2)),
+        Eigen::Vector3d::Constant(std::pow(config_.retaut_xi_dot_std_per_s, 2));
+    cable_.Reset(quad.time_s, d_W.normalized(), Eigen::Vector3d::Zero(), cable_cov);
+    Matrix6d tracker_cov = Matrix6d::Zero();
+    tracker_cov.diagonal() << Eigen::Vector3d::Constant(config_.initial_payload_position_var_m2),
+        Eigen::Vector3d::Constant(std::pow(config_.slack_entry_velocity_std_mps, 2));
+    tracker_.Reset(quad.time_s, quad.p_WB_W + d_W, quad.v_WB_W, tracker_cov);
+    tracker_hit_vehicle_ = false;
+    has_measured_ = false;
+    measured_v_WL_W_.setZero();
+    velocity_row_pending_ = false;
+    rejected_xi_W_.clear();
+    rejected_times_s_.clear();
   }
 
  private:
@@ -264,6 +394,25 @@ class CableEstimator final : public Estimator {
     ++retaut_restarts_;
     velocity_row_pending_ = config_.retaut_velocity_row;
     restart_time_s_ = quad_.state().time_s;
+  }
+
+  // Re-taut flagged by the tension cue while the payload is out of sight: the cable EKF restarts
+  // on the direction to the tracked payload with its velocity across the cable (Reset removes the
+  // radial part, as in the inelastic collision of docs/design.md section 4).
+  void RestartCableFromTracker(const Eigen::Vector3d& p_WL_W, const Eigen::Vector3d& v_WL_W) {
+    const QuadFilterState& quad = quad_.state();
+    const Eigen::Vector3d d_W = p_WL_W - quad.p_WB_W;
+    const Eigen::Vector3d xi =
+        d_W.norm() > 1e-6 ? Eigen::Vector3d(d_W.normalized()) : Eigen::Vector3d(0, 0, -1);
+    CableMatrix cov = CableMatrix::Zero();
+    cov.diagonal() << Eigen::Vector3d::Constant(std::pow(config_.retaut_xi_std, 2)),
+        Eigen::Vector3d::Constant(std::pow(config_.retaut_xi_dot_std_per_s, 2));
+    cable_.Reset(quad.time_s, xi, (v_WL_W - quad.v_WB_W) / params_.cable_length_m, cov);
+    mode_ = CableMode::kTaut;
+    tension_entry_pending_ = false;
+    velocity_row_pending_ = false;
+    ++retaut_restarts_;
+    ++retaut_restarts_by_tension_;
   }
 
   // The first detection after a re-taut restart fuses the rate of the body-frame payload position
@@ -355,6 +504,8 @@ class CableEstimator final : public Estimator {
         l_m * l_m * cable_.covariance().block<3, 3>(3, 3) + quad_.covariance().block<3, 3>(3, 3);
     tracker_.Reset(imu.time_s, p_WL_W, v_WL_W, cov);
     mode_ = CableMode::kSlack;
+    support_.Clear();
+    slack_entered_at_s_ = imu.time_s;
     tension_entry_pending_ = true;
     ++slack_entries_;
     ++slack_entries_by_tension_;
@@ -404,6 +555,8 @@ class CableEstimator final : public Estimator {
   ModeDetector mode_detector_;
   PayloadTracker tracker_;
   TensionCue tension_cue_;
+  SupportDetector support_;           // slack: held up or falling, from the detections
+  double slack_entered_at_s_ = 0.0;   // when the last slack began (tension flag or detection)
   double thrust_N_;                   // last allocated collective thrust
   CableMode mode_;                    // estimated mode (always taut when !hybrid)
   bool payload_visible_ = true;       // last camera frame had a detection
@@ -425,7 +578,10 @@ class CableEstimator final : public Estimator {
   int slack_entries_by_tension_ = 0;
   bool tension_entry_pending_ = false;  // slack flagged by tension, no detection since
   int retaut_restarts_ = 0;
+  int retaut_restarts_by_tension_ = 0;
   int cable_reinitialisations_ = 0;
+  EstimatorHealthResets health_resets_;  // the health check's re-initialisations by cause
+  std::optional<VioSample> last_vio_;    // the newest finite VIO sample (the quad filter's restart)
   // directions (world) and capture times of the detections the cable EKF rejected in a row
   std::deque<Eigen::Vector3d> rejected_xi_W_;
   std::deque<double> rejected_times_s_;

@@ -32,7 +32,12 @@ EstimatorHealth DistinctHealth() {
   h.slack_entries = 1004;
   h.slack_entries_by_tension = 1005;
   h.retaut_restarts = 1006;
+  h.retaut_restarts_by_tension = 1008;
   h.cable_reinitialisations = 1007;
+  h.health_resets.quad_non_finite = 2001;
+  h.health_resets.payload_non_finite = 2002;
+  h.health_resets.payload_speed = 2003;
+  h.health_resets.cable_length = 2004;
   h.slack = true;
   h.filtered_cable_length_m = 0.987;
   return h;
@@ -58,9 +63,12 @@ TEST(EstimatorHealthTest, FieldsAreNamedInTheDocumentedOrder) {
       expected.push_back(prefix + name);
     }
   }
-  for (const char* name : {"detections_lost", "detections_non_finite", "thrust_commands_non_finite",
-                           "slack_entries", "slack_entries_by_tension", "retaut_restarts",
-                           "cable_reinitialisations", "slack", "filtered_cable_length_m"}) {
+  for (const char* name :
+       {"detections_lost", "detections_non_finite", "thrust_commands_non_finite", "slack_entries",
+        "slack_entries_by_tension", "retaut_restarts", "retaut_restarts_by_tension",
+        "cable_reinitialisations", "health_resets", "health_resets_quad_non_finite",
+        "health_resets_payload_non_finite", "health_resets_payload_speed",
+        "health_resets_cable_length", "slack", "filtered_cable_length_m"}) {
     expected.push_back(name);
   }
   std::vector<std::string> names;
@@ -73,7 +81,8 @@ TEST(EstimatorHealthTest, EachFieldCarriesItsOwnCounter) {
                                         1,    2,    3,    4,    5,    6,    7.5,  // quad_
                                         10,   20,   30,   40,   50,   60,   75,   // cable_
                                         100,  200,  300,  400,  500,  600,  750,  // tracker_
-                                        1001, 1002, 1003, 1004, 1005, 1006, 1007,
+                                        1001, 1002, 1003, 1004, 1005, 1006, 1008,
+                                        1007, 8010, 2001, 2002, 2003, 2004,  // health resets
                                         1.0,  // estimator's own, slack as 1
                                         0.987};
   const auto fields = DistinctHealth().Fields();

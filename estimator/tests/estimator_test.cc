@@ -291,6 +291,123 @@ TEST(EstimatorTest, NonFiniteInputsDoNotCorruptTheEstimate) {
   EXPECT_EQ(estimator->Health().detections_lost, 1);
 }
 
+// A detection of the payload at p_BL_B (body frame) captured at time_s, the vehicle level.
+PayloadDetection DetectionAt(const Params& p, const Eigen::Vector3d& p_BL_B, double time_s) {
+  PayloadDetection det;
+  det.time_s = time_s;
+  det.found = true;
+  det.p_CL_C = p.R_BC.transpose() * (p_BL_B - p.t_BC_B_m);
+  return det;
+}
+
+// An IMU sample of a level vehicle whose rotors make the hover thrust and whose cable pulls with
+// the tension t_N straight down (0: the accelerometer reads the thrust alone, a slack cable).
+ImuSample LevelImu(const Params& p, double time_s, double t_N) {
+  ImuSample imu;
+  imu.time_s = time_s;
+  imu.accel_B_mps2 = Eigen::Vector3d(0, 0, (p.HoverThrustN() - t_N) / p.quad_mass_kg);
+  return imu;
+}
+
+// The line_impulse draw that went NaN: the tension cue flagged slack (0.1 kg payload swung over
+// the vehicle), the payload stayed out of view for 0.34 s, and the next detection read taut. The
+// cable filter, frozen while slack, took that gap in one propagation step and diverged. Now the
+// detection restarts it (and long gaps are sub-stepped): the estimate stays finite and on the
+// cable, and no health reset is needed.
+TEST(EstimatorTest, ATensionSlackEndedByATautDetectionRestartsTheCable) {
+  const Params p;
+  SystemState hover;
+  hover.p_WQ_W = Eigen::Vector3d(0, 0, 1.5);
+  hover.p_WL_W = hover.p_WQ_W - Eigen::Vector3d(0, 0, p.cable_length_m);
+  const double weight_N = p.payload_mass_kg * p.gravity_mps2;
+  std::unique_ptr<Estimator> estimator = MakeEstimator("hybrid", EstimatorConfig{}, p, hover);
+  int k = 0;
+  // taut and seen for 0.1 s, then the cable unloads (the payload out of view) for 0.34 s
+  for (; k <= 50; ++k) {
+    estimator->OnImu(LevelImu(p, 0.002 * k, weight_N));
+    if (k % 17 == 0) {
+      estimator->OnPayloadDetection(DetectionAt(p, Eigen::Vector3d(0, 0, -0.5), 0.002 * k));
+    }
+  }
+  for (; k <= 220; ++k) estimator->OnImu(LevelImu(p, 0.002 * k, 0.0));
+  ASSERT_EQ(estimator->Estimate(0.002 * k).mode, CableMode::kSlack);
+  ASSERT_EQ(estimator->Health().slack_entries_by_tension, 1);
+  // the cable pulls again and the payload is seen on it, swung 30 deg sideways
+  const Eigen::Vector3d swung_B(0.25, 0, -0.433);
+  for (; k <= 300; ++k) {
+    estimator->OnImu(LevelImu(p, 0.002 * k, weight_N));
+    if (k % 17 == 0) estimator->OnPayloadDetection(DetectionAt(p, swung_B, 0.002 * k));
+    const SystemState est = estimator->Estimate(0.002 * k);
+    ASSERT_TRUE(est.AllFinite()) << "t " << 0.002 * k;
+    ASSERT_LT((est.v_WL_W - est.v_WQ_W).norm(), 10.0) << "t " << 0.002 * k;
+  }
+  const SystemState est = estimator->Estimate(0.6);
+  EXPECT_EQ(est.mode, CableMode::kTaut);
+  // on the detected direction within a few centimetres (the restart's 0.03 std per component)
+  EXPECT_LT((est.p_WL_W - est.p_WQ_W - swung_B).norm(), 0.05);
+  EXPECT_GE(estimator->Health().retaut_restarts, 1);
+  EXPECT_EQ(estimator->Health().health_resets.Total(), 0);
+}
+
+// Slack, the payload unseen and the tension back: the cable is taut again without waiting for a
+// detection (the tension cue returns the mode; the payload is then on the cable's sphere).
+TEST(EstimatorTest, TheTensionCueReturnsAnUnseenPayloadToTaut) {
+  const Params p;
+  SystemState hover;
+  hover.p_WQ_W = Eigen::Vector3d(0, 0, 1.5);
+  hover.p_WL_W = hover.p_WQ_W - Eigen::Vector3d(0, 0, p.cable_length_m);
+  const double weight_N = p.payload_mass_kg * p.gravity_mps2;
+  std::unique_ptr<Estimator> estimator = MakeEstimator("hybrid", EstimatorConfig{}, p, hover);
+  int k = 0;
+  for (; k <= 50; ++k) {
+    estimator->OnImu(LevelImu(p, 0.002 * k, weight_N));
+    if (k % 17 == 0) {
+      estimator->OnPayloadDetection(DetectionAt(p, Eigen::Vector3d(0, 0, -0.5), 0.002 * k));
+    }
+  }
+  for (; k <= 100; ++k) estimator->OnImu(LevelImu(p, 0.002 * k, 0.0));
+  ASSERT_EQ(estimator->Estimate(0.002 * k).mode, CableMode::kSlack);
+  for (; k <= 200; ++k) estimator->OnImu(LevelImu(p, 0.002 * k, weight_N));
+  const SystemState est = estimator->Estimate(0.4);
+  EXPECT_EQ(est.mode, CableMode::kTaut);
+  EXPECT_NEAR((est.p_WL_W - est.p_WQ_W).norm(), p.cable_length_m, 1e-9);
+  EXPECT_EQ(estimator->Health().retaut_restarts_by_tension, 1);
+}
+
+// The health check: a state no filter may hand on re-initialises from the detections, by cause.
+TEST(EstimatorTest, TheHealthCheckResetsAPhysicallyImpossiblePayload) {
+  const Params p;
+  SystemState hover;
+  hover.p_WQ_W = Eigen::Vector3d(0, 0, 1.5);
+  hover.p_WL_W = hover.p_WQ_W - Eigen::Vector3d(0, 0, p.cable_length_m);
+  const double weight_N = p.payload_mass_kg * p.gravity_mps2;
+  const EstimatorConfig config;
+
+  // the paper's baseline passes the payload as measured: a detection 1.2 m away (a cable of
+  // 0.5 m) is refused and the payload put back on the cable
+  std::unique_ptr<Estimator> measured = MakeEstimator("always_taut", config, p, hover);
+  measured->OnImu(LevelImu(p, 0.002, weight_N));
+  measured->OnPayloadDetection(DetectionAt(p, Eigen::Vector3d(0, 0, -1.2), 0.002));
+  SystemState est = measured->Estimate(0.002);
+  EXPECT_EQ(measured->Health().health_resets.cable_length, 1);
+  EXPECT_LE((est.p_WL_W - est.p_WQ_W).norm(), p.cable_length_m + config.max_cable_stretch_m);
+  EXPECT_TRUE(est.AllFinite());
+
+  // slack flagged by the tension cue, and the first detection 0.3 m from the one 1.1 ms before:
+  // the slack entry's finite difference says 270 m/s, which no push gives a payload
+  std::unique_ptr<Estimator> hybrid = MakeEstimator("hybrid", config, p, hover);
+  hybrid->OnImu(LevelImu(p, 0.002, weight_N));
+  hybrid->OnPayloadDetection(DetectionAt(p, Eigen::Vector3d(0, 0, -0.5), 0.0020));
+  for (int k = 2; k <= 30; ++k) hybrid->OnImu(LevelImu(p, 0.002 * k, 0.0));
+  ASSERT_EQ(hybrid->Estimate(0.06).mode, CableMode::kSlack);
+  hybrid->OnPayloadDetection(DetectionAt(p, Eigen::Vector3d(0.3, 0, -0.4), 0.0031));
+  est = hybrid->Estimate(0.06);
+  EXPECT_EQ(hybrid->Health().health_resets.payload_speed, 1);
+  EXPECT_LT((est.v_WL_W - est.v_WQ_W).norm(), config.max_payload_relative_speed_mps);
+  // re-initialised from the newest detection, at the vehicle's velocity
+  EXPECT_LT((est.p_WL_W - est.p_WQ_W - Eigen::Vector3d(0.3, 0, -0.4)).norm(), 0.01);
+}
+
 TEST(EstimatorTest, HealthFieldsListEveryCountOnceByName) {
   EstimatorHealth health;
   health.quad_filter.rejected_updates = 2;

@@ -35,7 +35,8 @@ class Writer {
     F64(s.time_s), Vec(s.p_WL_W), Vec(s.v_WL_W), Vec(s.p_WQ_W), Vec(s.v_WQ_W), Quat(s.q_WB);
     Vec(s.w_B);
     U32(s.mode == CableMode::kTaut ? 1 : 0);
-    U32((s.payload_visible ? 1u : 0u) | (s.payload_lost ? 2u : 0u));
+    U32((s.payload_visible ? 1u : 0u) | (s.payload_lost ? 2u : 0u) |
+        (s.payload_supported ? 4u : 0u));
   }
   std::vector<uint8_t> bytes;
 
@@ -99,6 +100,7 @@ class Reader {
     const uint32_t flags = U32();
     s.payload_visible = (flags & 1u) != 0;
     s.payload_lost = (flags & 2u) != 0;
+    s.payload_supported = (flags & 4u) != 0;
     return s;
   }
   void End() {

@@ -85,7 +85,8 @@ class _Reader:
                 "p_WQ_W": np.array(v[7:10]), "v_WQ_W": np.array(v[10:13]),
                 "q_WB": np.array(v[13:17]), "w_B": np.array(v[17:20]),
                 "mode": "taut" if mode == 1 else "slack",
-                "payload_visible": bool(flags & 1), "payload_lost": bool(flags & 2)}
+                "payload_visible": bool(flags & 1), "payload_lost": bool(flags & 2),
+                "payload_supported": bool(flags & 4)}
 
 
 def _pack_state(s):
@@ -96,7 +97,8 @@ def _pack_state(s):
     q = [1.0, 0.0, 0.0, 0.0] if q is None else [float(x) for x in q]
     values = ([float(s.get("time_s", 0.0))] + vec("p_WL_W", 3) + vec("v_WL_W", 3) +
               vec("p_WQ_W", 3) + vec("v_WQ_W", 3) + q + vec("w_B", 3))
-    flags = (1 if s.get("payload_visible", False) else 0) | (2 if s.get("payload_lost", True) else 0)
+    flags = ((1 if s.get("payload_visible", False) else 0) | (2 if s.get("payload_lost", True) else 0)
+             | (4 if s.get("payload_supported", False) else 0))
     return struct.pack("<20dII", *values, 1 if s.get("mode", "taut") == "taut" else 0, flags)
 
 

@@ -103,6 +103,25 @@ TEST(ExpectKeysTest, EveryKeyPassesAndFailsOnItsMetric) {
   EXPECT_EQ(Cases().size(), ExpectKeys().size()) << "a case for a key that is not in the table";
 }
 
+TEST(ExpectKeysTest, ACrashFailsAScenarioThatDoesNotExpectOne) {
+  // summaries and expect_failure_rate read expect.passed: a crash the scenario does not bound
+  // must be a failure there too, not only in the exit code
+  Metrics crashed;
+  crashed.crashed = true;
+  crashed.crash_reason = "rotor_strike";
+  ExpectSpec silent;
+  silent.bounds["quad_position_deviation_max"] = {1.0};
+  CheckExpectations(silent, &crashed);
+  ASSERT_FALSE(crashed.expect_passed);
+  EXPECT_EQ(crashed.expect_failed[0].rfind("crashed: true (rotor_strike)", 0), 0u)
+      << crashed.expect_failed[0];
+  // a scenario that says a crash may happen decides by its own bound
+  ExpectSpec allowed;
+  allowed.bounds["crashed"] = {1.0};
+  CheckExpectations(allowed, &crashed);
+  EXPECT_TRUE(crashed.expect_passed);
+}
+
 // A scenario whose expect block is `expect: {KEY: VALUE}`.
 std::string ScenarioWithExpect(const std::string& key, const std::string& value) {
   return "name: expect_case\nduration: 1.0\ncontroller: {type: geometric}\n"

@@ -21,6 +21,7 @@ nlohmann::json FlownMetrics() {
   m.mode_accuracy = 0.9;
   m.retaut_count = 1;
   m.retaut_quad_vz_min_mps = -0.7;
+  m.retaut_peak_body_rate_radps = 1.2;
   m.slack_detection_latency_max_s = 0.02;
   m.mpc_solve_ms.median = 0.3;
   return nlohmann::json::parse(MetricsToJson(m));
@@ -53,6 +54,9 @@ TEST(MetricDefsTest, WhatARunDidNotMeasureIsNotRead) {
   EXPECT_FALSE(ReadMetric("payload_in_fov_fraction", j));
   EXPECT_FALSE(ReadMetric("retaut_quad_vz_min_mps", j));
   EXPECT_FALSE(ReadMetric("slack_detection_latency_max_s", j));
+  // without a re-taut the re-taut figures are null in metrics.json, not a perfect-looking 0
+  EXPECT_TRUE(j["retaut"]["quad_vz_min_mps"].is_null());
+  EXPECT_TRUE(j["retaut"]["peak_body_rate_radps"].is_null());
 }
 
 TEST(MetricDefsTest, EveryExpectKeyBoundsADeclaredMetric) {

@@ -5,10 +5,13 @@
 
 #include <gtest/gtest.h>
 
+#include <map>
 #include <set>
 #include <stdexcept>
 #include <string>
 #include <vector>
+
+#include "hpa/controller/reference_spec.h"
 
 namespace hpa {
 namespace {
@@ -19,6 +22,22 @@ TEST(ReferenceTypesTest, TypesInTheSchemaOrder) {
   // the same names as ReferenceSpec::type accepts (controller/reference_spec.h)
   EXPECT_EQ(names, (std::vector<std::string>{"hover", "lissajous", "line", "circle", "figure_eight",
                                              "csv"}));
+}
+
+TEST(ReferenceTypesTest, EveryTypeHasItsOwnRmseWindow) {
+  // only the Lissajous family ramps up: its RMSE starts at the ramp's end, every other type's at 0
+  // (a CSV flies its first sample at once; it once got the Lissajous's 2 s)
+  const std::map<std::string, double> expected = {{"hover", 0.0},        {"lissajous", 3.5},
+                                                  {"line", 0.0},         {"circle", 3.5},
+                                                  {"figure_eight", 3.5}, {"csv", 0.0}};
+  ASSERT_EQ(expected.size(), ReferenceTypes().size());
+  for (const ReferenceType& t : ReferenceTypes()) {
+    ReferenceSpec spec;
+    spec.type = t.name;
+    spec.lissajous.ramp_s = 3.5;
+    ASSERT_EQ(expected.count(t.name), 1u) << t.name;
+    EXPECT_EQ(RmseFromS(spec), expected.at(t.name)) << t.name;
+  }
 }
 
 TEST(ReferenceTypesTest, EveryKeyIsDescribedOnceWithAConsistentRange) {

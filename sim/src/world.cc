@@ -335,6 +335,7 @@ Truth World::GetTruth() const {
                ? CableMode::kTaut
                : CableMode::kSlack;
   s.payload_visible = true;
+  s.payload_supported = gripper_active();
   t.motor_speed_radps = motor_speed_radps_;
   return t;
 }

@@ -9,6 +9,7 @@
 #include <cstdio>
 #include <cstring>
 #include <fstream>
+#include <limits>
 #include <nlohmann/json.hpp>
 #include <sstream>
 
@@ -109,7 +110,7 @@ void SlackMetrics(const std::vector<LogRow>& rows,
                   const std::vector<std::pair<double, double>>& slack, Metrics* m) {
   m->slack_time_s = 0.0;
   std::vector<double> latencies;
-  double vz_min = 0.0, rate_peak = 0.0;
+  double vz_min = std::numeric_limits<double>::infinity(), rate_peak = 0.0;
   for (const auto& [start, end] : slack) {
     m->slack_time_s += end - start;
     bool detected = false;
@@ -132,8 +133,12 @@ void SlackMetrics(const std::vector<LogRow>& rows,
       }
     }
   }
-  m->retaut_quad_vz_min_mps = vz_min;
-  m->retaut_peak_body_rate_radps = rate_peak;
+  m->retaut_quad_vz_min_mps.reset();
+  m->retaut_peak_body_rate_radps.reset();
+  if (m->retaut_count > 0) {
+    m->retaut_quad_vz_min_mps = vz_min;
+    m->retaut_peak_body_rate_radps = rate_peak;
+  }
   if (!latencies.empty()) {
     double sum = 0.0;
     for (double l : latencies) sum += l;
@@ -190,6 +195,11 @@ void ComputeMetrics(const MetricsInputs& in, Metrics* m) {
 void CheckExpectations(const ExpectSpec& e, Metrics* m) {
   m->expect_failed.clear();
   if (m->run_error) m->expect_failed.push_back("run aborted: " + *m->run_error);
+  // a crash fails every scenario that does not bound `crashed` itself
+  if (m->crashed && !e.Has("crashed")) {
+    m->expect_failed.push_back("crashed: true (" + m->crash_reason.value_or("") +
+                               "), and the scenario does not expect a crash");
+  }
   for (const ExpectKey& k : ExpectKeys()) {
     const auto bound = e.bounds.find(k.key);
     if (bound == e.bounds.end()) continue;
@@ -246,8 +256,8 @@ std::string MetricsToJson(const Metrics& m) {
   o["camera_frames"] = m.camera_frames;
   o["detections"] = m.detections;
   o["retaut"] = {{"count", m.retaut_count},
-                 {"quad_vz_min_mps", num(m.retaut_quad_vz_min_mps)},
-                 {"peak_body_rate_radps", num(m.retaut_peak_body_rate_radps)}};
+                 {"quad_vz_min_mps", opt_num(m.retaut_quad_vz_min_mps)},
+                 {"peak_body_rate_radps", opt_num(m.retaut_peak_body_rate_radps)}};
   o["mpc_solve_ms"] = quantiles(m.mpc_solve_ms);
   o["mpc_failures"] = m.mpc_failures;
   o["closed_loop_cost"] = num(m.closed_loop_cost);
@@ -306,7 +316,8 @@ void WriteLogCsv(const std::string& path, const std::vector<LogRow>& rows) {
   header_state("est_");
   out << ",ref_pL_x,ref_pL_y,ref_pL_z,ref_pQ_x,ref_pQ_y,ref_pQ_z"
       << ",cmd_w_x,cmd_w_y,cmd_w_z,cmd_thrust_N,status,solve_ms,cost,tension_N,gripper"
-      << ",est_rejected_updates,est_resets,mixer_saturated\n";
+      << ",est_rejected_updates,est_resets,mixer_saturated,est_payload_lost,est_payload_"
+         "supported\n";
   // each row formatted into one buffer: std::to_chars with precision 7 writes what
   // `out << std::setprecision(7) << value` (printf's %.7g) writes, without the stream's locale
   // and formatting machinery on every value
@@ -347,6 +358,8 @@ void WriteLogCsv(const std::string& path, const std::vector<LogRow>& rows) {
     add_int(r.estimator_rejected_updates);
     add_int(r.estimator_resets);
     add_int(r.mixer_saturated ? 1 : 0);
+    add_int(r.estimate.payload_lost ? 1 : 0);
+    add_int(r.estimate.payload_supported ? 1 : 0);
     line.push_back('\n');
     out << line;
   }

@@ -86,10 +86,7 @@ RunResult RunScenario(const Scenario& scenario, const Params& base_params,
   metrics.camera = scenario.estimation.ground_truth ? "ground_truth" : scenario.estimation.camera;
   metrics.seed = scenario.seed;
   metrics.world_profile = scenario.world.name;
-  if (scenario.reference.type != "hover" &&
-      scenario.reference.type != "line") {  // Lissajous family
-    metrics.payload_rmse_from_s = scenario.reference.lissajous.ramp_s;
-  }
+  metrics.payload_rmse_from_s = RmseFromS(scenario.reference);
   std::unique_ptr<runner::RunLoop> loop;
   try {
     loop = std::make_unique<runner::RunLoop>(scenario, params, options, &metrics);

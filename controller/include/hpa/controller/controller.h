@@ -56,6 +56,15 @@ class Controller {
   virtual double RateHz() const = 0;
 };
 
+/// PX4's attitude gain MC_ROLL_P / MC_PITCH_P (default), 1/s: the level-out's.
+constexpr double kPx4AttitudeGainPerS = 6.5;
+
+/// The command every controller flies when it has no usable state or plan: PX4's attitude loop
+/// toward level (body rate = gain x the tilt error, yaw left alone) at hover thrust; zero body
+/// rate when q_WB is not finite.
+BodyRateCommand LevelOutCommand(const Params& params, const Eigen::Quaterniond& q_WB,
+                                double attitude_gain_per_s = kPx4AttitudeGainPerS);
+
 /// Builds the controller named in config.type; throws std::invalid_argument for unknown types.
 std::unique_ptr<Controller> MakeController(const ControllerConfig& config, const Params& params,
                                            std::shared_ptr<const Reference> reference);

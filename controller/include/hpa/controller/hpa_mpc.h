@@ -34,8 +34,8 @@ struct MpcSettings {
   // ... or above this tilt. Ours: 1.5 x PX4's MPC_TILTMAX_AIR default (45 deg), the most PX4's
   // own position loop commands; 0 = never
   double recovery_tilt_rad = 67.5 * M_PI / 180.0;
-  // the recovery's attitude gain: PX4's MC_ROLL_P / MC_PITCH_P default, 1/s
-  double recovery_attitude_gain_per_s = 6.5;
+  // the recovery's and the fallbacks' attitude gain (LevelOutCommand)
+  double recovery_attitude_gain_per_s = kPx4AttitudeGainPerS;
 };
 
 /// Model predictive controller over the OCP of ocp.h.
@@ -54,9 +54,10 @@ class HpaMpc : public Controller {
   HpaMpc& operator=(HpaMpc&&) noexcept = default;
 
   /// One solve of the solver named by settings.solver, warm-started from the previous plan; always
-  /// a safe command: non-finite state -> kNonFinite + level hover command; body rate or tilt
-  /// beyond the recovery settings -> kRecovery, a level-out at hover thrust; solver failure ->
-  /// previous plan shifted (kQpFailure), or hover (kFallback) when there is no usable plan.
+  /// a safe command: non-finite state -> kNonFinite + a level-out at hover thrust
+  /// (LevelOutCommand); body rate or tilt beyond the recovery settings -> kRecovery, the same
+  /// level-out; solver failure -> previous plan shifted (kQpFailure), or the level-out
+  /// (kFallback) when there is no usable plan.
   ControlOutput Update(const SystemState& state) override;
   /// Rate the runner calls Update at (MpcSettings::rate_hz).
   double RateHz() const override { return settings_.rate_hz; }

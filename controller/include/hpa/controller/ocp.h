@@ -68,6 +68,9 @@ struct Ocp {
   // stage retaut_stage. -1: `mode` is held over the whole horizon (the paper's form).
   int retaut_stage = -1;
   double perception_weight = 1.0;  // scale on q_cam (0: L_cam off)
+  // slack and held up (SystemState::payload_supported): L_cam sees the payload without the free
+  // fall the model predicts for it (SeenPayloadOffset)
+  bool payload_supported = false;
   OcpWeights weights = OcpWeights::Tuned();
   double u_hover_radps = 1.0;                          // normalisation of the input residual
   InputVector u_min_radps = InputVector::Zero();       // hard bounds  (4)
@@ -183,9 +186,10 @@ void SetCameraDeadzone(const SystemState& state, Ocp* ocp);
 
 /// Sets ocp->cam_slack_deadzone_stage_m along the plan u from x0 (slack mode only; taut clears
 /// it): stage 0 keeps cam_slack_deadzone_m, stage k the dead zone of the depth of its own
-/// predicted payload as L_cam sees it (on the cable's sphere, see CostPayloadInCamera); where
-/// that payload is nearer the lens plane than the minimum depth, the slack L_cam is off
-/// (infinite dead zone). Fixed for the solve.
+/// predicted payload as L_cam sees it (no farther than the cable's sphere, see
+/// CostPayloadInCamera); where that payload is nearer the lens plane than the minimum depth, the
+/// slack L_cam is off (infinite dead zone). A supported payload keeps stage 0's dead zone at every
+/// stage (it stays at the depth it is held at). Fixed for the solve.
 void SetCameraDeadzonesAlong(const StateVector& x0, const std::vector<InputVector>& u, Ocp* ocp);
 
 /// First stage k (1..N) whose state, simulated from x0 with u in slack mode, has reached the

@@ -26,6 +26,10 @@ struct ReferenceSpec {
   std::vector<TrajectorySample> samples;  // csv: the trajectory (LoadTrajectoryCsv)
 };
 
+/// Where the payload RMSE starts (s): the end of a Lissajous-family ramp, 0 for hover, line and
+/// csv references (a line holds its start, a CSV flies its samples from the first).
+double RmseFromS(const ReferenceSpec& spec);
+
 /// Builds the reference a spec describes (the line delayed to its start time).
 std::shared_ptr<Reference> MakeReference(const ReferenceSpec& spec, const Params& params);
 

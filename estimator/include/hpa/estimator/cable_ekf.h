@@ -18,6 +18,10 @@ struct CableEkfConfig {
   double initial_xi_std = 0.3;            // per axis, unit-vector components
   double initial_xi_dot_std_per_s = 1.0;  // per axis
   double history_s = 0.5;                 // how late a detection may arrive
+  // longest step of one RK4 and linearised covariance step: a longer gap between inputs is
+  // taken in equal sub-steps (twice the 500 Hz IMU period; the |xi_dot|^2 term makes one long
+  // step unstable at swing rates)
+  double max_step_s = 0.004;
   // detection gate: NIS over 30 rejects (3 dof: the 99.99% quantile is 21); the fourth
   // rejection in a row is accepted anyway (e.g. after an unmodelled jerk of the cable)
   InnovationGate gate = {30.0, 3};

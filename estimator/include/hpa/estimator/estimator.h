@@ -9,6 +9,7 @@
 #include "hpa/estimator/mode_detector.h"
 #include "hpa/estimator/payload_tracker.h"
 #include "hpa/estimator/quad_filter.h"
+#include "hpa/estimator/support_detector.h"
 #include "hpa/estimator/tension_cue.h"
 #include "hpa/models/detection_noise.h"
 #include "hpa/models/params.h"
@@ -24,6 +25,7 @@ struct EstimatorConfig {
   ModeDetectorConfig mode_detector;        // low-pass cable length vs l - epsilon
   TensionCueConfig tension_cue;            // slack from the IMU-implied cable tension
   PayloadTrackerConfig payload_tracker;    // free-fall payload filter used while slack
+  SupportDetectorConfig support_detector;  // slack: held up or falling
   CameraNoiseModel detection_noise;        // detector noise -> measurement covariances
   double detection_noise_floor_m = 0.002;  // added per axis (attitude and sync errors)
   // payload tracker covariance at start, per axis (variances: the tuned values are exact there)
@@ -54,6 +56,16 @@ struct EstimatorConfig {
   // vehicle's collision box grown by the payload radius and this margin: the payload has hit
   // the vehicle and free fall no longer holds
   double payload_hit_margin_m = 0.01;
+  // slack, the payload unseen for longer than this and the tension cue taut again: the cable is
+  // taut without a detection (three frames at 30 Hz: the camera has had its chance to say so)
+  double tension_retaut_unseen_s = 0.1;
+  // the health check (re-initialise from the detections) refuses a payload faster than this
+  // relative to the vehicle: the largest push the shipped sweeps draw, 2.5 N s, gives the 0.1 kg
+  // payload 25 m/s, a fall from the arena's 10 m ceiling 14 m/s, the vehicle itself a few m/s
+  double max_payload_relative_speed_mps = 40.0;
+  // ... or farther from the vehicle than the cable's length plus this: the tendon's stretch at
+  // the hardest re-taut is centimetres, the detector's error at 0.5 m millimetres
+  double max_cable_stretch_m = 0.1;
 };
 
 /// Full onboard estimator: quadrotor filter (IMU + VIO), cable EKF, mode detector.

@@ -43,10 +43,13 @@ struct SystemState {
   // the estimator has lost the payload: its payload state is a guess, not a tracked estimate
   // (no detection for a while, or the free-fall prediction ran into the vehicle); truth: false
   bool payload_lost = false;
+  // slack, and the last detections showed the payload held up (a hand, a gripper) rather than
+  // falling; out of view it is then estimated where it was last seen; truth: the gripper holds it
+  bool payload_supported = false;
 
   /// Packs into the 19-vector layout of StateIndex.
   StateVector ToVector() const;
-  /// Unpacks a 19-vector (normalises the quaternion); keeps time, mode, visibility and lost flag.
+  /// Unpacks a 19-vector (normalises the quaternion); keeps time, mode and the payload flags.
   void FromVector(const StateVector& x);
   /// True when every number is finite.
   bool AllFinite() const;

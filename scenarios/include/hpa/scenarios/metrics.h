@@ -63,8 +63,9 @@ struct Metrics {
   double mixer_saturated_fraction = 0.0;  // share of rate-loop allocations that fell short
   int camera_frames = 0, detections = 0;
   int retaut_count = 0;
-  double retaut_quad_vz_min_mps = 0.0;       // lowest quad z velocity within 0.5 s of a re-taut
-  double retaut_peak_body_rate_radps = 0.0;  // highest |w_B| within 0.5 s of a re-taut
+  // lowest quad z velocity and highest |w_B| within 0.5 s of a re-taut; none without a re-taut
+  std::optional<double> retaut_quad_vz_min_mps;
+  std::optional<double> retaut_peak_body_rate_radps;
   Quantiles mpc_solve_ms;
   int mpc_failures = 0;  // updates with QP failure, non-finite or fallback (capped plans fly)
   double closed_loop_cost = 0.0;                 // sum of the controller's plan costs
