@@ -98,3 +98,15 @@ set_tests_properties(cli.replay PROPERTIES LABELS cli TIMEOUT 300)
 add_test(NAME cli.install
          COMMAND bash ${SCEN}/tests/install_test.sh ${CMAKE_BINARY_DIR} ${CMAKE_SOURCE_DIR})
 set_tests_properties(cli.install PROPERTIES LABELS cli TIMEOUT 600)
+
+# The crash ordering on the wide impulse sweep (sideways 0.15 N s), onboard and with the true state
+add_test(NAME cli.impulse_wide_finding
+         COMMAND bash ${SCEN}/tests/impulse_wide_finding_test.sh ${HPA_BIN} ${SCEN}
+                 ${SCEN_OUT}/impulse_wide_finding)
+set_tests_properties(cli.impulse_wide_finding PROPERTIES LABELS "cli;scenario" TIMEOUT 900)
+
+# The re-taut claim on a line, a diagonal and a sideways push and the gripper lift, paired
+add_test(NAME cli.retaut_pushes_finding
+         COMMAND bash ${SCEN}/tests/retaut_pushes_finding_test.sh ${HPA_BIN} ${CMAKE_SOURCE_DIR}
+                 ${SCEN_OUT}/retaut_pushes_finding)
+set_tests_properties(cli.retaut_pushes_finding PROPERTIES LABELS "cli;scenario" TIMEOUT 900)
