@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
-# Identify the rotor drag coefficient from the paper's own Table I, as a prediction (issue 31,
-# item 5). The flight profile's rotor drag (models/profiles/flight.yaml, world.aero) is scaled by
-# one factor s on both axes, so the profile's x/y ratio (0.39168 / 0.27792, Faessler's) is kept:
+# Identify the rotor drag coefficient from the paper's own Table I, as a prediction
+# (docs/drag_identification.md). The sourced rotor drag (Faessler's, see flight.yaml) is scaled by one
+# factor s on both axes, so its x/y ratio (0.39168 / 0.27792, Faessler's) is kept:
 #   d_x = s * 0.39168 N s/m, d_y = s * 0.27792 N s/m.
 #   1. sweep: lissajous_T5, _T4, _T3_5 as shipped (rendered camera, onboard estimator, flight
 #      profile), SEEDS x SCALES, every other setting unchanged;
@@ -10,11 +10,12 @@
 #      crosses the paper's 0.052 m (linear interpolation between grid points); the identified
 #      value is where the seed-mean curve crosses it, its spread the per-seed crossings;
 #   3. predict: T = 4 and T = 3.5 at the identified d_x (same seeds, nothing else changed),
-#      against the paper's x RMSE and max |v_L|; the shipped value (s = 1) beside it.
+#      against the paper's x RMSE and max |v_L|; the sourced value (s = 1) beside it.
 # Writes DIR/drag_identification.md, DIR/drag_x_rmse.csv (one row per run) and
 # DIR/drag_x_rmse.svg (x RMSE against d_x, seed mean and range, paper's values as lines).
 # The T = 4 and 3.5 sweep rows only draw the plot; the fit reads T = 5 alone.
-# A developer tool (about 5 min on 2 cores), not a CI step.
+# A developer tool (about 5 min on 2 cores), not a CI step. Runs already in DIR are reused.
+# SEEDS, SCALES and JOBS (default 2 runs at a time) override the defaults below.
 #   ci/drag_identification.sh DIR
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -24,13 +25,10 @@ jobs=${JOBS:-2}
 seeds=${SEEDS:-"1 2 3 4 5"}
 scales=${SCALES:-"0 0.05 0.1 0.15 0.2 0.25 0.3 0.35 0.4 0.45 0.5 0.55 0.6 0.7 0.8 1.0 1.2 1.5"}
 periods="T5 T4 T3_5"
-# the flight profile's rotor drag, read from the profile itself
-profile_drag() {
-  sed -n "s/^ *rotor_drag_$1_Nspm: *\([0-9.eE+-]*\).*/\1/p" models/profiles/flight.yaml
-}
-dx0=$(profile_drag x)
-dy0=$(profile_drag y)
-[ -n "$dx0" ] && [ -n "$dy0" ] || { echo "no rotor drag in models/profiles/flight.yaml"; exit 1; }
+# s = 1: the sourced rotor drag (Faessler et al.'s k_drag times 0.72 kg, the flight profile's
+# value when this was written), fixed here so the grid stays the same if the profile changes
+dx0=0.39168
+dy0=0.27792
 mkdir -p "$out/runs"
 
 # one run: period, scale, seed; keeps metrics.json and the estimate's peak speed (not log.csv)
@@ -144,7 +142,7 @@ L = []
 L += ["# Rotor drag identified from Table I (T = 5 s) and the prediction for T = 4 and 3.5 s", "",
       f"`ci/drag_identification.sh DIR`: lissajous_T5, _T4, _T3_5 as shipped (flight profile, "
       f"rendered camera, onboard estimator), seeds {seedlist}, rotor drag d_x = s x {dx0}, "
-      f"d_y = s x {dy0} N s/m (the profile's x/y ratio kept), nothing else changed. "
+      f"d_y = s x {dy0} N s/m (Faessler's x 0.72 kg at s = 1; the x/y ratio kept), nothing else changed. "
       f"x RMSE is the onboard estimate against the reference (`payload_rmse_est_m[0]`, from the "
       f"ramp's end), the basis docs/results.md compares Table I on; the truth's is beside it. "
       f"Cells: mean over the seeds (min-max). Crashed runs: {crashes} of {len(rows)}.", ""]
@@ -161,12 +159,13 @@ def fmt_dx(v):
     return "none on the grid" if v is None else f"{v:.4f}"
 L += ["## Identified coefficient", "",
       f"- x RMSE (estimate) = 0.052 m on the seed-mean curve at **d_x = {est_dx:.4f} N s/m** "
-      f"(d_y = {est_dx / dx0 * dy0:.4f}; s = {est_dx / dx0:.3f} of the profile's).",
+      f"(d_y = {est_dx / dx0 * dy0:.4f}; s = {est_dx / dx0:.3f} of the sourced value).",
       "- per seed: " + ", ".join(f"seed {k}: {fmt_dx(v)}" for k, v in est_per.items())
       + (f"; range {min(crossed):.4f}-{max(crossed):.4f}, standard deviation "
          f"{statistics.stdev(crossed):.4f} N s/m" if len(crossed) > 1 else ""),
-      f"- on the truth's x RMSE instead: d_x = {fmt_dx(tru_dx)} N s/m (per seed "
-      + ", ".join(fmt_dx(v) for v in tru_per.values()) + ")",
+      ("- on the truth's x RMSE instead: " + (f"d_x = {tru_dx:.4f} N s/m" if tru_dx is not None
+       else f"no crossing on the seed mean (already {stats('T5', '0', 'true_x')[0]:.3f} m "
+            "without drag)") + "; per seed " + ", ".join(fmt_dx(v) for v in tru_per.values())),
       f"- if the paper's one flight's 0.052 m were 10 % off: d_x = "
       f"{fmt_dx(fit('est_x', 0.9 * PAPER['T5'][1])[0])} (0.047 m) to "
       f"{fmt_dx(fit('est_x', 1.1 * PAPER['T5'][1])[0])} N s/m (0.057 m)",
@@ -177,7 +176,7 @@ L += ["## Prediction against the paper", "",
       "|---|---|---|---|---|---|---|---|---|---|"]
 for period in PERIODS:
     T, px, pv = PAPER[period]
-    for label, s in ((f"{dx_id:.4f} identified", s_id), (f"{dx0:.4f} profile", "1.0"),
+    for label, s in ((f"{dx_id:.4f} identified", s_id), (f"{dx0:.4f} sourced", "1.0"),
                      ("0 none", "0")):
         L.append(f"| {T:g} | {label} | {cell(period, s, 'est_x')} | {px} "
                  f"| {ratio(period, s, 'est_x', px)} | {cell(period, s, 'true_x')} "
@@ -227,7 +226,7 @@ S.append(f'<text x="{(ml + W - mr) / 2}" y="{H - 12}" text-anchor="middle">rotor
          f'[N s/m] (d_y = {dy0 / dx0:.4f} d_x)</text>')
 S.append(f'<text x="16" y="{(mt + H - mb) / 2}" text-anchor="middle" '
          f'transform="rotate(-90 16 {(mt + H - mb) / 2})">x RMSE [m]</text>')
-for v, name, dash in ((dx0, "profile", "2,3"), (dx_id, "identified", "6,3")):
+for v, name, dash in ((dx0, "sourced", "2,3"), (dx_id, "identified", "6,3")):
     S.append(f'<line x1="{X(v):.1f}" y1="{Y(0):.1f}" x2="{X(v):.1f}" y2="{Y(ymax):.1f}" '
              f'stroke="black" stroke-dasharray="{dash}"/><text x="{X(v) + 3:.1f}" '
              f'y="{mt + 14}">{name} {v:.3f}</text>')

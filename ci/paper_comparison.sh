@@ -5,9 +5,11 @@
 # the sphere projection (always_taut_projected). Writes DIR/comparison.md (the README's table):
 #   - line_impulse and hover_gripper_pull, rendered camera, seeds 1-3: median and range of the
 #     quadrotor deviation, re-taut v_z and peak body rate, payload in view, crashes;
-#   - the impulse sweep (scenarios/sweeps/impulse_crash_rate.yaml, analytic camera) with
-#     RUNS draws per controller: crashes with the sweep summary's Wilson 95 % intervals, medians
-#     of the re-taut figures over the runs that did not crash.
+#   - the impulse sweeps (scenarios/sweeps/impulse_crash_rate.yaml, sideways spread 0.05 N s,
+#     and impulse_crash_rate_wide.yaml, 0.15 N s; analytic camera) with RUNS draws per
+#     controller: crashes with the sweep summary's Wilson 95 % intervals, each arm's exact
+#     McNemar test against the paper's baseline on the same draws, medians of the re-taut
+#     figures over the runs that did not crash.
 # A developer tool (about 5 min with RUNS=100 on 2 cores), not a CI step.
 #   ci/paper_comparison.sh DIR [RUNS]
 set -euo pipefail
@@ -49,24 +51,27 @@ for scenario in line_impulse hover_gripper_pull; do
   done
 done
 
-echo "== impulse sweep, $runs draws per controller"
-for arm in "${sweep_vary[@]}"; do
-  name=${arm%%|*}
-  vary=${arm#*|}
-  yaml="$out/sweeps/$name.yaml"
-  mkdir -p "$out/sweeps"
-  sed -e "s|^base: ../line_impulse.yaml|base: $PWD/scenarios/line_impulse.yaml|" \
-      -e "s|^runs: .*|runs: $runs|" \
-      -e "s|^  controller.type: .*|  $vary|" scenarios/sweeps/impulse_crash_rate.yaml \
-    | sed 's/\\n/\n/g' > "$yaml"
-  rm -rf "$out/sweeps/$name"
-  "$hpa" sweep "$yaml" --out "$out/sweeps/$name" --jobs "$(nproc)" > "$out/sweeps/$name.log" 2>&1 \
-    || { echo "sweep $name failed:"; tail -5 "$out/sweeps/$name.log"; exit 1; }
-  echo "sweep $name done"
+for spread in impulse_crash_rate impulse_crash_rate_wide; do
+  echo "== $spread sweep, $runs draws per controller"
+  for arm in "${sweep_vary[@]}"; do
+    name=${arm%%|*}
+    vary=${arm#*|}
+    dir="$out/sweeps/$spread"
+    yaml="$dir/$name.yaml"
+    mkdir -p "$dir"
+    sed -e "s|^base: ../line_impulse.yaml|base: $PWD/scenarios/line_impulse.yaml|" \
+        -e "s|^runs: .*|runs: $runs|" \
+        -e "s|^  controller.type: .*|  $vary|" "scenarios/sweeps/$spread.yaml" \
+      | sed 's/\\n/\n/g' > "$yaml"
+    rm -rf "${dir:?}/$name"
+    "$hpa" sweep "$yaml" --out "$dir/$name" --jobs "$(nproc)" > "$dir/$name.log" 2>&1 \
+      || { echo "sweep $name failed:"; tail -5 "$dir/$name.log"; exit 1; }
+    echo "sweep $spread $name done"
+  done
 done
 
-python3 - "$out" "$runs" <<'PY'
-import json, os, statistics, sys
+/usr/bin/python3 - "$out" "$runs" <<'PY'
+import json, math, os, statistics, sys
 out, runs = sys.argv[1], int(sys.argv[2])
 arms = ["hpa_mpc", "hpa_mpc+predict_retaut", "nonhybrid_mpc", "nonhybrid_mpc+projected"]
 
@@ -98,27 +103,48 @@ for scenario in ["line_impulse", "hover_gripper_pull"]:
             f"| {spread([m['payload_in_fov_fraction'] for m in ms])} |")
     lines.append("")
 
-lines += [f"## Impulse sweep ({runs} draws of 0.1-2.5 N s per controller, same draws, analytic "
-          "camera, flight profile)", "",
-          "| controller | crashes (Wilson 95 %) | crashes, impulse < 1.5 N s | re-taut v_z min, "
-          "median [m/s] | re-taut peak body rate, median [rad/s] | quad deviation, median [m] |",
-          "|---|---|---|---|---|---|"]
-for arm in arms:
-    # totals, the Wilson interval and the deviation median from the sweep's own summary
-    summary = json.load(open(os.path.join(out, "sweeps", arm, "summary.json")))
-    (total,) = summary["controllers"].values()
-    lo, hi = total["crash_rate_ci95"]
-    rows = [json.loads(l) for l in open(os.path.join(out, "sweeps", arm, "runs.jsonl"))]
-    low = [r["metrics"] for r in rows if r["status"] == "ok"
-           and r["values"]["events.0.impulse.2"] < 1.5]
-    ok = [r["metrics"] for r in rows if r["status"] == "ok" and not r["metrics"]["crashed"]
-          and r["metrics"]["retaut"]["count"] > 0]
-    lines.append(
-        f"| {arm} | {total['crashes']} of {total['runs']} [{lo:.3f}, {hi:.3f}] "
-        f"| {sum(m['crashed'] for m in low)} of {len(low)} "
-        f"| {statistics.median(m['retaut']['quad_vz_min_mps'] for m in ok):.2f} "
-        f"| {statistics.median(m['retaut']['peak_body_rate_radps'] for m in ok):.2f} "
-        f"| {total['quad_deviation_max_m']['median']:.3f} |")
+def mcnemar(b, c):
+    """Exact two-sided McNemar p-value on b and c discordant pairs."""
+    n = b + c
+    if n == 0:
+        return 1.0
+    tail = sum(math.comb(n, i) for i in range(0, min(b, c) + 1)) / 2 ** n
+    return min(1.0, 2 * tail)
+
+for spread, label in (("impulse_crash_rate", "0.05"), ("impulse_crash_rate_wide", "0.15")):
+    lines += [f"## Impulse sweep, sideways spread {label} N s ({runs} draws of 0.1-2.5 N s up per "
+              "controller, same draws, analytic camera, flight profile)", "",
+              "| controller | crashes (Wilson 95 %) | against nonhybrid_mpc: crashes only here / "
+              "only there (McNemar p) | crashes, impulse < 1.5 N s | re-taut v_z min, median [m/s] "
+              "| re-taut peak body rate, median [rad/s] | quad deviation, median [m] |",
+              "|---|---|---|---|---|---|---|"]
+    crashed_by_arm = {}
+    for arm in arms:
+        rows = [json.loads(l) for l in open(os.path.join(out, "sweeps", spread, arm, "runs.jsonl"))]
+        crashed_by_arm[arm] = {r["draw"]: r["status"] == "ok" and r["metrics"]["crashed"]
+                               for r in rows}
+    for arm in arms:
+        # totals, the Wilson interval and the deviation median from the sweep's own summary
+        summary = json.load(open(os.path.join(out, "sweeps", spread, arm, "summary.json")))
+        (total,) = summary["controllers"].values()
+        lo, hi = total["crash_rate_ci95"]
+        rows = [json.loads(l) for l in open(os.path.join(out, "sweeps", spread, arm, "runs.jsonl"))]
+        low = [r["metrics"] for r in rows if r["status"] == "ok"
+               and r["values"]["events.0.impulse.2"] < 1.5]
+        ok = [r["metrics"] for r in rows if r["status"] == "ok" and not r["metrics"]["crashed"]
+              and r["metrics"]["retaut"]["count"] > 0]
+        mine, base = crashed_by_arm[arm], crashed_by_arm["nonhybrid_mpc"]
+        only_here = sum(1 for d in mine if mine[d] and not base.get(d, False))
+        only_there = sum(1 for d in mine if base.get(d, False) and not mine[d])
+        paired = ("-" if arm == "nonhybrid_mpc" else
+                  f"{only_here} / {only_there} (p = {mcnemar(only_here, only_there):.3g})")
+        lines.append(
+            f"| {arm} | {total['crashes']} of {total['runs']} [{lo:.3f}, {hi:.3f}] | {paired} "
+            f"| {sum(m['crashed'] for m in low)} of {len(low)} "
+            f"| {statistics.median(m['retaut']['quad_vz_min_mps'] for m in ok):.2f} "
+            f"| {statistics.median(m['retaut']['peak_body_rate_radps'] for m in ok):.2f} "
+            f"| {total['quad_deviation_max_m']['median']:.3f} |")
+    lines.append("")
 open(os.path.join(out, "comparison.md"), "w").write("\n".join(lines) + "\n")
 print("\n".join(lines))
 PY

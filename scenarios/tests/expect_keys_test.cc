@@ -33,6 +33,7 @@ const std::map<std::string, Case>& Cases() {
           m->crashed = true;
           m->crash_reason = "tilt > 90 deg";
         }}},
+      {"crash_allowed", {{1.0}, [](Metrics*) {}, nullptr}},
       {"payload_rmse_max",
        {{0.1, 0.1, 0.1},
         [](Metrics* m) { m->payload_rmse_m = Eigen::Vector3d(0.09, 0, 0.1); },
@@ -89,6 +90,7 @@ TEST(ExpectKeysTest, EveryKeyPassesAndFailsOnItsMetric) {
     if (k.description.find("(test)") != std::string::npos) continue;
     const auto c = Cases().find(k.key);
     ASSERT_NE(c, Cases().end()) << "expect key '" << k.key << "' has no test case here";
+    if (!c->second.fail) continue;  // a key that never fails by itself (crash_allowed: below)
     ExpectSpec spec;
     spec.bounds[k.key] = c->second.bound;
     Metrics passing, failing;
@@ -120,6 +122,19 @@ TEST(ExpectKeysTest, ACrashFailsAScenarioThatDoesNotExpectOne) {
   allowed.bounds["crashed"] = {1.0};
   CheckExpectations(allowed, &crashed);
   EXPECT_TRUE(crashed.expect_passed);
+  // crash_allowed: the crash is no failure, the other bounds still are
+  ExpectSpec diagnostic;
+  diagnostic.bounds["crash_allowed"] = {1.0};
+  diagnostic.bounds["mpc_failures_max"] = {0.0};
+  CheckExpectations(diagnostic, &crashed);
+  EXPECT_TRUE(crashed.expect_passed);
+  crashed.mpc_failures = 2;
+  CheckExpectations(diagnostic, &crashed);
+  EXPECT_FALSE(crashed.expect_passed);
+  diagnostic.bounds["crash_allowed"] = {0.0};
+  crashed.mpc_failures = 0;
+  CheckExpectations(diagnostic, &crashed);
+  EXPECT_FALSE(crashed.expect_passed);
 }
 
 // A scenario whose expect block is `expect: {KEY: VALUE}`.

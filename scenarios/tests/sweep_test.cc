@@ -264,4 +264,26 @@ TEST(SweepSummaryTest, GroupsByGridVariablesAndBinsOverTheDeclaredRange) {
   EXPECT_EQ(bins.front()["runs"].get<int>(), 0);  // nothing drawn in 0.05-0.10: an empty bin
 }
 
+TEST(SweepSummaryTest, AGroupWithNoFinishedRunHasNoCrashRate) {
+  // every run an error: the crash rate is unknown (null, "-"), not a perfect-looking 0.000
+  std::vector<sweep::Record> records;
+  for (int i = 0; i < 3; ++i) {
+    sweep::Record r;
+    r.run = i;
+    r.controller = "hpa_mpc";
+    r.error = true;
+    r.line = "{}";
+    records.push_back(r);
+  }
+  const std::string dir = TestTempDir() + "summary_errors";
+  std::filesystem::create_directories(dir);
+  sweep::WriteSummary(records, dir, nullptr);
+  const nlohmann::json summary = nlohmann::json::parse(std::ifstream(dir + "/summary.json"));
+  EXPECT_TRUE(summary["controllers"]["hpa_mpc"]["crash_rate"].is_null());
+  std::ifstream md_file(dir + "/summary.md");
+  const std::string md((std::istreambuf_iterator<char>(md_file)), std::istreambuf_iterator<char>());
+  EXPECT_EQ(md.find("0.000 ["), std::string::npos) << md;
+  EXPECT_NE(md.find("| hpa_mpc | 0 | 3 | 0 | - ["), std::string::npos) << md;  // runs, errors
+}
+
 }  // namespace hpa

@@ -83,6 +83,23 @@ std::vector<ExpectKey> BuildTable() {
     };
     t.push_back(k);
   }
+  {
+    // read by CheckExpectations: a crash fails every scenario that neither bounds `crashed` nor
+    // allows one
+    ExpectKey k{"crash_allowed",
+                "crashed",
+                "always (a crash is then no failure)",
+                "true | false",
+                "true: a crash is no failure of this scenario (a diagnostic case whose other "
+                "bounds are its verdict)",
+                0,
+                0.0,
+                1.0,
+                false,
+                {}};
+    k.check = [](const Metrics&, const std::vector<double>&) { return std::vector<std::string>{}; };
+    t.push_back(k);
+  }
   t.push_back(AxesMax("payload_rmse_max", "payload_rmse_m", "payload tracking RMSE per axis",
                       [](const Metrics& m) { return m.payload_rmse_m; }));
   t.push_back(AxesMax("quad_rmse_max", "quad_rmse_m", "quadrotor tracking RMSE per axis",

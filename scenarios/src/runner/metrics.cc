@@ -195,8 +195,10 @@ void ComputeMetrics(const MetricsInputs& in, Metrics* m) {
 void CheckExpectations(const ExpectSpec& e, Metrics* m) {
   m->expect_failed.clear();
   if (m->run_error) m->expect_failed.push_back("run aborted: " + *m->run_error);
-  // a crash fails every scenario that does not bound `crashed` itself
-  if (m->crashed && !e.Has("crashed")) {
+  // a crash fails every scenario that neither bounds `crashed` itself nor allows a crash
+  const auto allowed = e.bounds.find("crash_allowed");
+  const bool crash_allowed = allowed != e.bounds.end() && allowed->second.at(0) != 0.0;
+  if (m->crashed && !e.Has("crashed") && !crash_allowed) {
     m->expect_failed.push_back("crashed: true (" + m->crash_reason.value_or("") +
                                "), and the scenario does not expect a crash");
   }

@@ -168,7 +168,7 @@ int RunExitCode(const RunResult& result, const Scenario& scenario) {
                  result.metrics.run_error->c_str());
     return kExitInternal;
   }
-  if (result.metrics.crashed && !scenario.expect.Has("crashed")) {
+  if (result.metrics.crashed && !result.metrics.expect_passed && !scenario.expect.Has("crashed")) {
     std::fprintf(stderr,
                  "hpa: the vehicle crashed (%s at t = %.3f s) and the scenario does not "
                  "expect a crash\n",

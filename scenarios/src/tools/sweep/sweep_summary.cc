@@ -247,7 +247,7 @@ void GroupTableMarkdown(const SummaryTable& t, std::ostringstream& md) {
     const Cell& g = t.total.at(c);
     const auto ci = Wilson(g.crashes, g.n);
     md << "| " << c << " | " << g.n << " | " << g.errors << " | " << g.crashes << " | "
-       << Fixed(g.n ? 1.0 * g.crashes / g.n : 0.0, 3) << " [" << Fixed(ci.first, 3) << ", "
+       << Fixed(g.n ? 1.0 * g.crashes / g.n : NAN, 3) << " [" << Fixed(ci.first, 3) << ", "
        << Fixed(ci.second, 3) << "] | " << g.expect_failures << "/" << g.n << " ["
        << Fixed(Wilson(g.expect_failures, g.n).first, 3) << ", "
        << Fixed(Wilson(g.expect_failures, g.n).second, 3) << "] | " << Fixed(Quantile(g.rmse, 0.5))

@@ -1,0 +1,177 @@
+#!/usr/bin/python3
+"""Derives a scenario's expect bounds from many seeds, or checks them on held-out seeds.
+
+The rule (docs/results.md, "How the bounds are set"): every bound is the worst value over the
+derivation seeds (1-20 by default) with a 30 % margin: an upper bound is max + 0.3 |max|, a lower
+bound min - 0.3 |min|; `mpc_failures_max` is the worst count (failures are whole updates);
+`crashed: false` only when no derivation seed crashed. A regression that makes every run 50 %
+worse therefore fails at least on the worst seed, and seeds beyond the derivation set (21-30)
+test the bound on cases it was not fitted on.
+
+  scenario_bounds.py SCENARIO.yaml [--seeds 1-20] [--hpa build/bin/hpa] [--write]
+  scenario_bounds.py --check SCENARIO.yaml... [--seeds 1-30]
+
+Derive prints the new expect block with the measured ranges (and --write puts it into the file,
+replacing the comment block before `expect:` and the block itself). --check runs the seeds and
+lists every seed whose run fails the file's bounds (exit 1 if any).
+"""
+import argparse
+import json
+import math
+import os
+import re
+import subprocess
+import sys
+import tempfile
+from concurrent.futures import ThreadPoolExecutor
+
+import yaml
+
+
+def parse_seeds(text):
+    lo, _, hi = text.partition("-")
+    return list(range(int(lo), int(hi or lo) + 1))
+
+
+def expect_keys(hpa):
+    """key -> (metric path, 'max' | 'min' | 'eq', per-axis) from `hpa schema expect`."""
+    out = subprocess.run([hpa, "schema", "expect"], check=True, capture_output=True,
+                         text=True).stdout
+    keys = {}
+    for line in out.splitlines():
+        m = re.match(r"\| `([a-z_]+)` \| `([a-z_.]+)` \| ([^|]+) \|", line)
+        if not m:
+            continue
+        key, metric, passes = m.group(1), m.group(2), m.group(3)
+        kind = "eq" if "==" in passes else ("max" if "<=" in passes else "min")
+        keys[key] = (metric, kind, "per axis" in passes)
+    return keys
+
+
+def run_seeds(hpa, scenario, seeds, out, jobs):
+    def one(seed):
+        d = os.path.join(out, f"seed{seed}")
+        subprocess.run([hpa, "run", scenario, "--seed", str(seed), "--out", d, "--quiet"],
+                       capture_output=True)
+        path = os.path.join(d, "metrics.json")
+        if not os.path.exists(path):
+            sys.exit(f"{scenario} seed {seed}: no metrics.json written")
+        return seed, json.load(open(path))
+    with ThreadPoolExecutor(jobs) as pool:
+        return dict(pool.map(one, seeds))
+
+
+def read(metrics, path):
+    v = metrics
+    for part in path.split("."):
+        v = v.get(part) if isinstance(v, dict) else None
+    return v
+
+
+def fmt(x):
+    return f"{x:.3g}" if abs(x) < 1e3 else f"{x:.0f}"
+
+
+def rounded(x, kind):
+    """x rounded outward (up for an upper bound, down for a lower one) to 3 significant digits."""
+    if x == 0:
+        return 0.0
+    scale = 10 ** (math.floor(math.log10(abs(x))) - 2)
+    steps = x / scale
+    # a value already on the grid (0.7 computed as 0.69999...) stays where it is
+    steps = round(steps) if abs(steps - round(steps)) < 1e-6 else steps
+    return round((math.ceil if kind == "max" else math.floor)(steps) * scale, 12)
+
+
+def derive(hpa, scenario, seeds, jobs, write):
+    text = open(scenario).read()
+    spec = yaml.safe_load(text)
+    keys = expect_keys(hpa)
+    with tempfile.TemporaryDirectory() as out:
+        runs = run_seeds(hpa, scenario, seeds, out, jobs)
+    crashes = sorted(s for s, m in runs.items() if m["crashed"])
+    lines, measured = [], []
+    for key, old in (spec.get("expect") or {}).items():
+        metric, kind, per_axis = keys[key]
+        if key == "crash_allowed":
+            lines.append(f"  crash_allowed: {str(old).lower()}")
+            measured.append(f"crashes {len(crashes)} of {len(seeds)} (allowed)")
+            continue
+        if key == "crashed":
+            if old is False and crashes:
+                print(f"{scenario}: seeds {crashes} crash, so `crashed: false` cannot hold",
+                      file=sys.stderr)
+            lines.append(f"  crashed: {str(old).lower()}")
+            measured.append(f"crashes {len(crashes)} of {len(seeds)}")
+            continue
+        values = [read(m, metric) for s, m in sorted(runs.items()) if not m["crashed"]]
+        values = [v for v in values if v is not None]
+        if not values:
+            sys.exit(f"{scenario}: {key} was not measured on any seed")
+        if per_axis:
+            bound = [rounded(max(v[i] for v in values) * 1.3, "max") for i in range(3)]
+            lines.append(f"  {key}: [{', '.join(fmt(b) for b in bound)}]")
+            measured.append(f"{metric} " + ", ".join(
+                f"{'xyz'[i]} {fmt(min(v[i] for v in values))}-{fmt(max(v[i] for v in values))}"
+                for i in range(3)))
+            continue
+        lo, hi = min(values), max(values)
+        if key == "mpc_failures_max":
+            bound = hi
+        elif kind == "max":
+            bound = rounded(hi + 0.3 * abs(hi), "max")
+        else:
+            bound = rounded(lo - 0.3 * abs(lo), "min")
+        if key.endswith("_min") and metric.endswith("fraction"):
+            bound = max(bound, 0.0)
+        lines.append(f"  {key}: {fmt(bound)}")
+        measured.append(f"{metric} {fmt(lo)}-{fmt(hi)}")
+    name = os.path.relpath(scenario)
+    comment = [f"# Bounds: `scripts/scenario_bounds.py {name} --seeds {seeds[0]}-{seeds[-1]}`:",
+               f"# the worst of seeds {seeds[0]}-{seeds[-1]} with a 30 % margin (docs/results.md, \"How the",
+               "# bounds are set\"); seeds 21-30 are held out (ci/check_bounds.sh). Measured:"]
+    body = "; ".join(measured)
+    while body:
+        cut = body[:96].rfind(" ") if len(body) > 96 else len(body)
+        comment.append("#   " + body[:cut].strip())
+        body = body[cut:].strip()
+    block = "\n".join(comment + ["expect:"] + lines) + "\n"
+    print(block, end="")
+    if write:
+        file_lines = text.splitlines(keepends=True)
+        start = next(i for i, l in enumerate(file_lines) if l.startswith("expect:"))
+        while start > 0 and file_lines[start - 1].startswith("#"):
+            start -= 1
+        open(scenario, "w").write("".join(file_lines[:start]) + block)
+
+
+def check(hpa, scenarios, seeds, jobs):
+    failed = 0
+    for scenario in scenarios:
+        with tempfile.TemporaryDirectory() as out:
+            runs = run_seeds(hpa, scenario, seeds, out, jobs)
+        bad = {s: m["expect"]["failed"] for s, m in sorted(runs.items()) if not m["expect"]["passed"]}
+        print(f"{scenario}: {len(seeds) - len(bad)} of {len(seeds)} seeds pass")
+        for s, why in bad.items():
+            print(f"  seed {s}: {'; '.join(why)}")
+        failed += bool(bad)
+    return failed
+
+
+def main():
+    p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("scenarios", nargs="+")
+    p.add_argument("--seeds", default=None, help="first-last (derive: 1-20, check: 1-30)")
+    p.add_argument("--hpa", default=os.environ.get("HPA", "build/bin/hpa"))
+    p.add_argument("--jobs", type=int, default=os.cpu_count() or 2)
+    p.add_argument("--write", action="store_true", help="rewrite the scenario's bounds")
+    p.add_argument("--check", action="store_true", help="check the file's bounds on the seeds")
+    a = p.parse_args()
+    if a.check:
+        sys.exit(1 if check(a.hpa, a.scenarios, parse_seeds(a.seeds or "1-30"), a.jobs) else 0)
+    for scenario in a.scenarios:
+        derive(a.hpa, scenario, parse_seeds(a.seeds or "1-20"), a.jobs, a.write)
+
+
+if __name__ == "__main__":
+    main()
