@@ -54,6 +54,30 @@ TEST(SweepDiffTest, BootstrapIntervalCoversTheMeanAndIsDeterministic) {
   EXPECT_EQ(zero.second, 0.0);
 }
 
+TEST(SweepDiffTest, HodgesLehmannMatchesR) {
+  // R: wilcox.test(1:10, conf.int = TRUE): estimate 5.5, 95 % interval [3, 8]
+  std::vector<double> d;
+  for (int i = 1; i <= 10; ++i) d.push_back(i);
+  const ShiftEstimate s = HodgesLehmann(d);
+  EXPECT_DOUBLE_EQ(s.estimate, 5.5);
+  EXPECT_DOUBLE_EQ(s.ci95.first, 3.0);
+  EXPECT_DOUBLE_EQ(s.ci95.second, 8.0);
+  // deterministic: no resampling, the same answer every time
+  EXPECT_EQ(HodgesLehmann(d).ci95, s.ci95);
+}
+
+TEST(SweepDiffTest, PairedRateDifferenceIsExact) {
+  // 8 discordant pairs, all favouring B, over 30 pairs: +8/30; Clopper-Pearson on 8 of 8 is
+  // [0.025^(1/8), 1] = [0.631, 1], scaled by 8/30
+  const ShiftEstimate s = PairedRateDifference(0, 8, 30);
+  EXPECT_NEAR(s.estimate, 8.0 / 30.0, 1e-12);
+  EXPECT_NEAR(s.ci95.first, 8.0 / 30.0 * (2.0 * std::pow(0.025, 1.0 / 8.0) - 1.0), 1e-6);
+  EXPECT_NEAR(s.ci95.second, 8.0 / 30.0, 1e-9);
+  // no discordant pair in 6: |B - A| is bounded only by 1 - 0.025^(1/6) = 0.459
+  const ShiftEstimate none = PairedRateDifference(0, 0, 6);
+  EXPECT_NEAR(none.ci95.second, 1.0 - std::pow(0.025, 1.0 / 6.0), 1e-12);
+}
+
 // --- the verdicts of CompareSweeps on written runs.jsonl files ------------------------------
 
 // One run's record as `hpa sweep` writes it, with the metrics sweep-diff reads.
@@ -64,6 +88,7 @@ struct FakeRun {
   double in_view = 1.0;      // payload_in_fov_fraction
   double solve_ms = 0.2;     // mpc_solve_ms.median
   bool crashed = false;
+  bool error = false;    // a run error (time limit): status "error", no metrics
   int slack_missed = 0;  // slack_detection_latency_s.missed
   int retauts = 1;       // retaut.count
 };
@@ -93,8 +118,8 @@ std::string WriteSweep(const std::string& name, const std::vector<FakeRun>& runs
                         {"draw", r.draw},
                         {"seed", 1000 + r.draw},
                         {"values", {{"controller.perception_weight", r.weight}}},
-                        {"status", "ok"},
-                        {"metrics", m}};
+                        {"status", r.error ? "error" : "ok"},
+                        {"metrics", r.error ? nlohmann::json() : m}};
     out << j.dump() << "\n";
   }
   return dir;
@@ -191,12 +216,13 @@ TEST(SweepDiffVerdictTest, VerdictAgreesWithTheInterval) {
     for (const MetricDiff& m : CompareSweeps(options).metrics) {
       if (m.binary || m.pairs == 0) continue;
       ++verdicts_checked;
+      // the one rule (docs/sweeps.md): equivalence is the interval within +- the minimum
+      // effect; a verdict needs the interval off zero and the estimate at the minimum effect
       if (m.verdict == "no difference shown") {
-        EXPECT_LE(m.ci95.first, 0.0) << m.name;
-        EXPECT_GE(m.ci95.second, 0.0) << m.name;
         EXPECT_LE(std::max(-m.ci95.first, m.ci95.second), m.min_effect) << m.name;
       } else if (m.verdict == "better" || m.verdict == "worse") {
         EXPECT_TRUE(m.ci95.first > 0.0 || m.ci95.second < 0.0) << m.name;
+        EXPECT_GE(std::fabs(m.estimate), m.min_effect) << m.name;
       }
     }
   }
@@ -215,8 +241,54 @@ TEST(SweepDiffVerdictTest, MissedSlackEventsCountAsFailures) {
   const SweepDiff diff = CompareSweeps(options);
   EXPECT_EQ(Find(diff, "slack_event_missed_rate").verdict, "worse");  // McNemar p = 2 / 2^8
   EXPECT_EQ(Find(diff, "slack_detection_latency_max_s").dropped_one_side, 8);
+  // the latency over the events each side detected: withheld, missing must not pay
+  EXPECT_EQ(Find(diff, "slack_detection_latency_max_s").verdict, "inconclusive");
+  EXPECT_NE(Find(diff, "slack_detection_latency_max_s").reason.find("miss"), std::string::npos);
   EXPECT_EQ(Find(diff, "retaut_quad_vz_min_mps").dropped_one_side, 3);
   EXPECT_EQ(Find(diff, "retaut_quad_vz_min_mps").pairs, 27);
+}
+
+// The direction comes from the tested statistic: 34 pairs 1 mm worse and 6 pairs 10 cm better
+// have a mean 1.4 cm better but a rank test that says worse; the shift estimate says worse by
+// 1 mm (interval [1, 1] mm), within the 1 cm that matters: no difference shown, never "better"
+// from the mean.
+TEST(SweepDiffVerdictTest, TheDirectionAndTheSizeComeFromTheTestedShift) {
+  std::vector<FakeRun> a = RandomRuns(40, 7), b = a;
+  for (int i = 0; i < 40; ++i) b[i].deviation_m = a[i].deviation_m + (i < 34 ? 0.001 : -0.1);
+  SweepDiffOptions options;
+  options.a_dir = WriteSweep("shift_a", a);
+  options.b_dir = WriteSweep("shift_b", b);
+  const SweepDiff diff = CompareSweeps(options);
+  const MetricDiff& m = Find(diff, "quad_position_deviation_max_m");
+  EXPECT_LT(m.difference, 0.0);  // the mean
+  EXPECT_GT(m.estimate, 0.0);    // the rank test's shift
+  EXPECT_LT(m.p_value, 0.05);
+  EXPECT_NEAR(m.estimate, 0.001, 1e-9);
+  EXPECT_EQ(m.verdict, "no difference shown") << m.reason;
+}
+
+// Identical runs: every metric equivalent or, for rates whose six pairs cannot bound a
+// difference of 0.05, inconclusive; never better or worse. Run errors are not crashes.
+TEST(SweepDiffVerdictTest, IdenticalPairsAndRunErrors) {
+  const std::vector<FakeRun> a = RandomRuns(6, 3);
+  SweepDiffOptions options;
+  options.a_dir = WriteSweep("same_a", a);
+  options.b_dir = WriteSweep("same_b", a);
+  for (const MetricDiff& m : CompareSweeps(options).metrics) {
+    EXPECT_NE(m.verdict, "better") << m.name;
+    EXPECT_NE(m.verdict, "worse") << m.name;
+    if (!m.binary && !m.timing && m.pairs > 0) EXPECT_EQ(m.verdict, "no difference shown") << m.name;
+  }
+  // 30 pairs, three of B's runs hit the time limit: left out of the crash rate, not crashes
+  std::vector<FakeRun> ok = RandomRuns(30, 5), errors = ok;
+  for (int i = 0; i < 3; ++i) errors[i].error = true;
+  options.a_dir = WriteSweep("err_a", ok);
+  options.b_dir = WriteSweep("err_b", errors);
+  const SweepDiff with_errors = CompareSweeps(options);
+  const MetricDiff& crash = Find(with_errors, "crash_rate");
+  EXPECT_EQ(crash.pairs, 27);
+  EXPECT_EQ(crash.difference, 0.0);
+  EXPECT_NE(crash.verdict, "worse");
 }
 
 // --a-where matches numbers numerically (1 finds the runs written 1.0); a value no run has is

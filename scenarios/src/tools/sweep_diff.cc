@@ -40,6 +40,8 @@ struct PairedMetric {
   double min_effect;  // smallest difference that matters, in the metric's unit
   std::string unit;
   bool timing = false;  // measures the machine: no verdict between builds unless asked
+  // taken over detected slack events only: no verdict when the sides miss events differently
+  bool needs_equal_misses = false;
 };
 
 bool Crashed(const Run& r) {
@@ -68,9 +70,13 @@ std::optional<double> MissedSlackEvent(const Run& r) {
 const std::vector<PairedMetric>& PairedMetrics() {
   static const std::vector<PairedMetric> defs = [] {
     std::vector<PairedMetric> d = {
+        // a run error (time limit, a dead worker) is no crash: the pair is left out
         {"crash_rate", false, true,
-         [](const Run& r) -> std::optional<double> { return Crashed(r) ? 1.0 : 0.0; }, 0.05,
-         "fraction"},
+         [](const Run& r) -> std::optional<double> {
+           if (!r.ok || r.metrics.is_null()) return std::nullopt;
+           return r.metrics.value("crashed", false) ? 1.0 : 0.0;
+         },
+         0.05, "fraction"},
         {"expect_failure_rate", false, true,
          [](const Run& r) -> std::optional<double> {
            if (!r.ok || r.metrics.is_null()) return 1.0;
@@ -83,7 +89,8 @@ const std::vector<PairedMetric>& PairedMetrics() {
       if (!def.compared) continue;
       d.push_back({def.name, def.better == Better::kHigher, false,
                    Field([&def](const Json& m) { return ReadMetric(def, m); }), def.min_effect,
-                   def.unit, def.timing});
+                   def.unit, def.timing,
+                   def.name.rfind("slack_detection_latency", 0) == 0});
     }
     return d;
   }();
@@ -272,38 +279,47 @@ std::vector<std::string> DescribeDifferences(const std::vector<RunPair>& pairs,
 }
 
 // Gives a metric compared over m->pairs pairs its verdict, and the reason when the verdict is
-// neither better nor worse: what the data could show decides between no difference shown and
-// inconclusive.
-void Judge(const PairedMetric& def, int a_only, int b_only, bool verdict_timing, MetricDiff* m) {
-  // what the data could show: the test's smallest attainable p over all pairs, and the
-  // difference's bound (rates: the Wilson bound of the discordant share, which limits |B - A|;
-  // continuous: the bootstrap interval)
+// neither better nor worse. One rule for every metric (docs/sweeps.md): better / worse when the
+// test rejects (p < 0.05), the interval excludes zero and the estimate reaches the minimum
+// effect; no difference shown when the interval lies within +- the minimum effect; else
+// inconclusive, saying why.
+void Judge(const PairedMetric& def, bool verdict_timing, MetricDiff* m) {
   const double attainable_p = SmallestAttainableP(m->pairs);
-  const double bound = def.binary ? WilsonUpper(a_only + b_only, m->pairs)
-                                  : std::max(std::fabs(m->ci95.first), std::fabs(m->ci95.second));
-  const bool test_says = m->p_value < 0.05 && m->difference != 0.0;
+  const bool test_says = m->p_value < 0.05 && m->estimate != 0.0;
   const bool interval_says = m->ci95.first > 0.0 || m->ci95.second < 0.0;
+  const bool large = std::fabs(m->estimate) >= def.min_effect;
+  const bool within = m->ci95.first >= -def.min_effect && m->ci95.second <= def.min_effect;
+  const std::string effect = Fixed(def.min_effect, 3) + " " + def.unit;
   if (def.timing && !verdict_timing) {
     m->verdict = "not compared";
     m->reason = "timing measures the machine; --verdict-timing to compare";
-  } else if (test_says && (def.binary || interval_says)) {
-    m->verdict = (m->difference > 0) == m->higher_is_better ? "better" : "worse";
+  } else if (test_says && interval_says && large) {
+    m->verdict = (m->estimate > 0) == m->higher_is_better ? "better" : "worse";
+  } else if (within) {
+    m->verdict = "no difference shown";
+    m->reason = "the interval [" + Fixed(m->ci95.first, 3) + ", " + Fixed(m->ci95.second, 3) +
+                "] lies within +-" + effect;
   } else if (attainable_p >= 0.05) {
     m->verdict = "inconclusive";
     m->reason = std::to_string(m->pairs) + " pairs: the test cannot reach p < 0.05 (smallest p " +
                 Fixed(attainable_p, 3) + ")";
-  } else if (test_says != interval_says && !def.binary) {
+  } else if (test_says != interval_says) {
     m->verdict = "inconclusive";
     m->reason = "the interval and the test disagree";
-  } else if (bound <= def.min_effect) {
-    m->verdict = "no difference shown";
-    m->reason = "|B - A| <= " + Fixed(bound, 3) + " " + def.unit + ", within the minimum effect " +
-                Fixed(def.min_effect, 3) + " " + def.unit;
+  } else if (test_says && !large) {
+    m->verdict = "inconclusive";
+    m->reason = "a difference below the minimum effect " + effect +
+                ", and the interval does not exclude one of it";
   } else {
     m->verdict = "inconclusive";
-    m->reason = "cannot exclude a difference of " + Fixed(def.min_effect, 3) + " " + def.unit +
-                " (bound " + Fixed(bound, 3) + ")";
+    m->reason = "cannot exclude a difference of " + effect;
   }
+}
+
+// Whether a pair's runs missed slack events differently (one missed, the other not).
+bool MissesDiffer(const RunPair& pair) {
+  const auto a = MissedSlackEvent(*pair.first), b = MissedSlackEvent(*pair.second);
+  return a && b && *a != *b;
 }
 
 // Compares one metric over the pairs in which both runs define it (the pairs left out are
@@ -352,9 +368,20 @@ MetricDiff CompareMetric(const PairedMetric& def, const std::vector<RunPair>& pa
   m.a = sum_a / m.pairs;
   m.b = sum_b / m.pairs;
   m.difference = m.b - m.a;
-  m.ci95 = BootstrapMeanCi(d);
+  const ShiftEstimate shift =
+      def.binary ? PairedRateDifference(a_only, b_only, m.pairs) : HodgesLehmann(d);
+  m.estimate = shift.estimate;
+  m.ci95 = shift.ci95;
   m.p_value = def.binary ? McNemarPValue(a_only, b_only) : SignedRankPValue(d);
-  Judge(def, a_only, b_only, verdict_timing, &m);
+  Judge(def, verdict_timing, &m);
+  // a latency is taken over the detected events: where one side misses events the other
+  // detects, a lower latency may only mean the hard events were missed
+  if (def.needs_equal_misses && m.verdict != "not compared" &&
+      std::any_of(pairs.begin(), pairs.end(), MissesDiffer)) {
+    m.verdict = "inconclusive";
+    m.reason = "A and B miss slack events in different runs (slack_event_missed_rate): a latency "
+               "over the detected events alone would reward missing them";
+  }
   return m;
 }
 

@@ -36,6 +36,7 @@ void WriteDiffJson(const SweepDiff& diff, const SweepDiffOptions& options) {
                             {"a", NumberOrNull(m.a)},
                             {"b", NumberOrNull(m.b)},
                             {"difference", NumberOrNull(m.difference)},
+                            {"estimate", NumberOrNull(m.estimate)},
                             {"ci95", {NumberOrNull(m.ci95.first), NumberOrNull(m.ci95.second)}},
                             {"p_value", NumberOrNull(m.p_value)},
                             {"higher_is_better", m.higher_is_better},
@@ -54,15 +55,16 @@ void WriteDiffJson(const SweepDiff& diff, const SweepDiffOptions& options) {
 
 // One table of diff.md: the timing metrics or all the others, a row per metric.
 void DiffTableMarkdown(const SweepDiff& diff, bool timing, std::ostringstream& md) {
-  md << "| metric | min effect | pairs (left out: crash / one run / none) | A | B | B - A | "
-        "95 % CI | p | verdict |\n"
-     << "|---|---|---|---|---|---|---|---|---|\n";
+  md << "| metric | min effect | pairs (left out: crash / one run / none) | A | B | B - A, mean | "
+        "B - A, estimate | 95 % CI | p | verdict |\n"
+     << "|---|---|---|---|---|---|---|---|---|---|\n";
   for (const MetricDiff& m : diff.metrics) {
     if (m.timing != timing) continue;
     md << "| " << m.name << (m.higher_is_better ? " (higher is better)" : "") << " | "
        << Fixed(m.min_effect, 3) << " " << m.unit << " | " << m.pairs << " (" << m.dropped_crashed
        << " / " << m.dropped_one_side << " / " << m.dropped_both << ") | " << Fixed(m.a) << " | "
-       << Fixed(m.b) << " | " << Fixed(m.difference) << " | [" << Fixed(m.ci95.first) << ", "
+       << Fixed(m.b) << " | " << Fixed(m.difference) << " | " << Fixed(m.estimate) << " | ["
+       << Fixed(m.ci95.first) << ", "
        << Fixed(m.ci95.second) << "] | " << Fixed(m.p_value, 3) << " | **" << m.verdict << "**"
        << (m.reason.empty() ? "" : ": " + m.reason) << " |\n";
   }
@@ -77,12 +79,15 @@ void WriteDiffMarkdown(const SweepDiff& diff, const SweepDiffOptions& options) {
      << "\n";
   for (const std::string& d : diff.differs) md << "- " << d << "\n";
   md << "\nDifference = B - A over the pairs where both runs define the metric (continuous "
-        "metrics: runs that did not crash; the pairs left out are counted). 95 % interval: "
-        "paired bootstrap of the mean. p: Wilcoxon signed-rank (continuous) or exact McNemar "
-        "(rates). Verdict: better / worse when p < 0.05 and the interval excludes zero on the "
-        "same side; no difference shown when the data bound |B - A| within the metric's minimum "
-        "effect (rates: the Wilson bound of the discordant share); otherwise inconclusive, with "
-        "the reason. A missed slack event counts in slack_event_missed_rate.\n\n";
+        "metrics: runs that did not crash; rates: runs that ended without a run error; the pairs "
+        "left out are counted). Estimate and 95 % interval: Hodges-Lehmann (continuous, the "
+        "interval the signed-rank test inverts) or the discordant pairs' difference with its "
+        "exact binomial interval (rates). p: Wilcoxon signed-rank or exact McNemar. Verdict, one "
+        "rule for every metric: better / worse when p < 0.05, the interval excludes zero and the "
+        "estimate reaches the minimum effect; no difference shown when the interval lies within "
+        "+- the minimum effect; otherwise inconclusive, with the reason. A missed slack event "
+        "counts in slack_event_missed_rate, and a slack detection latency gets no verdict when A "
+        "and B miss events in different runs.\n\n";
   DiffTableMarkdown(diff, false, md);
   md << "\n## Timing (measures the machine; not compared unless --verdict-timing)\n\n";
   DiffTableMarkdown(diff, true, md);
@@ -108,13 +113,13 @@ void WriteDiffPlot(const SweepDiff& diff, const SweepDiffOptions& options) {
                 cv::Rect(static_cast<int>(i % cols) * w, static_cast<int>(i / cols) * h, w, h),
                 m.name, "B - A: " + m.verdict + " (p = " + Fixed(m.p_value, 2) + ")",
                 "B - A [" + (m.unit.empty() || m.unit == "-" ? std::string("1") : m.unit) + "]");
-    const double lo = std::min({m.ci95.first, m.difference, 0.0});
-    const double hi = std::max({m.ci95.second, m.difference, 0.0});
+    const double lo = std::min({m.ci95.first, m.estimate, 0.0});
+    const double hi = std::max({m.ci95.second, m.estimate, 0.0});
     const double pad = hi > lo ? 0.15 * (hi - lo) : 0.01;
     p.SetRange(-1.0, 1.0, lo - pad, hi + pad);
     p.DrawAxes();
     p.Line({-1.0, 1.0}, {0.0, 0.0}, cv::Scalar(0, 0, 0), true);
-    p.ErrorBars({0.0}, {m.difference}, {m.ci95.first}, {m.ci95.second}, colour);
+    p.ErrorBars({0.0}, {m.estimate}, {m.ci95.first}, {m.ci95.second}, colour);
   }
   fig.Write(options.out_dir + "/diff", ParsePlotFormat(options.plot_format));
 }
@@ -132,12 +137,14 @@ void WriteOutputs(const SweepDiff& diff, const SweepDiffOptions& options) {
 int SweepDiffMain(int argc, char** argv) {
   SweepDiffOptions options;
   CLI::App app{
-      "Paired comparison of two sweep outputs (B against A): per metric the mean difference "
-      "B - A, its 95 % bootstrap interval, a p-value (Wilcoxon signed-rank; exact McNemar for "
-      "rates) and a verdict: better / worse (p < 0.05 and the interval on the same side of "
-      "zero), no difference shown (|B - A| bounded within the metric's minimum effect) or "
-      "inconclusive (with the reason: too few pairs, test and interval disagree, or the minimum "
-      "effect cannot be excluded). Timing metrics are listed apart and not compared unless "
+      "Paired comparison of two sweep outputs (B against A): per metric the paired difference "
+      "B - A (mean, and the tested estimate with its exact 95 % interval: Hodges-Lehmann, or "
+      "exact binomial for rates), a p-value (Wilcoxon signed-rank; exact McNemar for rates) and "
+      "a verdict by one rule: better / worse (p < 0.05, the interval excludes zero and the "
+      "estimate reaches the metric's minimum effect), no difference shown (the interval within "
+      "+- the minimum effect) or inconclusive (with the reason: too few pairs, test and "
+      "interval disagree, below the minimum effect, the minimum effect not excluded, or slack "
+      "events missed differently). Timing metrics are listed apart and not compared unless "
       "--verdict-timing. Writes DIR/diff.json, DIR/diff.md and DIR/diff.png. Runs pair by draw, "
       "seed and drawn values; the setting that differs is named.",
       "hpa sweep-diff"};
@@ -167,7 +174,7 @@ int SweepDiffMain(int argc, char** argv) {
       continue;
     }
     std::printf("  %-30s %-19s B - A = %+.4g  [%+.4g, %+.4g]  p = %.3g  (%d pairs)%s%s\n",
-                m.name.c_str(), m.verdict.c_str(), m.difference, m.ci95.first, m.ci95.second,
+                m.name.c_str(), m.verdict.c_str(), m.estimate, m.ci95.first, m.ci95.second,
                 m.p_value, m.pairs, m.reason.empty() ? "" : ": ", m.reason.c_str());
   }
   std::cout << "wrote " << options.out_dir << "/diff.md, diff.json, diff."

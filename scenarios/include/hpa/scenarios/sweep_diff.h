@@ -1,8 +1,9 @@
 #pragma once
 // `hpa sweep-diff A B`: a paired comparison of two sweep outputs whose runs pair up (same draws
 // and seeds: the same sweep on two builds, or two sweeps that differ in one setting). Per metric:
-// the paired difference B - A with a 95 % bootstrap interval, a p-value (Wilcoxon signed-rank
-// for continuous metrics, exact McNemar for crash and expect-failure rates) and a verdict.
+// the paired difference B - A with an exact 95 % interval (Hodges-Lehmann for continuous
+// metrics, conditional binomial for rates), a p-value (Wilcoxon signed-rank, exact McNemar) and
+// a verdict by one rule for every metric (docs/sweeps.md).
 
 #include <string>
 #include <utility>
@@ -21,12 +22,29 @@ double SignedRankPValue(const std::vector<double>& differences);
 std::pair<double, double> BootstrapMeanCi(const std::vector<double>& differences,
                                           int resamples = 4000);
 
-/// One metric's comparison. Verdicts (B relative to A): "better" / "worse" when the test gives
-/// p < 0.05 and (continuous metrics) the 95 % interval excludes zero on the same side; "no
-/// difference shown" when the data bound |B - A| within the metric's minimum effect; else
-/// "inconclusive" (too few pairs for the test to reach p < 0.05, the interval and the test
-/// disagree, or a difference of the minimum effect cannot be excluded); "not compared" for
-/// timing metrics unless asked.
+/// The Hodges-Lehmann estimate of a paired shift (the median of the Walsh averages
+/// (d_i + d_j) / 2, i <= j) and its 95 % interval: the Walsh averages of rank k + 1 and N - k,
+/// k the largest count with P(W+ <= k) <= 0.025 under the signed-rank null (exact up to 50
+/// differences, normal approximation above). The interval is the one the signed-rank test
+/// inverts: it excludes zero when the test rejects, up to ties, and needs no resampling.
+struct ShiftEstimate {
+  double estimate = 0.0;
+  std::pair<double, double> ci95{0.0, 0.0};
+};
+ShiftEstimate HodgesLehmann(const std::vector<double>& differences);
+
+/// The paired difference of two rates (B - A) from the discordant counts over n pairs, and its
+/// 95 % interval: Clopper-Pearson on the share of the discordant pairs that favour B, scaled by
+/// the discordant fraction (exact, conditional on the discordant count).
+ShiftEstimate PairedRateDifference(int a_only, int b_only, int n);
+
+/// One metric's comparison. Verdicts (B relative to A), one rule for rates and continuous metrics
+/// alike: "better" / "worse" when the test gives p < 0.05, the 95 % interval excludes zero and
+/// the estimate is at least the metric's minimum effect (its sign gives the direction); "no
+/// difference shown" when the interval lies within plus or minus the minimum effect; else
+/// "inconclusive" with the reason (too few pairs, the interval and the test disagree, a
+/// difference smaller than the minimum effect, one that cannot be excluded, or slack events
+/// missed at different rates for a latency); "not compared" for timing metrics unless asked.
 struct MetricDiff {
   std::string name;
   bool higher_is_better = false;
@@ -40,7 +58,8 @@ struct MetricDiff {
   int dropped_both = 0;                  // pairs left out: defined in neither run
   double a = 0.0, b = 0.0;               // means over those pairs
   double difference = 0.0;               // mean of b - a
-  std::pair<double, double> ci95{0, 0};  // of the difference
+  double estimate = 0.0;                 // the tested shift: Hodges-Lehmann, or the rate's
+  std::pair<double, double> ci95{0, 0};  // of the estimate
   double p_value = 1.0;
   std::string verdict = "inconclusive";  // better | worse | no difference shown | inconclusive
                                          // | not compared
