@@ -110,9 +110,9 @@ add_test(NAME cli.retaut_pushes_finding
                  ${SCEN_OUT}/retaut_pushes_finding)
 set_tests_properties(cli.retaut_pushes_finding PROPERTIES LABELS "cli;scenario" TIMEOUT 900)
 
-# Every shipped scenario's bounds (derived from seeds 1-20) on held-out seeds 21 and 22
-# (ci/check_bounds.sh runs 1-30)
+# Every shipped scenario's bounds (derived from seeds 1-30) on held-out seeds 31 and 32
+# (ci/check_bounds.sh runs 1-40)
 add_test(NAME cli.bounds_held_out
          COMMAND /usr/bin/python3 ${CMAKE_SOURCE_DIR}/scripts/scenario_bounds.py --check
-                 --hpa ${HPA_BIN} --seeds 21-22 ${HPA_SHIPPED_SCENARIOS})
+                 --hpa ${HPA_BIN} --seeds 31-32 ${HPA_SHIPPED_SCENARIOS})
 set_tests_properties(cli.bounds_held_out PROPERTIES LABELS "cli;scenario" TIMEOUT 900)

@@ -2,14 +2,14 @@
 """Derives a scenario's expect bounds from many seeds, or checks them on held-out seeds.
 
 The rule (docs/results.md, "How the bounds are set"): every bound is the worst value over the
-derivation seeds (1-20 by default) with a 30 % margin: an upper bound is max + 0.3 |max|, a lower
+derivation seeds (1-30 by default) with a 30 % margin: an upper bound is max + 0.3 |max|, a lower
 bound min - 0.3 |min|; `mpc_failures_max` is the worst count (failures are whole updates);
 `crashed: false` only when no derivation seed crashed. A regression that makes every run 50 %
-worse therefore fails at least on the worst seed, and seeds beyond the derivation set (21-30)
+worse therefore fails at least on the worst seed, and seeds beyond the derivation set (31-40)
 test the bound on cases it was not fitted on.
 
-  scenario_bounds.py SCENARIO.yaml [--seeds 1-20] [--hpa build/bin/hpa] [--write]
-  scenario_bounds.py --check SCENARIO.yaml... [--seeds 1-30]
+  scenario_bounds.py SCENARIO.yaml [--seeds 1-30] [--hpa build/bin/hpa] [--write]
+  scenario_bounds.py --check SCENARIO.yaml... [--seeds 1-40]
 
 Derive prints the new expect block with the measured ranges (and --write puts it into the file,
 replacing the comment block before `expect:` and the block itself). --check runs the seeds and
@@ -129,7 +129,7 @@ def derive(hpa, scenario, seeds, jobs, write):
     name = os.path.relpath(scenario)
     comment = [f"# Bounds: `scripts/scenario_bounds.py {name} --seeds {seeds[0]}-{seeds[-1]}`:",
                f"# the worst of seeds {seeds[0]}-{seeds[-1]} with a 30 % margin (docs/results.md, \"How the",
-               "# bounds are set\"); seeds 21-30 are held out (ci/check_bounds.sh). Measured:"]
+               "# bounds are set\"); seeds 31-40 are held out (ci/check_bounds.sh). Measured:"]
     body = "; ".join(measured)
     while body:
         cut = body[:96].rfind(" ") if len(body) > 96 else len(body)
@@ -161,16 +161,16 @@ def check(hpa, scenarios, seeds, jobs):
 def main():
     p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("scenarios", nargs="+")
-    p.add_argument("--seeds", default=None, help="first-last (derive: 1-20, check: 1-30)")
+    p.add_argument("--seeds", default=None, help="first-last (derive: 1-30, check: 1-40)")
     p.add_argument("--hpa", default=os.environ.get("HPA", "build/bin/hpa"))
     p.add_argument("--jobs", type=int, default=os.cpu_count() or 2)
     p.add_argument("--write", action="store_true", help="rewrite the scenario's bounds")
     p.add_argument("--check", action="store_true", help="check the file's bounds on the seeds")
     a = p.parse_args()
     if a.check:
-        sys.exit(1 if check(a.hpa, a.scenarios, parse_seeds(a.seeds or "1-30"), a.jobs) else 0)
+        sys.exit(1 if check(a.hpa, a.scenarios, parse_seeds(a.seeds or "1-40"), a.jobs) else 0)
     for scenario in a.scenarios:
-        derive(a.hpa, scenario, parse_seeds(a.seeds or "1-20"), a.jobs, a.write)
+        derive(a.hpa, scenario, parse_seeds(a.seeds or "1-30"), a.jobs, a.write)
 
 
 if __name__ == "__main__":
