@@ -309,6 +309,23 @@ ImuSample LevelImu(const Params& p, double time_s, double t_N) {
   return imu;
 }
 
+// A hybrid estimator hovering at 1.5 m with the payload hanging on the cable, fed 0.1 s of IMU
+// samples (500 Hz) with the cable's weight and a detection every 17th sample; *k is then the
+// next sample's index.
+std::unique_ptr<Estimator> HoveringTautAndSeen(const Params& p, int* k) {
+  SystemState hover;
+  hover.p_WQ_W = Eigen::Vector3d(0, 0, 1.5);
+  hover.p_WL_W = hover.p_WQ_W - Eigen::Vector3d(0, 0, p.cable_length_m);
+  std::unique_ptr<Estimator> estimator = MakeEstimator("hybrid", EstimatorConfig{}, p, hover);
+  for (*k = 0; *k <= 50; ++*k) {
+    estimator->OnImu(LevelImu(p, 0.002 * *k, p.payload_mass_kg * p.gravity_mps2));
+    if (*k % 17 == 0) {
+      estimator->OnPayloadDetection(DetectionAt(p, Eigen::Vector3d(0, 0, -0.5), 0.002 * *k));
+    }
+  }
+  return estimator;
+}
+
 // The line_impulse draw that went NaN: the tension cue flagged slack (0.1 kg payload swung over
 // the vehicle), the payload stayed out of view for 0.34 s, and the next detection read taut. The
 // cable filter, frozen while slack, took that gap in one propagation step and diverged. Now the
@@ -316,19 +333,10 @@ ImuSample LevelImu(const Params& p, double time_s, double t_N) {
 // cable, and no health reset is needed.
 TEST(EstimatorTest, ATensionSlackEndedByATautDetectionRestartsTheCable) {
   const Params p;
-  SystemState hover;
-  hover.p_WQ_W = Eigen::Vector3d(0, 0, 1.5);
-  hover.p_WL_W = hover.p_WQ_W - Eigen::Vector3d(0, 0, p.cable_length_m);
   const double weight_N = p.payload_mass_kg * p.gravity_mps2;
-  std::unique_ptr<Estimator> estimator = MakeEstimator("hybrid", EstimatorConfig{}, p, hover);
   int k = 0;
-  // taut and seen for 0.1 s, then the cable unloads (the payload out of view) for 0.34 s
-  for (; k <= 50; ++k) {
-    estimator->OnImu(LevelImu(p, 0.002 * k, weight_N));
-    if (k % 17 == 0) {
-      estimator->OnPayloadDetection(DetectionAt(p, Eigen::Vector3d(0, 0, -0.5), 0.002 * k));
-    }
-  }
+  std::unique_ptr<Estimator> estimator = HoveringTautAndSeen(p, &k);
+  // then the cable unloads (the payload out of view) for 0.34 s
   for (; k <= 220; ++k) estimator->OnImu(LevelImu(p, 0.002 * k, 0.0));
   ASSERT_EQ(estimator->Estimate(0.002 * k).mode, CableMode::kSlack);
   ASSERT_EQ(estimator->Health().slack_entries_by_tension, 1);
@@ -353,18 +361,9 @@ TEST(EstimatorTest, ATensionSlackEndedByATautDetectionRestartsTheCable) {
 // detection (the tension cue returns the mode; the payload is then on the cable's sphere).
 TEST(EstimatorTest, TheTensionCueReturnsAnUnseenPayloadToTaut) {
   const Params p;
-  SystemState hover;
-  hover.p_WQ_W = Eigen::Vector3d(0, 0, 1.5);
-  hover.p_WL_W = hover.p_WQ_W - Eigen::Vector3d(0, 0, p.cable_length_m);
   const double weight_N = p.payload_mass_kg * p.gravity_mps2;
-  std::unique_ptr<Estimator> estimator = MakeEstimator("hybrid", EstimatorConfig{}, p, hover);
   int k = 0;
-  for (; k <= 50; ++k) {
-    estimator->OnImu(LevelImu(p, 0.002 * k, weight_N));
-    if (k % 17 == 0) {
-      estimator->OnPayloadDetection(DetectionAt(p, Eigen::Vector3d(0, 0, -0.5), 0.002 * k));
-    }
-  }
+  std::unique_ptr<Estimator> estimator = HoveringTautAndSeen(p, &k);
   for (; k <= 100; ++k) estimator->OnImu(LevelImu(p, 0.002 * k, 0.0));
   ASSERT_EQ(estimator->Estimate(0.002 * k).mode, CableMode::kSlack);
   for (; k <= 200; ++k) estimator->OnImu(LevelImu(p, 0.002 * k, weight_N));

@@ -277,7 +277,8 @@ TEST(SweepDiffVerdictTest, IdenticalPairsAndRunErrors) {
   for (const MetricDiff& m : CompareSweeps(options).metrics) {
     EXPECT_NE(m.verdict, "better") << m.name;
     EXPECT_NE(m.verdict, "worse") << m.name;
-    if (!m.binary && !m.timing && m.pairs > 0) EXPECT_EQ(m.verdict, "no difference shown") << m.name;
+    if (!m.binary && !m.timing && m.pairs > 0)
+      EXPECT_EQ(m.verdict, "no difference shown") << m.name;
   }
   // 30 pairs, three of B's runs hit the time limit: left out of the crash rate, not crashes
   std::vector<FakeRun> ok = RandomRuns(30, 5), errors = ok;

@@ -89,8 +89,7 @@ const std::vector<PairedMetric>& PairedMetrics() {
       if (!def.compared) continue;
       d.push_back({def.name, def.better == Better::kHigher, false,
                    Field([&def](const Json& m) { return ReadMetric(def, m); }), def.min_effect,
-                   def.unit, def.timing,
-                   def.name.rfind("slack_detection_latency", 0) == 0});
+                   def.unit, def.timing, def.name.rfind("slack_detection_latency", 0) == 0});
     }
     return d;
   }();
@@ -379,8 +378,9 @@ MetricDiff CompareMetric(const PairedMetric& def, const std::vector<RunPair>& pa
   if (def.needs_equal_misses && m.verdict != "not compared" &&
       std::any_of(pairs.begin(), pairs.end(), MissesDiffer)) {
     m.verdict = "inconclusive";
-    m.reason = "A and B miss slack events in different runs (slack_event_missed_rate): a latency "
-               "over the detected events alone would reward missing them";
+    m.reason =
+        "A and B miss slack events in different runs (slack_event_missed_rate): a latency "
+        "over the detected events alone would reward missing them";
   }
   return m;
 }

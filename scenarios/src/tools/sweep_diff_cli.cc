@@ -64,9 +64,8 @@ void DiffTableMarkdown(const SweepDiff& diff, bool timing, std::ostringstream& m
        << Fixed(m.min_effect, 3) << " " << m.unit << " | " << m.pairs << " (" << m.dropped_crashed
        << " / " << m.dropped_one_side << " / " << m.dropped_both << ") | " << Fixed(m.a) << " | "
        << Fixed(m.b) << " | " << Fixed(m.difference) << " | " << Fixed(m.estimate) << " | ["
-       << Fixed(m.ci95.first) << ", "
-       << Fixed(m.ci95.second) << "] | " << Fixed(m.p_value, 3) << " | **" << m.verdict << "**"
-       << (m.reason.empty() ? "" : ": " + m.reason) << " |\n";
+       << Fixed(m.ci95.first) << ", " << Fixed(m.ci95.second) << "] | " << Fixed(m.p_value, 3)
+       << " | **" << m.verdict << "**" << (m.reason.empty() ? "" : ": " + m.reason) << " |\n";
   }
 }
 

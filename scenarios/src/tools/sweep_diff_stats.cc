@@ -128,9 +128,9 @@ double BetaQuantile(double q, double a, double b) {
     double h = d;
     for (int m = 1; m <= 300; ++m) {
       for (int half = 0; half < 2; ++half) {
-        const double num = half == 0 ? m * (bb - m) * xx / ((aa + 2 * m - 1) * (aa + 2 * m))
-                                     : -(aa + m) * (aa + bb + m) * xx /
-                                           ((aa + 2 * m) * (aa + 2 * m + 1));
+        const double num = half == 0
+                               ? m * (bb - m) * xx / ((aa + 2 * m - 1) * (aa + 2 * m))
+                               : -(aa + m) * (aa + bb + m) * xx / ((aa + 2 * m) * (aa + 2 * m + 1));
         d = 1.0 + num * d;
         d = 1.0 / (std::fabs(d) < 1e-300 ? 1e-300 : d);
         c = 1.0 + num / c;
@@ -166,8 +166,8 @@ ShiftEstimate HodgesLehmann(const std::vector<double>& differences) {
   }
   std::sort(walsh.begin(), walsh.end());
   const size_t count = walsh.size();
-  out.estimate = count % 2 == 1 ? walsh[count / 2]
-                                : 0.5 * (walsh[count / 2 - 1] + walsh[count / 2]);
+  out.estimate =
+      count % 2 == 1 ? walsh[count / 2] : 0.5 * (walsh[count / 2 - 1] + walsh[count / 2]);
   // k: the largest count with P(W+ <= k) <= 0.025; none (too few pairs): the whole range
   long k = -1;
   if (n <= 50) {
