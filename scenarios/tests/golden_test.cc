@@ -28,6 +28,20 @@ TEST(GoldenTest, ChangeBeyondToleranceIsReportedWithItsPath) {
   EXPECT_NE(d.changes[0].find("payload_rmse_m.0"), std::string::npos) << d.changes[0];
 }
 
+TEST(GoldenTest, AChangePrintsEnoughDigitsToTellTheValuesApart) {
+  // --exact (no tolerance): a change in the 12th digit shows in the printed values
+  const GoldenDiff d = CompareWithGolden(R"({"payload_rmse_m": [0.034734318912345, 0.2]})",
+                                         R"({"payload_rmse_m": [0.034734318998765, 0.2]})",
+                                         R"({"default": {"rel": 0, "abs": 0}})");
+  ASSERT_EQ(d.changes.size(), 1u);
+  const std::string& line = d.changes[0];
+  const size_t arrow = line.find(" -> ");
+  ASSERT_NE(arrow, std::string::npos) << line;
+  const std::string before = line.substr(line.find(": ") + 2, arrow - line.find(": ") - 2);
+  const std::string after = line.substr(arrow + 4, line.find(" (") - arrow - 4);
+  EXPECT_NE(before, after) << line;
+}
+
 TEST(GoldenTest, PerKeyToleranceAppliesToThatKeyOnly) {
   EXPECT_TRUE(
       CompareWithGolden(R"({"mode_accuracy": 0.975})", R"({"mode_accuracy": 0.98})", kTolerances)

@@ -79,15 +79,24 @@ std::pair<double, double> ToleranceOf(const Json& tolerances, const std::string&
   return {entry.value("rel", 0.0), entry.value("abs", 0.0)};
 }
 
-std::string Text(const Json& v) {
+// A value as the change list prints it: floats with `digits` significant digits.
+std::string Text(const Json& v, int digits = 9) {
   std::ostringstream out;
   if (v.is_number_float()) {
-    out.precision(9);
+    out.precision(digits);
     out << v.get<double>();
   } else {
     out << v.dump();
   }
   return out.str();
+}
+
+// "golden -> now" with as many digits as tell the two apart (17 round-trips any double): a change
+// in the 12th digit under --exact must not read "0.0347343189 -> 0.0347343189".
+std::string ChangeText(const Json& golden, const Json& now) {
+  int digits = 9;
+  while (digits < 17 && Text(golden, digits) == Text(now, digits)) digits += 4;
+  return Text(golden, std::min(digits, 17)) + " -> " + Text(now, std::min(digits, 17));
 }
 
 void Compare(const Json& now, const Json& golden, const std::string& path, const Json& tolerances,
@@ -120,14 +129,13 @@ void Compare(const Json& now, const Json& golden, const std::string& path, const
       if (std::fabs(a - b) > tolerance) {
         std::ostringstream line;
         line.precision(3);
-        line << path << ": " << Text(golden) << " -> " << Text(now) << " (tolerance " << tolerance
-             << ")";
+        line << path << ": " << ChangeText(golden, now) << " (tolerance " << tolerance << ")";
         diff->changes.push_back(line.str());
       }
       return;
     }
   }
-  if (now != golden) diff->changes.push_back(path + ": " + Text(golden) + " -> " + Text(now));
+  if (now != golden) diff->changes.push_back(path + ": " + ChangeText(golden, now));
 }
 
 // The current metrics of one golden scenario: read from `from_dir` or run here.
