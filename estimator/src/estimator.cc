@@ -82,8 +82,7 @@ class CableEstimator final : public Estimator {
     out.w_B = quad.w_B_radps;
     out.mode = hybrid_ ? mode_ : CableMode::kTaut;
     out.payload_visible = payload_visible_;
-    const double unseen_s = time_s - (seen_ ? last_seen_time_s_ : initial_time_s_);
-    out.payload_lost = unseen_s > config_.payload_lost_after_s;
+    out.payload_lost = UnseenFor(time_s) > config_.payload_lost_after_s;
     out.payload_lost =
         PayloadAt(time_s, out.p_WQ_W, out.v_WQ_W, &out.p_WL_W, &out.v_WL_W) || out.payload_lost;
     out.payload_supported = out.mode == CableMode::kSlack && support_.supported();
@@ -137,9 +136,8 @@ class CableEstimator final : public Estimator {
       // slack and out of sight, the tension back: the cable is taut again without a detection
       // (not for a payload last seen held up: a hand that holds it keeps the cable slack, and
       // the vehicle's own manoeuvres then move the tension estimate)
-      const double unseen_s = imu.time_s - (seen_ ? last_seen_time_s_ : initial_time_s_);
       if (tracked && mode_ == CableMode::kSlack && !tension_cue_.slack() && !support_.supported() &&
-          unseen_s > config_.tension_retaut_unseen_s) {
+          UnseenFor(imu.time_s) > config_.tension_retaut_unseen_s) {
         RestartCableFromTracker(p_WL_W, v_WL_W);
         return;
       }
@@ -222,6 +220,19 @@ class CableEstimator final : public Estimator {
     UpdateTautCable(d);
   }
 
+  // Seconds since the newest detection taken (since the start before the first).
+  double UnseenFor(double time_s) const {
+    return time_s - (seen_ ? last_seen_time_s_ : initial_time_s_);
+  }
+
+  // The cable filter's covariance at a restart: the re-taut standard deviations per component.
+  CableMatrix RetautCovariance() const {
+    CableMatrix cov = CableMatrix::Zero();
+    cov.diagonal() << Eigen::Vector3d::Constant(std::pow(config_.retaut_xi_std, 2)),
+        Eigen::Vector3d::Constant(std::pow(config_.retaut_xi_dot_std_per_s, 2));
+    return cov;
+  }
+
   // The payload at time_s for a quadrotor at p_WQ_W, v_WQ_W, by the variant and the mode; true
   // when the slack prediction has run into the vehicle (the payload is then lost).
   bool PayloadAt(double time_s, const Eigen::Vector3d& p_WQ_W, const Eigen::Vector3d& v_WQ_W,
@@ -277,9 +288,9 @@ class CableEstimator final : public Estimator {
     Eigen::Vector3d p_WL_W, v_WL_W;
     PayloadAt(quad.time_s, quad.p_WB_W, quad.v_WB_W, &p_WL_W, &v_WL_W);
     if (hybrid_ && mode_ == CableMode::kSlack) {
-      // the tracker's own velocity: the sphere's hold in PayloadAt would hide a wild one
-      Eigen::Vector3d tracked_p_WL_W;
-      tracker_.PredictTo(quad.time_s, &tracked_p_WL_W, &v_WL_W);
+      // the tracker's own velocity at its last update (the sphere's hold in PayloadAt would hide
+      // a wild one; the free fall since then adds g times a frame at most)
+      v_WL_W = tracker_.state().tail<3>();
     }
     const Eigen::Vector3d d_W = p_WL_W - quad.p_WB_W;
     if (!p_WL_W.allFinite() || !v_WL_W.allFinite() || !cable_.covariance().allFinite() ||
@@ -308,9 +319,7 @@ class CableEstimator final : public Estimator {
       d_W = quad.q_WB * last_p_BL_B_;
       if (d_W.norm() > l_m) d_W *= l_m / d_W.norm();
     }
-    CableMatrix cable_cov = CableMatrix::Zero();
-    cable_cov.diagonal() << Eigen::Vector3d::Constant(std::pow(config_.retaut_xi_std, 2)),
-        Eigen::Vector3d::Constant(std::pow(config_.retaut_xi_dot_std_per_s, 2));
+    const CableMatrix cable_cov = RetautCovariance();
     cable_.Reset(quad.time_s, d_W.normalized(), Eigen::Vector3d::Zero(), cable_cov);
     Matrix6d tracker_cov = Matrix6d::Zero();
     tracker_cov.diagonal() << Eigen::Vector3d::Constant(config_.initial_payload_position_var_m2),
@@ -387,9 +396,7 @@ class CableEstimator final : public Estimator {
     tracker_.PredictTo(quad_.state().time_s, &p_L, &v_L);
     const Eigen::Vector3d xi = (d.R_WB * d.p_BL_B).normalized();
     const Eigen::Vector3d xi_dot = (v_L - quad_.state().v_WB_W) / params_.cable_length_m;
-    CableMatrix cov = CableMatrix::Zero();
-    cov.diagonal() << Eigen::Vector3d::Constant(std::pow(config_.retaut_xi_std, 2)),
-        Eigen::Vector3d::Constant(std::pow(config_.retaut_xi_dot_std_per_s, 2));
+    const CableMatrix cov = RetautCovariance();
     cable_.Reset(quad_.state().time_s, xi, xi_dot, cov);
     ++retaut_restarts_;
     velocity_row_pending_ = config_.retaut_velocity_row;
@@ -404,9 +411,7 @@ class CableEstimator final : public Estimator {
     const Eigen::Vector3d d_W = p_WL_W - quad.p_WB_W;
     const Eigen::Vector3d xi =
         d_W.norm() > 1e-6 ? Eigen::Vector3d(d_W.normalized()) : Eigen::Vector3d(0, 0, -1);
-    CableMatrix cov = CableMatrix::Zero();
-    cov.diagonal() << Eigen::Vector3d::Constant(std::pow(config_.retaut_xi_std, 2)),
-        Eigen::Vector3d::Constant(std::pow(config_.retaut_xi_dot_std_per_s, 2));
+    const CableMatrix cov = RetautCovariance();
     cable_.Reset(quad.time_s, xi, (v_WL_W - quad.v_WB_W) / params_.cable_length_m, cov);
     mode_ = CableMode::kTaut;
     tension_entry_pending_ = false;
@@ -443,9 +448,7 @@ class CableEstimator final : public Estimator {
       const Eigen::Vector3d xi_dot_W =
           gap_s > 0.0 ? Eigen::Vector3d((xi_detected_W - rejected_xi_W_.back()) / gap_s)
                       : Eigen::Vector3d::Zero();
-      CableMatrix cov = CableMatrix::Zero();
-      cov.diagonal() << Eigen::Vector3d::Constant(std::pow(config_.retaut_xi_std, 2)),
-          Eigen::Vector3d::Constant(std::pow(config_.retaut_xi_dot_std_per_s, 2));
+      const CableMatrix cov = RetautCovariance();
       cable_.Reset(quad_.state().time_s, xi_detected_W, xi_dot_W, cov);
       rejected_xi_W_.clear();
       rejected_times_s_.clear();

@@ -114,15 +114,6 @@ bool SameValue(const std::string& a, const std::string& b) {
 // Smallest two-sided p-value an exact sign-flip test can reach with n informative pairs.
 double SmallestAttainableP(int n) { return n <= 0 ? 1.0 : std::min(1.0, 2.0 / std::pow(2.0, n)); }
 
-// Upper end of the Wilson 95 % interval of a proportion k of n.
-double WilsonUpper(int k, int n) {
-  if (n <= 0) return 1.0;
-  const double z = 1.959963984540054, p = static_cast<double>(k) / n;
-  const double centre = p + z * z / (2.0 * n);
-  const double half = z * std::sqrt(p * (1.0 - p) / n + z * z / (4.0 * n * n));
-  return std::min(1.0, (centre + half) / (1.0 + z * z / n));
-}
-
 std::vector<Run> ReadRuns(const std::string& dir, const std::string& where) {
   const std::string path = dir + "/runs.jsonl";
   CheckInputFile(path, "a sweep's runs.jsonl");

@@ -1,11 +1,9 @@
 // The paired tests of `hpa sweep-diff`: exact McNemar for rates, Wilcoxon signed-rank for
-// continuous metrics, their exact intervals (Hodges-Lehmann, Clopper-Pearson) and the bootstrap
-// interval of the mean difference.
+// continuous metrics, and their exact intervals (Hodges-Lehmann, Clopper-Pearson).
 
 #include <algorithm>
 #include <cmath>
 #include <numeric>
-#include <random>
 
 #include "hpa/scenarios/sweep_diff.h"
 
@@ -74,24 +72,6 @@ double SignedRankPValue(const std::vector<double>& differences) {
   const double var = n * (n + 1.0) * (2.0 * n + 1.0) / 24.0 - tie_term / 48.0;
   const double z = (std::fabs(w_plus - mean) - 0.5) / std::sqrt(var);
   return std::min(1.0, std::erfc(std::max(0.0, z) / std::sqrt(2.0)));
-}
-
-std::pair<double, double> BootstrapMeanCi(const std::vector<double>& differences, int resamples) {
-  const size_t n = differences.size();
-  if (n == 0) return {0.0, 0.0};
-  std::mt19937_64 rng(20261122);
-  std::uniform_int_distribution<size_t> pick(0, n - 1);
-  std::vector<double> means(resamples);
-  for (int r = 0; r < resamples; ++r) {
-    double sum = 0.0;
-    for (size_t i = 0; i < n; ++i) sum += differences[pick(rng)];
-    means[r] = sum / n;
-  }
-  std::sort(means.begin(), means.end());
-  const auto at = [&](double q) {
-    return means[std::min<size_t>(means.size() - 1, static_cast<size_t>(q * (resamples - 1)))];
-  };
-  return {at(0.025), at(0.975)};
 }
 
 namespace {

@@ -18,10 +18,6 @@ double McNemarPValue(int a_only, int b_only);
 /// to 25 non-zero differences, normal approximation with tie correction above).
 double SignedRankPValue(const std::vector<double>& differences);
 
-/// 95 % percentile-bootstrap interval of the mean of `differences` (deterministic: fixed seed).
-std::pair<double, double> BootstrapMeanCi(const std::vector<double>& differences,
-                                          int resamples = 4000);
-
 /// The Hodges-Lehmann estimate of a paired shift (the median of the Walsh averages
 /// (d_i + d_j) / 2, i <= j) and its 95 % interval: the Walsh averages of rank k + 1 and N - k,
 /// k the largest count with P(W+ <= k) <= 0.025 under the signed-rank null (exact up to 50
