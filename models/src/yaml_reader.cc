@@ -7,6 +7,7 @@
 #include <fstream>
 #include <sstream>
 
+#include "hpa/models/file_io.h"
 #include "hpa/models/input_error.h"
 
 namespace hpa {
@@ -92,18 +93,8 @@ YAML::Node LoadYamlText(const std::string& text, const std::string& file) {
 }
 
 std::string ReadYamlFile(const std::string& file) {
-  std::error_code ec;
-  const auto status = std::filesystem::status(file, ec);
-  if (ec || !std::filesystem::exists(status)) throw InputError(file, "", "cannot open file");
-  if (!std::filesystem::is_regular_file(status)) {
-    throw InputError(file, "", "not a regular file (a directory?): expected a YAML file");
-  }
-  std::ifstream in(file);
-  if (!in) throw InputError(file, "", "cannot open file");
-  std::ostringstream text;
-  text << in.rdbuf();
-  if (in.bad()) throw InputError(file, "", "cannot read file");
-  return text.str();
+  // YAML files are small: 16 MiB is far above any scenario, params or sweep file
+  return ReadInputFile(file, "a YAML file", std::uintmax_t{16} << 20);
 }
 
 YAML::Node LoadYamlFile(const std::string& file) { return LoadYamlText(ReadYamlFile(file), file); }

@@ -3,7 +3,8 @@
 # hover_gripper_pull) is found worse on slack_detection_latency_max_s and mode_accuracy; a sweep
 # compared with itself
 # is never better or worse on any metric and its timing is not compared; numeric grid values
-# match numerically; sweeps that do not pair are refused with exit 2.
+# match numerically; sweeps that do not pair are refused with exit 2; a base file edited between
+# two sweeps is named as a change of inputs, key by key; both say which build flew them.
 # usage: sweep_diff_cli_test.sh HPA_BIN SCENARIOS_DIR OUT_DIR
 set -uo pipefail
 hpa=$1; scen=$2; out=$3
@@ -69,6 +70,36 @@ echo "== sweeps that do not pair are refused"
   > "$out/unpaired.log" 2>&1
 [ $? -eq 2 ] || fail "20 runs against 40 did not exit 2"
 grep -q "no partner\|do not pair\|same draw, seed" "$out/unpaired.log" || fail "no pairing message: $(cat "$out/unpaired.log")"
+
+echo "== the base file edited between two sweeps: the inputs differ and the change is named"
+mkdir -p "$out/edit"
+sed 's/^duration: .*/duration: 3.0/' "$scen/hover.yaml" > "$out/edit/base.yaml"
+printf 'base: base.yaml\nruns: 2\nseed: 5\nvary:\n  estimation.camera: {list: [analytic]}\n' \
+  > "$out/edit/sweep.yaml"
+"$hpa" sweep "$out/edit/sweep.yaml" --out "$out/edit/a" --jobs 2 > "$out/edit/a.log" 2>&1 \
+  || fail "sweep A failed: $(tail -3 "$out/edit/a.log")"
+sed -i 's/force: \[0.3, 0.1, 0\]/force: [0.6, 0.1, 0]/' "$out/edit/base.yaml"
+"$hpa" sweep "$out/edit/sweep.yaml" --out "$out/edit/b" --jobs 2 > "$out/edit/b.log" 2>&1 \
+  || fail "sweep B failed: $(tail -3 "$out/edit/b.log")"
+"$hpa" sweep-diff "$out/edit/a" "$out/edit/b" --out "$out/edit/diff" > "$out/edit/diff.log" 2>&1 \
+  || fail "sweep-diff of the edited base failed: $(cat "$out/edit/diff.log")"
+grep -q "inputs: sweep_id .* (A) vs .* (B): the sweep or base file differs" "$out/edit/diff.log" \
+  || fail "an edited base file not reported as differing inputs: $(cat "$out/edit/diff.log")"
+grep -q "base file .*base.yaml: events.0.force.0: 0.3 (A) vs 0.6 (B)" "$out/edit/diff.log" \
+  || fail "the edited key not named: $(cat "$out/edit/diff.log")"
+grep -q "same build: hpa .*, commit " "$out/edit/diff.log" \
+  || fail "sweep-diff does not say A and B came from the same build: $(cat "$out/edit/diff.log")"
+python3 - "$out/edit/a/runs.jsonl" "$out/edit/diff/diff.json" <<'PY' || fail "provenance not recorded"
+import json, sys
+line = json.loads(open(sys.argv[1]).readline())
+assert set(line["build"]) == {"hpa_version", "commit", "build_type", "compiler"}, line["build"]
+assert all(line["build"].values()), line["build"]
+assert "build" not in line["metrics"], "the build twice in one record"
+d = json.load(open(sys.argv[2]))
+assert d["build"]["same"] is True, d["build"]
+PY
+grep -q "nothing in the varied values (same sweep)" "$out/edit/diff.log" \
+  && fail "an edited base still reads as the same sweep"
 
 [ $failures -eq 0 ] && echo "sweep-diff: all checks passed"
 exit $((failures > 0))

@@ -210,7 +210,7 @@ TEST(SweepOutlierTest, ListsRunsWhoseModeAccuracyOrResetsStandOut) {
   }
   records[3].mode_accuracy = 0.067;
   records[5].mode_accuracy = 0.962;
-  records[7].estimator_resets = 5;
+  records[7].estimator_restarts = 5;
   records[9].error = true;  // errors are not judged
   records[9].mode_accuracy = 0.0;
   const std::vector<sweep::Outlier> outliers = sweep::FindOutliers(records);
@@ -219,7 +219,29 @@ TEST(SweepOutlierTest, ListsRunsWhoseModeAccuracyOrResetsStandOut) {
   EXPECT_EQ(outliers[0].metric, "mode_accuracy");
   EXPECT_NEAR(outliers[0].median, 0.992, 0.002);  // the runs at 0.990-0.994
   EXPECT_EQ(outliers[1].record->run, 7);
-  EXPECT_EQ(outliers[1].metric, "estimator_resets");
+  EXPECT_EQ(outliers[1].metric, "estimator_restarts");
+}
+
+// Outliers are judged within their grid cell: a cell whose detector noise is 30 times the other's
+// restarts the estimator 8-13 times in every run, and none of its runs is listed against the
+// quiet cell's median of 0; a run of 12 restarts in the quiet cell still is.
+TEST(SweepOutlierTest, ComparesWithinEachGridCell) {
+  std::vector<sweep::Record> records(20);
+  for (size_t i = 0; i < records.size(); ++i) {
+    records[i].run = static_cast<int>(i);
+    records[i].controller = "hpa_mpc";
+    const bool noisy = i % 5 == 0;
+    records[i].values = {{"estimation.detector_noise_scale", noisy ? "30" : "1"}};
+    records[i].estimator_restarts = noisy ? 8.0 + static_cast<double>(i % 10) : 0.0;
+  }
+  records[4].estimator_restarts = 12;
+  const std::vector<sweep::Outlier> outliers =
+      sweep::FindOutliers(records, {"estimation.detector_noise_scale"});
+  ASSERT_EQ(outliers.size(), 1u);
+  EXPECT_EQ(outliers[0].record->run, 4);
+  EXPECT_EQ(outliers[0].metric, "estimator_restarts");
+  // pooled (no grid keys) the noisy cell's every run stands out as well
+  EXPECT_EQ(sweep::FindOutliers(records).size(), 5u);
 }
 
 // The summary groups runs by every grid variable, bins the drawn quantity over its declared

@@ -1,4 +1,5 @@
 #include "hpa/scenarios/metrics.h"
+#include "hpa/scenarios/provenance.h"
 
 #include <sys/stat.h>
 
@@ -229,6 +230,7 @@ std::string MetricsToJson(const Metrics& m) {
   o["controller"] = m.controller;
   o["camera"] = m.camera;
   o["seed"] = m.seed;
+  o["build"] = BuildToJson(ThisBuild());
   o["sim_time_s"] = num(m.sim_time_s);
   o["wall_time_s"] = num(m.wall_time_s);
   o["crashed"] = m.crashed;

@@ -8,6 +8,7 @@
 #include <sstream>
 #include <string>
 
+#include "hpa/models/file_io.h"
 #include "hpa/models/input_error.h"
 #include "hpa/sim/gl_backend.h"
 
@@ -25,38 +26,6 @@ inline std::optional<int> ParseCommandLine(CLI::App& app, int argc, char** argv)
     throw InputError(app.get_name(), "", e.what());
   }
   return std::nullopt;
-}
-
-/// Largest input file `hpa` reads whole (golden.json, runs.jsonl, metrics.json): far above any
-/// real one (a 100 000-run runs.jsonl is about 200 MiB), small enough that /dev/zero or a runaway
-/// file cannot exhaust memory.
-constexpr std::uintmax_t kMaxInputFileBytes = std::uintmax_t{1} << 30;
-
-/// Checks that `path` is a regular file of at most kMaxInputFileBytes before it is opened: a
-/// FIFO would block forever, a device (/dev/full, /dev/zero) never ends. Throws InputError
-/// naming the file and `what` it should have been.
-inline void CheckInputFile(const std::string& path, const std::string& what) {
-  std::error_code ec;
-  const auto status = std::filesystem::status(path, ec);
-  if (ec || !std::filesystem::exists(status)) throw InputError(path, "", "cannot read " + what);
-  if (!std::filesystem::is_regular_file(status)) {
-    throw InputError(path, "", "not a regular file (a FIFO, device or folder?): expected " + what);
-  }
-  const std::uintmax_t size = std::filesystem::file_size(path, ec);
-  if (ec || size > kMaxInputFileBytes) {
-    throw InputError(
-        path, "", "larger than " + std::to_string(kMaxInputFileBytes >> 20) + " MiB: not " + what);
-  }
-}
-
-/// The whole text of a user's input file, checked by CheckInputFile first.
-inline std::string ReadInputFile(const std::string& path, const std::string& what) {
-  CheckInputFile(path, what);
-  std::ifstream in(path);
-  if (!in) throw InputError(path, "", "cannot read " + what);
-  std::stringstream text;
-  text << in.rdbuf();
-  return text.str();
 }
 
 /// Adds --gl osmesa|egl (the rendered cameras' GL context) to a command's parser.

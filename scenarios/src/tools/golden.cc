@@ -25,15 +25,15 @@ namespace fs = std::filesystem;
 // the shipped scenarios (of the source tree, or of an installed prefix)
 std::string ScenariosDir() { return DataPath("scenarios"); }
 
-// Fields that measure the machine, not the behaviour.
-bool IsTimingKey(const std::string& key) {
-  return key == "wall_time_s" || key == "mpc_solve_ms" || key == "render_ms" ||
+// Fields that measure the machine or name the build, not the behaviour.
+bool IsMachineKey(const std::string& key) {
+  return key == "build" || key == "wall_time_s" || key == "mpc_solve_ms" || key == "render_ms" ||
          key == "detector_ms" || key == "image_model_ms";
 }
 
-Json StripTiming(Json metrics) {
+Json StripMachineFields(Json metrics) {
   for (auto it = metrics.begin(); it != metrics.end();) {
-    it = IsTimingKey(it.key()) ? metrics.erase(it) : std::next(it);
+    it = IsMachineKey(it.key()) ? metrics.erase(it) : std::next(it);
   }
   return metrics;
 }
@@ -170,7 +170,7 @@ std::vector<std::string> GoldenScenarioNames() {
 GoldenDiff CompareWithGolden(const std::string& metrics_json, const std::string& golden_json,
                              const std::string& tolerances_json) {
   GoldenDiff diff;
-  Compare(StripTiming(Json::parse(metrics_json)), StripTiming(Json::parse(golden_json)), "",
+  Compare(StripMachineFields(Json::parse(metrics_json)), StripMachineFields(Json::parse(golden_json)), "",
           Json::parse(tolerances_json), &diff);
   return diff;
 }
@@ -302,7 +302,7 @@ int RunGolden(const GoldenOptions& options) {
   Json updated = Json::object();
   for (const std::string& name : names) {
     if (!options.quiet) std::cerr << "golden: " << name << " ..." << std::flush;
-    const Json now = StripTiming(CurrentMetrics(name, options, params));
+    const Json now = StripMachineFields(CurrentMetrics(name, options, params));
     if (options.update) CheckRecordable(name, now);
     updated[name] = now;
     changed += CompareScenario(name, now, golden["scenarios"], tolerances, options);

@@ -13,8 +13,10 @@
 #include "hpa/models/input_error.h"
 #include "hpa/scenarios/metric_defs.h"
 #include "hpa/scenarios/metrics.h"
+#include "hpa/scenarios/provenance.h"
 #include "scenarios/src/tools/cli_parse.h"
 #include "scenarios/src/tools/significant_digits.h"
+#include "scenarios/src/tools/sweep/sweep_internal.h"
 
 namespace hpa {
 namespace {
@@ -29,6 +31,8 @@ struct Run {
   bool ok = false;                            // finished without a run error
   Json metrics;                               // null if none
   std::string sweep;
+  std::string inputs_id;  // hash of the sweep and base files the run was flown from
+  std::string build;      // the build that flew it (DescribeBuild), "not recorded" if unknown
 };
 
 // A metric read from one run; nullopt where the run does not define it.
@@ -142,6 +146,8 @@ std::vector<Run> ReadRuns(const std::string& dir, const std::string& where) {
     r.draw = j.value("draw", 0);
     r.seed = j.value("seed", 0ul);
     r.sweep = j.value("sweep", "");
+    r.inputs_id = j.contains("inputs_id") ? j.value("inputs_id", "") : j.value("sweep_id", "");
+    r.build = j.contains("build") ? DescribeBuild(BuildFromJson(j["build"])) : "not recorded";
     for (const auto& [key, value] : j["values"].items()) {
       r.values[key] = value.is_string() ? value.get<std::string>() : value.dump();
     }
@@ -268,6 +274,41 @@ std::vector<std::string> DescribeDifferences(const std::vector<RunPair>& pairs,
   return differs;
 }
 
+// The distinct values of one field over the runs, joined for the reader.
+std::set<std::string> Distinct(const std::vector<Run>& runs, std::string Run::*field) {
+  std::set<std::string> out;
+  for (const Run& r : runs) out.insert(r.*field);
+  return out;
+}
+
+std::string Join(const std::set<std::string>& values) {
+  std::string out;
+  for (const std::string& v : values) out += (out.empty() ? "" : ", ") + v;
+  return out;
+}
+
+// When A and B were flown from different inputs (sweep and base files, by their hash): says so
+// and lists what changed, from each folder's inputs.json.
+std::vector<std::string> DescribeInputs(const SweepDiffOptions& options, const std::vector<Run>& a,
+                                        const std::vector<Run>& b) {
+  const std::set<std::string> ids_a = Distinct(a, &Run::inputs_id);
+  const std::set<std::string> ids_b = Distinct(b, &Run::inputs_id);
+  if (ids_a == ids_b) return {};
+  std::vector<std::string> lines = {"inputs: sweep_id " + Join(ids_a) + " (A) vs " + Join(ids_b) +
+                                    " (B): the sweep or base file differs"};
+  const auto snap_a = sweep::ReadInputsSnapshot(options.a_dir);
+  const auto snap_b = sweep::ReadInputsSnapshot(options.b_dir);
+  if (!snap_a || !snap_b) {
+    lines.push_back(std::string("what changed cannot be shown: no inputs.json in ") +
+                    (!snap_a ? "A" : "B") + " (recorded by an older hpa)");
+    return lines;
+  }
+  for (std::string& change : sweep::DescribeInputChanges(*snap_a, *snap_b)) {
+    lines.push_back(std::move(change));
+  }
+  return lines;
+}
+
 // Gives a metric compared over m->pairs pairs its verdict, and the reason when the verdict is
 // neither better nor worse. One rule for every metric (docs/sweeps.md): better / worse when the
 // test rejects (p < 0.05), the interval excludes zero and the estimate reaches the minimum
@@ -387,6 +428,12 @@ SweepDiff CompareSweeps(const SweepDiffOptions& options) {
   SweepDiff diff;
   diff.runs_paired = static_cast<int>(pairs.size());
   diff.differs = DescribeDifferences(pairs, differing, a, b);
+  for (std::string& line : DescribeInputs(options, a, b)) diff.differs.push_back(std::move(line));
+  const std::set<std::string> builds_a = Distinct(a, &Run::build);
+  const std::set<std::string> builds_b = Distinct(b, &Run::build);
+  diff.build_a = Join(builds_a);
+  diff.build_b = Join(builds_b);
+  diff.same_build = builds_a == builds_b && builds_a.size() == 1 && !builds_a.count("not recorded");
   for (const PairedMetric& def : PairedMetrics()) {
     diff.metrics.push_back(CompareMetric(def, pairs, options.verdict_timing));
   }

@@ -8,6 +8,7 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 
+#include "hpa/models/file_io.h"
 #include "hpa/scenarios/metrics.h"
 #include "hpa/scenarios/plot_canvas.h"
 #include "hpa/scenarios/sweep_diff.h"
@@ -30,6 +31,7 @@ void WriteDiffJson(const SweepDiff& diff, const SweepDiffOptions& options) {
   j["b"] = options.b_dir;
   j["runs_paired"] = diff.runs_paired;
   j["differs"] = diff.differs;
+  j["build"] = {{"same", diff.same_build}, {"a", diff.build_a}, {"b", diff.build_b}};
   j["metrics"] = Json::object();
   for (const MetricDiff& m : diff.metrics) {
     j["metrics"][m.name] = {{"pairs", m.pairs},
@@ -50,7 +52,7 @@ void WriteDiffJson(const SweepDiff& diff, const SweepDiffOptions& options) {
                             {"verdict", m.verdict},
                             {"reason", m.reason}};
   }
-  sweep::WriteFileChecked(options.out_dir + "/diff.json", j.dump(1) + "\n");
+  WriteFileAtomic(options.out_dir + "/diff.json", j.dump(1) + "\n");
 }
 
 // One table of diff.md: the timing metrics or all the others, a row per metric.
@@ -77,6 +79,12 @@ void WriteDiffMarkdown(const SweepDiff& diff, const SweepDiffOptions& options) {
      << (diff.differs.empty() ? std::string("nothing in the varied values (same sweep)") : "")
      << "\n";
   for (const std::string& d : diff.differs) md << "- " << d << "\n";
+  if (diff.same_build) {
+    md << "\nBuild: the same for A and B (" << diff.build_a << ").\n";
+  } else {
+    md << "\nBuild: **not the same** (timing and bit-level results may differ): A " << diff.build_a
+       << "; B " << diff.build_b << ".\n";
+  }
   md << "\nDifference = B - A over the pairs where both runs define the metric (continuous "
         "metrics: runs that did not crash; rates: runs that ended without a run error; the pairs "
         "left out are counted). Estimate and 95 % interval: Hodges-Lehmann (continuous, the "
@@ -90,7 +98,7 @@ void WriteDiffMarkdown(const SweepDiff& diff, const SweepDiffOptions& options) {
   DiffTableMarkdown(diff, false, md);
   md << "\n## Timing (measures the machine; not compared unless --verdict-timing)\n\n";
   DiffTableMarkdown(diff, true, md);
-  sweep::WriteFileChecked(options.out_dir + "/diff.md", md.str());
+  WriteFileAtomic(options.out_dir + "/diff.md", md.str());
 }
 
 // Writes the diff plot: one small panel per compared metric, its difference with its interval
@@ -166,7 +174,10 @@ int SweepDiffMain(int argc, char** argv) {
   WriteOutputs(diff, options);
   std::cout << diff.runs_paired << " paired runs";
   for (const std::string& d : diff.differs) std::cout << "; " << d;
-  std::cout << "\n";
+  std::cout << "\n"
+            << (diff.same_build ? "same build: " + diff.build_a
+                                : "builds differ: A " + diff.build_a + "; B " + diff.build_b)
+            << "\n";
   for (const MetricDiff& m : diff.metrics) {
     if (m.pairs == 0) {
       std::printf("  %-30s %-19s (%s)\n", m.name.c_str(), m.verdict.c_str(), m.reason.c_str());

@@ -19,6 +19,7 @@ struct VarySpec {
 /// A sweep file, validated.
 struct SweepSpec {
   std::string file;
+  std::string sweep_text;  // the sweep file's text when loaded (hashed into sweep_id)
   std::string base_path;  // scenario file, resolved against the sweep's folder
   std::string base_text;  // its text when the sweep was loaded: every run uses this snapshot
   int runs = 1;           // random draws; grids multiply them

@@ -74,6 +74,8 @@ struct SweepDiffOptions {
 struct SweepDiff {
   int runs_paired = 0;
   std::vector<std::string> differs;  // what differs between A and B ("controller.type: x vs y")
+  std::string build_a, build_b;      // the builds that flew A's and B's runs (DescribeBuild)
+  bool same_build = false;           // one build, recorded, flew every run of both
   std::vector<MetricDiff> metrics;
 };
 

@@ -13,6 +13,7 @@
 #include <set>
 #include <thread>
 
+#include "hpa/models/file_io.h"
 #include "hpa/models/input_error.h"
 #include "hpa/models/params.h"
 #include "hpa/scenarios/runner.h"
@@ -252,6 +253,7 @@ int SweepMain(int argc, char** argv) {
   PrepareResultsFile(jsonl, a.retry_errors);
   // resume: skip what is recorded
   const std::set<int> done = RecordedRuns(jsonl, a, &spec);
+  sweep::WriteInputsSnapshot(spec, a.out_dir);
   runs.erase(std::remove_if(runs.begin(), runs.end(),
                             [&](const SweepRun& r) { return done.count(r.index) > 0; }),
              runs.end());
@@ -335,10 +337,7 @@ std::optional<SweepSpec> SameSweep(const std::string& sweep_file, const std::str
 void WriteMergedRuns(const std::vector<Record>& records, const std::string& out_dir) {
   std::string merged;
   for (const Record& r : records) merged += r.line + "\n";
-  sweep::WriteFileChecked(out_dir + "/runs.jsonl.tmp", merged);
-  if (std::rename((out_dir + "/runs.jsonl.tmp").c_str(), (out_dir + "/runs.jsonl").c_str()) != 0) {
-    throw OutputError(out_dir + "/runs.jsonl", std::strerror(errno));
-  }
+  WriteFileAtomic(out_dir + "/runs.jsonl", merged);
 }
 
 // Names the runs of the sweep that no folder recorded: the merge is incomplete (exit 1);
@@ -389,6 +388,7 @@ int MergeMain(int argc, char** argv) {
   for (const std::string& w : warnings) std::fprintf(stderr, "hpa: warning: %s\n", w.c_str());
   MakeOutputDir(out_dir);
   WriteMergedRuns(records, out_dir);
+  sweep::CopyInputsSnapshot(dirs, sweep_id, out_dir);
   sweep::WriteSummary(records, out_dir, spec ? &*spec : nullptr);
   std::printf(
       "merged %zu runs from %zu folders into %s (summary.md, summary.json, crash_rate.png)\n",

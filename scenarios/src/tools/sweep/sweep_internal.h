@@ -5,6 +5,9 @@
 
 #include <cstdint>
 #include <functional>
+#include <map>
+#include <optional>
+#include <set>
 #include <string>
 #include <utility>
 #include <vector>
@@ -39,12 +42,14 @@ struct Record {
   double payload_rmse_norm_m = 0, quad_dev_max_m = 0, solve_median_ms = 0, slack_time_s = 0;
   double payload_in_fov = 1;
   double mode_accuracy = 1;
-  double estimator_resets = 0;  // forced accepts and filter restarts (estimator health); 0 if none
+  // metrics.json's estimator.resets (forced accepts) + estimator.cable_reinitialisations (cable
+  // filter restarts); 0 if none
+  double estimator_restarts = 0;
   std::string line;             // the raw JSON line
 };
 
-/// A run whose mode accuracy, in-view fraction or estimator resets stands out of its controller's
-/// runs (see FindOutliers).
+/// A run whose mode accuracy, in-view fraction or estimator restarts stands out of the runs of its
+/// group (see FindOutliers).
 struct Outlier {
   const Record* record = nullptr;
   std::string metric;
@@ -52,10 +57,12 @@ struct Outlier {
 };
 
 /// Finished runs whose mode_accuracy or payload_in_fov_fraction lies below, or whose estimator
-/// resets lie above, their controller's median by more than 5 scaled median absolute deviations
-/// (1.4826 MAD: 5 standard deviations of a normal sample) and by more than a floor that matters
-/// (0.05 for the fractions, 2 resets): a run the estimator lost, which no crash flags.
-std::vector<Outlier> FindOutliers(const std::vector<Record>& records);
+/// restarts lie above, the median of their group (the controller and the values of
+/// `grid_keys`: a grid cell) by more than 5 scaled median absolute deviations (1.4826 MAD: 5
+/// standard deviations of a normal sample) and by more than a floor that matters (0.05 for the
+/// fractions, 2 restarts): a run the estimator lost, which no crash flags.
+std::vector<Outlier> FindOutliers(const std::vector<Record>& records,
+                                  const std::set<std::string>& grid_keys = {});
 
 /// One record per run index, the rule of both the sweep's summary and merge: a run recorded
 /// twice with the same outcome counts once; a finished record wins over an error record (a run
@@ -84,8 +91,33 @@ void DropTornLastLine(const std::string& jsonl);
 /// were dropped.
 int DropErrorRecords(const std::string& jsonl);
 
-/// Writes a file whole and checks it reached the disk (a full disk is an error, not silence).
-void WriteFileChecked(const std::string& path, const std::string& text);
+/// One input file of a sweep as it was when the sweep ran.
+struct InputFile {
+  std::string role;  // "sweep" or "base"
+  std::string path;
+  std::string text;
+};
+
+/// DIR/inputs.json: the files a sweep ran from, with its sweep_id.
+struct InputsSnapshot {
+  std::string sweep_id;
+  std::vector<InputFile> files;
+};
+
+/// Writes DIR/inputs.json from the spec's snapshots unless the folder has one (a resume keeps
+/// the first).
+void WriteInputsSnapshot(const SweepSpec& spec, const std::string& dir);
+
+/// DIR/inputs.json, or nothing when the folder has none; InputError if it is malformed.
+std::optional<InputsSnapshot> ReadInputsSnapshot(const std::string& dir);
+
+/// Copies the first of `from_dirs`' inputs.json of sweep `sweep_id` into `to_dir` (a merge).
+void CopyInputsSnapshot(const std::vector<std::string>& from_dirs, const std::string& sweep_id,
+                        const std::string& to_dir);
+
+/// What changed between two sweeps' input files, one line per changed YAML key ("base file
+/// scenarios/x.yaml: reference.period_s: 5 (A) vs 4 (B)"); empty when the files are the same.
+std::vector<std::string> DescribeInputChanges(const InputsSnapshot& a, const InputsSnapshot& b);
 
 /// Wilson score interval (95 %) for k successes in n trials; [0, 1] for n = 0.
 std::pair<double, double> Wilson(int k, int n);

@@ -12,7 +12,9 @@
 #include <map>
 #include <nlohmann/json.hpp>
 
+#include "hpa/models/file_io.h"
 #include "hpa/models/input_error.h"
+#include "hpa/scenarios/provenance.h"
 #include "hpa/scenarios/metric_defs.h"
 #include "scenarios/src/tools/cli_parse.h"
 #include "scenarios/src/tools/sweep/sweep_internal.h"
@@ -59,14 +61,6 @@ void DropTornLastLine(const std::string& jsonl) {
                jsonl.c_str(), text.size() - keep);
 }
 
-// Writes a file whole and checks it reached the disk (a full disk is an error, not silence).
-void WriteFileChecked(const std::string& path, const std::string& text) {
-  std::ofstream out(path, std::ios::trunc);
-  out << text;
-  out.flush();
-  if (!out) throw OutputError(path, std::strerror(errno));
-}
-
 int DropErrorRecords(const std::string& jsonl) {
   std::ifstream in(jsonl);
   if (!in) return 0;
@@ -88,10 +82,7 @@ int DropErrorRecords(const std::string& jsonl) {
   }
   if (dropped == 0) return 0;
   // replaced in one rename: a kill during the rewrite leaves the old file whole
-  WriteFileChecked(jsonl + ".tmp", kept);
-  if (std::rename((jsonl + ".tmp").c_str(), jsonl.c_str()) != 0) {
-    throw std::runtime_error("cannot replace " + jsonl + ": " + std::strerror(errno));
-  }
+  WriteFileAtomic(jsonl, kept);
   return dropped;
 }
 
@@ -173,7 +164,7 @@ std::vector<Record> ReadRecords(const std::string& path) {
         if (m.contains("estimator") && m["estimator"].is_object()) {
           const Json& e = m["estimator"];
           for (const char* key : {"resets", "cable_reinitialisations"}) {
-            if (e.contains(key) && e[key].is_number()) r.estimator_resets += e[key].get<double>();
+            if (e.contains(key) && e[key].is_number()) r.estimator_restarts += e[key].get<double>();
           }
         }
       }
@@ -207,6 +198,9 @@ std::string RecordLine(const SweepSpec& spec, const SweepRun& run, const std::st
   line["status"] = error.empty() ? "ok" : "error";
   line["error"] = error.empty() ? Json() : Json(error);
   line["metrics"] = metrics_json.empty() ? Json() : Json::parse(metrics_json);
+  // the build once per line, also for a run that ended in an error (no metrics)
+  if (line["metrics"].is_object()) line["metrics"].erase("build");
+  line["build"] = BuildToJson(ThisBuild());
   // one line, invalid UTF-8 in names or messages replaced rather than thrown on
   return line.dump(-1, ' ', false, Json::error_handler_t::replace);
 }

@@ -47,13 +47,6 @@ namespace {
 using sweep::BuildScenario;
 using sweep::FormatNumber;
 
-std::string ReadFile(const std::string& path) {
-  CheckInputFile(path, "a YAML file");
-  std::ifstream in(path);
-  if (!in) throw InputError(path, "", "cannot open file");
-  return std::string(std::istreambuf_iterator<char>(in), {});
-}
-
 std::string Hex(uint64_t v) {
   std::ostringstream out;
   out << std::hex << std::setw(16) << std::setfill('0') << v;
@@ -144,9 +137,12 @@ void ValidateRuns(const SweepSpec& s, const std::string& path) {
 }  // namespace
 
 SweepSpec LoadSweep(const std::string& path) {
-  const YamlMap root = YamlMap::LoadFile(path);
   SweepSpec s;
   s.file = path;
+  s.sweep_text = ReadYamlFile(path);
+  const YAML::Node root_node = LoadYamlText(s.sweep_text, path);
+  if (!root_node.IsMap()) throw InputError(path, "", "expected a YAML map at the top level");
+  const YamlMap root(root_node, path, "");
   const std::string base = root.String("base");
   s.base_path = (!base.empty() && base[0] == '/') ? base : Dirname(path) + "/" + base;
   try {
@@ -170,7 +166,7 @@ SweepSpec LoadSweep(const std::string& path) {
                          " runs: split the sweep");
   }
   ValidateRuns(s, path);
-  s.sweep_id = Hex(Fnv1a(ReadFile(path) + "\n--base--\n" + s.base_text));
+  s.sweep_id = Hex(Fnv1a(s.sweep_text + "\n--base--\n" + s.base_text));
   return s;
 }
 

@@ -10,6 +10,7 @@
 #include <set>
 #include <sstream>
 
+#include "hpa/models/file_io.h"
 #include "hpa/models/input_error.h"
 #include "hpa/scenarios/metrics.h"
 #include "hpa/scenarios/plot_canvas.h"
@@ -235,7 +236,7 @@ void WriteSummaryJson(const std::vector<Record>& records, const SummaryTable& t,
                                    {"median", Num(o.median)},
                                    {"replay", ReplayCommand(*o.record)}});
   }
-  WriteFileChecked(dir + "/summary.json", summary.dump(2) + "\n");
+  WriteFileAtomic(dir + "/summary.json", summary.dump(2) + "\n");
 }
 
 // summary.md's table of each group's counts, rates with Wilson intervals and quantiles.
@@ -314,17 +315,18 @@ void WriteSummaryMarkdown(const std::vector<Record>& records, const SummaryTable
   GroupTableMarkdown(t, md);
   BinTableMarkdown(t, md);
   WorstRunsMarkdown(records, md);
-  md << "\n## Outlier runs (mode accuracy, in view, estimator resets)\n\n"
+  md << "\n## Outlier runs (mode accuracy, in view, estimator restarts)\n\n"
      << "A finished run is listed when its mode accuracy or in-view fraction lies below, or its "
-        "estimator resets above, its controller's median by more than 5 scaled MADs and by more "
-        "than 0.05 (fractions) or 2 (resets).\n\n";
+        "estimator restarts (metrics.json's estimator.resets + estimator.cable_reinitialisations) "
+        "above, the median of its group (controller and grid cell, as in the table above) by more "
+        "than 5 scaled MADs and by more than 0.05 (fractions) or 2 (restarts).\n\n";
   if (outliers.empty()) md << "None.\n";
   for (const Outlier& o : outliers) {
     md << "- run " << o.record->run << " (" << o.record->controller << "): " << o.metric << " "
        << Fixed(o.value) << " (median " << Fixed(o.median) << ")\n  `" << ReplayCommand(*o.record)
        << "`\n";
   }
-  WriteFileChecked(dir + "/summary.md", md.str());
+  WriteFileAtomic(dir + "/summary.md", md.str());
 }
 
 // Draws one group's crash rate per bin (thick, with its Wilson interval) and expect-failure rate
@@ -396,13 +398,14 @@ void WriteCrashRatePlot(const SummaryTable& t, const std::string& dir) {
 void WriteSummary(const std::vector<Record>& records, const std::string& dir,
                   const SweepSpec* spec) {
   const SummaryTable table = Tabulate(records, spec);
-  const std::vector<Outlier> outliers = FindOutliers(records);
+  const std::vector<Outlier> outliers = FindOutliers(records, table.grid_keys);
   WriteSummaryJson(records, table, outliers, dir);
   WriteSummaryMarkdown(records, table, outliers, dir);
   WriteCrashRatePlot(table, dir);
 }
 
-std::vector<Outlier> FindOutliers(const std::vector<Record>& records) {
+std::vector<Outlier> FindOutliers(const std::vector<Record>& records,
+                                  const std::set<std::string>& grid_keys) {
   struct Rule {
     const char* metric;
     double (*value)(const Record&);
@@ -412,14 +415,15 @@ std::vector<Outlier> FindOutliers(const std::vector<Record>& records) {
   const Rule rules[] = {
       {"mode_accuracy", [](const Record& r) { return r.mode_accuracy; }, -1, 0.05},
       {"payload_in_fov_fraction", [](const Record& r) { return r.payload_in_fov; }, -1, 0.05},
-      {"estimator_resets", [](const Record& r) { return r.estimator_resets; }, +1, 2.0},
+      {"estimator_restarts", [](const Record& r) { return r.estimator_restarts; }, +1, 2.0},
   };
-  std::map<std::string, std::vector<const Record*>> by_controller;
+  // within a grid cell: a cell with 30 times the detector noise is not judged by the others
+  std::map<std::string, std::vector<const Record*>> by_group;
   for (const Record& r : records) {
-    if (!r.error) by_controller[r.controller].push_back(&r);
+    if (!r.error) by_group[GroupOf(r, grid_keys)].push_back(&r);
   }
   std::vector<Outlier> out;
-  for (const auto& [controller, runs] : by_controller) {
+  for (const auto& [group, runs] : by_group) {
     for (const Rule& rule : rules) {
       std::vector<double> values;
       for (const Record* r : runs) {
