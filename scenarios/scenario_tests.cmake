@@ -116,3 +116,9 @@ add_test(NAME cli.bounds_held_out
          COMMAND /usr/bin/python3 ${CMAKE_SOURCE_DIR}/scripts/scenario_bounds.py --check
                  --hpa ${HPA_BIN} --seeds 31-32 ${HPA_SHIPPED_SCENARIOS})
 set_tests_properties(cli.bounds_held_out PROPERTIES LABELS "cli;scenario" TIMEOUT 900)
+
+# The Python client's loaders and lockstep decoding on hostile files and messages (stdlib + numpy)
+add_test(NAME python.hostile_inputs
+         COMMAND ${HPA_PYTHON3} -m unittest discover -s ${CMAKE_SOURCE_DIR}/python/tests -p "test_*.py" -v)
+set_tests_properties(python.hostile_inputs PROPERTIES LABELS cli TIMEOUT 120
+                     ENVIRONMENT "PYTHONPATH=${CMAKE_SOURCE_DIR}/python;PYTHONDONTWRITEBYTECODE=1")

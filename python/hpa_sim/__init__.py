@@ -1,5 +1,8 @@
 """hpa-sim's Python side: a flight-stack client for the lockstep protocol (lockstep) and loaders
-of what a run writes (results). Standard library and numpy only."""
+of what a run writes (results). Standard library and numpy only. A file the loaders cannot read
+is an InputError ("PATH:LINE:COLUMN: what was wrong, what was expected"); a message the client
+cannot read is a ProtocolError naming the message."""
 
 from .lockstep import FlightStackClient, Command, Tick, PROTOCOL_VERSION, run  # noqa: F401
-from .results import load_log, load_metrics, load_runs  # noqa: F401
+from .lockstep import ProtocolError  # noqa: F401
+from .results import InputError, load_log, load_metrics, load_runs  # noqa: F401

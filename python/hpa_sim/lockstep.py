@@ -24,17 +24,25 @@ import sys
 
 import numpy as np
 
+from .results import _decode_utf8, _parse_json, _require_object
+
 PROTOCOL_VERSION = 1
 MAGIC = 0x46415048  # "HPAF"
 HELLO, HELLO_ACK, TICK, TICK_REPLY, FINISH, FINISH_REPLY, ERROR = range(1, 8)
+MESSAGE_TYPES = {HELLO: "hello", HELLO_ACK: "hello_ack", TICK: "tick", TICK_REPLY: "tick_reply",
+                 FINISH: "finish", FINISH_REPLY: "finish_reply", ERROR: "error"}
+MAX_MESSAGE_BYTES = 64 << 20  # the simulator's own limit on a message body
 
 _HAS_ALLOCATION, _SATURATED, _HAS_TRUTH, _NEED_ESTIMATE, _GRIPPER = 1, 2, 4, 8, 16
+_TICK_FLAGS = "1 allocation, 2 mixer saturated, 4 truth, 8 estimate needed, 16 gripper"
+_STATE_FLAGS = "1 payload visible, 2 payload lost, 4 payload supported"
 _HAS_COMMAND, _HAS_ESTIMATE = 1, 2
 STATUS = ["success", "max_iterations", "qp_failure", "non_finite", "fallback", "recovery"]
+MODES = ["slack", "taut"]  # a state's cable mode by its wire value (0 slack, 1 taut)
 
 
 class ProtocolError(RuntimeError):
-    """A malformed or unexpected message."""
+    """A malformed or unexpected message; the text names the message and what was wrong."""
 
 
 class Command:
@@ -61,13 +69,18 @@ class Tick:
 
 
 class _Reader:
-    def __init__(self, data):
-        self.data, self.pos = data, 0
+    # reads one binary message; every refusal names the message ("malformed tick message: ...")
+    def __init__(self, data, what):
+        self.data, self.pos, self.what = data, 0, what
+
+    def fail(self, why):
+        raise ProtocolError("malformed %s message: %s" % (self.what, why))
 
     def take(self, fmt):
         size = struct.calcsize(fmt)
         if self.pos + size > len(self.data):
-            raise ProtocolError("message ends early")
+            self.fail("it ends early (byte %d of %d, %d more needed)"
+                      % (self.pos, len(self.data), size))
         values = struct.unpack_from(fmt, self.data, self.pos)
         self.pos += size
         return values
@@ -78,13 +91,29 @@ class _Reader:
     def u32(self):
         return self.take("<I")[0]
 
-    def state(self):
+    def text(self, name):
+        length = self.u32()
+        if length > len(self.data) - self.pos:
+            self.fail("%s of %d bytes, longer than the rest of the message" % (name, length))
+        raw = bytes(self.data[self.pos:self.pos + length])
+        self.pos += length
+        try:
+            return raw.decode("utf-8")
+        except UnicodeDecodeError as e:
+            bad = e
+        self.fail("%s is not UTF-8 (byte %d of it, 0x%02x: %s)"
+                  % (name, bad.start, raw[bad.start], bad.reason))
+
+    def state(self, name):
         v = self.take("<20d")
         mode, flags = self.take("<II")
+        if mode >= len(MODES):
+            self.fail("%s cable mode %d, expected 0 slack or 1 taut" % (name, mode))
+        if flags & ~7:
+            self.fail("%s flags 0x%x with unknown bits, expected %s" % (name, flags, _STATE_FLAGS))
         return {"time_s": v[0], "p_WL_W": np.array(v[1:4]), "v_WL_W": np.array(v[4:7]),
                 "p_WQ_W": np.array(v[7:10]), "v_WQ_W": np.array(v[10:13]),
-                "q_WB": np.array(v[13:17]), "w_B": np.array(v[17:20]),
-                "mode": "taut" if mode == 1 else "slack",
+                "q_WB": np.array(v[13:17]), "w_B": np.array(v[17:20]), "mode": MODES[mode],
                 "payload_visible": bool(flags & 1), "payload_lost": bool(flags & 2),
                 "payload_supported": bool(flags & 4)}
 
@@ -99,14 +128,22 @@ def _pack_state(s):
               vec("p_WQ_W", 3) + vec("v_WQ_W", 3) + q + vec("w_B", 3))
     flags = ((1 if s.get("payload_visible", False) else 0) | (2 if s.get("payload_lost", True) else 0)
              | (4 if s.get("payload_supported", False) else 0))
-    return struct.pack("<20dII", *values, 1 if s.get("mode", "taut") == "taut" else 0, flags)
+    mode = s.get("mode", "taut")
+    if mode not in MODES:
+        raise ValueError("estimate mode %r, expected one of %s" % (mode, ", ".join(MODES)))
+    return struct.pack("<20dII", *values, MODES.index(mode), flags)
 
 
-def decode_tick(data):
-    """Decodes a tick message body into a Tick (frames without images)."""
-    r = _Reader(data)
+def decode_tick(data, what="tick"):
+    """Decodes a tick (or finish: what="finish") message body into a Tick (frames without
+    images); ProtocolError naming the message on a malformed one or an unknown flag or mode."""
+    r = _Reader(data, what)
     t = Tick()
     t.time_s, flags = r.take("<dI")
+    if flags & ~(_HAS_ALLOCATION | _SATURATED | _HAS_TRUTH | _NEED_ESTIMATE | _GRIPPER):
+        r.fail("flags 0x%x with unknown bits, expected %s" % (flags, _TICK_FLAGS))
+    if flags & _SATURATED and not flags & _HAS_ALLOCATION:
+        r.fail("flags 0x%x: mixer saturated without an allocation" % flags)
     t.allocation = None
     if flags & _HAS_ALLOCATION:
         t.allocation = (r.take("<d")[0], bool(flags & _SATURATED))
@@ -119,12 +156,12 @@ def decode_tick(data):
     n = r.u32()
     t.vio = r.f64s(11 * n).reshape(n, 11)
     t.detections = []
-    for _ in range(r.u32()):
+    for i in range(r.u32()):
         time_s, found = r.take("<dI")
+        if found > 1:
+            r.fail("detection %d found %d, expected 0 or 1" % (i, found))
         v = r.f64s(6)
-        length = r.u32()
-        reason = bytes(r.data[r.pos:r.pos + length]).decode("utf-8", "replace")
-        r.pos += length
+        reason = r.text("detection %d's reason" % i)
         t.detections.append({"time_s": time_s, "found": bool(found), "p_CL_C": v[0:3],
                              "centre_px": v[3:5], "radius_px": v[5], "reason": reason})
     t.frames = []
@@ -132,10 +169,63 @@ def decode_tick(data):
         capture_time_s, x, y, w, h, region_slot, whole_slot = r.take("<d4iII")
         t.frames.append({"capture_time_s": capture_time_s, "region": (x, y, w, h),
                          "region_slot": region_slot, "whole_slot": whole_slot, "image": None})
-    t.truth = r.state() if flags & _HAS_TRUTH else None
+    t.truth = r.state("truth") if flags & _HAS_TRUTH else None
     if r.pos != len(data):
-        raise ProtocolError("%d bytes after the tick's end" % (len(data) - r.pos))
+        r.fail("%d bytes after its end" % (len(data) - r.pos))
     return t
+
+
+def decode_header(header):
+    """(type, body length) of a 12-byte message header; ProtocolError on a bad magic, an unknown
+    type or a body past MAX_MESSAGE_BYTES."""
+    magic, kind, length = struct.unpack("<III", header)
+    if magic != MAGIC:
+        raise ProtocolError("not an hpa lockstep message (magic 0x%08x, expected 0x%08x)"
+                            % (magic, MAGIC))
+    if kind not in MESSAGE_TYPES:
+        raise ProtocolError("message type %d, expected one of %s" % (kind, ", ".join(
+            "%d %s" % item for item in MESSAGE_TYPES.items())))
+    if length > MAX_MESSAGE_BYTES:
+        raise ProtocolError("%s message of %d bytes, expected at most %d"
+                            % (MESSAGE_TYPES[kind], length, MAX_MESSAGE_BYTES))
+    return kind, length
+
+
+def _field(obj, key, where, types):
+    # a JSON field that must be there with one of the given types
+    if key not in obj:
+        raise ProtocolError("%s: no '%s'" % (where, key))
+    if not isinstance(obj[key], types) or isinstance(obj[key], bool):
+        raise ProtocolError("%s: '%s' is %r, expected %s"
+                            % (where, key, obj[key], " or ".join(t.__name__ for t in types)))
+    return obj[key]
+
+
+def decode_hello(body):
+    """The hello message's JSON object as a dict; ProtocolError naming the hello and, for bad
+    UTF-8 or JSON, the line and column."""
+    where = "hello message"
+    text = _decode_utf8(body, where, error=ProtocolError)
+    hello = _require_object(_parse_json(text, where, error=ProtocolError), text, where, 1,
+                            "the run's parameters", error=ProtocolError)
+    # another version's layout is unknown: the caller refuses it by its version
+    if _field(hello, "protocol_version", where, (int,)) != PROTOCOL_VERSION:
+        return hello
+    camera = hello.get("camera")
+    if camera is not None:
+        where += "'s camera"
+        if not isinstance(camera, dict):
+            raise ProtocolError("%s: %r, expected an object" % (where, camera))
+        _field(camera, "ring", where, (str,))
+        for key in ("slots", "width_px", "height_px", "slot_bytes"):
+            if _field(camera, key, where, (int,)) < 0:
+                raise ProtocolError("%s: '%s' is %d, expected 0 or more"
+                                    % (where, key, camera[key]))
+        if camera["slot_bytes"] < 3 * camera["width_px"] * camera["height_px"]:
+            raise ProtocolError("%s: 'slot_bytes' %d, expected at least 3 x width x height = %d"
+                                % (where, camera["slot_bytes"],
+                                   3 * camera["width_px"] * camera["height_px"]))
+    return hello
 
 
 def encode_reply(command, estimate, rejected=0, resets=0, frames_detected=0, camera_roi=(0, 0, 0, 0)):
@@ -145,6 +235,9 @@ def encode_reply(command, estimate, rejected=0, resets=0, frames_detected=0, cam
     flags = (_HAS_COMMAND if command is not None else 0) | (_HAS_ESTIMATE if estimate is not None else 0)
     out = struct.pack("<I", flags)
     if command is not None:
+        if command.status not in STATUS:
+            raise ValueError("command status %r, expected one of %s"
+                             % (command.status, ", ".join(STATUS)))
         out += struct.pack("<4dIdd", *command.w_B_radps, command.thrust_N,
                            STATUS.index(command.status), command.solve_time_ms, command.cost)
     if estimate is not None:
@@ -164,12 +257,11 @@ class FlightStackClient:
         self.ring = None
 
     def receive(self):
-        """(type, body bytes) of the next message."""
-        magic, kind, length = struct.unpack("<III", self._read(12))
-        if magic != MAGIC:
-            raise ProtocolError("not an hpa lockstep message (bad magic)")
-        body = self._read(length)
+        """(type, body bytes) of the next message; ProtocolError on a bad header or an error."""
+        kind, length = decode_header(self._read(12, "a message header"))
+        body = self._read(length, "a %s message's body" % MESSAGE_TYPES[kind])
         if kind == ERROR:
+            # the simulator's own report, shown even where its bytes are not UTF-8
             raise ProtocolError("the simulator reported: " + body.decode("utf-8", "replace"))
         return kind, body
 
@@ -181,8 +273,8 @@ class FlightStackClient:
         """Receives the hello (a dict), maps the frame ring, answers with the ack."""
         kind, body = self.receive()
         if kind != HELLO:
-            raise ProtocolError("expected a hello, got message type %d" % kind)
-        hello = json.loads(body)
+            raise ProtocolError("expected a hello, got a %s message" % MESSAGE_TYPES[kind])
+        hello = decode_hello(body)
         if hello["protocol_version"] != PROTOCOL_VERSION:
             self.send(ERROR, ("this client speaks protocol version %d" % PROTOCOL_VERSION).encode())
             raise ProtocolError("the simulator speaks protocol version %d" % hello["protocol_version"])
@@ -202,17 +294,23 @@ class FlightStackClient:
     def attach_frames(self, tick):
         """Points each frame's "image" at its whole frame in the ring (a read-only numpy view)."""
         for f in tick.frames:
+            if self.ring is None:
+                raise ProtocolError("a tick at t = %g s carries a frame, but the hello had no "
+                                    "camera" % tick.time_s)
             c = self.camera
+            if not 0 <= f["whole_slot"] < c["slots"]:
+                raise ProtocolError("a tick at t = %g s names ring slot %d, expected 0 to %d"
+                                    % (tick.time_s, f["whole_slot"], c["slots"] - 1))
             offset = f["whole_slot"] * c["slot_bytes"]
             f["image"] = np.frombuffer(self.ring, dtype=np.uint8, count=c["width_px"] * c["height_px"] * 3,
                                        offset=offset).reshape(c["height_px"], c["width_px"], 3)
 
-    def _read(self, n):
+    def _read(self, n, what):
         chunks = []
         while n > 0:
             chunk = self.sock.recv(n)
             if not chunk:
-                raise EOFError("the simulator closed the connection")
+                raise EOFError("the simulator closed the connection while this read %s" % what)
             chunks.append(chunk)
             n -= len(chunk)
         return b"".join(chunks)
@@ -230,13 +328,14 @@ def run(controller_class, name=None, control_rate_hz=0.0):
         last_vio, last_gyro = None, np.zeros(3)
         while True:
             kind, body = client.receive()
-            tick = decode_tick(body)
+            if kind not in (TICK, FINISH):
+                raise ProtocolError("expected a tick or finish, got a %s message"
+                                    % MESSAGE_TYPES[kind])
+            tick = decode_tick(body, MESSAGE_TYPES[kind])
             if kind == FINISH:
                 client.send(FINISH_REPLY, json.dumps({"estimator": "", "estimator_health": [],
                                                       "frames_detected": 0}).encode())
                 return 0
-            if kind != TICK:
-                raise ProtocolError("unexpected message type %d" % kind)
             client.attach_frames(tick)
             if len(tick.vio):
                 last_vio = tick.vio[-1]
