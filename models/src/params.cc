@@ -2,6 +2,7 @@
 
 #include <Eigen/LU>
 #include <cmath>
+#include <cstdio>
 
 #include "hpa/models/data_dir.h"
 #include "hpa/models/input_error.h"
@@ -23,6 +24,13 @@ std::string DefaultParamsPath() { return DataPath("models/params.yaml"); }
 Params LoadParams(const std::string& path) { return ParseParams(YamlMap::LoadFile(path)); }
 
 namespace {
+
+// A number as %g writes it (0.5, 1830, 2.4e+04), for messages.
+std::string Short(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%g", v);
+  return buf;
+}
 
 // Copies every key of `from` into `into`, descending into maps both have.
 void MergeInto(YAML::Node into, const YAML::Node& from) {
@@ -103,11 +111,21 @@ Params ParseParams(const YamlMap& root) {
   const YamlMap rotor = root.Map("rotor");
   p.k_f_N_per_radps2 = rotor.Number("k_f_N_per_radps2", 1e-12, 1.0);
   p.k_m_Nm_per_radps2 = rotor.Number("k_m_Nm_per_radps2", 1e-14, 1.0);
+  // a propeller's torque-to-thrust ratio k_m / k_f is a length of the order of a tenth of its
+  // radius (0.01-0.05 m for 5-10 inch propellers; 0.016 m here): 0.2 m is no propeller, and
+  // MuJoCo cannot integrate the yaw such a ratio gives
+  if (p.k_m_Nm_per_radps2 / p.k_f_N_per_radps2 > 0.2) {
+    rotor.Fail("k_m_Nm_per_radps2",
+               "k_m / k_f (k_m_Nm_per_radps2 / k_f_N_per_radps2) is " +
+                   Short(p.k_m_Nm_per_radps2 / p.k_f_N_per_radps2) +
+                   " m: expected at most 0.2 m (a real propeller's is 0.01-0.05 m)");
+  }
   p.motor_time_constant_s = rotor.Number("motor_time_constant_s", 1e-4, 1.0);
   p.motor_speed_min_radps = rotor.Number("motor_speed_min_radps", 0.0, 1e5);
   p.motor_speed_max_radps = rotor.Number("motor_speed_max_radps", 1.0, 1e5);
   if (p.motor_speed_max_radps <= p.motor_speed_min_radps) {
-    rotor.Fail("motor_speed_max_radps", "must be above motor_speed_min_radps");
+    rotor.Fail("motor_speed_min_radps", "must be below motor_speed_max_radps (" +
+                                            Short(p.motor_speed_max_radps) + ")");
   }
   rotor.RejectUnknownKeys();
 
@@ -119,6 +137,11 @@ Params ParseParams(const YamlMap& root) {
   const YamlMap cable = root.Map("cable");
   p.cable_length_m = cable.Number("length_m", 0.05, 10.0);
   p.slack_epsilon_m = cable.Number("slack_epsilon_m", 0.0, 1.0);
+  if (!(p.slack_epsilon_m < p.cable_length_m)) {
+    cable.Fail("slack_epsilon_m", "must be below the cable's length_m (" +
+                                      Short(p.cable_length_m) +
+                                      "): slack is a distance shorter than the cable by it");
+  }
   cable.RejectUnknownKeys();
 
   const YamlMap cam = root.Map("payload_camera");

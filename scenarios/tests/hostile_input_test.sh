@@ -204,5 +204,54 @@ expect_exit 4 "cannot write" render-frame "$base" --at 0.5 --out /dev/full/frame
 : > "$out/a_file"
 expect_exit 4 "cannot write.*a_file.*output folder" run "$base" --out "$out/a_file"
 
+echo "== physics that cannot fly is refused before the run, naming the parameter (exit 2)"
+for case in "params.quadrotor.mass_kg=100|cannot hover: .* 982 N .* at most 20.09 N" \
+    "params.rotor.k_f_N_per_radps2=1e-12|k_m_Nm_per_radps2.*k_m / k_f" \
+    "params.rotor.motor_speed_max_radps=101|cannot hover" \
+    "params.gravity_mps2=100|cannot hover" \
+    "params.payload.mass_kg=100|cannot hover" \
+    "params.cable.length_m=10|the vehicle, 10 m above it, would be outside the 20 x 20 x 10 m arena" \
+    "params.quadrotor.body_half_size_m=[5,5,5]|into the body \\(half height 5 m\\)" \
+    "params.payload.radius_m=0.6|payload of radius 0.6 m into the body" \
+    "params.cable.slack_epsilon_m=1.0|slack_epsilon_m': must be below the cable's length_m \\(0.5\\)" \
+    "params.rotor.k_m_Nm_per_radps2=1.0|k_m / k_f .* expected at most 0.2 m" \
+    "params.rotor.motor_speed_min_radps=2000|motor_speed_min_radps': must be below motor_speed_max_radps" \
+    "reference.payload_position=[0,0,50]|payload at \\(0, 0, 50\\) m at t = 0 s: the vehicle.* outside" \
+    "reference.payload_position=[500,0,0.7]|payload at \\(500, 0, 0.7\\) m"; do
+  expect_exit 2 "${case#*|}" run "$base" --quiet --out "$out/unflyable" --set "${case%%|*}"
+done
+[ -e "$out/unflyable/metrics.json" ] && fail "an unflyable scenario wrote metrics"
+
+echo "== an empty option value is refused, never read as the default"
+expect_exit 2 "key '--out': an empty value" run "$base" --quiet --out ""
+
+echo "== SIGINT during hpa run and hpa golden: exit 130, what was computed is written"
+long="$out/long.yaml"
+sed 's/^duration: .*/duration: 600.0/' "$base" > "$long"
+"$hpa" run "$long" --quiet --out "$out/sig_run" > "$out/sig_run.log" 2>&1 &
+pid=$!; sleep 1.5; kill -INT "$pid"; wait "$pid"; status=$?
+[ "$status" -eq 130 ] || fail "hpa run stopped by SIGINT exited $status, expected 130: $(cat "$out/sig_run.log")"
+grep -q '"run_error": "stopped by signal 2' "$out/sig_run/metrics.json" 2>/dev/null \
+  || fail "the stopped run's metrics.json does not say it was stopped"
+HPA_DATA_DIR=$(dirname "$scen") "$hpa" golden --quiet > "$out/sig_golden.log" 2>&1 &
+pid=$!; sleep 1.5; kill -INT "$pid"; wait "$pid"; status=$?
+[ "$status" -eq 130 ] || fail "hpa golden stopped by SIGINT exited $status, expected 130: $(cat "$out/sig_golden.log")"
+grep -q "stopped by signal 2.*nothing compared or written" "$out/sig_golden.log" \
+  || fail "golden does not say it was stopped: $(cat "$out/sig_golden.log")"
+
+echo "== golden --from and sweep-diff refuse records of the wrong shape (exit 2, not 3)"
+mkdir -p "$out/shape"
+for n in $(python3 -c "import glob,os,sys; print(' '.join([os.path.splitext(os.path.basename(p))[0] for p in glob.glob(sys.argv[1]+'/*.yaml')] + ['ci_' + os.path.splitext(os.path.basename(p))[0] for p in glob.glob(sys.argv[1]+'/ci/*.yaml')]))" "$scen"); do
+  mkdir -p "$out/shape/$n"; echo '[1,2]' > "$out/shape/$n/metrics.json"
+done
+printf '{"tolerances": {"default": {"rel": 1e-3}}, "scenarios": {}}' > "$out/shape/golden.json"
+expect_exit 2 "expected a metrics.json object, got array" golden --golden "$out/shape/golden.json" \
+  --from "$out/shape" --quiet
+mkdir -p "$out/oops"
+echo '{"sweep_id":"x","sweep":"s","base":"b","run":0,"draw":0,"seed":1,"values":{},"controller":"c","status":"ok","error":null,"metrics":"oops"}' \
+  > "$out/oops/runs.jsonl"
+expect_exit 2 "runs.jsonl: key 'line 1: metrics': expected a metrics.json object or null" \
+  sweep-diff "$out/oops" "$out/oops" --out "$out/oops_diff"
+
 [ $failures -eq 0 ] && echo "hostile input: all checks passed"
 exit $((failures > 0))

@@ -122,9 +122,11 @@ void World::CheckWarnings() {
     warning_count_[i] = n;
     const std::string text = TakeWarnings();
     if (i == mjWARN_BADQPOS || i == mjWARN_BADQVEL || i == mjWARN_BADQACC) {
-      // MuJoCo has reset mjData: the state went non-finite (docs/design.md section 8: a crash)
-      LatchCrash("non-finite state (MuJoCo: " + text + ")");
-      continue;
+      // MuJoCo has reset mjData: its integration diverged. That is the simulation failing
+      // (parameters it cannot integrate), not a flight result: a run error, not a crash
+      throw std::runtime_error("the physics diverged at t = " + std::to_string(time_s()) +
+                               " s (MuJoCo: " + text +
+                               "): the parameters cannot be simulated; a run error, not a crash");
     }
     throw std::runtime_error("MuJoCo warning at t = " + std::to_string(time_s()) + " s: " + text);
   }
@@ -162,12 +164,10 @@ void World::CheckCrash() {
   // tilt past 90 deg: body z points below the horizon
   if (s.q_WB.normalized().toRotationMatrix()(2, 2) < 0.0) return LatchCrash("tilt > 90 deg");
 
-  // arena 20 x 20 x 10 m
-  constexpr double kArenaHalfWidth_m = 10.0, kArenaHeight_m = 10.0;
   const Eigen::Vector3d& p = s.p_WQ_W;
   if (std::abs(p.x()) > kArenaHalfWidth_m || std::abs(p.y()) > kArenaHalfWidth_m || p.z() < 0.0 ||
       p.z() > kArenaHeight_m) {
-    return LatchCrash("left the 20x20x10 m arena");
+    return LatchCrash("left the 20x20x10 m arena");  // kArenaHalfWidth_m, kArenaHeight_m
   }
 }
 

@@ -22,8 +22,11 @@ namespace hpa::runner {
 /// with the cable length of `params`.
 SystemState InitialState(const Reference& reference, const Params& params);
 
-/// Refuses a reference that puts the payload into the ground, naming the first time it does.
-void CheckReferenceAboveGround(const Reference& reference, double duration_s, const Params& params);
+/// Refuses, with an InputError naming the scenario file, the parameter or the reference and the first time it
+/// fails, a vehicle that cannot fly the scenario: hover above 80 % of full thrust or idle thrust
+/// near the weight, a payload hanging into the body, a body too wide for the arena, or a
+/// reference that puts the payload into the ground or the vehicle outside the arena.
+void CheckFlyable(const Reference& reference, const Scenario& scenario, const Params& params);
 
 /// The signal a stop was requested with, or 0 (RequestStop sets it).
 int StopSignal();

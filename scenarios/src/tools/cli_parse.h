@@ -16,7 +16,7 @@ namespace hpa {
 
 /// Parses argv[2..] (argv[1] is the command) into `app`. Returns the exit code to return at
 /// once for --help (0), nothing when the command should run; a parse error (an unknown option,
-/// a missing or malformed value) throws InputError naming the command, so it exits 2.
+/// a missing, malformed or empty value) throws InputError naming the command, so it exits 2.
 inline std::optional<int> ParseCommandLine(CLI::App& app, int argc, char** argv) {
   try {
     app.parse(argc - 1, argv + 1);
@@ -24,6 +24,15 @@ inline std::optional<int> ParseCommandLine(CLI::App& app, int argc, char** argv)
     return app.exit(e);
   } catch (const CLI::ParseError& e) {
     throw InputError(app.get_name(), "", e.what());
+  }
+  // an option given an empty value ("--out ''") is a mistake, never a request for the default
+  for (const CLI::Option* option : app.get_options()) {
+    for (const std::string& value : option->results()) {
+      if (value.empty()) {
+        throw InputError(app.get_name(), option->get_name(),
+                         "an empty value; leave the option out for its default");
+      }
+    }
   }
   return std::nullopt;
 }

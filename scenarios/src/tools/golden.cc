@@ -1,6 +1,7 @@
 #include "hpa/scenarios/golden.h"
 
 #include <algorithm>
+#include <cstring>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -9,12 +10,14 @@
 #include <sstream>
 
 #include "hpa/models/data_dir.h"
+#include "hpa/models/file_io.h"
 #include "hpa/models/input_error.h"
 #include "hpa/models/params.h"
 #include "hpa/scenarios/metrics.h"
 #include "hpa/scenarios/runner.h"
 #include "hpa/scenarios/scenario.h"
 #include "scenarios/src/tools/cli_parse.h"
+#include "scenarios/src/tools/scenario_commands.h"
 
 namespace hpa {
 namespace {
@@ -144,7 +147,12 @@ Json CurrentMetrics(const std::string& name, const GoldenOptions& options, const
     std::string flat = name;
     std::replace(flat.begin(), flat.end(), '/', '_');
     const std::string path = options.from_dir + "/" + flat + "/metrics.json";
-    return ParseJson(ReadText(path, "the metrics of " + name), path);
+    Json metrics = ParseJson(ReadText(path, "the metrics of " + name), path);
+    if (!metrics.is_object()) {
+      throw InputError(path, "", "expected a metrics.json object, got " +
+                                     std::string(metrics.type_name()));
+    }
+    return metrics;
   }
   const Scenario scenario = LoadScenario(ScenariosDir() + "/" + name + ".yaml");
   RunOptions run_options;
@@ -277,9 +285,8 @@ void WriteGolden(const std::string& path, Json golden, const Json& updated,
                  const GoldenOptions& options, size_t scenario_count) {
   golden["scenarios"] = updated;
   golden["reason"] = options.reason;
-  std::ofstream out(path);
-  out << golden.dump(1) << "\n";
-  if (!out.flush()) throw OutputError(path, "disk full?");
+  // atomically: a full disk or a kill leaves the previous golden file whole
+  WriteFileAtomic(path, golden.dump(1) + "\n");
   std::cout << "golden: wrote " << scenario_count << " scenarios to " << path
             << " (commit it with the reason: " << options.reason << ")\n";
 }
@@ -303,6 +310,12 @@ int RunGolden(const GoldenOptions& options) {
   for (const std::string& name : names) {
     if (!options.quiet) std::cerr << "golden: " << name << " ..." << std::flush;
     const Json now = StripMachineFields(CurrentMetrics(name, options, params));
+    if (const int signal = StopRequested(); signal != 0) {
+      // a run cut short by the signal is no measurement: nothing is compared or written
+      std::cout << "\ngolden: stopped by signal " << signal << " (" << strsignal(signal)
+                << ") at " << name << "; nothing compared or written\n";
+      return kExitStoppedBySignal + signal;
+    }
     if (options.update) CheckRecordable(name, now);
     updated[name] = now;
     changed += CompareScenario(name, now, golden["scenarios"], tolerances, options);

@@ -14,6 +14,7 @@
 #include <string>
 #include <vector>
 
+#include "hpa/controller/controller_registry.h"
 #include "hpa/models/input_error.h"
 #include "hpa/models/params.h"
 #include "hpa/models/yaml_reader.h"
@@ -111,6 +112,19 @@ void RemoveStaleOutputs(const std::string& dir) {
   }
 }
 
+// Removes what a previous comparison left in `dir` (the table, the plot, and each registered
+// controller's run outputs), so a killed comparison never mixes old and new results.
+void RemoveStaleComparison(const std::string& dir) {
+  for (const char* name : {"comparison.md", "comparison.png", "comparison.svg", "comparison.pdf",
+                           "comparison.csv"}) {
+    std::remove((dir + "/" + name).c_str());
+  }
+  for (const std::string& type : ControllerNames()) {
+    RemoveStaleOutputs(dir + "/" + type);
+    std::remove((dir + "/" + type + "/slack_events.mp4").c_str());
+  }
+}
+
 // Says where the video went; a slack-events video of a run without slack is not written, and
 // that is said even with --quiet (a missing file would otherwise look like a failure).
 void ReportVideo(const std::string& video_path, bool quiet) {
@@ -163,6 +177,11 @@ void WriteRunOutputs(const RunResult& result, const Scenario& scenario, const Pa
 // The exit code of a finished run, saying why it failed: an internal error, a crash the
 // scenario does not expect (no expect block says a crash is fine) or a failed expect bound.
 int RunExitCode(const RunResult& result, const Scenario& scenario) {
+  if (const int signal = StopRequested(); signal != 0) {
+    std::fprintf(stderr, "hpa: stopped by signal %d (%s); the results so far are written\n",
+                 signal, strsignal(signal));
+    return kExitStoppedBySignal + signal;
+  }
   if (result.metrics.run_error) {
     std::fprintf(stderr, "hpa: internal error during the run (results so far are written): %s\n",
                  result.metrics.run_error->c_str());
@@ -238,11 +257,26 @@ int RunMain(int argc, char** argv) {
   app.add_option("--flight-stack", flight_stack,
                  "fly a separate flight stack: a shell command (e.g. hpa-flight, or python3 "
                  "examples/python/hover_controller.py) started with HPA_FLIGHT_SOCKET set and "
-                 "run in lockstep over docs/protocol.md's protocol (default: in process)");
+                 "run in lockstep over docs/protocol.md's protocol (default: in process)")
+      ->check([](const std::string& text) {
+        // a blank command starts a shell that exits at once: a mistake, not a flight stack
+        if (text.find_first_not_of(" \t\n") == std::string::npos) {
+          return "expected a shell command, got '" + text +
+                 "' (leave --flight-stack out to fly in process)";
+        }
+        return std::string();
+      });
   app.add_option("--flight-timeout", flight_timeout_s,
-                 "with --flight-stack: seconds to wait for its reply to one tick before the run "
-                 "stops with a run error")
-      ->check(CLI::Range(0.001, 3600.0));
+                 "with --flight-stack: seconds to wait for its whole reply to one tick before "
+                 "the run stops with a run error, in [0.001, 3600]")
+      ->check([](const std::string& text) {
+        // NaN passes a range check (every comparison with it is false): finite and in range
+        double s = 0.0;
+        if (!CLI::detail::lexical_cast(text, s) || !std::isfinite(s) || s < 0.001 || s > 3600.0) {
+          return "expected seconds in [0.001, 3600], got '" + text + "'";
+        }
+        return std::string();
+      });
   app.add_flag("--no-control-thread", no_control_thread,
                "compute the in-process controller's commands on the simulation's thread (the "
                "same run; by default they are computed on a second core while the simulation "
@@ -312,6 +346,7 @@ int CompareMain(int argc, char** argv) {
   // every name checked before the first run
   if (types.empty()) throw InputError("", "--controllers", "expected a list such as A,B");
   for (const std::string& type : types) CheckControllerType(type, "", "--controllers");
+  RemoveStaleComparison(out_dir);
   std::vector<RunResult> results;
   bool all_passed = true;
   bool run_error = false;
@@ -342,13 +377,20 @@ int CompareMain(int argc, char** argv) {
     }
     if (!o.quiet) PrintSummary(results.back().metrics, dir);
     ReportVideo(video, o.quiet);
+    if (StopRequested() != 0) break;  // the controllers not yet flown are left out
   }
+  types.resize(results.size());
   const std::string png =
       WriteComparisonPlot(results, ScenarioParams(base, params), out_dir + "/comparison", format);
   const std::string table = ComparisonTable(results, types);
   WriteText(out_dir + "/comparison.md", table);
   if (!o.quiet) std::printf("\n%s", table.c_str());
   if (!o.quiet) std::printf("comparison plot %s\n", png.c_str());
+  if (const int signal = StopRequested(); signal != 0) {
+    std::fprintf(stderr, "hpa: stopped by signal %d (%s); the results so far are written\n",
+                 signal, strsignal(signal));
+    return kExitStoppedBySignal + signal;
+  }
   if (run_error) return kExitInternal;
   return all_passed ? kExitOk : kExitExpectFailed;
 }

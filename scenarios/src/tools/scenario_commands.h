@@ -9,6 +9,9 @@ constexpr int kExitExpectFailed = 1;  // an expect bound failed, or an unexpecte
 constexpr int kExitBadInput = 2;      // a file, key or value the message names
 constexpr int kExitInternal = 3;
 constexpr int kExitCannotWrite = 4;  // an output could not be written (disk full, no permission)
+/// Stopped by a signal: the code is this plus the signal (130 SIGINT, 143 SIGTERM), after what
+/// was computed is written.
+constexpr int kExitStoppedBySignal = 128;
 
 /// `hpa run SCENARIO.yaml ...` (argv[1] is "run"); returns the exit code.
 int RunMain(int argc, char** argv);

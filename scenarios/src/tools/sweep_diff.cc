@@ -142,17 +142,30 @@ std::vector<Run> ReadRuns(const std::string& dir, const std::string& where) {
     } catch (const Json::exception& e) {
       throw InputError(path, "line " + std::to_string(number), e.what());
     }
-    Run r;
-    r.draw = j.value("draw", 0);
-    r.seed = j.value("seed", 0ul);
-    r.sweep = j.value("sweep", "");
-    r.inputs_id = j.contains("inputs_id") ? j.value("inputs_id", "") : j.value("sweep_id", "");
-    r.build = j.contains("build") ? DescribeBuild(BuildFromJson(j["build"])) : "not recorded";
-    for (const auto& [key, value] : j["values"].items()) {
-      r.values[key] = value.is_string() ? value.get<std::string>() : value.dump();
+    // the record's shape, checked before it is read (a hand-edited or foreign file)
+    const std::string where = "line " + std::to_string(number);
+    if (!j.is_object()) throw InputError(path, where, "expected a JSON object (a run record)");
+    if (j.contains("values") && !j["values"].is_object()) {
+      throw InputError(path, where + ": values", "expected an object of varied values");
     }
-    r.ok = j.value("status", "") == "ok";
-    r.metrics = j.contains("metrics") ? j["metrics"] : Json();
+    if (j.contains("metrics") && !j["metrics"].is_object() && !j["metrics"].is_null()) {
+      throw InputError(path, where + ": metrics", "expected a metrics.json object or null");
+    }
+    Run r;
+    try {
+      r.draw = j.value("draw", 0);
+      r.seed = j.value("seed", 0ul);
+      r.sweep = j.value("sweep", "");
+      r.inputs_id = j.contains("inputs_id") ? j.value("inputs_id", "") : j.value("sweep_id", "");
+      r.build = j.contains("build") ? DescribeBuild(BuildFromJson(j["build"])) : "not recorded";
+      for (const auto& [key, value] : j["values"].items()) {
+        r.values[key] = value.is_string() ? value.get<std::string>() : value.dump();
+      }
+      r.ok = j.value("status", "") == "ok";
+      r.metrics = j.contains("metrics") ? j["metrics"] : Json();
+    } catch (const Json::exception& e) {
+      throw InputError(path, where, std::string("malformed run record: ") + e.what());
+    }
     runs.push_back(std::move(r));
   }
   if (runs.empty()) throw InputError(path, "", "no runs recorded");

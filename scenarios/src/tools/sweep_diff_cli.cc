@@ -170,7 +170,14 @@ int SweepDiffMain(int argc, char** argv) {
                  "png | svg | pdf: the format of diff.png (diff.csv holds its numbers)");
   if (const auto code = ParseCommandLine(app, argc, argv)) return *code;
   ParsePlotFormat(options.plot_format);  // refused before any work
-  const SweepDiff diff = CompareSweeps(options);
+  SweepDiff diff;
+  try {
+    diff = CompareSweeps(options);
+  } catch (const nlohmann::json::exception& e) {
+    // a metric of the wrong type inside a record (a hand-edited runs.jsonl)
+    throw InputError(options.a_dir + "/runs.jsonl or " + options.b_dir + "/runs.jsonl", "metrics",
+                     std::string("a metric of the wrong type: ") + e.what());
+  }
   WriteOutputs(diff, options);
   std::cout << diff.runs_paired << " paired runs";
   for (const std::string& d : diff.differs) std::cout << "; " << d;

@@ -20,6 +20,7 @@
 #include "hpa/sim/camera_image_model.h"
 #include "hpa/sim/world.h"
 #include "scenarios/src/tools/cli_parse.h"
+#include "scenarios/src/tools/scenario_commands.h"
 #include "scenarios/src/tools/sweep/sweep_internal.h"
 
 namespace hpa {
@@ -283,7 +284,7 @@ int SweepMain(int argc, char** argv) {
         "or killed unrecorded; continue with --resume\n",
         results.tty() ? "\n" : "", stopped_by, strsignal(stopped_by), results.finished(),
         jsonl.c_str());
-    return 128 + stopped_by;
+    return kExitStoppedBySignal + stopped_by;
   }
   if (results.tty()) std::printf("\n");
   const double wall_s = results.elapsed_s();

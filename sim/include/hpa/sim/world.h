@@ -90,6 +90,11 @@ struct CameraFrameTiming {
 /// Body selector for disturbances.
 enum class Body { kQuadrotor, kPayload };
 
+/// The arena the vehicle flies in: |x|, |y| <= kArenaHalfWidth_m and 0 <= z <= kArenaHeight_m
+/// (a 20 x 20 x 10 m hall); leaving it is a crash, and a scenario must fit inside it.
+constexpr double kArenaHalfWidth_m = 10.0;
+constexpr double kArenaHeight_m = 10.0;
+
 /// The simulated world the scenario runner steps in lockstep with the flight code.
 class World {
  public:
@@ -186,8 +191,8 @@ class World {
   /// True while the gripper holds the payload.
   bool gripper_active() const;
 
-  /// Latched: quad body contact with ground/obstacle, tilt > 90 deg, outside the 20x20x10 m
-  /// arena (|x|, |y| <= 10 m, 0 <= z <= 10 m), non-finite state.
+  /// Latched: quad body contact with ground/obstacle, tilt > 90 deg, outside the arena
+  /// (|x|, |y| <= kArenaHalfWidth_m, 0 <= z <= kArenaHeight_m), non-finite state.
   CrashStatus Crash() const;
 
   /// Payload camera frame, CV_8UC3 BGR, 1280x720, top row first (first call creates the GL

@@ -1,0 +1,139 @@
+// Golden covers every path a change can touch: each registered controller, estimator variant,
+// OCP solver and QP method, reference type, event type (an impulse on either body), world profile
+// and world-profile part, and each flight-code switch off its default, is flown by at least one
+// golden scenario. A change confined to a path no golden scenario flies would pass
+// `golden --exact`; this test fails first, naming the path and what to add.
+
+#include <gtest/gtest.h>
+
+#include <functional>
+#include <set>
+#include <string>
+#include <vector>
+
+#include "hpa/controller/controller_registry.h"
+#include "hpa/controller/rti_solver.h"
+#include "hpa/estimator/estimator_registry.h"
+#include "hpa/models/data_dir.h"
+#include "hpa/scenarios/events.h"
+#include "hpa/scenarios/golden.h"
+#include "hpa/scenarios/reference_types.h"
+#include "hpa/scenarios/scenario.h"
+#include "hpa/scenarios/world_profile_yaml.h"
+
+namespace hpa {
+namespace {
+
+// One part of the world profile, and whether a scenario's world has it on.
+struct WorldPart {
+  std::string name;
+  std::function<bool(const Scenario&)> on;
+};
+
+// Every part of sim::WorldProfile (one entry per section of the profile file, the wind split
+// into its steady and its gust part) and the flight code's PX4 rate loop.
+const std::vector<WorldPart>& WorldParts() {
+  static const std::vector<WorldPart> parts = {
+      {"contact", [](const Scenario& s) { return s.world.contact.enabled; }},
+      {"actuation", [](const Scenario& s) { return s.world.actuation.enabled; }},
+      {"latency",
+       [](const Scenario& s) {
+         const auto& l = s.world.latency;
+         return l.compute_s > 0 || l.transport_s > 0 || l.estimate_s > 0;
+       }},
+      {"mismatch", [](const Scenario& s) { return s.world.mismatch.enabled; }},
+      {"aero", [](const Scenario& s) { return s.world.aero.enabled; }},
+      {"wind.mean",
+       [](const Scenario& s) {
+         const auto& w = s.world.wind;
+         return w.mean_x_mps != 0 || w.mean_y_mps != 0 || w.mean_z_mps != 0;
+       }},
+      {"wind.gust (Dryden)", [](const Scenario& s) { return s.world.wind.gust_sigma_mps > 0; }},
+      {"vio", [](const Scenario& s) { return s.world.vio.enabled; }},
+      {"imu", [](const Scenario& s) { return s.world.imu.enabled; }},
+      {"camera.exposure", [](const Scenario& s) { return s.world.camera.exposure_s > 0; }},
+      {"camera.noise", [](const Scenario& s) { return s.world.camera.noise; }},
+      {"rate_gyro", [](const Scenario& s) { return s.world.rate_gyro.enabled; }},
+      {"rate_loop.px4", [](const Scenario& s) { return s.rate_loop.px4; }},
+  };
+  return parts;
+}
+
+// What one scenario flies, as "kind: name" entries.
+std::set<std::string> PathsOf(const Scenario& s) {
+  std::set<std::string> paths = {
+      "controller: " + s.controller.type,
+      "estimator: " + EstimatorOf(s),
+      "solver: " + s.controller.solver,
+      "reference: " + s.reference.type,
+      "world profile: " + s.world.name,
+      "camera: " + std::string(s.estimation.ground_truth ? "ground_truth" : s.estimation.camera),
+  };
+  if (s.controller.solver == "rti") paths.insert("qp_method: " + s.controller.qp_method);
+  if (s.controller.predict_retaut) paths.insert("switch: controller.predict_retaut true");
+  if (!s.estimation.slack_tension_cue) paths.insert("switch: estimation.slack_tension_cue false");
+  if (s.estimation.camera_randomize) paths.insert("switch: estimation.camera_randomize true");
+  for (const EventSpec& e : s.events) {
+    paths.insert("event: " + e.type);
+    if (const auto* impulse = dynamic_cast<const ImpulseEvent*>(e.action.get())) {
+      paths.insert(std::string("event: impulse on the ") +
+                   (impulse->on_payload ? "payload" : "quadrotor"));
+    }
+  }
+  for (const WorldPart& part : WorldParts()) {
+    if (part.on(s)) paths.insert("world part: " + part.name);
+  }
+  return paths;
+}
+
+// Every path the registries and declarations say exists.
+std::set<std::string> RegisteredPaths() {
+  std::set<std::string> paths;
+  for (const std::string& n : ControllerNames()) paths.insert("controller: " + n);
+  for (const std::string& n : EstimatorNames()) paths.insert("estimator: " + n);
+  for (const std::string& n : OcpSolverNames()) paths.insert("solver: " + n);
+  for (const std::string& n : RtiQpMethodNames()) paths.insert("qp_method: " + n);
+  for (const ReferenceType& t : ReferenceTypes()) paths.insert("reference: " + t.name);
+  for (const std::string& n : WorldProfileNames()) paths.insert("world profile: " + n);
+  for (const char* camera : {"render", "analytic", "ground_truth"}) {
+    paths.insert(std::string("camera: ") + camera);
+  }
+  for (const EventRegistration& e : EventTypes()) paths.insert("event: " + e.name);
+  paths.insert("event: impulse on the payload");
+  paths.insert("event: impulse on the quadrotor");
+  paths.insert("switch: controller.predict_retaut true");
+  paths.insert("switch: estimation.slack_tension_cue false");
+  paths.insert("switch: estimation.camera_randomize true");
+  for (const WorldPart& part : WorldParts()) paths.insert("world part: " + part.name);
+  return paths;
+}
+
+TEST(GoldenCoverageTest, EveryRegisteredPathIsFlownByAGoldenScenario) {
+  std::set<std::string> flown;
+  for (const std::string& name : GoldenScenarioNames()) {
+    const std::set<std::string> paths =
+        PathsOf(LoadScenario(DataPath("scenarios") + "/" + name + ".yaml"));
+    flown.insert(paths.begin(), paths.end());
+  }
+  for (const std::string& path : RegisteredPaths()) {
+    EXPECT_TRUE(flown.count(path))
+        << path << ": no golden scenario flies it; add a short scenario to scenarios/ci/ that "
+        << "does (then `hpa golden --update --reason ...`)";
+  }
+}
+
+// The check sees what it claims to: a scenario's impulse body, solver and switches.
+TEST(GoldenCoverageTest, PathsOfAScenarioNameWhatItFlies) {
+  const Scenario s = LoadScenario(DataPath("scenarios") + "/line_impulse.yaml",
+                                  {{"controller.solver", "nlopt"},
+                                   {"estimation.slack_tension_cue", "false"}});
+  const std::set<std::string> paths = PathsOf(s);
+  EXPECT_TRUE(paths.count("solver: nlopt"));
+  EXPECT_FALSE(paths.count("qp_method: structured"));  // nlopt has no RTI QP
+  EXPECT_TRUE(paths.count("switch: estimation.slack_tension_cue false"));
+  EXPECT_TRUE(paths.count("event: impulse on the payload"));
+  EXPECT_TRUE(paths.count("reference: line"));
+}
+
+}  // namespace
+}  // namespace hpa
