@@ -80,7 +80,8 @@ void WriteFileAtomic(const std::string& path, const std::string& text) {
       const int write_errno = errno;
       out.close();
       std::remove(partial.c_str());
-      throw OutputError(path, write_errno ? std::strerror(write_errno) : "write failed (disk full?)");
+      throw OutputError(path,
+                        write_errno ? std::strerror(write_errno) : "write failed (disk full?)");
     }
   }
   CommitPartial(path);

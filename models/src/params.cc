@@ -124,8 +124,8 @@ Params ParseParams(const YamlMap& root) {
   p.motor_speed_min_radps = rotor.Number("motor_speed_min_radps", 0.0, 1e5);
   p.motor_speed_max_radps = rotor.Number("motor_speed_max_radps", 1.0, 1e5);
   if (p.motor_speed_max_radps <= p.motor_speed_min_radps) {
-    rotor.Fail("motor_speed_min_radps", "must be below motor_speed_max_radps (" +
-                                            Short(p.motor_speed_max_radps) + ")");
+    rotor.Fail("motor_speed_min_radps",
+               "must be below motor_speed_max_radps (" + Short(p.motor_speed_max_radps) + ")");
   }
   rotor.RejectUnknownKeys();
 
@@ -138,8 +138,7 @@ Params ParseParams(const YamlMap& root) {
   p.cable_length_m = cable.Number("length_m", 0.05, 10.0);
   p.slack_epsilon_m = cable.Number("slack_epsilon_m", 0.0, 1.0);
   if (!(p.slack_epsilon_m < p.cable_length_m)) {
-    cable.Fail("slack_epsilon_m", "must be below the cable's length_m (" +
-                                      Short(p.cable_length_m) +
+    cable.Fail("slack_epsilon_m", "must be below the cable's length_m (" + Short(p.cable_length_m) +
                                       "): slack is a distance shorter than the cable by it");
   }
   cable.RejectUnknownKeys();

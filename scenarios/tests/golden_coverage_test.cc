@@ -124,9 +124,9 @@ TEST(GoldenCoverageTest, EveryRegisteredPathIsFlownByAGoldenScenario) {
 
 // The check sees what it claims to: a scenario's impulse body, solver and switches.
 TEST(GoldenCoverageTest, PathsOfAScenarioNameWhatItFlies) {
-  const Scenario s = LoadScenario(DataPath("scenarios") + "/line_impulse.yaml",
-                                  {{"controller.solver", "nlopt"},
-                                   {"estimation.slack_tension_cue", "false"}});
+  const Scenario s =
+      LoadScenario(DataPath("scenarios") + "/line_impulse.yaml",
+                   {{"controller.solver", "nlopt"}, {"estimation.slack_tension_cue", "false"}});
   const std::set<std::string> paths = PathsOf(s);
   EXPECT_TRUE(paths.count("solver: nlopt"));
   EXPECT_FALSE(paths.count("qp_method: structured"));  // nlopt has no RTI QP

@@ -4,10 +4,12 @@
 #include <limits.h>
 #include <unistd.h>
 
+#include <cstdio>
 #include <mutex>
 #include <string>
 #include <vector>
 
+#include "hpa/models/file_io.h"
 #include "hpa/models/input_error.h"
 
 namespace hpa {
@@ -77,7 +79,13 @@ std::unique_ptr<VideoSink> OpenVideo(const std::string& path, const char* fourcc
 }
 
 bool WriteImage(const std::string& path, const cv::Mat& image) {
-  return Module(path).write_image(path, image);
+  // whole under PartialPath (same extension: the format), then renamed: never half an image
+  if (!Module(path).write_image(PartialPath(path), image)) {
+    std::remove(PartialPath(path).c_str());
+    return false;
+  }
+  CommitPartial(path);
+  return true;
 }
 
 }  // namespace hpa

@@ -10,7 +10,9 @@
 #include <fstream>
 #include <map>
 #include <opencv2/imgproc.hpp>
+#include <sstream>
 
+#include "hpa/models/file_io.h"
 #include "hpa/models/input_error.h"
 #include "media.h"
 
@@ -144,8 +146,8 @@ std::string Figure::Write(const std::string& stem, PlotFormat format) const {
   } else {
     cairo_surface_t* surface =
         format == PlotFormat::kSvg
-            ? cairo_svg_surface_create(path.c_str(), image_.cols, image_.rows)
-            : cairo_pdf_surface_create(path.c_str(), image_.cols, image_.rows);
+            ? cairo_svg_surface_create(PartialPath(path).c_str(), image_.cols, image_.rows)
+            : cairo_pdf_surface_create(PartialPath(path).c_str(), image_.cols, image_.rows);
     cairo_t* cr = cairo_create(surface);
     Replay(*this, cr);
     cairo_destroy(cr);
@@ -153,12 +155,14 @@ std::string Figure::Write(const std::string& stem, PlotFormat format) const {
     const cairo_status_t status = cairo_surface_status(surface);
     cairo_surface_destroy(surface);
     if (status != CAIRO_STATUS_SUCCESS) {
+      std::remove(PartialPath(path).c_str());
       throw OutputError(path, std::string("cairo: ") + cairo_status_to_string(status));
     }
+    CommitPartial(path);
   }
   // the data, one row per point of every series, long format
   const std::string csv = stem + ".csv";
-  std::ofstream out(csv);
+  std::ostringstream out;
   out << "panel,series,x_label,y_label,x,y,low,high,value\n";
   for (size_t k = 0; k < series.size(); ++k) {
     const Series& s = series[k];
@@ -179,8 +183,7 @@ std::string Figure::Write(const std::string& stem, PlotFormat format) const {
           << "," << CsvNumber(s.high, i) << "," << CsvNumber(s.value, i) << "\n";
     }
   }
-  out.close();
-  if (!out) throw OutputError(csv, "the plot's CSV could not be written");
+  WriteFileAtomic(csv, out.str());
   return path;
 }
 

@@ -1,5 +1,4 @@
 #include "hpa/scenarios/metrics.h"
-#include "hpa/scenarios/provenance.h"
 
 #include <sys/stat.h>
 
@@ -14,8 +13,10 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 
+#include "hpa/models/file_io.h"
 #include "hpa/models/input_error.h"
 #include "hpa/scenarios/expect_keys.h"
+#include "hpa/scenarios/provenance.h"
 
 namespace hpa {
 namespace {
@@ -305,7 +306,9 @@ void MakeOutputDir(const std::string& dir) {
 }
 
 void WriteLogCsv(const std::string& path, const std::vector<LogRow>& rows) {
-  std::ofstream out(path);
+  // written under PartialPath and renamed when whole (CommitPartial): a reader never sees half
+  // a log
+  std::ofstream out(PartialPath(path));
   if (!out) throw OutputError(path, std::strerror(errno));
   auto header_state = [&](const std::string& p) {
     for (const char* n :
@@ -368,7 +371,13 @@ void WriteLogCsv(const std::string& path, const std::vector<LogRow>& rows) {
     out << line;
   }
   out.flush();
-  if (!out) throw OutputError(path, "disk full?");
+  if (!out) {
+    out.close();
+    std::remove(PartialPath(path).c_str());
+    throw OutputError(path, "disk full?");
+  }
+  out.close();
+  CommitPartial(path);
 }
 
 }  // namespace hpa

@@ -100,13 +100,12 @@ void CheckFlyable(const Reference& reference, const Scenario& scenario, const Pa
                         std::abs(p_WQ_W.y()) + half_B_m.y() <= sim::kArenaHalfWidth_m &&
                         p_WQ_W.z() + half_B_m.z() <= sim::kArenaHeight_m;
     if (!inside) {
-      throw InputError(file, "reference",
-                       "puts the payload at (" + Num(p_WL_W.x()) + ", " + Num(p_WL_W.y()) + ", " +
-                           Num(p_WL_W.z()) + ") m" + at + ": the vehicle, " +
-                           Num(params.cable_length_m) + " m above it, would be outside the " +
-                           Num(2 * sim::kArenaHalfWidth_m) + " x " +
-                           Num(2 * sim::kArenaHalfWidth_m) + " x " + Num(sim::kArenaHeight_m) +
-                           " m arena");
+      throw InputError(
+          file, "reference",
+          "puts the payload at (" + Num(p_WL_W.x()) + ", " + Num(p_WL_W.y()) + ", " +
+              Num(p_WL_W.z()) + ") m" + at + ": the vehicle, " + Num(params.cable_length_m) +
+              " m above it, would be outside the " + Num(2 * sim::kArenaHalfWidth_m) + " x " +
+              Num(2 * sim::kArenaHalfWidth_m) + " x " + Num(sim::kArenaHeight_m) + " m arena");
     }
   }
 }
@@ -362,8 +361,7 @@ void RunLoop::KeepTickStartMessage(sim::SensorMessage* message) {
 }
 
 cv::Rect FlightCameraReadout::Region() {
-  return SendsFrames() ? stack_roi_
-                       : detector_->RegionAround(recent_, flight::kRegionMarginPx);
+  return SendsFrames() ? stack_roi_ : detector_->RegionAround(recent_, flight::kRegionMarginPx);
 }
 
 // In process: DetectInRegion on a region (its result equals the whole frame's when it gives

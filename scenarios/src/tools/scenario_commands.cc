@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "hpa/controller/controller_registry.h"
+#include "hpa/models/file_io.h"
 #include "hpa/models/input_error.h"
 #include "hpa/models/params.h"
 #include "hpa/models/yaml_reader.h"
@@ -86,20 +87,8 @@ RunRecord RecordOf(const ScenarioOptions& o, const std::string& controller, cons
   return r;
 }
 
-// Writes a whole file; a write that does not reach the file (a full disk) is an error.
-void WriteText(const std::string& path, const std::string& text) {
-  // written whole under a temporary name, then renamed: a reader never sees half a file
-  const std::string partial = path + ".partial";
-  {
-    std::ofstream out(partial);
-    if (!out) throw OutputError(path, std::strerror(errno));
-    out << text;
-    out.flush();
-    if (!out) throw OutputError(path, "disk full?");
-  }
-  if (std::rename(partial.c_str(), path.c_str()) != 0)
-    throw OutputError(path, std::strerror(errno));
-}
+// Writes a whole file atomically (WriteFileAtomic): a reader never sees half a file.
+void WriteText(const std::string& path, const std::string& text) { WriteFileAtomic(path, text); }
 
 // Removes the outputs a previous run left in `dir`, so a run that is killed leaves nothing
 // that looks complete (metrics.json appears last, whole, when the run has finished).
@@ -162,10 +151,7 @@ void PrintSummary(const Metrics& m, const std::string& out_dir) {
 // metrics last, so that a complete metrics.json means a finished run.
 void WriteRunOutputs(const RunResult& result, const Scenario& scenario, const Params& params,
                      const std::string& out_dir, bool plots, PlotFormat format, bool quiet) {
-  WriteLogCsv(out_dir + "/log.csv.partial", result.rows);
-  if (std::rename((out_dir + "/log.csv.partial").c_str(), (out_dir + "/log.csv").c_str()) != 0) {
-    throw OutputError(out_dir + "/log.csv", std::strerror(errno));
-  }
+  WriteLogCsv(out_dir + "/log.csv", result.rows);
   WriteText(out_dir + "/metrics.json", MetricsToJson(result.metrics));
   if (!plots) return;
   for (const std::string& png :

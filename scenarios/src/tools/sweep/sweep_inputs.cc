@@ -1,12 +1,12 @@
 // DIR/inputs.json: the text of the files a sweep was run from, kept with its results so that
 // sweep-diff can say what changed between two sweeps even after the files were edited.
 
+#include <sys/stat.h>
 #include <yaml-cpp/yaml.h>
 
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <set>
-#include <sys/stat.h>
 
 #include "hpa/models/file_io.h"
 #include "hpa/models/input_error.h"
@@ -60,9 +60,8 @@ std::optional<InputsSnapshot> ReadInputsSnapshot(const std::string& dir) {
     const Json j = Json::parse(ReadInputFile(path, "a sweep's inputs.json"));
     snapshot.sweep_id = j.at("sweep_id").get<std::string>();
     for (const Json& f : j.at("files")) {
-      snapshot.files.push_back(
-          {f.at("role").get<std::string>(), f.at("path").get<std::string>(),
-           f.at("text").get<std::string>()});
+      snapshot.files.push_back({f.at("role").get<std::string>(), f.at("path").get<std::string>(),
+                                f.at("text").get<std::string>()});
     }
   } catch (const Json::exception& e) {
     throw InputError(path, "", std::string("malformed: ") + e.what());
@@ -86,9 +85,9 @@ std::vector<std::string> DescribeInputChanges(const InputsSnapshot& a, const Inp
   for (const InputFile& fa : a.files) {
     for (const InputFile& fb : b.files) {
       if (fa.role != fb.role || fa.text == fb.text) continue;
-      const std::string what = fa.role + " file " +
-                               (fa.path == fb.path ? fa.path : fa.path + " (A) / " + fb.path +
-                                                                   " (B)");
+      const std::string what =
+          fa.role + " file " +
+          (fa.path == fb.path ? fa.path : fa.path + " (A) / " + fb.path + " (B)");
       std::map<std::string, std::string> ka, kb;
       try {
         Flatten(LoadYamlText(fa.text, fa.path), "", &ka);
@@ -106,7 +105,8 @@ std::vector<std::string> DescribeInputChanges(const InputsSnapshot& a, const Inp
         const std::string va = ia == ka.end() ? "(absent)" : ia->second;
         const std::string vb = ib == kb.end() ? "(absent)" : ib->second;
         if (va == vb) continue;
-        if (++listed <= 20) changes.push_back(what + ": " + k + ": " + va + " (A) vs " + vb + " (B)");
+        if (++listed <= 20)
+          changes.push_back(what + ": " + k + ": " + va + " (A) vs " + vb + " (B)");
       }
       if (listed > 20) {
         changes.push_back(what + ": and " + std::to_string(listed - 20) + " more keys differ");

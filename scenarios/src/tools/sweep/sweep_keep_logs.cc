@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <nlohmann/json.hpp>
 
+#include "hpa/models/file_io.h"
 #include "hpa/models/input_error.h"
 #include "hpa/models/yaml_reader.h"
 #include "hpa/scenarios/golden.h"
@@ -89,10 +90,7 @@ void KeepWorstLogs(const SweepSpec& spec, const std::vector<Record>& records,
     record.params = params;
     WriteRunRecord(dir, record);
     const std::string metrics = MetricsToJson(result.metrics);
-    std::FILE* out = std::fopen((dir + "/metrics.json").c_str(), "w");
-    if (out == nullptr || std::fputs(metrics.c_str(), out) < 0 || std::fclose(out) != 0) {
-      throw OutputError(dir + "/metrics.json", "cannot write");
-    }
+    WriteFileAtomic(dir + "/metrics.json", metrics);
     // the replay is the recorded run, bit for bit (timing aside)
     const nlohmann::json recorded = nlohmann::json::parse(r.record->line)["metrics"];
     const bool same =
