@@ -2,6 +2,7 @@
 // stack the runner would (params, controller, estimator, reference, initial state).
 
 #include <string>
+#include <variant>
 
 #include "hpa/flight/protocol.h"
 
@@ -42,36 +43,81 @@ SystemState StateFromJson(const nlohmann::json& j) {
   return s;
 }
 
+// Every field of Params as the protocol names it (ParamsTables' wire names): numbers as
+// numbers, vectors as arrays, the camera rotation as its 9 numbers row by row.
+nlohmann::json ParamsJson(const Params& p) {
+  nlohmann::json out = nlohmann::json::object();
+  for (const ParamTable<Params>& table : ParamsTables()) {
+    for (const ParamDecl<Params>& d : table.params) {
+      const std::string& name = d.wire_key.empty() ? d.key : d.wire_key;
+      std::visit(
+          [&](auto member) {
+            using T = std::decay_t<decltype(p.*member)>;
+            if constexpr (std::is_same_v<T, double> || std::is_same_v<T, int> ||
+                          std::is_same_v<T, bool>) {
+              out[name] = p.*member;
+            } else {
+              nlohmann::json values = nlohmann::json::array();
+              const auto& m = p.*member;
+              for (Eigen::Index i = 0; i < m.rows(); ++i) {
+                for (Eigen::Index j = 0; j < m.cols(); ++j) values.push_back(m(i, j));
+              }
+              out[name] = values;
+            }
+          },
+          d.member);
+    }
+  }
+  return out;
+}
+
+// Params from ParamsJson's JSON, each value checked against its declared range; throws
+// ProtocolError naming the field.
+Params ParamsFromJson(const nlohmann::json& j) {
+  Params p;
+  for (const ParamTable<Params>& table : ParamsTables()) {
+    for (const ParamDecl<Params>& d : table.params) {
+      const std::string& name = d.wire_key.empty() ? d.key : d.wire_key;
+      const auto in_range = [&](double v) {
+        if (!(v >= d.min && v <= d.max)) {
+          throw ProtocolError("params." + name + ": " + std::to_string(v) + " outside " +
+                              std::to_string(d.min) + " to " + std::to_string(d.max));
+        }
+        return v;
+      };
+      std::visit(
+          [&](auto member) {
+            using T = std::decay_t<decltype(p.*member)>;
+            const nlohmann::json& v = j.at(name);
+            if constexpr (std::is_same_v<T, bool>) {
+              p.*member = v.get<bool>();
+            } else if constexpr (std::is_same_v<T, int>) {
+              p.*member = static_cast<int>(in_range(v.get<int>()));
+            } else if constexpr (std::is_same_v<T, double>) {
+              p.*member = in_range(v.get<double>());
+            } else {
+              auto& m = p.*member;
+              if (!v.is_array() || v.size() != static_cast<size_t>(m.size())) {
+                throw ProtocolError("params." + name + ": expected " + std::to_string(m.size()) +
+                                    " numbers");
+              }
+              for (Eigen::Index i = 0; i < m.rows(); ++i) {
+                for (Eigen::Index k = 0; k < m.cols(); ++k) {
+                  m(i, k) = in_range(v.at(i * m.cols() + k).template get<double>());
+                }
+              }
+            }
+          },
+          d.member);
+    }
+  }
+  return p;
+}
+
 }  // namespace
 
 nlohmann::json ConfigToJson(const FlightConfig& c) {
-  const Params& p = c.params;
-  nlohmann::json params = {{"gravity_mps2", p.gravity_mps2},
-                           {"quad_mass_kg", p.quad_mass_kg},
-                           {"inertia_B_kgm2", Vec3(p.inertia_B_kgm2)},
-                           {"arm_length_m", p.arm_length_m},
-                           {"body_half_size_m", Vec3(p.body_half_size_m)},
-                           {"k_f_N_per_radps2", p.k_f_N_per_radps2},
-                           {"k_m_Nm_per_radps2", p.k_m_Nm_per_radps2},
-                           {"motor_time_constant_s", p.motor_time_constant_s},
-                           {"motor_speed_min_radps", p.motor_speed_min_radps},
-                           {"motor_speed_max_radps", p.motor_speed_max_radps},
-                           {"payload_mass_kg", p.payload_mass_kg},
-                           {"payload_radius_m", p.payload_radius_m},
-                           {"cable_length_m", p.cable_length_m},
-                           {"slack_epsilon_m", p.slack_epsilon_m},
-                           {"camera_width_px", p.camera_width_px},
-                           {"camera_height_px", p.camera_height_px},
-                           {"camera_fovy_deg", p.camera_fovy_deg},
-                           {"t_BC_B_m", Vec3(p.t_BC_B_m)},
-                           {"camera_distortion",
-                            {p.camera_distortion[0], p.camera_distortion[1], p.camera_distortion[2],
-                             p.camera_distortion[3]}},
-                           {"R_BC_rowmajor",
-                            {p.R_BC(0, 0), p.R_BC(0, 1), p.R_BC(0, 2), p.R_BC(1, 0), p.R_BC(1, 1),
-                             p.R_BC(1, 2), p.R_BC(2, 0), p.R_BC(2, 1), p.R_BC(2, 2)}},
-                           {"vio_width_px", p.vio_width_px},
-                           {"vio_height_px", p.vio_height_px}};
+  const nlohmann::json params = ParamsJson(c.params);
   const ReferenceSpec& r = c.reference;
   const LissajousSpec& l = r.lissajous;
   nlohmann::json reference = {{"type", r.type},
@@ -117,31 +163,7 @@ nlohmann::json ConfigToJson(const FlightConfig& c) {
 FlightConfig ConfigFromJson(const nlohmann::json& j) {
   try {
     FlightConfig c;
-    const nlohmann::json& pj = j.at("params");
-    Params& p = c.params;
-    p.gravity_mps2 = pj.at("gravity_mps2").get<double>();
-    p.quad_mass_kg = pj.at("quad_mass_kg").get<double>();
-    p.inertia_B_kgm2 = ReadVec3(pj, "inertia_B_kgm2");
-    p.arm_length_m = pj.at("arm_length_m").get<double>();
-    p.body_half_size_m = ReadVec3(pj, "body_half_size_m");
-    p.k_f_N_per_radps2 = pj.at("k_f_N_per_radps2").get<double>();
-    p.k_m_Nm_per_radps2 = pj.at("k_m_Nm_per_radps2").get<double>();
-    p.motor_time_constant_s = pj.at("motor_time_constant_s").get<double>();
-    p.motor_speed_min_radps = pj.at("motor_speed_min_radps").get<double>();
-    p.motor_speed_max_radps = pj.at("motor_speed_max_radps").get<double>();
-    p.payload_mass_kg = pj.at("payload_mass_kg").get<double>();
-    p.payload_radius_m = pj.at("payload_radius_m").get<double>();
-    p.cable_length_m = pj.at("cable_length_m").get<double>();
-    p.slack_epsilon_m = pj.at("slack_epsilon_m").get<double>();
-    p.camera_width_px = pj.at("camera_width_px").get<int>();
-    p.camera_height_px = pj.at("camera_height_px").get<int>();
-    p.camera_fovy_deg = pj.at("camera_fovy_deg").get<double>();
-    p.t_BC_B_m = ReadVec3(pj, "t_BC_B_m");
-    for (int i = 0; i < 4; ++i)
-      p.camera_distortion[i] = pj.at("camera_distortion").at(i).get<double>();
-    for (int i = 0; i < 9; ++i) p.R_BC(i / 3, i % 3) = pj.at("R_BC_rowmajor").at(i).get<double>();
-    p.vio_width_px = pj.at("vio_width_px").get<int>();
-    p.vio_height_px = pj.at("vio_height_px").get<int>();
+    c.params = ParamsFromJson(j.at("params"));
     const nlohmann::json& cj = j.at("controller");
     c.controller.type = cj.at("type").get<std::string>();
     c.controller.perception_weight = cj.at("perception_weight").get<double>();

@@ -227,3 +227,28 @@ void YamlMap::RejectUnknownKeys() const {
 }
 
 }  // namespace hpa
+
+namespace hpa {
+
+Eigen::Matrix3d ReadMatrix3(const YamlMap& map, const std::string& key, double min, double max) {
+  const YAML::Node rows = map.Node(key);
+  const std::string expect =
+      "expected a 3x3 matrix as a list of 3 rows of 3 numbers in " + Range(min, max);
+  if (!rows.IsSequence() || rows.size() != 3) map.Fail(key, expect);
+  Eigen::Matrix3d m;
+  for (int i = 0; i < 3; ++i) {
+    if (!rows[i].IsSequence() || rows[i].size() != 3) map.Fail(key, expect);
+    for (int j = 0; j < 3; ++j) {
+      try {
+        if (Quoted(rows[i][j])) throw YAML::Exception(YAML::Mark(), "");
+        m(i, j) = rows[i][j].as<double>();
+      } catch (const YAML::Exception&) {
+        map.Fail(key, expect);
+      }
+      if (!std::isfinite(m(i, j)) || m(i, j) < min || m(i, j) > max) map.Fail(key, expect);
+    }
+  }
+  return m;
+}
+
+}  // namespace hpa

@@ -11,7 +11,6 @@
 #include "hpa/estimator/estimator_registry.h"
 #include "hpa/models/input_error.h"
 #include "hpa/models/params.h"
-#include "hpa/models/params_yaml.h"
 #include "hpa/scenarios/events.h"
 #include "hpa/scenarios/expect_keys.h"
 #include "hpa/scenarios/metric_defs.h"
@@ -57,24 +56,6 @@ std::string BetterText(Better b) {
       break;
   }
   return "-";
-}
-
-// A copy of `node` with each number in its short form (0.72, not 0.71999999999999997).
-YAML::Node ShortNumbers(const YAML::Node& node) {
-  if (node.IsMap()) {
-    YAML::Node out(YAML::NodeType::Map);
-    for (const auto& kv : node) out[kv.first.as<std::string>()] = ShortNumbers(kv.second);
-    return out;
-  }
-  if (node.IsSequence()) {
-    YAML::Node out(YAML::NodeType::Sequence);
-    for (const auto& v : node) out.push_back(ShortNumbers(v));
-    if (out.size() <= 4) out.SetStyle(YAML::EmitterStyle::Flow);
-    return out;
-  }
-  double v = 0.0;
-  if (YAML::convert<double>::decode(node, v)) return YAML::Node(Short(v));
-  return node;
 }
 
 // The registered controllers with the estimator each flies with.
@@ -154,14 +135,24 @@ std::string ReferencesSection() {
   return md;
 }
 
-// models/params.yaml's values as YAML, the keys a scenario's params: block can change.
+// Every parameter from its declaration (ParamsTables): key, unit, range, models/params.yaml's
+// value and meaning, one table per section.
 std::string ParamsSection() {
-  return "## Parameters (`params.SECTION.KEY` in a scenario, params.yaml's keys)\n\n"
-         "A scenario's `params:` block (or `--set params.SECTION.KEY=VALUE`, a sweep's "
-         "`vary: params.SECTION.KEY`) changes these for the flight code and the world alike, "
-         "checked with params.yaml's ranges; the values here are "
-         "models/params.yaml's.\n\n```yaml\n" +
-         YAML::Dump(ShortNumbers(ParamsToYaml(LoadParams(DefaultParamsPath())))) + "\n```\n";
+  const Params values = LoadParams(DefaultParamsPath());
+  std::string md =
+      "## Parameters (`params.SECTION.KEY` in a scenario, params.yaml's keys)\n\n"
+      "A scenario's `params:` block (or `--set params.SECTION.KEY=VALUE`, a sweep's "
+      "`vary: params.SECTION.KEY`) changes these for the flight code and the world alike, "
+      "checked with these ranges (and: k_m / k_f at most 0.2 m, the idle speed below the full "
+      "speed, slack_epsilon_m below the cable length, R_BC a rotation, and hover within 80 % of "
+      "full thrust); the values are models/params.yaml's.\n";
+  for (const ParamTable<Params>& table : ParamsTables()) {
+    const std::string prefix = table.section.empty() ? "params." : "params." + table.section + ".";
+    md += "\n### `" + (table.section.empty() ? std::string("params") : "params." + table.section) +
+          "`: " + table.description + "\n\n" +
+          ParamTableMarkdown(table, values, prefix, "params.yaml");
+  }
+  return md;
 }
 
 // The controller's tuning keys from its declared parameter table.

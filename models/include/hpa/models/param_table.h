@@ -13,15 +13,22 @@
 
 namespace hpa {
 
+/// A 4-vector stored unaligned (a 16-byte-aligned member would change the alignment of every
+/// struct that embeds its owner).
+using Vector4dUnaligned = Eigen::Matrix<double, 4, 1, Eigen::DontAlign>;
+
 /// One parameter of a config struct C.
 template <class C>
 struct ParamDecl {
   std::string key;   // as written in YAML
   std::string unit;  // "s", "m", "N s/m", "-" for a pure number, "" for a switch
-  double min = 0.0;  // allowed range (each element of a vector; unused for a switch)
+  double min = 0.0;  // allowed range (each element of a vector or matrix; unused for a switch)
   double max = 0.0;
   std::string description;  // one line: what it is and, where it has one, its source
-  std::variant<double C::*, bool C::*, int C::*, Eigen::Vector3d C::*> member;
+  std::variant<double C::*, bool C::*, int C::*, Eigen::Vector3d C::*, Vector4dUnaligned C::*,
+               Eigen::Matrix3d C::*>
+      member;
+  std::string wire_key = "";  // its name in the lockstep protocol's JSON ("": the YAML key)
 };
 
 /// The parameters of one config struct, in the order they are documented.
@@ -58,9 +65,22 @@ inline std::string ParamValueText(double v) {
 }
 inline std::string ParamValueText(bool v) { return v ? "true" : "false"; }
 inline std::string ParamValueText(int v) { return std::to_string(v); }
-inline std::string ParamValueText(const Eigen::Vector3d& v) {
-  return "[" + ParamValueText(v.x()) + ", " + ParamValueText(v.y()) + ", " + ParamValueText(v.z()) +
-         "]";
+/// A vector or matrix as a YAML flow list ([1, 2, 3]; a matrix as its list of rows).
+template <typename Derived>
+std::string ParamValueText(const Eigen::MatrixBase<Derived>& m) {
+  std::string text = "[";
+  for (Eigen::Index i = 0; i < m.rows(); ++i) {
+    if (m.cols() == 1) {
+      text += (i ? ", " : "") + ParamValueText(static_cast<double>(m(i, 0)));
+      continue;
+    }
+    text += std::string(i ? ", " : "") + "[";
+    for (Eigen::Index j = 0; j < m.cols(); ++j) {
+      text += (j ? ", " : "") + ParamValueText(static_cast<double>(m(i, j)));
+    }
+    text += "]";
+  }
+  return text + "]";
 }
 
 /// A Markdown table of `table`: key, unit, range, the value in `values` (a struct read from a

@@ -3,6 +3,9 @@
 
 #include <Eigen/Core>
 #include <string>
+#include <vector>
+
+#include "hpa/models/param_table.h"
 
 namespace hpa {
 
@@ -34,9 +37,8 @@ struct Params {
   // radial-tangential lens distortion (k1, k2, p1, p2) on normalised coordinates; zero: pinhole
   // unaligned storage: a 16-byte-aligned member would change Params' alignment for every struct
   // that embeds it
-  Eigen::Matrix<double, 4, 1, Eigen::DontAlign> camera_distortion =
-      Eigen::Matrix<double, 4, 1, Eigen::DontAlign>::Zero();       // (4)
-  Eigen::Matrix3d R_BC = Eigen::Vector3d(1, -1, -1).asDiagonal();  // camera axes in body (3x3)
+  Vector4dUnaligned camera_distortion = Vector4dUnaligned::Zero();  // (4)
+  Eigen::Matrix3d R_BC = Eigen::Vector3d(1, -1, -1).asDiagonal();   // camera axes in body (3x3)
 
   int vio_width_px = 640;
   int vio_height_px = 480;
@@ -48,6 +50,12 @@ struct Params {
   /// Camera focal length in pixels (square pixels), from fovy and the image height.
   double CameraFocalPx() const;
 };
+
+/// Every field of Params, declared once: one table per params.yaml section (the first, with
+/// section "", holds the top-level keys), each entry with its YAML key, unit, range, meaning and
+/// protocol name. params.yaml's reader and writer, the lockstep protocol's configuration and
+/// `hpa schema params` are driven by it.
+const std::vector<ParamTable<Params>>& ParamsTables();
 
 /// Loads and validates params.yaml; throws InputError naming the file and key on any problem
 /// (missing file, unknown key, wrong type, non-positive mass...).

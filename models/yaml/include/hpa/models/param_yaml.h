@@ -11,10 +11,17 @@
 
 namespace hpa {
 
-/// Reads the keys of `table` from `map` into `*config`; rejects unknown keys of `map`.
+/// Reads a matrix given as a list of rows, each element in [min, max].
+Eigen::Matrix3d ReadMatrix3(const YamlMap& map, const std::string& key, double min, double max);
+
+/// Reads the keys of `table` from `map` into `*config`; rejects unknown keys of `map`. With
+/// `required`, every declared key must be present (a file that is the one source of its
+/// numbers); otherwise an absent key keeps the struct's value.
 template <class C>
-void ReadParamTable(const YamlMap& map, const ParamTable<C>& table, C* config) {
+void ReadParamTable(const YamlMap& map, const ParamTable<C>& table, C* config,
+                    bool required = false) {
   for (const ParamDecl<C>& d : table.params) {
+    if (required && !map.Has(d.key)) map.Fail(d.key, "missing required key");
     std::visit(
         [&](auto member) {
           using T = std::decay_t<decltype(config->*member)>;
@@ -25,8 +32,13 @@ void ReadParamTable(const YamlMap& map, const ParamTable<C>& table, C* config) {
                 d.key, static_cast<long>(d.min), static_cast<long>(d.max), config->*member));
           } else if constexpr (std::is_same_v<T, double>) {
             config->*member = map.Number(d.key, d.min, d.max, config->*member);
+          } else if constexpr (std::is_same_v<T, Eigen::Matrix3d>) {
+            if (map.Has(d.key)) config->*member = ReadMatrix3(map, d.key, d.min, d.max);
           } else {
-            if (map.Has(d.key)) config->*member = map.Vector(d.key, 3, d.min, d.max);
+            if (map.Has(d.key)) {
+              config->*member =
+                  map.Vector(d.key, static_cast<int>(T::RowsAtCompileTime), d.min, d.max);
+            }
           }
         },
         d.member);

@@ -1,0 +1,83 @@
+// The flight configuration's params through the protocol's JSON: every field ParamsTables
+// declares goes through, by construction, and a value outside its declared range is refused.
+
+#include <gtest/gtest.h>
+
+#include <set>
+#include <string>
+#include <variant>
+
+#include "hpa/flight/protocol.h"
+#include "hpa/models/params.h"
+
+namespace hpa::flight {
+namespace {
+
+// Sets every declared field of `p` to a value of its own inside its range (the k-th field at
+// the k-th of 97 steps through the range), so that a field lost or swapped on the way shows.
+void SetEveryField(Params* p) {
+  int k = 0;
+  for (const ParamTable<Params>& table : ParamsTables()) {
+    for (const ParamDecl<Params>& d : table.params) {
+      const double value = d.min + (d.max - d.min) * (++k) / 97.0;
+      std::visit(
+          [&](auto member) {
+            using T = std::decay_t<decltype(p->*member)>;
+            if constexpr (std::is_same_v<T, bool>) {
+              p->*member = k % 2 == 0;
+            } else if constexpr (std::is_same_v<T, int>) {
+              p->*member = static_cast<int>(value);
+            } else if constexpr (std::is_same_v<T, double>) {
+              p->*member = value;
+            } else {
+              auto& m = p->*member;
+              for (Eigen::Index i = 0; i < m.size(); ++i) {
+                m.data()[i] = d.min + (d.max - d.min) * (k + 0.1 * i) / 97.0;
+              }
+            }
+          },
+          d.member);
+    }
+  }
+}
+
+TEST(ProtocolConfigTest, EveryDeclaredParamRoundTripsThroughJson) {
+  FlightConfig c;
+  SetEveryField(&c.params);
+  const nlohmann::json json = ConfigToJson(c);
+  const FlightConfig back = ConfigFromJson(nlohmann::json::parse(json.dump()));
+  int fields = 0;
+  std::set<std::string> names;
+  for (const ParamTable<Params>& table : ParamsTables()) {
+    for (const ParamDecl<Params>& d : table.params) {
+      ++fields;
+      const std::string name = d.wire_key.empty() ? d.key : d.wire_key;
+      names.insert(name);
+      std::visit([&](auto member) { EXPECT_EQ(back.params.*member, c.params.*member) << name; },
+                 d.member);
+    }
+  }
+  EXPECT_GE(fields, 22);  // every field of Params today
+  // nothing on the wire that is not declared
+  for (const auto& [name, value] : json.at("params").items()) {
+    EXPECT_TRUE(names.count(name)) << name << " is sent but not declared in ParamsTables";
+  }
+  EXPECT_EQ(json.at("params").size(), names.size());
+}
+
+TEST(ProtocolConfigTest, AValueOutsideItsDeclaredRangeIsRefusedByName) {
+  nlohmann::json json = ConfigToJson(FlightConfig{});
+  json["params"]["cable_length_m"] = 1e300;
+  try {
+    ConfigFromJson(json);
+    FAIL() << "a cable of 1e300 m was accepted";
+  } catch (const ProtocolError& e) {
+    EXPECT_NE(std::string(e.what()).find("params.cable_length_m"), std::string::npos) << e.what();
+  }
+  json = ConfigToJson(FlightConfig{});
+  json["params"]["R_BC_rowmajor"] = {1, 0, 0};
+  EXPECT_THROW(ConfigFromJson(json), ProtocolError);
+}
+
+}  // namespace
+}  // namespace hpa::flight
