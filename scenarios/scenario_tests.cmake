@@ -122,3 +122,9 @@ add_test(NAME python.hostile_inputs
          COMMAND ${HPA_PYTHON3} -m unittest discover -s ${CMAKE_SOURCE_DIR}/python/tests -p "test_*.py" -v)
 set_tests_properties(python.hostile_inputs PROPERTIES LABELS cli TIMEOUT 120
                      ENVIRONMENT "PYTHONPATH=${CMAKE_SOURCE_DIR}/python;PYTHONDONTWRITEBYTECODE=1")
+
+# A csv reference's file: not a regular file, rows too close, positions and speeds out of bounds,
+# an undefined quadrotor reference refused by file and line; a byte order mark accepted
+add_test(NAME cli.csv_reference_inputs
+         COMMAND bash ${SCEN}/tests/csv_reference_cli_test.sh ${HPA_BIN} ${CMAKE_SOURCE_DIR})
+set_tests_properties(cli.csv_reference_inputs PROPERTIES LABELS cli TIMEOUT 300)

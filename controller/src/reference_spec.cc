@@ -37,7 +37,11 @@ std::shared_ptr<Reference> MakeReference(const ReferenceSpec& r, const Params& p
   if (IsLissajousFamily(r)) {
     return MakeLissajousReference(params, r.lissajous);
   }
-  if (r.type == "csv") return MakeSampledReference(params, r.samples);
+  if (r.type == "csv") {
+    // the quadrotor reference depends on params (gravity, cable length): checked here, by line
+    CheckSampledReference(params, r.samples, r.file);
+    return MakeSampledReference(params, r.samples);
+  }
   if (r.type == "line") {
     return std::make_shared<DelayedReference>(
         MakeLineReference(params, r.line_start_W_m, r.line_end_W_m, r.line_duration_s),

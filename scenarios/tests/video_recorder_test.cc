@@ -1,5 +1,6 @@
 // CheckVideoPath's refusals and VideoRecorder: every frame written, or only the frames within
-// kSlackWindow_s of a slack event, and no file left for a slack-events video without slack.
+// kSlackWindow_s of a slack event, no file left for a slack-events video without slack, and a
+// video that appears whole or not at all.
 
 #include "hpa/scenarios/video_recorder.h"
 
@@ -10,6 +11,7 @@
 #include <opencv2/videoio.hpp>
 #include <string>
 
+#include "hpa/models/file_io.h"
 #include "hpa/models/input_error.h"
 #include "models/tests/temp_dir.h"
 
@@ -54,8 +56,41 @@ TEST(VideoRecorderTest, CheckVideoPathNamesTheProblem) {
     EXPECT_NE(std::string(e.what()).find("folder"), std::string::npos) << e.what();
     EXPECT_NE(std::string(e.what()).find(dir + "missing"), std::string::npos) << e.what();
   }
+  // a folder in the way cannot be written over: an output error (exit 4), naming the option
   mkdir((dir + "taken.mp4").c_str(), 0755);
-  EXPECT_THROW(CheckVideoPath(dir + "taken.mp4"), InputError);  // a folder in the way
+  try {
+    CheckVideoPath(dir + "taken.mp4", "--out");
+    FAIL() << "a folder in the way was accepted";
+  } catch (const OutputError& e) {
+    EXPECT_NE(std::string(e.what()).find("in the way (--out)"), std::string::npos) << e.what();
+  }
+}
+
+// A recorder destroyed or abandoned before Finish() leaves the previous file as it was and no
+// partial file; Finish() replaces it whole.
+TEST(VideoRecorderTest, OnlyAFinishedVideoReplacesThePreviousOne) {
+  const std::string path = TestTempDir() + "video.mp4";
+  std::ofstream(path) << "previous";
+  {
+    VideoRecorder video(path, kRate_Hz, false);
+    AddFrames(&video, 4, 100, 100);
+    EXPECT_GT(FileSize(PartialPath(path)), -1);  // the frames go to the partial file
+  }
+  EXPECT_EQ(FileSize(path), 8);  // "previous"
+  EXPECT_EQ(FileSize(PartialPath(path)), -1);
+  VideoRecorder abandoned(path, kRate_Hz, false);
+  AddFrames(&abandoned, 4, 100, 100);
+  abandoned.Abandon();
+  EXPECT_EQ(FileSize(path), 8);
+  EXPECT_EQ(FileSize(PartialPath(path)), -1);
+  VideoRecorder finished(path, kRate_Hz, false);
+  AddFrames(&finished, 4, 100, 100);
+  EXPECT_EQ(finished.Finish(), 4);
+  EXPECT_GT(FileSize(path), 8);
+  EXPECT_EQ(FileSize(PartialPath(path)), -1);
+  cv::VideoCapture read_back(path);
+  ASSERT_TRUE(read_back.isOpened());
+  EXPECT_EQ(read_back.get(cv::CAP_PROP_FRAME_COUNT), 4);
 }
 
 TEST(VideoRecorderTest, EveryFrameIsWritten) {

@@ -2,16 +2,18 @@
 
 #include <unistd.h>
 
+#include <charconv>
 #include <cmath>
 #include <cstdio>
-#include <cstdlib>
-#include <fstream>
 #include <map>
-#include <sstream>
+#include <optional>
+#include <string_view>
 
+#include "hpa/models/file_io.h"
 #include "hpa/models/input_error.h"
 #include "hpa/scenarios/run_record.h"
 #include "hpa/scenarios/runner.h"
+#include "hpa/scenarios/video_recorder.h"
 #include "hpa/sim/world.h"
 
 namespace hpa {
@@ -21,24 +23,56 @@ const char* const kStateColumns[kNx] = {"pL_x", "pL_y", "pL_z", "vL_x", "vL_y", 
                                         "pQ_y", "pQ_z", "vQ_x", "vQ_y", "vQ_z", "q_w",  "q_x",
                                         "q_y",  "q_z",  "w_x",  "w_y",  "w_z"};
 
-std::vector<std::string> Split(const std::string& line) {
-  std::vector<std::string> cells;
-  std::stringstream in(line);
-  std::string cell;
-  while (std::getline(in, cell, ',')) cells.push_back(cell);
-  if (!line.empty() && line.back() == ',') cells.push_back("");
+// The video rates a replay takes (--rate): a frame a second up to the physics rate.
+constexpr double kMinRate_Hz = 1.0;
+constexpr double kMaxRate_Hz = 1000.0;
+
+// The cells of one CSV line (a trailing comma is an empty last cell); views into `line`.
+std::vector<std::string_view> Split(std::string_view line) {
+  std::vector<std::string_view> cells;
+  size_t start = 0;
+  while (true) {
+    const size_t comma = line.find(',', start);
+    cells.push_back(line.substr(start, comma == std::string_view::npos ? comma : comma - start));
+    if (comma == std::string_view::npos) break;
+    start = comma + 1;
+  }
   return cells;
+}
+
+// A number as a message shows it (six significant digits).
+std::string Num(double value) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%g", value);
+  return text;
+}
+
+// Refuses a video rate outside [kMinRate_Hz, kMaxRate_Hz], NaN included.
+void CheckRate(double rate_hz) {
+  if (!(rate_hz >= kMinRate_Hz && rate_hz <= kMaxRate_Hz)) {
+    throw InputError("", "--rate",
+                     "'" + Num(rate_hz) + "' is not a video rate: expected frames per second in [" +
+                         Num(kMinRate_Hz) + ", " + Num(kMaxRate_Hz) + "]");
+  }
 }
 
 }  // namespace
 
-std::vector<LogRow> ReadLogCsv(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw InputError(path, "", "cannot open the log");
-  std::string line;
-  if (!std::getline(in, line)) throw InputError(path, "line 1", "empty: no header");
-  const std::vector<std::string> header = Split(line);
-  std::map<std::string, size_t> column;
+std::vector<LogRow> ReadLogCsv(const std::string& path, double duration_s) {
+  const std::string text = ReadInputFile(path, "a run's log.csv");
+  std::string_view rest(text);
+  // the next line of the text, without its newline; false at the end
+  const auto next_line = [&rest](std::string_view* line) {
+    if (rest.empty()) return false;
+    const size_t newline = rest.find('\n');
+    *line = rest.substr(0, newline);
+    rest = newline == std::string_view::npos ? std::string_view() : rest.substr(newline + 1);
+    return true;
+  };
+  std::string_view line;
+  if (!next_line(&line)) throw InputError(path, "line 1", "empty: no header");
+  const std::vector<std::string_view> header = Split(line);
+  std::map<std::string_view, size_t> column;
   for (size_t c = 0; c < header.size(); ++c) column[header[c]] = c;
   const auto index = [&](const std::string& name) {
     const auto it = column.find(name);
@@ -55,25 +89,43 @@ std::vector<LogRow> ReadLogCsv(const std::string& path) {
                gripper = index("gripper");
   std::vector<LogRow> rows;
   int line_no = 1;
-  while (std::getline(in, line)) {
+  while (next_line(&line)) {
     ++line_no;
-    const std::vector<std::string> cells = Split(line);
+    const std::vector<std::string_view> cells = Split(line);
+    const std::string where = "line " + std::to_string(line_no);
     if (cells.size() != header.size()) {
-      throw InputError(path, "line " + std::to_string(line_no),
+      throw InputError(path, where,
                        std::to_string(cells.size()) + " fields, the header has " +
                            std::to_string(header.size()) + " (a truncated log?)");
     }
     const auto number = [&](size_t c) {
-      char* end = nullptr;
-      const double v = std::strtod(cells[c].c_str(), &end);
-      if (cells[c].empty() || *end != '\0' || !std::isfinite(v)) {
-        throw InputError(path, "line " + std::to_string(line_no) + " column " + header[c],
-                         "'" + cells[c] + "' is not a finite number");
+      const std::string_view cell = cells[c];
+      double v = 0.0;
+      const std::from_chars_result r = std::from_chars(cell.data(), cell.data() + cell.size(), v);
+      if (cell.empty() || r.ec != std::errc() || r.ptr != cell.data() + cell.size() ||
+          !std::isfinite(v)) {
+        throw InputError(path, where + " column " + std::string(header[c]),
+                         "'" + std::string(cell) + "' is not a finite number");
       }
       return v;
     };
     LogRow r;
     r.time_s = number(time);
+    // times a run of duration_s writes: from 0, increasing, up to its end
+    const std::string time_key = where + " column time_s";
+    if (r.time_s < 0.0) {
+      throw InputError(path, time_key, "time " + Num(r.time_s) + " s is negative");
+    }
+    if (!rows.empty() && !(r.time_s > rows.back().time_s)) {
+      throw InputError(path, time_key,
+                       "time " + Num(r.time_s) + " s is not after the row before (" +
+                           Num(rows.back().time_s) + " s)");
+    }
+    if (r.time_s > duration_s + kLogTimeSlack_s) {
+      throw InputError(path, time_key,
+                       "time " + Num(r.time_s) + " s is past the run's duration, " +
+                           Num(duration_s) + " s (run.json's scenario)");
+    }
     StateVector xt, xe;
     for (int i = 0; i < kNx; ++i) xt(i) = number(truth[i]), xe(i) = number(est[i]);
     r.truth.FromVector(xt);
@@ -90,21 +142,27 @@ std::vector<LogRow> ReadLogCsv(const std::string& path) {
   return rows;
 }
 
-int ReplayRun(const ReplayOptions& options,
-              const std::function<void(const ReplayFrame&)>& on_frame) {
-  const RunRecord record = ReadRunRecord(options.dir);
-  const std::vector<LogRow> rows = ReadLogCsv(options.dir + "/log.csv");
+namespace {
+
+// ReplayRun of a record already read from options.dir/run.json.
+ReplaySummary ReplayRecord(const ReplayOptions& options, const RunRecord& record,
+                           const std::function<void(const ReplayFrame&)>& on_frame) {
   const Scenario scenario = ScenarioOf(record);
+  const std::vector<LogRow> rows = ReadLogCsv(options.dir + "/log.csv", scenario.duration_s);
+  ReplaySummary summary;
+  if ((summary.stop_signal = StopRequested()) != 0) return summary;
   const Params params = ScenarioParams(scenario, record.params);
   sim::World world(WorldConfigOf(scenario, params, options.gl_backend));
   world.Reset(rows.front().truth);
   const InputVector hover = InputVector::Constant(world.world_params().HoverMotorSpeedRadps());
   const bool progress = options.progress && isatty(STDERR_FILENO);
+  // the last time is at most the run's duration (ReadLogCsv), so the frames are bounded by it
   const double end_s = rows.back().time_s;
   const long ticks = static_cast<long>(std::floor(end_s * options.rate_hz + 1e-9)) + 1;
   size_t next = 0;
-  int frames = 0;
   for (long k = 0; k < ticks; ++k) {
+    // SIGINT / SIGTERM: stop before the next frame
+    if ((summary.stop_signal = StopRequested()) != 0) break;
     // the video tick as the live run's clock has it: the physics step nearest k / rate
     const double t =
         std::llround(k / options.rate_hz / sim::World::kPhysicsDt_s) * sim::World::kPhysicsDt_s;
@@ -119,11 +177,42 @@ int ReplayRun(const ReplayOptions& options,
     world.RenderPayloadCamera(&frame.onboard, cv::Rect());
     frame.chase = world.RenderChaseCamera(960, 540);
     on_frame(frame);
-    ++frames;
-    if (progress) std::fprintf(stderr, "\rreplay: frame %d / %ld", frames, ticks);
+    ++summary.frames;
+    if (progress) std::fprintf(stderr, "\rreplay: frame %d / %ld", summary.frames, ticks);
   }
   if (progress) std::fprintf(stderr, "\n");
-  return frames;
+  return summary;
+}
+
+}  // namespace
+
+ReplaySummary ReplayRun(const ReplayOptions& options,
+                        const std::function<void(const ReplayFrame&)>& on_frame) {
+  CheckRate(options.rate_hz);
+  return ReplayRecord(options, ReadRunRecord(options.dir), on_frame);
+}
+
+ReplaySummary ReplayToVideo(const ReplayOptions& options, const std::string& video_path) {
+  CheckRate(options.rate_hz);
+  // a folder that is not a run is refused before the output is looked at
+  const RunRecord record = ReadRunRecord(options.dir);
+  CheckVideoPath(video_path, "--out");
+  // opened at the first frame, after log.csv has been read and checked too
+  std::optional<VideoRecorder> video;
+  ReplaySummary summary = ReplayRecord(options, record, [&](const ReplayFrame& f) {
+    if (!video) video.emplace(video_path, options.rate_hz, false, "--out");
+    const VideoRecorder::Hud hud{f.time_s, f.row->truth.mode, f.row->estimate.mode,
+                                 f.row->command.thrust_N, f.row->cable_tension_N};
+    video->AddFrame(f.chase, f.onboard, hud);
+  });
+  if (!video) return summary;  // stopped before the first frame: nothing was written
+  summary.codec = video->codec();
+  if (summary.stop_signal != 0) {
+    video->Abandon();  // the previous video stays as it was
+    return summary;
+  }
+  video->Finish();
+  return summary;
 }
 
 }  // namespace hpa

@@ -7,19 +7,20 @@
 #include <filesystem>
 #include <opencv2/imgproc.hpp>
 
+#include "hpa/models/file_io.h"
 #include "hpa/models/input_error.h"
 #include "hpa/sim/world.h"
 #include "media.h"
 
 namespace hpa {
 
-void CheckVideoPath(const std::string& path) {
+void CheckVideoPath(const std::string& path, const std::string& option) {
   namespace fs = std::filesystem;
   const fs::path file(path);
   std::string extension = file.extension().string();
   for (char& c : extension) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
   if (extension != ".mp4") {
-    throw InputError(path, "--video",
+    throw InputError(path, option,
                      "the extension is the problem: expected a file name ending in .mp4, got '" +
                          file.extension().string() + "'");
   }
@@ -27,35 +28,57 @@ void CheckVideoPath(const std::string& path) {
   std::error_code ec;
   if (!fs::is_directory(folder, ec)) {
     throw InputError(
-        path, "--video",
+        path, option,
         "the folder is the problem: '" + folder.string() + "' is not a folder that exists");
   }
+  // the folder is there but cannot take the file: an output that cannot be written (exit 4)
   if (access(folder.c_str(), W_OK) != 0) {
-    throw InputError(path, "--video",
-                     "the folder is the problem: '" + folder.string() + "' is not writable");
+    throw OutputError(path,
+                      "the folder '" + folder.string() + "' is not writable (" + option + ")");
   }
   if (fs::is_directory(file, ec)) {
-    throw InputError(path, "--video", "a folder of that name is in the way");
+    throw OutputError(path, "a folder of that name is in the way (" + option + ")");
   }
 }
 
-VideoRecorder::VideoRecorder(const std::string& path, double rate_hz, bool slack_events_only)
+VideoRecorder::VideoRecorder(const std::string& path, double rate_hz, bool slack_events_only,
+                             const std::string& option)
     : path_(path), rate_hz_(rate_hz), slack_events_only_(slack_events_only) {
-  CheckVideoPath(path);
+  CheckVideoPath(path, option);
+  // written under the partial name (same folder, still .mp4 for the writer's container choice)
+  const std::string partial = PartialPath(path);
   // H.264 (plays in browsers and slides, files several times smaller); MPEG-4 part 2 where the
   // OpenCV build has no H.264 encoder
-  writer_ = OpenVideo(path, "avc1", rate_hz, cv::Size(kWidthPx, kHeightPx));
+  writer_ = OpenVideo(partial, "avc1", rate_hz, cv::Size(kWidthPx, kHeightPx));
   codec_ = "avc1";
   if (writer_ == nullptr) {
-    writer_ = OpenVideo(path, "mp4v", rate_hz, cv::Size(kWidthPx, kHeightPx));
+    writer_ = OpenVideo(partial, "mp4v", rate_hz, cv::Size(kWidthPx, kHeightPx));
     codec_ = "mp4v";
   }
   if (writer_ == nullptr) {
+    std::remove(partial.c_str());
     throw OutputError(path, "no MP4 writer could open it (the folder and the .mp4 name are fine)");
   }
 }
 
-VideoRecorder::~VideoRecorder() = default;
+VideoRecorder::~VideoRecorder() {
+  if (done_) return;
+  try {
+    RemovePartial();
+  } catch (...) {
+    // a destructor must not throw; the partial file is at worst left behind
+  }
+}
+
+void VideoRecorder::RemovePartial() {
+  done_ = true;
+  if (writer_ != nullptr) writer_->Close();
+  std::remove(PartialPath(path_).c_str());
+}
+
+void VideoRecorder::Abandon() {
+  if (!done_) RemovePartial();
+}
 
 cv::Mat VideoRecorder::Compose(const cv::Mat& chase_bgr, const cv::Mat& onboard_bgr,
                                const Hud& hud) const {
@@ -112,9 +135,21 @@ void VideoRecorder::AddFrame(const cv::Mat& chase_bgr, const cv::Mat& onboard_bg
 }
 
 int VideoRecorder::Finish() {
-  writer_->Close();
+  if (done_) return frames_written_;
   // a slack-events video of a run without slack would be an empty file: write nothing
-  if (slack_events_only_ && frames_written_ == 0) std::remove(path_.c_str());
+  if (slack_events_only_ && frames_written_ == 0) {
+    RemovePartial();
+    std::remove(path_.c_str());
+    return 0;
+  }
+  done_ = true;
+  writer_->Close();
+  std::error_code ec;
+  if (std::filesystem::file_size(PartialPath(path_), ec) == 0 || ec) {
+    std::remove(PartialPath(path_).c_str());
+    throw OutputError(path_, "the video writer left no file (disk full?)");
+  }
+  CommitPartial(path_);
   return frames_written_;
 }
 

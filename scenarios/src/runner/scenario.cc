@@ -73,7 +73,9 @@ Eigen::Vector3d RefVec3(const YamlMap& r, const std::string& type, const std::st
   return Vec3(r, key, k.min, k.max);
 }
 
-ReferenceSpec ParseReference(const YamlMap& r) {
+// `csv_text`, when given, is the reference CSV's text (a run.json's snapshot), parsed in place
+// of reading the file.
+ReferenceSpec ParseReference(const YamlMap& r, const std::optional<std::string>& csv_text) {
   ReferenceSpec ref;
   std::vector<std::string> names;
   for (const ReferenceType& t : ReferenceTypes()) names.push_back(t.name);
@@ -86,7 +88,11 @@ ReferenceSpec ParseReference(const YamlMap& r) {
       const size_t slash = r.file().rfind('/');
       ref.file = (slash == std::string::npos ? "" : r.file().substr(0, slash + 1)) + ref.file;
     }
-    ref.samples = LoadTrajectoryCsv(ref.file);
+    // positions within the one range the hover reference declares
+    const ReferenceKey& hover = FindReferenceKey("hover", "payload_position");
+    const PositionRange range{hover.min, hover.max};
+    ref.samples = csv_text ? ParseTrajectoryCsv(*csv_text, ref.file, range)
+                           : LoadTrajectoryCsv(ref.file, range);
   } else if (type == "circle" || type == "figure_eight") {
     // the Lissajous family (reference_types.cc gives each one's formula)
     LissajousSpec& s = ref.lissajous;
@@ -215,7 +221,12 @@ void SetDottedPath(YAML::Node root, const std::string& path, const std::string& 
 
 }  // namespace
 
-Scenario ParseScenario(const YamlMap& root) {
+const std::vector<std::string>& CameraNames() {
+  static const std::vector<std::string> names = {"render", "analytic"};
+  return names;
+}
+
+Scenario ParseScenario(const YamlMap& root, const std::optional<std::string>& reference_csv_text) {
   Scenario s;
   s.file = root.file();
   s.name = root.String("name");
@@ -256,7 +267,7 @@ Scenario ParseScenario(const YamlMap& root) {
   }
   if (root.Has("estimation")) {
     const YamlMap e = root.Map("estimation");
-    s.estimation.camera = e.Choice("camera", {"render", "analytic"}, "render");
+    s.estimation.camera = e.Choice("camera", CameraNames(), "render");
     s.estimation.ground_truth = e.Bool("ground_truth", false);
     // the estimator keeps 0.5 s of history to apply late detections at their capture time
     s.estimation.camera_latency_s = e.Number("camera_latency", 0.0, 0.4, 0.03);
@@ -266,7 +277,9 @@ Scenario ParseScenario(const YamlMap& root) {
     if (e.Has("estimator")) s.estimation.estimator = e.Choice("estimator", EstimatorNames(), "");
     e.RejectUnknownKeys();
   }
-  if (root.Has("reference")) s.reference = ParseReference(root.Map("reference"));
+  if (root.Has("reference")) {
+    s.reference = ParseReference(root.Map("reference"), reference_csv_text);
+  }
   if (root.Has("events")) {
     const YAML::Node list = root.Node("events");
     if (!list.IsSequence()) root.Fail("events", "expected a list of events");
@@ -303,13 +316,14 @@ Scenario LoadScenario(const std::string& path, const std::vector<ScenarioSet>& s
 }
 
 Scenario LoadScenarioText(const std::string& text, const std::string& path,
-                          const std::vector<ScenarioSet>& sets, const std::string& origin) {
+                          const std::vector<ScenarioSet>& sets, const std::string& origin,
+                          const std::optional<std::string>& reference_csv_text) {
   YAML::Node root = LoadYamlText(text, path);
   if (!root.IsMap()) throw InputError(path, "", "expected a YAML map at the top level");
-  if (sets.empty()) return ParseScenario(YamlMap(root, path, ""));
+  if (sets.empty()) return ParseScenario(YamlMap(root, path, ""), reference_csv_text);
   for (const ScenarioSet& set : sets) SetDottedPath(root, set.first, set.second, origin);
   try {
-    return ParseScenario(YamlMap(root, path, ""));
+    return ParseScenario(YamlMap(root, path, ""), reference_csv_text);
   } catch (const InputError& e) {
     // a bad value that came from a set: name where it came from, not the file it is not in
     for (auto it = sets.rbegin(); it != sets.rend(); ++it) {

@@ -141,17 +141,16 @@ int ReplayMain(int argc, char** argv) {
   if (const auto code = ParseCommandLine(app, argc, argv)) return *code;
   options.gl_backend = ParseGlOption(gl);
   options.progress = !quiet;
-  ReadRunRecord(options.dir);  // a folder that is not a run is refused before anything is written
   if (out.empty()) out = options.dir + "/replay.mp4";
-  CheckVideoPath(out);
-  VideoRecorder video(out, options.rate_hz, false);
-  const int frames = ReplayRun(options, [&](const ReplayFrame& f) {
-    const VideoRecorder::Hud hud{f.time_s, f.row->truth.mode, f.row->estimate.mode,
-                                 f.row->command.thrust_N, f.row->cable_tension_N};
-    video.AddFrame(f.chase, f.onboard, hud);
-  });
-  video.Finish();
-  if (!quiet) std::printf("wrote %s (%d frames, %s)\n", out.c_str(), frames, video.codec().c_str());
+  const ReplaySummary replay = ReplayToVideo(options, out);
+  if (replay.stop_signal != 0) {
+    std::fprintf(stderr, "hpa: replay stopped by signal %d (%s) after %d frames; %s is unchanged\n",
+                 replay.stop_signal, strsignal(replay.stop_signal), replay.frames, out.c_str());
+    return kExitStoppedBySignal + replay.stop_signal;
+  }
+  if (!quiet) {
+    std::printf("wrote %s (%d frames, %s)\n", out.c_str(), replay.frames, replay.codec.c_str());
+  }
   return kExitOk;
 }
 

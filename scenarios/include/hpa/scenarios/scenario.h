@@ -79,16 +79,23 @@ Scenario LoadScenario(const std::string& path, const std::vector<ScenarioSet>& s
                       const std::string& origin = "--set");
 
 /// LoadScenario from the scenario's text (a sweep's snapshot of its base); `path` names it in
-/// messages.
+/// messages. `reference_csv_text`, when given, is a csv reference's file text (a run.json's
+/// snapshot), parsed instead of reading the file.
 Scenario LoadScenarioText(const std::string& text, const std::string& path,
                           const std::vector<ScenarioSet>& sets = {},
-                          const std::string& origin = "--set");
+                          const std::string& origin = "--set",
+                          const std::optional<std::string>& reference_csv_text = std::nullopt);
 
 /// Splits a `--set PATH=VALUE` argument; throws InputError if it has no PATH= part.
 ScenarioSet ParseSetArgument(const std::string& text);
 
-/// Validates an already parsed YAML node as a scenario (used by sweeps after applying `vary`).
-Scenario ParseScenario(const class YamlMap& root);
+/// Validates an already parsed YAML node as a scenario (used by sweeps after applying `vary`);
+/// `reference_csv_text` as for LoadScenarioText.
+Scenario ParseScenario(const class YamlMap& root,
+                       const std::optional<std::string>& reference_csv_text = std::nullopt);
+
+/// The payload cameras estimation.camera (and --camera) may name.
+const std::vector<std::string>& CameraNames();
 
 /// The params a scenario flies with: `params` with the scenario's `params:` block applied
 /// (validated when the scenario was loaded).

@@ -13,12 +13,15 @@ namespace hpa {
 
 class VideoSink;
 
-/// Writes frames through OpenCV's video writer (H.264 "avc1", else "mp4v"); optionally only
-/// around slack events.
-/// Checks a --video path before a run starts: a .mp4 name in a folder that exists and can be
-/// written; throws InputError saying whether the folder or the extension is the problem.
-void CheckVideoPath(const std::string& path);
+/// Checks a video path before anything is rendered: a .mp4 name in a folder that exists (else
+/// InputError naming `option` and saying whether the folder or the extension is the problem),
+/// and a folder that can be written with no folder in the way (else OutputError: exit 4).
+void CheckVideoPath(const std::string& path, const std::string& option = "--video");
 
+/// Writes frames through OpenCV's video writer (H.264 "avc1", else "mp4v"); optionally only
+/// around slack events. The file is written whole or not at all: frames go to
+/// PartialPath(path), which Finish() renames onto `path`; a recorder destroyed or abandoned
+/// before that removes the partial file and leaves a previous video at `path` as it was.
 class VideoRecorder {
  public:
   static constexpr int kWidthPx = 960;
@@ -34,22 +37,32 @@ class VideoRecorder {
     double tension_N;
   };
 
-  /// Opens the file; throws InputError if it cannot be written.
-  VideoRecorder(const std::string& path, double rate_hz, bool slack_events_only);
+  /// Checks `path` (CheckVideoPath, naming `option`) and opens its partial file; throws
+  /// InputError or OutputError as CheckVideoPath does, OutputError if no writer opens it.
+  VideoRecorder(const std::string& path, double rate_hz, bool slack_events_only,
+                const std::string& option = "--video");
+  /// Removes the partial file unless Finish() has committed it.
   ~VideoRecorder();
 
   /// Adds one frame (chase view kWidthPx x kHeightPx, onboard frame any size, BGR).
   void AddFrame(const cv::Mat& chase_bgr, const cv::Mat& onboard_bgr, const Hud& hud);
 
-  /// Flushes and closes; returns the number of frames written (a slack-events video with no
-  /// frame is removed rather than left empty).
+  /// Flushes, closes and renames the partial file onto the path; returns the number of frames
+  /// written. A slack-events video with no frame is not written (and a previous one at the path
+  /// removed: it belongs to another run). Throws OutputError if the file cannot be completed.
   int Finish();
+
+  /// Closes and removes the partial file (a stopped replay): the path keeps what it held.
+  void Abandon();
 
   /// The codec the file is written with: "avc1" (H.264) or "mp4v".
   const std::string& codec() const { return codec_; }
 
  private:
   cv::Mat Compose(const cv::Mat& chase_bgr, const cv::Mat& onboard_bgr, const Hud& hud) const;
+
+  // closes the writer and removes the partial file (Abandon and the destructor)
+  void RemovePartial();
 
   std::string path_;
   std::string codec_;
@@ -59,6 +72,7 @@ class VideoRecorder {
   std::deque<cv::Mat> pre_buffer_;  // frames before a slack event (slack_events_only)
   double keep_until_s_ = -1.0;      // write frames up to this time
   int frames_written_ = 0;
+  bool done_ = false;  // Finish() or Abandon() has run: nothing left to clean up
 };
 
 /// The video of a run as a recorder: the chase camera and a whole onboard frame of its own at
