@@ -128,3 +128,11 @@ set_tests_properties(python.hostile_inputs PROPERTIES LABELS cli TIMEOUT 120
 add_test(NAME cli.csv_reference_inputs
          COMMAND bash ${SCEN}/tests/csv_reference_cli_test.sh ${HPA_BIN} ${CMAKE_SOURCE_DIR})
 set_tests_properties(cli.csv_reference_inputs PROPERTIES LABELS cli TIMEOUT 300)
+
+# The flight-stack boundary on hostile input: bad --flight-timeout / --flight-stack, SIGINT and
+# SIGTERM during every wait on a stack, a reply's whole-message time limit, a stack's invalid
+# UTF-8, a truncated frame ring, out-of-range values, and what a killed hpa leaves (reclaimed by
+# the next); the stop times it measures are printed
+add_test(NAME cli.flight_boundary
+         COMMAND bash ${SCEN}/tests/flight_boundary_test.sh ${HPA_BIN} ${CMAKE_SOURCE_DIR} ${HPA_PYTHON3})
+set_tests_properties(cli.flight_boundary PROPERTIES LABELS "cli;scenario" TIMEOUT 300)

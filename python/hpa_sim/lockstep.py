@@ -320,12 +320,17 @@ def run(controller_class, name=None, control_rate_hz=0.0):
     """Serves one run: builds controller_class(hello) and calls its step(tick) every tick.
     step returns a Command (a new command), or None (the rate loop keeps the last one); the
     controller may set `estimate` (a state dict) for the simulator's log and rate loop, else the
-    latest VIO pose and IMU rate are sent."""
+    latest VIO pose and IMU rate are sent (before the first VIO sample, the hello's initial
+    state)."""
     client = FlightStackClient()
     try:
         hello = client.hello(name or controller_class.__name__, control_rate_hz)
         controller = controller_class(hello)
         last_vio, last_gyro = None, np.zeros(3)
+        # before the first VIO sample, the state the run starts from (the simulator refuses a
+        # reply without the estimate a tick asks for)
+        start = hello.get("config", {}).get("initial_state") or {}
+        start = dict(start, q_WB=start.get("q_WB_wxyz", [1.0, 0.0, 0.0, 0.0]))
         while True:
             kind, body = client.receive()
             if kind not in (TICK, FINISH):
@@ -348,8 +353,9 @@ def run(controller_class, name=None, control_rate_hz=0.0):
             if estimate is None and last_vio is not None:
                 estimate = {"p_WQ_W": last_vio[1:4], "q_WB": last_vio[4:8], "v_WQ_W": last_vio[8:11],
                             "w_B": last_gyro}
-            if estimate is not None:
-                estimate = dict(estimate, time_s=tick.time_s)
+            if estimate is None:
+                estimate = start
+            estimate = dict(estimate, time_s=tick.time_s)
             client.send(TICK_REPLY, encode_reply(command, estimate))
     except EOFError:
         return 0

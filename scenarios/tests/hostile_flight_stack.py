@@ -33,4 +33,6 @@ while True:
         client.sock.sendall(b"GET / HTTP/1.1\r\n\r\n")
         continue
     thrust = float("nan") if mode == "nan" else 8.0
-    client.send(lockstep.TICK_REPLY, lockstep.encode_reply(lockstep.Command([0, 0, 0], thrust), None))
+    # a level vehicle at the origin as its estimate (the simulator refuses a command without one)
+    client.send(lockstep.TICK_REPLY, lockstep.encode_reply(lockstep.Command([0, 0, 0], thrust),
+                                                           {"time_s": tick.time_s}))

@@ -1,14 +1,13 @@
 #include "scenarios/src/runner/flight_link.h"
 
-#include <fcntl.h>
 #include <poll.h>
 #include <signal.h>
-#include <sys/mman.h>
 #include <sys/socket.h>
 #include <sys/un.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <atomic>
 #include <cerrno>
 #include <chrono>
@@ -16,7 +15,12 @@
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
+#include <optional>
 #include <thread>
+
+#include "hpa/scenarios/runner.h"
+#include "scenarios/src/runner/flight_process.h"
+#include "scenarios/src/runner/frame_ring.h"
 
 namespace hpa::runner {
 namespace {
@@ -53,6 +57,13 @@ std::string ExecutableDir() {
   return path.substr(0, path.rfind('/'));
 }
 
+// Whether a stop (SIGINT, SIGTERM) was requested.
+bool Stopping() { return StopRequested() != 0; }
+
+// How long the waits on a stack go on once a stop was requested (s): a stack that answers
+// promptly completes the message in flight and its finish report, a hung one is abandoned.
+constexpr double kStopGraceS = 0.2;
+
 // A separate flight stack: its process, the socket it connected to and the frame ring.
 class ExternalFlight final : public FlightLink {
  public:
@@ -70,16 +81,20 @@ class ExternalFlight final : public FlightLink {
 
   void Start(const flight::FlightConfig& config) {
     const ExternalFlightOptions& options = options_;
+    // what earlier runs of killed hpa processes left behind, before this run adds its own
+    RemoveStaleFlightRuns();
     static std::atomic<int> counter{0};
     const int n = counter++;
-    char dir[] = "/tmp/hpa-flight-XXXXXX";
-    if (::mkdtemp(dir) == nullptr) Fail(std::string("mkdtemp: ") + std::strerror(errno));
+    const std::string owner = FlightOwnerTag();
+    std::string dir = "/tmp/hpa-flight-" + owner + "-XXXXXX";
+    if (::mkdtemp(dir.data()) == nullptr) Fail(std::string("mkdtemp: ") + std::strerror(errno));
     dir_ = dir;
     socket_path_ = dir_ + "/lockstep.sock";
     Listen();
     if (options.frames.slots > 0) {
-      ring_name_ = "/hpa-flight-" + std::to_string(::getpid()) + "-" + std::to_string(n);
-      MapRing(options.frames);
+      ring_ = std::make_unique<FrameRing>("/hpa-flight-" + owner + "-" + std::to_string(n),
+                                          options.frames.slots, options.frames.width_px,
+                                          options.frames.height_px);
     }
     Spawn();
     Accept();
@@ -88,60 +103,57 @@ class ExternalFlight final : public FlightLink {
                             {"seed", options.seed},
                             {"rates", options.rates},
                             {"config", flight::ConfigToJson(config)}};
-    if (!ring_name_.empty()) {
-      hello["camera"] = {{"ring", ring_name_},
+    if (ring_) {
+      hello["camera"] = {{"ring", ring_->name()},
                          {"slots", options.frames.slots},
                          {"width_px", options.frames.width_px},
                          {"height_px", options.frames.height_px},
-                         {"slot_bytes", slot_bytes_}};
+                         {"slot_bytes", ring_->slot_bytes()}};
     }
     Guard(
         [&] {
-          channel_->SendJson(MessageType::kHello, hello);
-          const std::vector<uint8_t> ack =
-              channel_->Expect(MessageType::kHelloAck, options_.step_timeout_s);
-          nlohmann::json j;
-          try {
-            j = nlohmann::json::parse(ack.begin(), ack.end());
-            const uint32_t version = j.at("protocol_version").get<uint32_t>();
-            if (version != flight::kProtocolVersion) {
-              throw ProtocolError("it speaks protocol version " + std::to_string(version) +
-                                  ", this simulator version " +
-                                  std::to_string(flight::kProtocolVersion));
-            }
-            name_ = j.value("name", "external");
-            const nlohmann::json rate = j.value("control_rate_hz", nlohmann::json());
-            control_rate_hz_ = rate.is_number() ? rate.get<double>() : 0.0;
-          } catch (const nlohmann::json::exception& e) {
-            throw ProtocolError(std::string("a malformed hello_ack: ") + e.what());
-          }
+          channel_->SendJson(MessageType::kHello, hello, Limit());
+          const flight::HelloAck ack =
+              flight::ParseHelloAck(channel_->Expect(MessageType::kHelloAck, Limit()));
+          name_ = ack.name;
+          control_rate_hz_ = ack.control_rate_hz;
         },
         "hello");
   }
 
-  // Closes the socket (a stack waiting on it sees the end), stops the process, frees the ring
-  // and removes the socket's directory.
+  // Closes the socket (a stack waiting on it sees the end), stops the process (its group and
+  // every process carrying its socket), frees the ring and removes the socket's directory.
   void Cleanup() {
     channel_.reset();
-    Reap(2.0, true);
-    if (ring_ != nullptr) ::munmap(ring_, slot_bytes_ * static_cast<size_t>(options_.frames.slots));
-    ring_ = nullptr;
-    if (!ring_name_.empty()) ::shm_unlink(ring_name_.c_str());
+    Reap(Stopping() ? 0.0 : 2.0, true);
+    if (!socket_path_.empty()) KillProcessesOfSocket(socket_path_);
+    ring_.reset();
     if (listen_fd_ >= 0) ::close(listen_fd_);
     listen_fd_ = -1;
     if (!dir_.empty()) {
       ::unlink(socket_path_.c_str());
       ::rmdir(dir_.c_str());
+      dir_.clear();
     }
   }
 
   flight::FlightOutputs Step(const flight::FlightInputs& in) override {
     flight::FlightOutputs out;
+    messages_so_far_ += in.imu.size() + in.vio.size() + in.detections.size() + in.frames.size();
     Guard(
         [&] {
-          channel_->Send(MessageType::kTick, flight::EncodeTick(in));
-          out = flight::DecodeReply(
-              channel_->Expect(MessageType::kTickReply, options_.step_timeout_s));
+          if (ring_) ring_->Check();  // frames rendered into a ring cut short are never sent
+          channel_->Send(MessageType::kTick, flight::EncodeTick(in), Limit());
+          out = flight::DecodeReply(channel_->Expect(MessageType::kTickReply, Limit()));
+          flight::ReplyBounds bounds;
+          bounds.frames = in.frames.size();
+          bounds.estimate_needed = in.need_estimate;
+          bounds.messages_so_far = messages_so_far_;
+          if (ring_) {
+            bounds.image_width_px = options_.frames.width_px;
+            bounds.image_height_px = options_.frames.height_px;
+          }
+          flight::CheckReply(out, bounds);
         },
         "tick at t = " + std::to_string(in.time_s) + " s");
     return out;
@@ -149,31 +161,30 @@ class ExternalFlight final : public FlightLink {
 
   FlightFinish Finish(const flight::FlightInputs& pending) override {
     FlightFinish f;
+    // a stack that failed (or a wait a stop ended) is not asked again: the run error says why;
+    // after a stop, only within its grace
+    if (failed_ || StopDue()) return f;
+    const flight::WaitLimit limit = Limit();
     Guard(
         [&] {
-          channel_->Send(MessageType::kFinish, flight::EncodeTick(pending));
-          const std::vector<uint8_t> body =
-              channel_->Expect(MessageType::kFinishReply, options_.step_timeout_s);
-          try {
-            const nlohmann::json j = nlohmann::json::parse(body.begin(), body.end());
-            f.estimator = j.value("estimator", "");
-            f.frames_detected = j.value("frames_detected", 0);
-            for (const nlohmann::json& kv : j.value("estimator_health", nlohmann::json::array())) {
-              f.estimator_health.emplace_back(kv.at(0).get<std::string>(), kv.at(1).get<double>());
-            }
-          } catch (const nlohmann::json::exception& e) {
-            throw ProtocolError(std::string("a malformed finish_reply: ") + e.what());
-          }
+          if (ring_) ring_->Check();
+          channel_->Send(MessageType::kFinish, flight::EncodeTick(pending), limit);
+          const flight::FinishReply reply = flight::ParseFinishReply(
+              channel_->Expect(MessageType::kFinishReply, limit), pending.frames.size());
+          f.estimator = reply.estimator;
+          f.frames_detected = reply.frames_detected;
+          f.estimator_health = reply.estimator_health;
         },
         "finish");
     return f;
   }
 
   cv::Mat* NextFrameSlot(int* slot) override {
-    if (ring_ == nullptr) return nullptr;
+    if (!ring_) return nullptr;
+    Guard([&] { ring_->Check(); }, "frame ring");
     *slot = next_slot_;
     next_slot_ = (next_slot_ + 1) % options_.frames.slots;
-    return &slot_mats_[static_cast<size_t>(*slot)];
+    return ring_->Slot(*slot);
   }
   bool wants_reference() const override { return true; }
   std::string name() const override { return name_; }
@@ -181,16 +192,46 @@ class ExternalFlight final : public FlightLink {
 
  private:
   [[noreturn]] void Fail(const std::string& what) const {
-    throw ProtocolError("flight stack '" + options_.command + "': " + what);
+    // the text may carry the stack's own bytes (a parse error quotes them): it becomes JSON
+    throw ProtocolError(flight::CleanUtf8("flight stack '" + options_.command + "': " + what));
+  }
+
+  // Ends the run as stopped by the requested signal while it waited on the stack (`during`
+  // says for what); the stack is killed and not asked again.
+  [[noreturn]] void Stopped(const std::string& during) {
+    failed_ = true;
+    Reap(0.0, true);
+    throw flight::WaitInterrupted(
+        flight::CleanUtf8("stopped by signal " + std::to_string(StopRequested()) +
+                          " while waiting for flight stack '" + options_.command + "' " + during));
+  }
+
+  // One message's wait: the step timeout, ended kStopGraceS after a stop was requested.
+  flight::WaitLimit Limit() {
+    return {options_.step_timeout_s, [this] { return StopDue(); }};
+  }
+
+  // Whether a stop was requested kStopGraceS ago or more (counted from when a wait or the
+  // finish first saw it).
+  bool StopDue() {
+    if (!Stopping()) return false;
+    const auto now = std::chrono::steady_clock::now();
+    if (!stop_due_) {
+      stop_due_ = now + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                            std::chrono::duration<double>(kStopGraceS));
+    }
+    return now >= *stop_due_;
   }
 
   // Runs `f`; a protocol failure is rethrown naming the command, the step and, if the process
-  // has ended, how.
+  // has ended, how; a wait a stop signal ended is rethrown as the stop.
   template <class F>
   void Guard(F&& f, const std::string& step) {
     if (failed_) Fail(step + ": not sent, the flight stack failed before");
     try {
       f();
+    } catch (const flight::WaitInterrupted&) {
+      Stopped("(" + step + ")");
     } catch (const ProtocolError& e) {
       failed_ = true;
       std::string what = step + ": " + e.what();
@@ -212,48 +253,24 @@ class ExternalFlight final : public FlightLink {
     }
   }
 
-  void MapRing(const FrameRingSpec& frames) {
-    slot_bytes_ = static_cast<size_t>(frames.width_px) * frames.height_px * 3;
-    const size_t bytes = slot_bytes_ * static_cast<size_t>(frames.slots);
-    const int fd = ::shm_open(ring_name_.c_str(), O_CREAT | O_EXCL | O_RDWR, 0600);
-    if (fd < 0) Fail("shm_open " + ring_name_ + ": " + std::strerror(errno));
-    if (::ftruncate(fd, static_cast<off_t>(bytes)) != 0) {
-      ::close(fd);
-      Fail("cannot size the frame ring: " + std::string(std::strerror(errno)));
-    }
-    void* p = ::mmap(nullptr, bytes, PROT_READ | PROT_WRITE, MAP_SHARED, fd, 0);
-    ::close(fd);
-    if (p == MAP_FAILED) Fail("cannot map the frame ring: " + std::string(std::strerror(errno)));
-    ring_ = static_cast<uint8_t*>(p);
-    for (int i = 0; i < frames.slots; ++i) {
-      slot_mats_.emplace_back(frames.height_px, frames.width_px, CV_8UC3,
-                              ring_ + slot_bytes_ * static_cast<size_t>(i));
-    }
-  }
-
   void Spawn() {
     const std::string path_env =
         ExecutableDir() + ":" + (std::getenv("PATH") ? std::getenv("PATH") : "");
-    pid_ = ::fork();
-    if (pid_ < 0) Fail(std::string("fork: ") + std::strerror(errno));
-    if (pid_ == 0) {
-      ::setpgid(0, 0);  // its own process group: the whole command can be stopped
-      ::dup2(2, 1);     // its output goes to stderr, never into hpa's stdout
-      ::setenv("HPA_FLIGHT_SOCKET", socket_path_.c_str(), 1);
-      ::setenv("PATH", path_env.c_str(), 1);
-      ::execl("/bin/sh", "sh", "-c", options_.command.c_str(), static_cast<char*>(nullptr));
-      ::_exit(127);
+    try {
+      pid_ = pgid_ = SpawnFlightStack(options_.command, socket_path_, path_env);
+    } catch (const std::runtime_error& e) {
+      Fail(e.what());
     }
-    ::setpgid(pid_, pid_);
-    pgid_ = pid_;
   }
 
+  // Waits for the stack to connect, polling for its end and for a stop signal.
   void Accept() {
     using Clock = std::chrono::steady_clock;
     const auto deadline = Clock::now() + std::chrono::duration<double>(options_.connect_timeout_s);
     while (Clock::now() < deadline) {
+      if (Stopping()) Stopped("to connect");
       pollfd pfd{listen_fd_, POLLIN, 0};
-      const int ready = ::poll(&pfd, 1, 100);
+      const int ready = ::poll(&pfd, 1, static_cast<int>(flight::kStopPollS * 1000.0));
       if (ready > 0) {
         const int fd = ::accept4(listen_fd_, nullptr, nullptr, SOCK_CLOEXEC);
         if (fd >= 0) {
@@ -268,8 +285,8 @@ class ExternalFlight final : public FlightLink {
          " s (does it read HPA_FLIGHT_SOCKET?)");
   }
 
-  // Waits up to wait_s for the process to end and notes how it ended; if it has not and `stop`
-  // is set, kills its process group.
+  // Waits up to wait_s (cut short by a stop signal) for the process to end and notes how it
+  // ended; if it has not and `stop` is set, kills its process group.
   void Reap(double wait_s, bool stop) {
     if (pid_ <= 0) return;
     using Clock = std::chrono::steady_clock;
@@ -288,7 +305,7 @@ class ExternalFlight final : public FlightLink {
         if (stop) KillGroup();  // anything it left behind
         return;
       }
-      if (r < 0 || Clock::now() >= deadline) break;
+      if (r < 0 || Clock::now() >= deadline || Stopping()) break;
       std::this_thread::sleep_for(std::chrono::milliseconds(5));
     }
     if (stop) {
@@ -302,16 +319,16 @@ class ExternalFlight final : public FlightLink {
   }
 
   ExternalFlightOptions options_;
-  std::string dir_, socket_path_, ring_name_, name_ = "external", exit_note_;
+  std::string dir_, socket_path_, name_ = "external", exit_note_;
   double control_rate_hz_ = 0.0;  // from the hello_ack (0: not stated)
   int listen_fd_ = -1;
   pid_t pid_ = 0, pgid_ = 0;
   std::unique_ptr<Channel> channel_;
-  uint8_t* ring_ = nullptr;
-  size_t slot_bytes_ = 0;
-  std::vector<cv::Mat> slot_mats_;
+  std::unique_ptr<FrameRing> ring_;  // the rendered frames, when they cross
   int next_slot_ = 0;
-  bool failed_ = false;  // a message failed: the stack is not asked again
+  uint64_t messages_so_far_ = 0;  // sensor messages sent (the estimator counters' bound)
+  bool failed_ = false;           // a message failed: the stack is not asked again
+  std::optional<std::chrono::steady_clock::time_point> stop_due_;  // waits end then (a stop)
 };
 
 }  // namespace

@@ -59,7 +59,7 @@ std::unique_ptr<FlightLink> MakeInProcessFlight(const flight::FlightConfig& conf
 /// Settings of a separate flight stack.
 struct ExternalFlightOptions {
   std::string command;              // shell command line that starts it
-  double step_timeout_s = 10.0;     // longest wait for one reply (and for the hello)
+  double step_timeout_s = 10.0;     // longest wait for one whole message (reply, hello_ack)
   double connect_timeout_s = 30.0;  // longest wait for it to connect
   FrameRingSpec frames;             // the rendered camera's frames, if they cross
   nlohmann::json rates;             // the rate table, for the hello
@@ -68,7 +68,11 @@ struct ExternalFlightOptions {
 };
 
 /// Starts `options.command` and completes the hello; throws flight::ProtocolError naming the
-/// command for one that does not start, connect, or speak this protocol's version.
+/// command for one that does not start, connect, or speak this protocol's version, and
+/// flight::WaitInterrupted naming the signal when a stop (StopRequested) ends the wait. Every
+/// wait on the stack polls StopRequested; every reply is checked at this boundary
+/// (flight::DecodeReply, CheckReply, ParseHelloAck, ParseFinishReply): a stack's bad value ends
+/// the run with a run error naming it.
 std::unique_ptr<FlightLink> StartExternalFlight(const flight::FlightConfig& config,
                                                 const ExternalFlightOptions& options);
 

@@ -7,9 +7,11 @@
 // little-endian IEEE doubles and unsigned 32-bit integers, so both sides see the same bits.
 
 #include <cstdint>
+#include <functional>
 #include <nlohmann/json.hpp>
 #include <stdexcept>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "hpa/flight/flight_stack.h"
@@ -40,8 +42,18 @@ class ProtocolError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+/// A wait on the peer that its stop check ended early (the simulator was asked to stop).
+class WaitInterrupted : public ProtocolError {
+ public:
+  using ProtocolError::ProtocolError;
+};
+
 /// Name of a message type for errors ("hello", "tick", ...).
 std::string MessageTypeName(MessageType type);
+
+/// `text` with every byte that is not part of valid UTF-8 replaced by U+FFFD: a peer's text
+/// (an error message, a name) can then enter JSON, which must be UTF-8.
+std::string CleanUtf8(std::string_view text);
 
 /// Encodes one tick's inputs (frames as their slot and capture time).
 std::vector<uint8_t> EncodeTick(const FlightInputs& in);
@@ -49,14 +61,77 @@ std::vector<uint8_t> EncodeTick(const FlightInputs& in);
 FlightInputs DecodeTick(const std::vector<uint8_t>& body);
 /// Encodes a tick's reply.
 std::vector<uint8_t> EncodeReply(const FlightOutputs& out);
-/// Decodes a tick's reply; throws ProtocolError for a non-finite command or estimate, or an
-/// unknown status.
+/// Decodes a tick's reply; throws ProtocolError naming the field and its value for a non-finite
+/// command or estimate, an unknown status or state flag, a negative or non-finite solve time
+/// (or one past kMaxSolveTimeMs), a negative or non-finite cost, or an estimate quaternion of
+/// norm outside [0.9, 1.1]. A quaternion within that range but not unit to 1e-9 is
+/// renormalised (a unit one keeps every bit).
 FlightOutputs DecodeReply(const std::vector<uint8_t>& body);
+
+/// Longest solve time a reply may state (ms): an hour, the longest wait for a reply.
+constexpr double kMaxSolveTimeMs = 3.6e6;
+
+/// What a tick's reply is checked against: the tick it answers and the run so far.
+struct ReplyBounds {
+  size_t frames = 0;             // frames the tick delivered (frames_detected's bound)
+  bool estimate_needed = false;  // the tick set flag 8 (estimate needed)
+  uint64_t messages_so_far = 0;  // sensor messages delivered since the run began, this tick's
+                                 // included (the estimator counters' bound)
+  int image_width_px = 0;        // the camera image, when frames cross (0: none cross)
+  int image_height_px = 0;
+};
+
+/// Checks a decoded reply against its tick; throws ProtocolError naming the field and value:
+/// frames_detected outside [0, frames delivered], an estimator counter outside [0, messages
+/// delivered so far], no estimate when the tick asked for one or with a command, a camera
+/// region of negative size or outside the image.
+void CheckReply(const FlightOutputs& out, const ReplyBounds& bounds);
+
+/// The hello_ack's content.
+struct HelloAck {
+  std::string name;              // the stack's name (metrics.json's flight_stack)
+  double control_rate_hz = 0.0;  // as the stack states it (0: not stated)
+};
+
+/// Parses a hello_ack; throws ProtocolError naming the field and value for a protocol_version
+/// that is not the integer kProtocolVersion, a name that is not a string of at most
+/// kMaxNameBytes, or a control rate that is not a finite number >= 0.
+HelloAck ParseHelloAck(const std::vector<uint8_t>& body);
+
+/// The finish_reply's content.
+struct FinishReply {
+  std::string estimator;  // the stack's estimator ("" with ground truth)
+  std::vector<std::pair<std::string, double>> estimator_health;  // its counters, in order
+  int frames_detected = 0;  // of the finish's frames, those with the payload
+};
+
+/// Longest name (bytes) a stack may give itself, its estimator or a health entry.
+constexpr size_t kMaxNameBytes = 128;
+/// Most estimator health entries a finish_reply may carry.
+constexpr size_t kMaxHealthEntries = 1000;
+
+/// Parses a finish_reply answering a finish that carried `frames` frames; throws ProtocolError
+/// naming the field and value for frames_detected that is not an integer in [0, frames], an
+/// estimator name that is not a string, or a health entry that is not [name, finite number]
+/// with a name of letters, digits and underscores, unique and not a key metrics.json's
+/// estimator block reserves (variant).
+FinishReply ParseFinishReply(const std::vector<uint8_t>& body, size_t frames);
 
 /// FlightConfig as JSON (the hello's "config"); doubles keep every bit.
 nlohmann::json ConfigToJson(const FlightConfig& config);
 /// FlightConfig from the hello's "config"; throws ProtocolError naming a missing or bad key.
 FlightConfig ConfigFromJson(const nlohmann::json& j);
+
+/// How long one message's send or receipt may take: a time limit on the whole message (header
+/// and body together, however the peer splits them) and a check, polled every kStopPollS, that
+/// ends the wait early.
+struct WaitLimit {
+  double timeout_s = 0.0;      // the whole message within this (<= 0: no limit)
+  std::function<bool()> stop;  // true: stop waiting (WaitInterrupted); empty: never
+};
+
+/// How often a wait polls its stop check (s): a stop ends a wait within this.
+constexpr double kStopPollS = 0.05;
 
 /// One connected stream socket with message framing and a per-message time limit.
 class Channel {
@@ -67,19 +142,25 @@ class Channel {
   Channel(const Channel&) = delete;
   Channel& operator=(const Channel&) = delete;
 
-  /// Sends one message; throws ProtocolError if the peer has gone.
-  void Send(MessageType type, const std::vector<uint8_t>& body);
-  /// Sends a JSON message.
-  void SendJson(MessageType type, const nlohmann::json& j);
-  /// Receives one message within timeout_s (<= 0: no limit); throws ProtocolError on a timeout,
-  /// a closed peer, a bad magic or an oversized length. An kError message is thrown as its text.
+  /// Sends one message within `limit`; throws ProtocolError if the peer has gone or reads
+  /// nothing until the limit, WaitInterrupted when the limit's stop check ends the wait.
+  void Send(MessageType type, const std::vector<uint8_t>& body, const WaitLimit& limit = {});
+  /// Sends a JSON message within `limit`.
+  void SendJson(MessageType type, const nlohmann::json& j, const WaitLimit& limit = {});
+  /// Receives one whole message within `limit`; throws ProtocolError on a timeout, a closed
+  /// peer, a bad magic or an oversized length, WaitInterrupted when the stop check ends the
+  /// wait. A kError message is thrown as its text (invalid UTF-8 replaced).
+  MessageType Receive(std::vector<uint8_t>* body, const WaitLimit& limit);
+  /// Receive within timeout_s (<= 0: no limit), no stop check.
   MessageType Receive(std::vector<uint8_t>* body, double timeout_s);
   /// Receives a message that must be of `type` (ProtocolError naming both otherwise).
+  std::vector<uint8_t> Expect(MessageType type, const WaitLimit& limit);
+  /// Expect within timeout_s (<= 0: no limit), no stop check.
   std::vector<uint8_t> Expect(MessageType type, double timeout_s);
+  /// The socket (owned).
   int fd() const { return fd_; }
 
  private:
-  void ReadExact(uint8_t* data, size_t n, double timeout_s);
   int fd_;
 };
 
