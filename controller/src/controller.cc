@@ -69,8 +69,7 @@ const ParamTable<ControllerConfig>& ControllerParamTable() {
 std::unique_ptr<Controller> MakeController(const ControllerConfig& config, const Params& params,
                                            std::shared_ptr<const Reference> reference) {
   if (!reference) throw std::invalid_argument("MakeController: null reference");
-  CheckParamValue(ControllerParamTable(), "controller.", "perception_weight",
-                  config.perception_weight);
+  CheckParamTable(ControllerParamTable(), "controller.", config);
   const std::vector<std::string> solvers = OcpSolverNames();
   if (std::find(solvers.begin(), solvers.end(), config.solver) == solvers.end()) {
     throw std::invalid_argument("controller.solver: expected one of " + Joined(solvers) +

@@ -14,8 +14,6 @@ HpaMpc::HpaMpc(const Params& params, std::shared_ptr<const Reference> reference,
       reference_(std::move(reference)),
       settings_(settings),
       solver_(MakeOcpSolver(settings_.solver, settings_.solvers)) {
-  CheckParamValue(ControllerParamTable(), "controller.", "perception_weight",
-                  settings_.perception_weight);
   if (settings_.rate_output_stage < 0 || settings_.rate_output_stage > kOcpHorizonSteps ||
       settings_.thrust_output_stage < 0 || settings_.thrust_output_stage >= kOcpHorizonSteps) {
     throw std::invalid_argument("mpc output_stage outside the horizon");

@@ -253,5 +253,36 @@ echo '{"sweep_id":"x","sweep":"s","base":"b","run":0,"draw":0,"seed":1,"values":
 expect_exit 2 "runs.jsonl: key 'line 1: metrics': expected a metrics.json object or null" \
   sweep-diff "$out/oops" "$out/oops" --out "$out/oops_diff"
 
+echo "== a sweep flies the reference CSV it was started with; a resume refuses it edited"
+mkdir -p "$out/csv_sweep"
+cp "$scen/references/figure_eight_path.csv" "$out/csv_sweep/path.csv"
+cat > "$out/csv_sweep/base.yaml" <<'YAML'
+name: csv_base
+duration: 2.0
+controller: {type: geometric}
+estimation: {ground_truth: true, camera: analytic}
+reference: {type: csv, file: path.csv}
+YAML
+printf 'base: base.yaml\nruns: 6\nseed: 2\nvary:\n  estimation.camera: {list: [analytic]}\n' \
+  > "$out/csv_sweep/sweep.yaml"
+"$hpa" sweep "$out/csv_sweep/sweep.yaml" --out "$out/csv_sweep/out" --jobs 1 \
+  > "$out/csv_sweep/sweep.log" 2>&1 &
+pid=$!
+for _ in $(seq 1 400); do [ -s "$out/csv_sweep/out/runs.jsonl" ] && break; sleep 0.05; done
+rm "$out/csv_sweep/path.csv"  # gone mid-sweep: the runs still to come fly the snapshot
+wait "$pid" || fail "the sweep failed once its CSV was gone: $(tail -3 "$out/csv_sweep/sweep.log")"
+python3 - "$out/csv_sweep/out/runs.jsonl" "$out/csv_sweep/out/inputs.json" <<'PY' \
+  || fail "a run did not fly the snapshot of the CSV"
+import json, sys
+runs = [json.loads(l) for l in open(sys.argv[1])]
+assert len(runs) == 6 and all(r["status"] == "ok" for r in runs), [r["error"] for r in runs]
+roles = [f["role"] for f in json.load(open(sys.argv[2]))["files"]]
+assert roles[:3] == ["sweep", "base", "reference.file"] and "params" in roles, roles
+PY
+cp "$scen/references/figure_eight_path.csv" "$out/csv_sweep/path.csv"
+sed -i '5s/.*/0.02,0.05,0.0,0.8/' "$out/csv_sweep/path.csv"
+expect_exit 2 "holds runs of a different sweep" sweep "$out/csv_sweep/sweep.yaml" \
+  --out "$out/csv_sweep/out" --resume
+
 [ $failures -eq 0 ] && echo "hostile input: all checks passed"
 exit $((failures > 0))

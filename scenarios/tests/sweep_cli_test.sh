@@ -192,15 +192,17 @@ grep -q "unterminated" "$out/torn.log" || fail "the repair was not reported"
   || fail "after the repair: $(count_runs "$out/torn/runs.jsonl") lines, expected 10 distinct runs"
 
 echo "== a full disk fails the sweep (exit 3), never exit 0"
-# runs.jsonl: a file-size limit of 4 KiB holds the first record (about 2.5 KiB), not the second;
-# SIGXFSZ ignored (inherited through exec) turns the limit into a failed write (EFBIG)
-(trap '' XFSZ; ulimit -f 4; exec "$hpa" sweep "$out/tiny.yaml" --out "$out/full_jsonl" --jobs 1) \
+# runs.jsonl: a file-size limit of 16 KiB holds inputs.json and the first records (about 2.5 KiB
+# each), not all ten; SIGXFSZ ignored (inherited through exec) turns the limit into a failed
+# write (EFBIG)
+(trap '' XFSZ; ulimit -f 16; exec "$hpa" sweep "$out/tiny.yaml" --out "$out/full_jsonl" --jobs 1) \
   > "$out/full_jsonl.log" 2>&1
 status=$?
 [ "$status" -eq 4 ] || fail "runs.jsonl write past the limit: exit $status, expected 4"
 grep -q "cannot append" "$out/full_jsonl.log" || fail "the failed append is not named: $(tail -2 "$out/full_jsonl.log")"
-# summary.json on /dev/full (ENOSPC)
-mkdir -p "$out/full_summary" && ln -s /dev/full "$out/full_summary/summary.json"
+# summary.json on /dev/full (ENOSPC): its partial file, the one it is written to before the
+# rename, is the device
+mkdir -p "$out/full_summary" && ln -s /dev/full "$out/full_summary/summary.partial.json"
 "$hpa" sweep "$out/tiny.yaml" --out "$out/full_summary" > "$out/full_summary.log" 2>&1
 status=$?
 [ "$status" -eq 4 ] || fail "summary.json on /dev/full: exit $status, expected 4"

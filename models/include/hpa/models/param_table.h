@@ -57,6 +57,27 @@ void CheckParamValue(const ParamTable<C>& table, const std::string& prefix, cons
   throw std::invalid_argument(prefix + key + ": not a declared parameter");
 }
 
+/// Checks every numeric field of `config` against its declaration in `table` (each element of a
+/// vector or matrix too); throws std::invalid_argument "PREFIXkey: expected MIN to MAX, got V".
+template <class C>
+void CheckParamTable(const ParamTable<C>& table, const std::string& prefix, const C& config) {
+  for (const ParamDecl<C>& d : table.params) {
+    std::visit(
+        [&](auto member) {
+          using T = std::decay_t<decltype(config.*member)>;
+          if constexpr (std::is_same_v<T, double> || std::is_same_v<T, int>) {
+            CheckParamValue(table, prefix, d.key, static_cast<double>(config.*member));
+          } else if constexpr (!std::is_same_v<T, bool>) {
+            const auto& m = config.*member;
+            for (Eigen::Index i = 0; i < m.size(); ++i) {
+              CheckParamValue(table, prefix, d.key, m.data()[i]);
+            }
+          }
+        },
+        d.member);
+  }
+}
+
 /// Text of one value as the tables print it.
 inline std::string ParamValueText(double v) {
   std::ostringstream out;

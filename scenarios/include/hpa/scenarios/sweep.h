@@ -2,7 +2,9 @@
 // Monte Carlo sweeps (docs/design.md section 6): expansion of `vary` into runs, parallel worker
 // processes with crash isolation, JSON-lines results, shards, resume, merge and summaries.
 
+#include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace hpa {
@@ -20,9 +22,13 @@ struct VarySpec {
 struct SweepSpec {
   std::string file;
   std::string sweep_text;  // the sweep file's text when loaded (hashed into sweep_id)
-  std::string base_path;  // scenario file, resolved against the sweep's folder
-  std::string base_text;  // its text when the sweep was loaded: every run uses this snapshot
-  int runs = 1;           // random draws; grids multiply them
+  std::string base_path;   // scenario file, resolved against the sweep's folder
+  std::string base_text;   // its text when the sweep was loaded: every run uses this snapshot
+  // a csv reference's file and its text when the sweep was loaded (every run flies the text);
+  // unset when the base has no csv reference or the sweep varies the reference
+  std::string reference_csv_path;
+  std::optional<std::string> reference_csv_text;
+  int runs = 1;  // random draws; grids multiply them
   unsigned long seed = 1;
   double time_limit_s = 600.0;  // per run; a run past it is killed and recorded as an error
   std::vector<VarySpec> vary;
@@ -44,6 +50,10 @@ SweepSpec LoadSweep(const std::string& path);
 
 /// Expands the sweep into its runs (deterministic in the sweep seed).
 std::vector<SweepRun> ExpandSweep(const SweepSpec& spec);
+
+/// The data files every run of a sweep reads, by role ("params", "scene", "profile flight"):
+/// hashed into the sweep_id, so a resume refuses them changed, and kept in inputs.json.
+std::vector<std::pair<std::string, std::string>> DataInputFiles();
 
 /// How many runs the sweep has: its draws times its grid cells (LoadSweep keeps it at most
 /// kMaxSweepRuns).

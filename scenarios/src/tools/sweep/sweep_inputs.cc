@@ -7,6 +7,7 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <set>
+#include <sstream>
 
 #include "hpa/models/file_io.h"
 #include "hpa/models/input_error.h"
@@ -38,6 +39,23 @@ void Flatten(const YAML::Node& node, const std::string& path,
   }
 }
 
+// Where two texts first differ, for a file that is not YAML: "line N: A (A) vs B (B)".
+std::string FirstDifferingLine(const std::string& a, const std::string& b) {
+  std::istringstream sa(a), sb(b);
+  std::string la, lb;
+  for (int line = 1;; ++line) {
+    const bool more_a = static_cast<bool>(std::getline(sa, la));
+    const bool more_b = static_cast<bool>(std::getline(sb, lb));
+    if (!more_a && !more_b) return "the text differs";
+    if (!more_a) la = "(end)";
+    if (!more_b) lb = "(end)";
+    if (la != lb) {
+      return "line " + std::to_string(line) + ": " + la.substr(0, 80) + " (A) vs " +
+             lb.substr(0, 80) + " (B)";
+    }
+  }
+}
+
 }  // namespace
 
 void WriteInputsSnapshot(const SweepSpec& spec, const std::string& dir) {
@@ -46,6 +64,19 @@ void WriteInputsSnapshot(const SweepSpec& spec, const std::string& dir) {
   Json files = Json::array();
   files.push_back({{"role", "sweep"}, {"path", spec.file}, {"text", spec.sweep_text}});
   files.push_back({{"role", "base"}, {"path", spec.base_path}, {"text", spec.base_text}});
+  if (spec.reference_csv_text) {
+    files.push_back({{"role", "reference.file"},
+                     {"path", spec.reference_csv_path},
+                     {"text", *spec.reference_csv_text}});
+  }
+  // the data files by their hash (the MJCF scene and the profiles are long): params.yaml's text
+  // too, so that a changed parameter is named key by key
+  for (const auto& [role, path] : DataInputFiles()) {
+    const std::string text = ReadInputFile(path, "a data file of hpa");
+    Json entry = {{"role", role}, {"path", path}, {"hash", HashText(text)}};
+    if (role == "params") entry["text"] = text;
+    files.push_back(entry);
+  }
   const Json snapshot = {{"sweep_id", spec.sweep_id}, {"files", files}};
   WriteFileAtomic(dir + kInputsFile,
                   snapshot.dump(1, ' ', false, Json::error_handler_t::replace) + "\n");
@@ -60,8 +91,10 @@ std::optional<InputsSnapshot> ReadInputsSnapshot(const std::string& dir) {
     const Json j = Json::parse(ReadInputFile(path, "a sweep's inputs.json"));
     snapshot.sweep_id = j.at("sweep_id").get<std::string>();
     for (const Json& f : j.at("files")) {
+      // a file kept by its hash alone compares by that hash
       snapshot.files.push_back({f.at("role").get<std::string>(), f.at("path").get<std::string>(),
-                                f.at("text").get<std::string>()});
+                                f.contains("text") ? f.at("text").get<std::string>()
+                                                   : "hash " + f.at("hash").get<std::string>()});
     }
   } catch (const Json::exception& e) {
     throw InputError(path, "", std::string("malformed: ") + e.what());
@@ -89,6 +122,14 @@ std::vector<std::string> DescribeInputChanges(const InputsSnapshot& a, const Inp
           fa.role + " file " +
           (fa.path == fb.path ? fa.path : fa.path + " (A) / " + fb.path + " (B)");
       std::map<std::string, std::string> ka, kb;
+      if (fa.text.rfind("hash ", 0) == 0 || fb.text.rfind("hash ", 0) == 0) {
+        changes.push_back(what + ": its content differs");
+        continue;
+      }
+      if (fa.role == "reference.file") {
+        changes.push_back(what + ": " + FirstDifferingLine(fa.text, fb.text));
+        continue;
+      }
       try {
         Flatten(LoadYamlText(fa.text, fa.path), "", &ka);
         Flatten(LoadYamlText(fb.text, fb.path), "", &kb);

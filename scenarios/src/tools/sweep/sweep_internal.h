@@ -25,6 +25,9 @@ bool IsNumber(const std::string& s, double* v = nullptr);
 /// A number with round-trip precision (drawn values are replayed with --set).
 std::string FormatNumber(double v);
 
+/// A 16-hex-digit FNV-1a hash of a text: the sweep_id of a sweep's inputs, a data file's hash.
+std::string HashText(const std::string& text);
+
 /// Builds the scenario of one run: the base file with the run's values set, validated.
 Scenario BuildScenario(const SweepSpec& spec, const SweepRun& run);
 
@@ -45,7 +48,7 @@ struct Record {
   // metrics.json's estimator.resets (forced accepts) + estimator.cable_reinitialisations (cable
   // filter restarts); 0 if none
   double estimator_restarts = 0;
-  std::string line;             // the raw JSON line
+  std::string line;  // the raw JSON line
 };
 
 /// A run whose mode accuracy, in-view fraction or estimator restarts stands out of the runs of its
@@ -93,7 +96,7 @@ int DropErrorRecords(const std::string& jsonl);
 
 /// One input file of a sweep as it was when the sweep ran.
 struct InputFile {
-  std::string role;  // "sweep" or "base"
+  std::string role;  // "sweep", "base", "reference.file", "params", "scene", "profile NAME"
   std::string path;
   std::string text;
 };

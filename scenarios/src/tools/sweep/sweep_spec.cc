@@ -8,9 +8,14 @@
 #include <random>
 #include <sstream>
 
+#include "hpa/controller/reference.h"
+#include "hpa/models/data_dir.h"
+#include "hpa/models/file_io.h"
 #include "hpa/models/input_error.h"
+#include "hpa/models/params.h"
 #include "hpa/models/seed_streams.h"
 #include "hpa/models/yaml_reader.h"
+#include "hpa/scenarios/world_profile_yaml.h"
 #include "scenarios/src/tools/cli_parse.h"
 #include "scenarios/src/tools/sweep/sweep_internal.h"
 
@@ -31,11 +36,19 @@ std::string FormatNumber(double v) {
   return out.str();
 }
 
+std::string HashText(const std::string& text) {
+  uint64_t h = 1469598103934665603ULL;  // FNV-1a
+  for (unsigned char c : text) h = (h ^ c) * 1099511628211ULL;
+  std::ostringstream out;
+  out << std::hex << std::setw(16) << std::setfill('0') << h;
+  return out.str();
+}
+
 Scenario BuildScenario(const SweepSpec& spec, const SweepRun& run) {
   // the base as it was when the sweep was loaded: an edit during the sweep changes no run
-  Scenario s = spec.base_text.empty()
-                   ? LoadScenario(spec.base_path, run.values, spec.file)
-                   : LoadScenarioText(spec.base_text, spec.base_path, run.values, spec.file);
+  Scenario s = spec.base_text.empty() ? LoadScenario(spec.base_path, run.values, spec.file)
+                                      : LoadScenarioText(spec.base_text, spec.base_path, run.values,
+                                                         spec.file, spec.reference_csv_text);
   s.seed = run.seed;
   return s;
 }
@@ -46,19 +59,6 @@ namespace {
 
 using sweep::BuildScenario;
 using sweep::FormatNumber;
-
-std::string Hex(uint64_t v) {
-  std::ostringstream out;
-  out << std::hex << std::setw(16) << std::setfill('0') << v;
-  return out.str();
-}
-
-// FNV-1a of a text: identifies a sweep (its file and its base scenario's text).
-uint64_t Fnv1a(const std::string& text) {
-  uint64_t h = 1469598103934665603ULL;
-  for (unsigned char c : text) h = (h ^ c) * 1099511628211ULL;
-  return h;
-}
 
 std::string Dirname(const std::string& path) {
   const size_t slash = path.rfind('/');
@@ -136,6 +136,24 @@ void ValidateRuns(const SweepSpec& s, const std::string& path) {
 
 }  // namespace
 
+// The base's reference CSV, read once when the sweep is loaded: every run flies this text, so
+// an edit during the sweep or before a resume changes no run (a resume with an edited CSV is
+// refused by the sweep_id). A sweep that varies reference.file reads each run's own file.
+void SnapshotReferencedFiles(SweepSpec* s) {
+  for (const VarySpec& v : s->vary) {
+    if (v.path.rfind("reference", 0) == 0) return;
+  }
+  // only the reference block is read here: the runs are validated, with their values, later
+  const YAML::Node reference = LoadYamlText(s->base_text, s->base_path)["reference"];
+  if (!reference.IsMap() || !reference["type"] || !reference["file"]) return;
+  if (!reference["type"].IsScalar() || reference["type"].Scalar() != "csv") return;
+  if (!reference["file"].IsScalar()) return;
+  std::string file = reference["file"].Scalar();
+  if (file.empty() || file[0] != '/') file = Dirname(s->base_path) + "/" + file;
+  s->reference_csv_path = file;
+  s->reference_csv_text = ReadInputFile(file, "a reference CSV", kMaxReferenceCsvBytes);
+}
+
 SweepSpec LoadSweep(const std::string& path) {
   SweepSpec s;
   s.file = path;
@@ -165,9 +183,26 @@ SweepSpec LoadSweep(const std::string& path) {
                      "runs times the grid's cells is over " + std::to_string(kMaxSweepRuns) +
                          " runs: split the sweep");
   }
+  SnapshotReferencedFiles(&s);
   ValidateRuns(s, path);
-  s.sweep_id = Hex(Fnv1a(s.sweep_text + "\n--base--\n" + s.base_text));
+  // the id hashes every input: the sweep and base files, the reference CSV and the data files
+  // every run reads (params, the MJCF scene, the world profiles)
+  std::string inputs = s.sweep_text + "\n--base--\n" + s.base_text;
+  if (s.reference_csv_text) inputs += "\n--reference.file--\n" + *s.reference_csv_text;
+  for (const auto& [role, file] : DataInputFiles()) {
+    inputs += "\n--" + role + "--\n" + ReadInputFile(file, "a data file of hpa");
+  }
+  s.sweep_id = sweep::HashText(inputs);
   return s;
+}
+
+std::vector<std::pair<std::string, std::string>> DataInputFiles() {
+  std::vector<std::pair<std::string, std::string>> files = {
+      {"params", DefaultParamsPath()}, {"scene", DataPath("models/scene.xml")}};
+  for (const std::string& name : WorldProfileNames()) {
+    files.emplace_back("profile " + name, DataPath("models/profiles/" + name + ".yaml"));
+  }
+  return files;
 }
 
 long SweepRunCount(const SweepSpec& spec) {
