@@ -8,6 +8,11 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 
+#include "hpa/models/params.h"
+#include "hpa/scenarios/metrics.h"
+#include "hpa/scenarios/runner.h"
+#include "hpa/scenarios/scenario.h"
+
 namespace hpa {
 namespace {
 
@@ -84,6 +89,24 @@ TEST(GoldenTest, EveryShippedScenarioIsInTheCommittedGoldenFile) {
     EXPECT_TRUE(golden["scenarios"].contains(name)) << name << ": run hpa golden --update";
   }
   EXPECT_EQ(golden["scenarios"].size(), names.size());
+}
+
+// The committed default tolerance is tight enough to see a small real change: the hover
+// scenario flown in air 1e-4 denser moves its metrics by about 2e-8 relative, and golden must
+// call that a change (a tolerance of 1e-3 passed it). The same run unchanged passes.
+TEST(GoldenTest, TheCommittedToleranceSeesAHoverInAir1e4Denser) {
+  std::ifstream in(std::string(HPA_SOURCE_DIR) + "/scenarios/ci/golden.json");
+  const nlohmann::json golden = nlohmann::json::parse(in);
+  const std::string tolerances = golden["tolerances"].dump();
+  const std::string recorded = golden["scenarios"]["hover"].dump();
+  const Params params = LoadParams(DefaultParamsPath());
+  const std::string file = std::string(HPA_SOURCE_DIR) + "/scenarios/hover.yaml";
+  const RunResult same = RunScenario(LoadScenario(file), params, RunOptions{});
+  EXPECT_TRUE(CompareWithGolden(MetricsToJson(same.metrics), recorded, tolerances).changes.empty());
+  const RunResult denser = RunScenario(
+      LoadScenario(file, {{"world.aero.air_density_kgpm3", "1.2251225"}}), params, RunOptions{});
+  EXPECT_FALSE(
+      CompareWithGolden(MetricsToJson(denser.metrics), recorded, tolerances).changes.empty());
 }
 
 }  // namespace

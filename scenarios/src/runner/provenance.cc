@@ -6,15 +6,17 @@ namespace hpa {
 
 namespace {
 
-// The compiler's own name and version macros.
+// The compiler's own name and version macros (clang's ends in a space: trimmed).
 std::string CompilerName() {
 #if defined(__clang__)
-  return std::string("clang ") + __clang_version__;
+  std::string name = std::string("clang ") + __clang_version__;
 #elif defined(__GNUC__)
-  return std::string("gcc ") + __VERSION__;
+  std::string name = std::string("gcc ") + __VERSION__;
 #else
-  return "unknown compiler";
+  std::string name = "unknown compiler";
 #endif
+  while (!name.empty() && name.back() == ' ') name.pop_back();
+  return name;
 }
 
 }  // namespace

@@ -1,8 +1,8 @@
 #include "hpa/scenarios/golden.h"
 
 #include <algorithm>
-#include <cstring>
 #include <cmath>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
@@ -14,6 +14,7 @@
 #include "hpa/models/input_error.h"
 #include "hpa/models/params.h"
 #include "hpa/scenarios/metrics.h"
+#include "hpa/scenarios/provenance.h"
 #include "hpa/scenarios/runner.h"
 #include "hpa/scenarios/scenario.h"
 #include "scenarios/src/tools/cli_parse.h"
@@ -149,8 +150,8 @@ Json CurrentMetrics(const std::string& name, const GoldenOptions& options, const
     const std::string path = options.from_dir + "/" + flat + "/metrics.json";
     Json metrics = ParseJson(ReadText(path, "the metrics of " + name), path);
     if (!metrics.is_object()) {
-      throw InputError(path, "", "expected a metrics.json object, got " +
-                                     std::string(metrics.type_name()));
+      throw InputError(path, "",
+                       "expected a metrics.json object, got " + std::string(metrics.type_name()));
     }
     return metrics;
   }
@@ -178,8 +179,8 @@ std::vector<std::string> GoldenScenarioNames() {
 GoldenDiff CompareWithGolden(const std::string& metrics_json, const std::string& golden_json,
                              const std::string& tolerances_json) {
   GoldenDiff diff;
-  Compare(StripMachineFields(Json::parse(metrics_json)), StripMachineFields(Json::parse(golden_json)), "",
-          Json::parse(tolerances_json), &diff);
+  Compare(StripMachineFields(Json::parse(metrics_json)),
+          StripMachineFields(Json::parse(golden_json)), "", Json::parse(tolerances_json), &diff);
   return diff;
 }
 
@@ -202,6 +203,18 @@ Json LoadGoldenFile(const std::string& path, bool update) {
     }
     for (const auto& [key, entry] : keys.items()) {
       CheckTolerance(entry, path, "tolerances.keys." + key);
+    }
+  }
+  if (golden["tolerances"].contains("build_sensitive")) {
+    const Json& sensitive = golden["tolerances"]["build_sensitive"];
+    if (!sensitive.is_object()) {
+      throw InputError(path, "tolerances.build_sensitive",
+                       "expected a map from scenario name to the reason it differs between builds");
+    }
+    for (const auto& [name, reason] : sensitive.items()) {
+      if (!reason.is_string()) {
+        throw InputError(path, "tolerances.build_sensitive." + name, "expected the reason (text)");
+      }
     }
   }
   if (!golden.contains("scenarios")) {
@@ -285,6 +298,9 @@ void WriteGolden(const std::string& path, Json golden, const Json& updated,
                  const GoldenOptions& options, size_t scenario_count) {
   golden["scenarios"] = updated;
   golden["reason"] = options.reason;
+  // the compiler that recorded it: build-sensitive scenarios are compared only by that compiler
+  golden["recorded_with"] = {{"compiler", ThisBuild().compiler},
+                             {"build_type", ThisBuild().build_type}};
   // atomically: a full disk or a kill leaves the previous golden file whole
   WriteFileAtomic(path, golden.dump(1) + "\n");
   std::cout << "golden: wrote " << scenario_count << " scenarios to " << path
@@ -305,15 +321,37 @@ int RunGolden(const GoldenOptions& options) {
   const Params params = LoadParams(DefaultParamsPath());
   const std::vector<std::string> names = GoldenScenarioNames();
 
-  int changed = 0;
+  int changed = 0, not_compared = 0;
   Json updated = Json::object();
+  const std::string recorded_compiler =
+      golden.contains("recorded_with") && golden["recorded_with"].is_object()
+          ? golden["recorded_with"].value("compiler", "")
+          : "";
+  const Json sensitive = golden["tolerances"].value("build_sensitive", Json::object());
   for (const std::string& name : names) {
     if (!options.quiet) std::cerr << "golden: " << name << " ..." << std::flush;
-    const Json now = StripMachineFields(CurrentMetrics(name, options, params));
+    const Json full = CurrentMetrics(name, options, params);
+    const Json now = StripMachineFields(full);
+    // a build-sensitive scenario (its result differs between compilers, measured) is compared
+    // only when the compiler that flew it is the one that recorded it
+    const std::string compiler = full.contains("build") && full["build"].is_object()
+                                     ? full["build"].value("compiler", "")
+                                     : ThisBuild().compiler;
+    if (!options.update && sensitive.contains(name) && !recorded_compiler.empty() &&
+        compiler != recorded_compiler) {
+      if (!options.quiet) {
+        std::cerr << " not compared: build-sensitive (" << sensitive[name].get<std::string>()
+                  << "); recorded with " << recorded_compiler << ", flown with " << compiler
+                  << "\n";
+      }
+      ++not_compared;
+      updated[name] = now;
+      continue;
+    }
     if (const int signal = StopRequested(); signal != 0) {
       // a run cut short by the signal is no measurement: nothing is compared or written
-      std::cout << "\ngolden: stopped by signal " << signal << " (" << strsignal(signal)
-                << ") at " << name << "; nothing compared or written\n";
+      std::cout << "\ngolden: stopped by signal " << signal << " (" << strsignal(signal) << ") at "
+                << name << "; nothing compared or written\n";
       return kExitStoppedBySignal + signal;
     }
     if (options.update) CheckRecordable(name, now);
@@ -334,7 +372,13 @@ int RunGolden(const GoldenOptions& options) {
                  "file\n";
     return 1;
   }
-  std::cout << "golden: all " << names.size() << " scenarios " << within << " of " << path << "\n";
+  std::cout << "golden: all " << names.size() - not_compared << " scenarios " << within << " of "
+            << path;
+  if (not_compared > 0) {
+    std::cout << " (" << not_compared << " build-sensitive scenarios not compared: flown with "
+              << "another compiler than the one that recorded them)";
+  }
+  std::cout << "\n";
   return 0;
 }
 
