@@ -19,6 +19,7 @@ packages=(
   libgtest-dev libgmock-dev  # unit and integration tests
   libbenchmark-dev         # mpc_bench and other benchmarks
   python3-numpy            # the Python flight-stack client and result loaders (python/hpa_sim)
+  python3-venv python3-pip # hpa_sim pip-installed offline into a venv (ctest python.package)
   parallel                 # shard sweeps across processes/machines (CI runs two shards)
   slurm-wlm munge          # a single-node Slurm cluster: the job-array sweep test
   clang-14 libclang-rt-14-dev  # ASan + UBSan build and libFuzzer (ci/sanitize.sh)

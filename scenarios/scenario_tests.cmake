@@ -136,3 +136,11 @@ set_tests_properties(cli.csv_reference_inputs PROPERTIES LABELS cli TIMEOUT 300)
 add_test(NAME cli.flight_boundary
          COMMAND bash ${SCEN}/tests/flight_boundary_test.sh ${HPA_BIN} ${CMAKE_SOURCE_DIR} ${HPA_PYTHON3})
 set_tests_properties(cli.flight_boundary PROPERTIES LABELS "cli;scenario" TIMEOUT 300)
+
+# The Python client as a package: pip-installed offline into a fresh venv (Debian's python3,
+# setuptools and wheel; numpy through --system-site-packages), the example stack flown from it
+# with PYTHONPATH unset, and a raising stack's run error naming its file:line
+add_test(NAME python.package
+         COMMAND bash ${SCEN}/tests/python_package_test.sh ${HPA_BIN} ${CMAKE_SOURCE_DIR}
+                 ${HPA_PYTHON3} ${PROJECT_VERSION})
+set_tests_properties(python.package PROPERTIES LABELS cli TIMEOUT 600)

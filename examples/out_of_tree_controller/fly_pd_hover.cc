@@ -1,63 +1,23 @@
-// A PD hover controller registered from outside hpa's tree and flown through hpa's runner: the
-// quadrotor held above the payload reference from the state the flight code sees (position and
-// velocity PD to a thrust vector, attitude error to body rates). Exits 0 when the run finishes
-// uncrashed with the quadrotor within its bound of the reference.
+// hpa as a library: pd_hover registered and flown on one scenario through RunScenario, the
+// metrics read back in C++ (my_hpa.cc gives the whole command line instead). Exits 0 when the run
+// finishes uncrashed with the quadrotor within its bound of the reference.
 #include <cstdio>
-#include <cstdlib>
 #include <string>
 
-#include "hpa/controller/controller_registry.h"
 #include "hpa/models/data_dir.h"
 #include "hpa/models/params.h"
+#include "hpa/scenarios/cli.h"
 #include "hpa/scenarios/runner.h"
 #include "hpa/scenarios/scenario.h"
-
-namespace {
-
-// Position PD (2 rad/s, damping 0.75) to a thrust vector for quadrotor + payload, its direction
-// tracked by a 6 1/s attitude loop; zero yaw.
-class PdHover : public hpa::Controller {
- public:
-  PdHover(const hpa::Params& params, std::shared_ptr<const hpa::Reference> reference)
-      : params_(params), reference_(std::move(reference)) {}
-
-  hpa::ControlOutput Update(const hpa::SystemState& s) override {
-    const hpa::ReferencePoint r = reference_->At(s.time_s);
-    const double mass_kg = params_.quad_mass_kg + params_.payload_mass_kg;
-    const Eigen::Vector3d force_W =
-        mass_kg * (Eigen::Vector3d(0, 0, params_.gravity_mps2) + 4.0 * (r.p_WQ_W - s.p_WQ_W) +
-                   3.0 * (r.v_WQ_W - s.v_WQ_W));
-    const Eigen::Matrix3d R = s.q_WB.toRotationMatrix();
-    const Eigen::Vector3d b3 = force_W.normalized();
-    const Eigen::Vector3d b2 = b3.cross(Eigen::Vector3d::UnitX()).normalized();
-    Eigen::Matrix3d Rd;
-    Rd << b2.cross(b3), b2, b3;
-    const Eigen::Matrix3d E = Rd.transpose() * R - R.transpose() * Rd;
-    hpa::ControlOutput out;
-    out.command.w_B_radps = -6.0 * 0.5 * Eigen::Vector3d(E(2, 1), E(0, 2), E(1, 0));
-    out.command.thrust_N = std::max(0.0, force_W.dot(R.col(2)));
-    return out;
-  }
-  double RateHz() const override { return 100.0; }
-
- private:
-  hpa::Params params_;
-  std::shared_ptr<const hpa::Reference> reference_;
-};
-
-}  // namespace
+#include "pd_hover.h"
 
 int main(int argc, char** argv) {
-  // the installed data, unless HPA_DATA_DIR says otherwise
-  setenv("HPA_DATA_DIR", HPA_INSTALLED_DATA_DIR, /*overwrite=*/0);
-  hpa::RegisterController({"pd_hover", "a PD hover controller built out of tree", "hybrid",
-                           [](const hpa::ControllerConfig&, const hpa::Params& params,
-                              std::shared_ptr<const hpa::Reference> reference) {
-                             return std::make_unique<PdHover>(params, std::move(reference));
-                           }});
-  const std::string path = argc > 1 ? argv[1] : hpa::DataPath("scenarios/hover.yaml");
+  hpa::UsePackageDataDir(HPA_PACKAGE_DATA_DIR);  // the installed data, when it has none of its own
+  hpa::RegisterController(PdHoverRegistration());
   hpa::RunResult result;
+  std::string path;
   try {
+    path = argc > 1 ? argv[1] : hpa::DataPath("scenarios/hover.yaml");
     hpa::Scenario scenario = hpa::LoadScenario(path);
     scenario.controller.type = "pd_hover";
     const hpa::Params params = hpa::LoadParams(hpa::DefaultParamsPath());

@@ -22,8 +22,14 @@ import sys
 
 import numpy as np
 
-sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "python"))
-from hpa_sim import Command, run  # noqa: E402
+try:
+    # the installed package (python3 -m pip install ./python, docs/extending.md)
+    from hpa_sim import Command, run
+except ImportError:
+    # else the client beside this example: hpa's source tree, or an installed share/hpa
+    sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..",
+                                    "python"))
+    from hpa_sim import Command, run
 
 # Gains: a 2 rad/s position loop with damping 0.75 (slow against the 30 Hz VIO and its
 # latency), a small integral for the payload's unmodelled pull, a 6 1/s attitude loop (the

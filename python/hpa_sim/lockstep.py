@@ -21,6 +21,7 @@ import os
 import socket
 import struct
 import sys
+import traceback
 
 import numpy as np
 
@@ -32,6 +33,10 @@ HELLO, HELLO_ACK, TICK, TICK_REPLY, FINISH, FINISH_REPLY, ERROR = range(1, 8)
 MESSAGE_TYPES = {HELLO: "hello", HELLO_ACK: "hello_ack", TICK: "tick", TICK_REPLY: "tick_reply",
                  FINISH: "finish", FINISH_REPLY: "finish_reply", ERROR: "error"}
 MAX_MESSAGE_BYTES = 64 << 20  # the simulator's own limit on a message body
+ERROR_FRAMES = 3  # the innermost stack frames an error message names
+# An error message's length: a run error is read by a person in metrics.json and on stderr, so a
+# page of text, far inside MAX_MESSAGE_BYTES (the whole traceback goes to the stack's stderr)
+ERROR_MAX_BYTES = 4096
 
 _HAS_ALLOCATION, _SATURATED, _HAS_TRUTH, _NEED_ESTIMATE, _GRIPPER = 1, 2, 4, 8, 16
 _TICK_FLAGS = "1 allocation, 2 mixer saturated, 4 truth, 8 estimate needed, 16 gripper"
@@ -245,6 +250,33 @@ def encode_reply(command, estimate, rejected=0, resets=0, frames_detected=0, cam
     return out + struct.pack("<III4i", rejected, resets, frames_detected, *camera_roi)
 
 
+def describe_exception(exc, frames=ERROR_FRAMES, max_bytes=ERROR_MAX_BYTES):
+    """The text an error message carries for an exception: its innermost `frames` stack frames
+    as FILE:LINE in FUNCTION, then TYPE: MESSAGE, in at most max_bytes of UTF-8 (cut at the
+    end, so a long exception text goes first), e.g. "Traceback (last 3 frames): a.py:10 in run;
+    b.py:20 in step; b.py:7 in gains; ValueError: boom"."""
+    stack = traceback.extract_tb(exc.__traceback__)
+    shown = list(stack)[-frames:] if frames > 0 else []
+    head = ""
+    if shown:
+        left_out = len(stack) - len(shown)
+        head = "Traceback (last %d frame%s%s): %s; " % (
+            len(shown), "" if len(shown) == 1 else "s",
+            ", %d before them left out" % left_out if left_out else "",
+            "; ".join("%s:%s in %s" % (f.filename, f.lineno, f.name) for f in shown))
+    try:
+        text = str(exc)
+    except Exception:  # an exception whose __str__ fails still has a type
+        text = "(its text could not be formatted)"
+    data = (head + type(exc).__name__ + (": " + text if text else "")).encode("utf-8", "replace")
+    if len(data) <= max_bytes:
+        return data.decode("utf-8")
+    # cut at a character boundary; the note's count has no more digits than len(data)
+    note = " ... (%d bytes cut)" % len(data)
+    kept = data[:max(0, max_bytes - len(note))].decode("utf-8", "ignore")
+    return kept + " ... (%d bytes cut)" % (len(data) - len(kept.encode("utf-8")))
+
+
 class FlightStackClient:
     """One connection to the simulator: messages in and out, and the frame ring."""
 
@@ -359,10 +391,11 @@ def run(controller_class, name=None, control_rate_hz=0.0):
             client.send(TICK_REPLY, encode_reply(command, estimate))
     except EOFError:
         return 0
-    except Exception as e:  # tell the simulator why, then fail
+    except Exception as e:  # tell the simulator why and where (its run error), then fail
         try:
-            client.send(ERROR, ("%s: %s" % (type(e).__name__, e)).encode())
+            client.send(ERROR, describe_exception(e).encode("utf-8", "replace"))
         except OSError:
             pass
         print("flight stack: %s: %s" % (type(e).__name__, e), file=sys.stderr)
+        traceback.print_exc(file=sys.stderr)
         return 1

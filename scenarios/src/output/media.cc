@@ -2,32 +2,85 @@
 
 #include <dlfcn.h>
 #include <limits.h>
+#include <link.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <mutex>
 #include <string>
 #include <vector>
 
+#include "hpa/models/data_dir.h"
 #include "hpa/models/file_io.h"
 #include "hpa/models/input_error.h"
 
 namespace hpa {
 namespace {
 
-// Where the module may be: the lib folder beside the executable's bin folder (the build tree and
-// a relocated install), then the install prefix this build was configured for (a program linked
-// against the installed libraries).
-std::vector<std::string> ModuleCandidates() {
-  std::vector<std::string> paths;
+// The folder of a path ("" if it has none).
+std::string FolderOf(const std::string& path) {
+  const size_t slash = path.rfind('/');
+  return slash == std::string::npos ? std::string() : path.substr(0, slash);
+}
+
+// The shared library that holds this code, as the dynamic loader opened it, or "" when hpa_output
+// is linked into the executable (a static library: the main program's link map has no name).
+std::string SharedLibraryOfThisCode() {
+  Dl_info info{};
+  link_map* map = nullptr;
+  if (::dladdr1(reinterpret_cast<const void*>(&SharedLibraryOfThisCode), &info,
+                reinterpret_cast<void**>(&map), RTLD_DL_LINKMAP) == 0 ||
+      map == nullptr || map->l_name == nullptr || map->l_name[0] != '/') {
+    return "";
+  }
+  return map->l_name;
+}
+
+// The running executable's real path (a symlink to an installed program resolved to where the
+// program is), or "".
+std::string ExecutablePath() {
   char buf[PATH_MAX];
   const ssize_t n = ::readlink("/proc/self/exe", buf, sizeof buf - 1);
-  if (n > 0) {
-    std::string exe(buf, static_cast<size_t>(n));
-    const std::string dir = exe.substr(0, exe.rfind('/'));
-    paths.push_back(dir + "/../" HPA_MEDIA_MODULE_LIBDIR "/hpa/libhpa_media.so");
+  return n > 0 ? std::string(buf, static_cast<size_t>(n)) : std::string();
+}
+
+// The install prefix whose share/hpa is the data folder (HPA_DATA_DIR, or beside the executable),
+// or "" when the data folder is not an installed share/hpa (a source tree) or there is none.
+std::string PrefixOfInstalledData() {
+  std::string data;
+  try {
+    data = DataDir();
+  } catch (const InputError&) {
+    return "";  // the run reports a missing data folder itself
   }
-  paths.push_back(HPA_MEDIA_MODULE_INSTALLED);
+  while (data.size() > 1 && data.back() == '/') data.pop_back();
+  const std::string installed = "/share/hpa";
+  if (data.size() <= installed.size() ||
+      data.compare(data.size() - installed.size(), installed.size(), installed) != 0) {
+    return "";
+  }
+  return data.substr(0, data.size() - installed.size());
+}
+
+// Where the module may be, in order: beside the object that loads it (a shared libhpa_output's
+// folder's hpa/; the executable's ../lib/hpa: the build tree, an install wherever it was moved,
+// a program installed into hpa's prefix); the prefix whose share/hpa is the data folder (a
+// program outside the prefix pointed at it by $HPA_DATA_DIR); the install prefix this build was
+// configured for.
+std::vector<std::string> ModuleCandidates() {
+  const std::string in_prefix = "/" HPA_MEDIA_MODULE_LIBDIR "/hpa/libhpa_media.so";
+  std::vector<std::string> paths;
+  const auto add = [&paths](const std::string& path) {
+    if (std::find(paths.begin(), paths.end(), path) == paths.end()) paths.push_back(path);
+  };
+  if (const std::string library = SharedLibraryOfThisCode(); !library.empty()) {
+    add(FolderOf(library) + "/hpa/libhpa_media.so");
+  }
+  if (const std::string exe = ExecutablePath(); !exe.empty())
+    add(FolderOf(exe) + "/.." + in_prefix);
+  if (const std::string prefix = PrefixOfInstalledData(); !prefix.empty()) add(prefix + in_prefix);
+  add(HPA_MEDIA_MODULE_INSTALLED);
   return paths;
 }
 
