@@ -284,5 +284,21 @@ sed -i '5s/.*/0.02,0.05,0.0,0.8/' "$out/csv_sweep/path.csv"
 expect_exit 2 "holds runs of a different sweep" sweep "$out/csv_sweep/sweep.yaml" \
   --out "$out/csv_sweep/out" --resume
 
+echo "== compare clears what an earlier comparison left before it runs (no old and new mixed)"
+mkdir -p "$out/cmp_stale/nonhybrid_mpc" "$out/cmp_stale/geometric"
+echo '{"stale": true}' > "$out/cmp_stale/nonhybrid_mpc/metrics.json"
+echo '{"stale": true}' > "$out/cmp_stale/geometric/metrics.json"
+echo "stale" > "$out/cmp_stale/comparison.md"
+"$hpa" compare "$base" --controllers geometric --out "$out/cmp_stale" --quiet \
+  > "$out/cmp_stale.log" 2>&1 || fail "compare failed: $(tail -2 "$out/cmp_stale.log")"
+[ -e "$out/cmp_stale/nonhybrid_mpc/metrics.json" ] && fail "a stale controller's metrics survived"
+grep -q stale "$out/cmp_stale/geometric/metrics.json" "$out/cmp_stale/comparison.md" \
+  && fail "stale comparison outputs survived"
+
+echo "== hpa schema params lists every parameter's range"
+"$hpa" schema params > "$out/schema_params.md" 2>&1
+grep -q '`params.cable.length_m` | m | 0.05 to 10 |' "$out/schema_params.md" \
+  || fail "schema params does not list the cable length's range: $(head -5 "$out/schema_params.md")"
+
 [ $failures -eq 0 ] && echo "hostile input: all checks passed"
 exit $((failures > 0))
