@@ -2,17 +2,14 @@
 the innermost stack frames as FILE:LINE in FUNCTION, then the exception, within
 lockstep.ERROR_MAX_BYTES. The simulator is played by a thread on a Unix socket."""
 
-import contextlib
-import io
 import json
 import os
-import socket
 import struct
-import tempfile
-import threading
 import unittest
 
 from hpa_sim import lockstep
+
+import fake_simulator
 
 THIS_FILE = os.path.abspath(__file__)
 
@@ -57,59 +54,13 @@ class RaisesLongText:
 
 
 def serve(controller_class):
-    """Runs run(controller_class) against a simulator thread that sends the hello, then ticks
-    until the stack answers with something other than a tick reply; returns run()'s exit code
-    and the error message's text (None if there was none)."""
-    folder = tempfile.TemporaryDirectory()
-    path = os.path.join(folder.name, "lockstep.sock")
-    server = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
-    server.bind(path)
-    server.listen(1)
-    error = []
-
-    def read(conn, n):
-        data = b""
-        while len(data) < n:
-            chunk = conn.recv(n - len(data))
-            if not chunk:
-                raise EOFError
-            data += chunk
-        return data
-
-    def simulator():
-        conn, _ = server.accept()
-        with conn:
-            try:
-                messages = [(lockstep.HELLO, _hello())] + [(lockstep.TICK, _tick())] * 3
-                for kind, body in messages:
-                    try:
-                        conn.sendall(struct.pack("<III", lockstep.MAGIC, kind, len(body)) + body)
-                    except OSError:  # the stack sent its error and closed: read the error
-                        pass
-                    _, reply_kind, length = struct.unpack("<III", read(conn, 12))
-                    reply = read(conn, length)
-                    if reply_kind == lockstep.ERROR:
-                        error.append(reply)
-                        return
-            except (EOFError, OSError):
-                pass
-
-    thread = threading.Thread(target=simulator)
-    thread.start()
-    old = os.environ.get("HPA_FLIGHT_SOCKET")
-    os.environ["HPA_FLIGHT_SOCKET"] = path
-    try:
-        with contextlib.redirect_stderr(io.StringIO()):
-            code = lockstep.run(controller_class, name="test")
-    finally:
-        if old is None:
-            del os.environ["HPA_FLIGHT_SOCKET"]
-        else:
-            os.environ["HPA_FLIGHT_SOCKET"] = old
-        thread.join(10)
-        server.close()
-        folder.cleanup()
-    return code, (error[0].decode("utf-8") if error else None)
+    """Runs run(controller_class) against a simulator that sends the hello, then ticks until
+    the stack answers with something other than a tick reply; returns run()'s exit code and the
+    error message's text (None if there was none)."""
+    code, replies = fake_simulator.serve(controller_class, _hello(),
+                                         [(lockstep.TICK, _tick())] * 3)
+    errors = [body for kind, body in replies if kind == lockstep.ERROR]
+    return code, (errors[0].decode("utf-8") if errors else None)
 
 
 class ErrorTracebackTest(unittest.TestCase):

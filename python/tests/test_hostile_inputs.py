@@ -3,21 +3,20 @@ line and (where it helps) the column; every message the lockstep client refuses 
 ProtocolError naming the message. Good inputs, written by hand in the formats docs/design.md
 section 8 and docs/protocol.md describe, still load."""
 
-import contextlib
-import io
 import json
 import os
 import re
 import socket
 import struct
 import tempfile
-import threading
 import unittest
 import warnings
 
 import numpy as np
 
 from hpa_sim import InputError, ProtocolError, load_log, load_metrics, load_runs, lockstep
+
+import fake_simulator
 
 # log.csv's header as the simulator writes it (scenarios/src/runner/metrics.cc, WriteLogCsv)
 _STATE = ["pL_x", "pL_y", "pL_z", "vL_x", "vL_y", "vL_z", "pQ_x", "pQ_y", "pQ_z", "vQ_x", "vQ_y",
@@ -502,48 +501,7 @@ class RunTest(unittest.TestCase):
     def serve(self, messages):
         """Serves the hello then `messages` (type, body), one per reply; returns the replies
         (type, body) and run()'s exit code."""
-        folder = tempfile.TemporaryDirectory()
-        self.addCleanup(folder.cleanup)
-        path = os.path.join(folder.name, "lockstep.sock")
-        server = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
-        self.addCleanup(server.close)
-        server.bind(path)
-        server.listen(1)
-        replies = []
-
-        def read(conn, n):
-            data = b""
-            while len(data) < n:
-                chunk = conn.recv(n - len(data))
-                if not chunk:
-                    raise EOFError
-                data += chunk
-            return data
-
-        def simulator():
-            conn, _ = server.accept()
-            with conn:
-                try:
-                    for kind, body in [(lockstep.HELLO, good_hello(camera=None))] + messages:
-                        conn.sendall(struct.pack("<III", lockstep.MAGIC, kind, len(body)) + body)
-                        _, reply_kind, length = struct.unpack("<III", read(conn, 12))
-                        replies.append((reply_kind, read(conn, length)))
-                except EOFError:
-                    pass
-
-        thread = threading.Thread(target=simulator)
-        thread.start()
-        old = os.environ.get("HPA_FLIGHT_SOCKET")
-        os.environ["HPA_FLIGHT_SOCKET"] = path
-        try:
-            with contextlib.redirect_stderr(io.StringIO()):
-                code = lockstep.run(Hover, name="test")
-        finally:
-            if old is None:
-                del os.environ["HPA_FLIGHT_SOCKET"]
-            else:
-                os.environ["HPA_FLIGHT_SOCKET"] = old
-            thread.join(10)
+        code, replies = fake_simulator.serve(Hover, good_hello(camera=None), messages)
         return replies, code
 
     def test_a_session_is_served(self):
