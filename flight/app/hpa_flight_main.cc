@@ -81,8 +81,10 @@ int Serve(Channel& channel, const std::string& controller, const std::string& es
   hpa::flight::FlightStack stack(config);
   FrameRing ring;
   ring.Map(hello.value("camera", nlohmann::json()));
+  // named after the controller it flies: metrics.json's controller equals the in-process run's
   channel.SendJson(MessageType::kHelloAck, {{"protocol_version", hpa::flight::kProtocolVersion},
                                             {"name", "hpa-flight (" + config.controller.type + ")"},
+                                            {"controller", config.controller.type},
                                             {"control_rate_hz", stack.control_rate_hz()}});
   std::vector<uint8_t> body;
   while (true) {

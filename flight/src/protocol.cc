@@ -446,6 +446,7 @@ HelloAck ParseHelloAck(const std::vector<uint8_t>& body) {
   }
   HelloAck ack;
   ack.name = NameField(j, what, "name", "external");
+  ack.controller = NameField(j, what, "controller", "");
   if (j.contains("control_rate_hz")) {
     const nlohmann::json& rate = j.at("control_rate_hz");
     if (!rate.is_number() || !std::isfinite(rate.get<double>()) || rate.get<double>() < 0.0) {

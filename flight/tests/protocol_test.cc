@@ -340,6 +340,11 @@ TEST(ProtocolTest, HelloAckIsRefusedNamingTheFieldAndValue) {
   EXPECT_EQ(good.name, "mine");
   EXPECT_EQ(good.control_rate_hz, 100.0);
   EXPECT_EQ(ack(R"({"protocol_version": 1})").name, "external");
+  // the controller it flies: optional (then its name labels the run), a string like the name
+  EXPECT_EQ(good.controller, "");
+  EXPECT_EQ(ack(R"({"protocol_version": 1, "name": "a", "controller": "pd"})").controller, "pd");
+  EXPECT_TRUE(Has(ErrorOf([&] { ack(R"({"protocol_version": 1, "controller": [1]})"); }),
+                  "controller is [1]"));
   EXPECT_TRUE(Has(ErrorOf([&] { ack(R"({"protocol_version": 1.9})"); }), "version 1.9,"));
   EXPECT_TRUE(
       Has(ErrorOf([&] { ack(R"({"protocol_version": 4294967297})"); }), "version 4294967297,"));

@@ -146,7 +146,8 @@ std::vector<std::string> WriteRunPlots(const RunResult& result, const Params& pa
 }
 
 std::string WriteComparisonPlot(const std::vector<RunResult>& results, const Params& params,
-                                const std::string& stem, PlotFormat format) {
+                                const std::string& stem, PlotFormat format,
+                                const std::vector<std::string>& labels) {
   Figure fig(1400, 1000);
   const std::string name = results.empty() ? "" : results.front().metrics.scenario;
   struct Panel {
@@ -189,7 +190,8 @@ std::string WriteComparisonPlot(const std::vector<RunResult>& results, const Par
       }
       p.Line(ts[i], ys[i], SeriesColour(static_cast<int>(i)), 2);
       const Metrics& m = results[i].metrics;
-      legend.emplace_back(m.controller + (m.crashed ? " (CRASHED)" : ""),
+      const std::string& label = i < labels.size() ? labels[i] : m.controller;
+      legend.emplace_back(label + (m.crashed ? " (CRASHED)" : ""),
                           SeriesColour(static_cast<int>(i)));
     }
     if (k == 0) legend.emplace_back("slack (shaded per run)", cv::Scalar(0, 200, 255));

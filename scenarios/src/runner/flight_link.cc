@@ -42,6 +42,7 @@ class InProcessFlight final : public FlightLink {
     return f;
   }
   std::string name() const override { return "in_process"; }
+  std::string controller() const override { return stack_.config().controller.type; }
   double control_rate_hz() const override { return stack_.control_rate_hz(); }
 
  private:
@@ -116,6 +117,10 @@ class ExternalFlight final : public FlightLink {
           const flight::HelloAck ack =
               flight::ParseHelloAck(channel_->Expect(MessageType::kHelloAck, Limit()));
           name_ = ack.name;
+          // a stack that names no controller flies its own: its name labels the run
+          controller_ = !ack.controller.empty() ? ack.controller
+                        : !ack.name.empty()     ? ack.name
+                                                : "external";
           control_rate_hz_ = ack.control_rate_hz;
         },
         "hello");
@@ -188,6 +193,7 @@ class ExternalFlight final : public FlightLink {
   }
   bool wants_reference() const override { return true; }
   std::string name() const override { return name_; }
+  std::string controller() const override { return controller_; }
   double control_rate_hz() const override { return control_rate_hz_; }
 
  private:
@@ -319,7 +325,7 @@ class ExternalFlight final : public FlightLink {
   }
 
   ExternalFlightOptions options_;
-  std::string dir_, socket_path_, name_ = "external", exit_note_;
+  std::string dir_, socket_path_, name_ = "external", controller_ = "external", exit_note_;
   double control_rate_hz_ = 0.0;  // from the hello_ack (0: not stated)
   int listen_fd_ = -1;
   pid_t pid_ = 0, pgid_ = 0;

@@ -48,6 +48,9 @@ class FlightLink {
   virtual bool wants_reference() const { return false; }
   /// What flies: "in_process" or the name the separate stack gave in its hello.
   virtual std::string name() const = 0;
+  /// The controller that flies, for metrics.json's controller: the scenario's in process; a
+  /// separate stack's hello_ack `controller`, else its name (it flies its own controller).
+  virtual std::string controller() const = 0;
   /// The stack's control rate (Hz) as it states it (a separate stack in its hello_ack; 0: not
   /// stated): information for sizing the log, the stack decides when it commands.
   virtual double control_rate_hz() const = 0;

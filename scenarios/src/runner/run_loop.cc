@@ -210,6 +210,7 @@ RunLoop::RunLoop(const Scenario& scenario, const Params& params, const RunOption
     flight_ = StartExternalFlight(flight_config, external);
   }
   metrics->flight_stack = flight_->name();
+  metrics->controller = flight_->controller();  // what flies: a separate stack names its own
   // one log row per control step: sized once (a stack that commands faster than it says only
   // makes the log grow)
   const double control_rate_hz = flight_->control_rate_hz();

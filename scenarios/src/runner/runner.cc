@@ -82,7 +82,11 @@ RunResult RunScenario(const Scenario& scenario, const Params& base_params,
   RunResult result;
   Metrics& metrics = result.metrics;
   metrics.scenario = scenario.name;
-  metrics.controller = scenario.controller.type;
+  // what flies: a separate stack names itself in its hello (RunLoop); one that never does is
+  // "external", never the scenario's controller it did not fly
+  const bool external = !options.flight_stack.empty();
+  metrics.controller = external ? "external" : scenario.controller.type;
+  if (external) metrics.flight_stack = "external";
   metrics.camera = scenario.estimation.ground_truth ? "ground_truth" : scenario.estimation.camera;
   metrics.seed = scenario.seed;
   metrics.world_profile = scenario.world.name;

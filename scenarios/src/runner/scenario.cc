@@ -19,22 +19,11 @@
 namespace hpa {
 namespace {
 
-constexpr double kBig = 1e3;
+constexpr double kBig = 1e3;  // generous bound on positions (m), forces (N), impulses (N s)
 
 // The run keeps its log in memory (one row per control step): an hour of flight, several
 // battery lifetimes, stays in the hundreds of megabytes.
 constexpr double kMaxScenarioDuration_s = 3600.0;
-
-// A scenario name becomes out/<name>: no separators, no leading dot, nothing a shell mangles.
-bool IsSafeName(const std::string& name) {
-  if (name.empty() || name.size() > 64 || name[0] == '.') return false;
-  for (char c : name) {
-    if (!std::isalnum(static_cast<unsigned char>(c)) && c != '_' && c != '-' && c != '.') {
-      return false;
-    }
-  }
-  return true;
-}  // generous bound on positions (m), forces (N), impulses (N s)
 
 Eigen::Vector3d Vec3(const YamlMap& map, const std::string& key, double min, double max) {
   return map.Vector(key, 3, min, max);
@@ -220,6 +209,17 @@ void SetDottedPath(YAML::Node root, const std::string& path, const std::string& 
 }
 
 }  // namespace
+
+// A scenario name becomes out/<name>: no separators, no leading dot, nothing a shell mangles.
+bool IsSafeName(const std::string& name) {
+  if (name.empty() || name.size() > 64 || name[0] == '.') return false;
+  for (char c : name) {
+    if (!std::isalnum(static_cast<unsigned char>(c)) && c != '_' && c != '-' && c != '.') {
+      return false;
+    }
+  }
+  return true;
+}
 
 const std::vector<std::string>& CameraNames() {
   static const std::vector<std::string> names = {"render", "analytic"};

@@ -2,6 +2,7 @@
 // One argument parser for every `hpa` command (CLI11): help and parse errors are handled alike.
 
 #include <CLI/CLI.hpp>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <optional>
@@ -35,6 +36,35 @@ inline std::optional<int> ParseCommandLine(CLI::App& app, int argc, char** argv)
     }
   }
   return std::nullopt;
+}
+
+/// The longest flight-stack command a sweep or compare accepts (bytes).
+constexpr size_t kMaxFlightStackBytes = 4096;
+
+/// Why `command` cannot start a flight stack, "" when it can: blank (a shell that exits at once
+/// is a mistake, not a stack), a NUL byte (it would cut the command short), or longer than
+/// kMaxFlightStackBytes.
+inline std::string FlightStackCommandError(const std::string& command) {
+  if (command.find_first_not_of(" \t\n") == std::string::npos) {
+    return "expected a shell command, got '" + command +
+           "' (leave it out to fly the flight code in process)";
+  }
+  if (command.find('\0') != std::string::npos) return "a NUL byte in the command";
+  if (command.size() > kMaxFlightStackBytes) {
+    return "a command of " + std::to_string(command.size()) + " bytes, more than " +
+           std::to_string(kMaxFlightStackBytes);
+  }
+  return "";
+}
+
+/// Why `text` is no --flight-timeout, "" when it is one: finite seconds in [0.001, 3600] (NaN
+/// passes a plain range check, every comparison with it being false).
+inline std::string FlightTimeoutError(const std::string& text) {
+  double s = 0.0;
+  if (!CLI::detail::lexical_cast(text, s) || !std::isfinite(s) || s < 0.001 || s > 3600.0) {
+    return "expected seconds in [0.001, 3600], got '" + text + "'";
+  }
+  return "";
 }
 
 /// Adds --gl osmesa|egl (the rendered cameras' GL context) to a command's parser.

@@ -48,23 +48,28 @@ usage:
       docs/protocol.md's protocol; --flight-timeout bounds its reply to one tick (default 10 s).
       In process, the controller's command is computed on a second core while the simulation
       steps on until it is due (the same run); --no-control-thread computes it in line.
-  hpa compare SCENARIO.yaml --out DIR [--controllers A,B] [--camera render|analytic]
+  hpa compare SCENARIO.yaml --out DIR [--controllers A,B] [--flight-stack NAME=CMD]...
+                        [--flight-timeout S] [--camera render|analytic]
                         [--seed N] [--video-slack-events] [--quiet] [--gl osmesa|egl]
                         [--params FILE] [--set PATH=VALUE]... [--no-control-thread]
-      Runs the scenario once per controller (default hpa_mpc,nonhybrid_mpc) into DIR/<type>/
-      and writes DIR/comparison.png and DIR/comparison.md (each controller's metrics and their
-      differences to the first); with --video-slack-events, a slack-event video per run.
+      Runs the scenario once per controller (default hpa_mpc,nonhybrid_mpc) into DIR/<type>/,
+      then once per --flight-stack NAME=CMD (a separate stack, as run --flight-stack) into
+      DIR/NAME/, and writes DIR/comparison.png and DIR/comparison.md (each one's metrics and
+      their differences to the first); with --video-slack-events, a slack-event video per run.
   hpa render-frame SCENARIO.yaml --at T --out FILE.png [--seed N] [--controller TYPE]
                         [--gl osmesa|egl] [--params FILE] [--set PATH=VALUE]...
       Runs the scenario to time T (s) and writes one 1280x720 onboard payload-camera frame.
       --gl egl renders through EGL (a GPU where there is one) instead of OSMesa.
   hpa sweep SWEEP.yaml --out DIR [--jobs N] [--shard K/N] [--keep-logs worst:N[:METRIC]]
                         [--resume [--retry-errors] [--allow-changed-inputs]] [--gl osmesa|egl]
+                        [--flight-stack "CMD"] [--flight-timeout S]
       Monte Carlo sweep: one JSON line per run in DIR/runs.jsonl, then a summary. --jobs
       defaults to the number of cores; --shard K/N (K = 1..N) runs every N-th run; --resume
       skips recorded runs, --retry-errors runs the recorded errors (killed, timed out) again;
       a resume refuses a sweep or base file changed since, unless --allow-changed-inputs;
       --keep-logs replays the N worst runs and keeps their log.csv in DIR/logs/.
+      --flight-stack (or the sweep file's flight_stack:) flies every run with its own process
+      of a separate flight stack; a resume or merge refuses another stack.
   hpa merge DIR... --out DIR
       Joins sweep shards and writes DIR/summary.json, DIR/summary.md and plots.
   hpa sweep-diff A B --out DIR [--a-where KEY=VALUE] [--b-where KEY=VALUE] [--verdict-timing]

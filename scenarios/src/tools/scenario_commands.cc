@@ -4,6 +4,7 @@
 
 #include <sys/stat.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cmath>
 #include <cstdio>
@@ -23,6 +24,7 @@
 #include "hpa/scenarios/plots.h"
 #include "hpa/scenarios/run_record.h"
 #include "hpa/scenarios/runner.h"
+#include "hpa/scenarios/scenario.h"
 #include "hpa/scenarios/video_recorder.h"
 #include "hpa/sim/world.h"
 #include "scenarios/src/output/media.h"
@@ -101,17 +103,64 @@ void RemoveStaleOutputs(const std::string& dir) {
   }
 }
 
-// Removes what a previous comparison left in `dir` (the table, the plot, and each registered
-// controller's run outputs), so a killed comparison never mixes old and new results.
-void RemoveStaleComparison(const std::string& dir) {
-  for (const char* name : {"comparison.md", "comparison.png", "comparison.svg", "comparison.pdf",
-                           "comparison.csv"}) {
+// Removes what a previous comparison left in `dir` (the table, the plot, and the run outputs of
+// each registered controller and of each of this comparison's names), so a killed comparison
+// never mixes old and new results.
+void RemoveStaleComparison(const std::string& dir, const std::vector<std::string>& names) {
+  for (const char* name :
+       {"comparison.md", "comparison.png", "comparison.svg", "comparison.pdf", "comparison.csv"}) {
     std::remove((dir + "/" + name).c_str());
   }
-  for (const std::string& type : ControllerNames()) {
-    RemoveStaleOutputs(dir + "/" + type);
-    std::remove((dir + "/" + type + "/slack_events.mp4").c_str());
+  std::vector<std::string> folders = ControllerNames();
+  folders.insert(folders.end(), names.begin(), names.end());
+  for (const std::string& folder : folders) {
+    RemoveStaleOutputs(dir + "/" + folder);
+    std::remove((dir + "/" + folder + "/slack_events.mp4").c_str());
   }
+}
+
+// One entry of `hpa compare`: a registered controller flown in process, or a separate flight
+// stack given as --flight-stack NAME=CMD.
+struct CompareEntry {
+  std::string name;          // its folder DIR/<name>/, its column and its legend label
+  std::string flight_stack;  // the shell command of a separate stack ("": a controller type)
+};
+
+// The entries of `hpa compare`: the --controllers types, then each --flight-stack NAME=CMD, every
+// one checked before the first run (a NAME is a safe folder name, no registered controller's
+// and no other entry's; a CMD is a command FlightStackCommandError accepts).
+std::vector<CompareEntry> CompareEntries(std::string list, const std::vector<std::string>& stacks) {
+  std::vector<CompareEntry> entries;
+  list += ",";
+  for (size_t p = 0; (p = list.find(',')) != std::string::npos; list.erase(0, p + 1)) {
+    if (p > 0) entries.push_back({list.substr(0, p), ""});
+  }
+  if (entries.empty()) throw InputError("", "--controllers", "expected a list such as A,B");
+  for (const CompareEntry& e : entries) CheckControllerType(e.name, "", "--controllers");
+  const std::vector<std::string> registered = ControllerNames();
+  for (const std::string& text : stacks) {
+    const size_t eq = text.find('=');
+    const std::string name = text.substr(0, eq);
+    const auto fail = [&](const std::string& why) {
+      throw InputError("", "--flight-stack", "'" + text + "': " + why);
+    };
+    if (eq == std::string::npos || eq == 0) fail("expected NAME=CMD, e.g. pd=\"python3 pd.py\"");
+    if (!IsSafeName(name)) {
+      fail("NAME '" + name +
+           "' is not a safe folder name: 1 to 64 of A-Z a-z 0-9 _ - ., not "
+           "starting with '.' (it names the folder DIR/NAME/)");
+    }
+    if (std::find(registered.begin(), registered.end(), name) != registered.end()) {
+      fail("NAME '" + name + "' is a registered controller's: name the stack otherwise");
+    }
+    for (const CompareEntry& e : entries) {
+      if (e.name == name) fail("NAME '" + name + "' is given twice");
+    }
+    const std::string why = FlightStackCommandError(text.substr(eq + 1));
+    if (!why.empty()) fail(why);
+    entries.push_back({name, text.substr(eq + 1)});
+  }
+  return entries;
 }
 
 // Says where the video went; a slack-events video of a run without slack is not written, and
@@ -164,8 +213,8 @@ void WriteRunOutputs(const RunResult& result, const Scenario& scenario, const Pa
 // scenario does not expect (no expect block says a crash is fine) or a failed expect bound.
 int RunExitCode(const RunResult& result, const Scenario& scenario) {
   if (const int signal = StopRequested(); signal != 0) {
-    std::fprintf(stderr, "hpa: stopped by signal %d (%s); the results so far are written\n",
-                 signal, strsignal(signal));
+    std::fprintf(stderr, "hpa: stopped by signal %d (%s); the results so far are written\n", signal,
+                 strsignal(signal));
     return kExitStoppedBySignal + signal;
   }
   if (result.metrics.run_error) {
@@ -184,10 +233,19 @@ int RunExitCode(const RunResult& result, const Scenario& scenario) {
   return result.metrics.expect_passed ? kExitOk : kExitExpectFailed;
 }
 
-// The paired comparison of one scenario's runs (same seed): each controller's metrics and,
-// for every controller after the first, its difference to the first.
+// The paired comparison of one scenario's runs (same seed): what flew each column, then each
+// one's metrics and, for every column after the first, its difference to the first.
 std::string ComparisonTable(const std::vector<RunResult>& results,
-                            const std::vector<std::string>& types) {
+                            const std::vector<CompareEntry>& entries) {
+  std::vector<std::string> types;
+  std::string flown;
+  for (size_t i = 0; i < results.size(); ++i) {
+    types.push_back(entries[i].name);
+    if (entries[i].flight_stack.empty()) continue;
+    flown += "- " + entries[i].name + ": the flight stack `" + entries[i].flight_stack +
+             "`, which flew as " + results[i].metrics.controller + " (flight_stack " +
+             results[i].metrics.flight_stack + ")\n";
+  }
   // the rows: every metric of the metric table with a label, read from each run's metrics.json
   std::vector<const MetricDef*> rows;
   for (const MetricDef& def : MetricDefs()) {
@@ -202,7 +260,8 @@ std::string ComparisonTable(const std::vector<RunResult>& results,
     std::snprintf(text, sizeof(text), "%.4g", *v);
     return std::string(text);
   };
-  std::string md = "| metric (seed " + std::to_string(results.front().metrics.seed) + ") |";
+  std::string md = flown.empty() ? "" : flown + "\n";
+  md += "| metric (seed " + std::to_string(results.front().metrics.seed) + ") |";
   for (const std::string& t : types) md += " " + t + " |";
   for (size_t i = 1; i < types.size(); ++i) md += " " + types[i] + " - " + types[0] + " |";
   md += "\n|---|";
@@ -305,15 +364,27 @@ int RunMain(int argc, char** argv) {
 int CompareMain(int argc, char** argv) {
   ScenarioOptions o;
   std::string out_dir, list = "hpa_mpc,nonhybrid_mpc", plot_format = "png";
+  std::vector<std::string> stacks;  // --flight-stack NAME=CMD, in order
+  double flight_timeout_s = 10.0;
   bool slack_events = false;
   CLI::App app{
-      "Runs the scenario once per controller into DIR/<type>/ and writes "
-      "DIR/comparison.png (or .svg, .pdf) with DIR/comparison.csv, its numbers.",
+      "Runs the scenario once per controller into DIR/<type>/, and once per --flight-stack "
+      "NAME=CMD into DIR/NAME/, and writes DIR/comparison.md and DIR/comparison.png (or .svg, "
+      ".pdf) with DIR/comparison.csv, its numbers.",
       "hpa compare"};
   AddScenarioOptions(app, &o, true, true);
   app.add_option("--out", out_dir, "output folder")->required();
-  app.add_option("--controllers", list, "comma-separated controller types")
+  app.add_option("--controllers", list, "comma-separated controller types, flown first")
       ->default_str("hpa_mpc,nonhybrid_mpc");
+  app.add_option("--flight-stack", stacks,
+                 "NAME=CMD (repeatable): also fly the separate flight stack CMD (a shell command, "
+                 "as hpa run --flight-stack) into DIR/NAME/, labelled NAME in the table and the "
+                 "plot")
+      ->allow_extra_args(false);  // one NAME=CMD per --flight-stack
+  app.add_option("--flight-timeout", flight_timeout_s,
+                 "with --flight-stack: seconds to wait for a stack's whole reply to one tick "
+                 "before its run stops with a run error, in [0.001, 3600]")
+      ->check(FlightTimeoutError);
   app.add_flag("--video-slack-events", slack_events, "a slack-event video per run");
   app.add_option("--plot-format", plot_format, "png | svg | pdf: the comparison plot's format")
       ->default_str("png");
@@ -324,27 +395,25 @@ int CompareMain(int argc, char** argv) {
   const PlotFormat format = ParsePlotFormat(plot_format);
   const Params params = LoadParamsOf(o);
   const Scenario base = LoadScenarioOf(o);
-  std::vector<std::string> types;
-  list += ",";
-  for (size_t p = 0; (p = list.find(',')) != std::string::npos; list.erase(0, p + 1)) {
-    if (p > 0) types.push_back(list.substr(0, p));
-  }
-  // every name checked before the first run
-  if (types.empty()) throw InputError("", "--controllers", "expected a list such as A,B");
-  for (const std::string& type : types) CheckControllerType(type, "", "--controllers");
-  RemoveStaleComparison(out_dir);
+  // every name and command checked before the first run
+  std::vector<CompareEntry> entries = CompareEntries(list, stacks);
+  std::vector<std::string> names;
+  for (const CompareEntry& e : entries) names.push_back(e.name);
+  RemoveStaleComparison(out_dir, names);
   std::vector<RunResult> results;
   bool all_passed = true;
   bool run_error = false;
-  for (const std::string& type : types) {
+  for (const CompareEntry& entry : entries) {
     Scenario s = base;
-    s.controller.type = type;
-    const std::string dir = out_dir + "/" + type;
+    if (entry.flight_stack.empty()) s.controller.type = entry.name;
+    const std::string dir = out_dir + "/" + entry.name;
     MakeOutputDir(dir);
     RunOptions options;
     options.progress = !o.quiet;
     options.gl_backend = ParseGlOption(o.gl);
     options.control_thread = !no_control_thread && ControlThreadPays();
+    options.flight_stack = entry.flight_stack;
+    options.flight_step_timeout_s = flight_timeout_s;
     const std::string video = slack_events ? dir + "/slack_events.mp4" : "";
     std::unique_ptr<VideoTickRecorder> recorder;
     if (slack_events) {
@@ -358,23 +427,24 @@ int CompareMain(int argc, char** argv) {
     all_passed = all_passed && results.back().metrics.expect_passed;
     if (results.back().metrics.run_error) {
       std::fprintf(stderr, "hpa: internal error during the %s run (its results are written): %s\n",
-                   type.c_str(), results.back().metrics.run_error->c_str());
+                   entry.name.c_str(), results.back().metrics.run_error->c_str());
       run_error = true;
     }
     if (!o.quiet) PrintSummary(results.back().metrics, dir);
     ReportVideo(video, o.quiet);
-    if (StopRequested() != 0) break;  // the controllers not yet flown are left out
+    if (StopRequested() != 0) break;  // the entries not yet flown are left out
   }
-  types.resize(results.size());
-  const std::string png =
-      WriteComparisonPlot(results, ScenarioParams(base, params), out_dir + "/comparison", format);
-  const std::string table = ComparisonTable(results, types);
+  entries.resize(results.size());
+  names.resize(results.size());
+  const std::string png = WriteComparisonPlot(results, ScenarioParams(base, params),
+                                              out_dir + "/comparison", format, names);
+  const std::string table = ComparisonTable(results, entries);
   WriteText(out_dir + "/comparison.md", table);
   if (!o.quiet) std::printf("\n%s", table.c_str());
   if (!o.quiet) std::printf("comparison plot %s\n", png.c_str());
   if (const int signal = StopRequested(); signal != 0) {
-    std::fprintf(stderr, "hpa: stopped by signal %d (%s); the results so far are written\n",
-                 signal, strsignal(signal));
+    std::fprintf(stderr, "hpa: stopped by signal %d (%s); the results so far are written\n", signal,
+                 strsignal(signal));
     return kExitStoppedBySignal + signal;
   }
   if (run_error) return kExitInternal;

@@ -31,8 +31,9 @@ struct Run {
   bool ok = false;                            // finished without a run error
   Json metrics;                               // null if none
   std::string sweep;
-  std::string inputs_id;  // hash of the sweep and base files the run was flown from
-  std::string build;      // the build that flew it (DescribeBuild), "not recorded" if unknown
+  std::string controller;  // what flew: a controller type or the name a flight stack gave
+  std::string inputs_id;   // hash of the sweep and base files the run was flown from
+  std::string build;       // the build that flew it (DescribeBuild), "not recorded" if unknown
 };
 
 // A metric read from one run; nullopt where the run does not define it.
@@ -156,6 +157,7 @@ std::vector<Run> ReadRuns(const std::string& dir, const std::string& where) {
       r.draw = j.value("draw", 0);
       r.seed = j.value("seed", 0ul);
       r.sweep = j.value("sweep", "");
+      r.controller = j.value("controller", "");
       r.inputs_id = j.contains("inputs_id") ? j.value("inputs_id", "") : j.value("sweep_id", "");
       r.build = j.contains("build") ? DescribeBuild(BuildFromJson(j["build"])) : "not recorded";
       for (const auto& [key, value] : j["values"].items()) {
@@ -283,6 +285,21 @@ std::vector<std::string> DescribeDifferences(const std::vector<RunPair>& pairs,
   }
   if (!a.empty() && !b.empty() && a.front().sweep != b.front().sweep) {
     differs.push_back("sweep file: " + a.front().sweep + " (A) vs " + b.front().sweep + " (B)");
+  }
+  // what flew, when no varied key says it (a flight stack names itself in its hello)
+  if (!differing.count("controller.type")) {
+    std::set<std::string> ca, cb;
+    for (const auto& [ra, rb] : pairs) {
+      ca.insert(ra->controller);
+      cb.insert(rb->controller);
+    }
+    if (ca != cb) {
+      std::string line = "controller (what flew): ";
+      for (const std::string& c : ca) line += c + " ";
+      line += "(A) vs ";
+      for (const std::string& c : cb) line += c + " ";
+      differs.push_back(line + "(B)");
+    }
   }
   return differs;
 }

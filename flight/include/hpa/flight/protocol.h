@@ -90,11 +90,12 @@ void CheckReply(const FlightOutputs& out, const ReplyBounds& bounds);
 /// The hello_ack's content.
 struct HelloAck {
   std::string name;              // the stack's name (metrics.json's flight_stack)
+  std::string controller;        // what flies, as metrics.json's controller ("": its name)
   double control_rate_hz = 0.0;  // as the stack states it (0: not stated)
 };
 
 /// Parses a hello_ack; throws ProtocolError naming the field and value for a protocol_version
-/// that is not the integer kProtocolVersion, a name that is not a string of at most
+/// that is not the integer kProtocolVersion, a name or controller that is not a string of at most
 /// kMaxNameBytes, or a control rate that is not a finite number >= 0.
 HelloAck ParseHelloAck(const std::vector<uint8_t>& body);
 

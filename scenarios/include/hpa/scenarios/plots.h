@@ -20,7 +20,9 @@ std::vector<std::string> WriteRunPlots(const RunResult& result, const Params& pa
 
 /// One figure comparing controllers on one scenario: payload z, quadrotor z and deviation,
 /// body-rate norm, slack shaded. Writes STEM.png|svg|pdf and STEM.csv; returns the plot's path.
+/// `labels` name the runs in the legend (default: each run's metrics' controller).
 std::string WriteComparisonPlot(const std::vector<RunResult>& results, const Params& params,
-                                const std::string& stem, PlotFormat format = PlotFormat::kPng);
+                                const std::string& stem, PlotFormat format = PlotFormat::kPng,
+                                const std::vector<std::string>& labels = {});
 
 }  // namespace hpa

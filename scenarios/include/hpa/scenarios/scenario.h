@@ -86,6 +86,10 @@ Scenario LoadScenarioText(const std::string& text, const std::string& path,
                           const std::string& origin = "--set",
                           const std::optional<std::string>& reference_csv_text = std::nullopt);
 
+/// Whether `name` can name an output folder: 1 to 64 of A-Z a-z 0-9 _ - ., not starting with
+/// '.' (no separators, nothing a shell mangles). A scenario's name and compare's stack names.
+bool IsSafeName(const std::string& name);
+
 /// Splits a `--set PATH=VALUE` argument; throws InputError if it has no PATH= part.
 ScenarioSet ParseSetArgument(const std::string& text);
 

@@ -32,8 +32,13 @@ struct SweepSpec {
   unsigned long seed = 1;
   double time_limit_s = 600.0;  // per run; a run past it is killed and recorded as an error
   std::vector<VarySpec> vary;
-  std::string sweep_id;   // hash of the sweep and base files: merge refuses mixes
-  std::string inputs_id;  // set when a resume continues with changed inputs: their hash
+  // the separate flight stack every run flies (`flight_stack:`, or `hpa sweep --flight-stack`,
+  // which replaces it): a shell command, started once per run; empty: the flight code in
+  // process. Part of the sweep_id: a resume or merge with another stack is refused
+  std::string flight_stack;
+  double flight_timeout_s = 10.0;  // longest wait for the stack's whole reply to one tick
+  std::string sweep_id;            // hash of the sweep and base files: merge refuses mixes
+  std::string inputs_id;           // set when a resume continues with changed inputs: their hash
 };
 
 /// One expanded run: which draw, which grid cell, its seed and its values.
@@ -45,8 +50,9 @@ struct SweepRun {
 };
 
 /// Loads and validates a sweep file: every expanded run must be a valid scenario (each drawn
-/// value within its key's range), else InputError naming the run and its values.
-SweepSpec LoadSweep(const std::string& path);
+/// value within its key's range), else InputError naming the run and its values. A non-empty
+/// `flight_stack` (hpa sweep --flight-stack) replaces the file's `flight_stack:`.
+SweepSpec LoadSweep(const std::string& path, const std::string& flight_stack = "");
 
 /// Expands the sweep into its runs (deterministic in the sweep seed).
 std::vector<SweepRun> ExpandSweep(const SweepSpec& spec);

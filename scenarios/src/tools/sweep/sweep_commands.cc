@@ -31,7 +31,8 @@ namespace {
 
 // What `hpa sweep` was asked for on its command line.
 struct SweepArgs {
-  std::string sweep_file, out_dir, shard = "1/1", gl = "osmesa", keep_logs;
+  std::string sweep_file, out_dir, shard = "1/1", gl = "osmesa", keep_logs, flight_stack;
+  double flight_timeout_s = 10.0;
   int jobs = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
   bool resume = false, retry_errors = false, allow_changed_inputs = false;
 };
@@ -54,6 +55,15 @@ void AddSweepOptions(CLI::App& app, SweepArgs* a) {
                  "worst:N[:METRIC]: after the sweep, replay the N worst runs (crashes first, then "
                  "by METRIC, default quad_position_deviation_max_m) and keep their log.csv in "
                  "DIR/logs/run_<index>/ (whole sweeps, not shards)");
+  app.add_option("--flight-stack", a->flight_stack,
+                 "every run flies this separate flight stack (a shell command started once per "
+                 "run, as hpa run --flight-stack; replaces the sweep file's flight_stack:); part "
+                 "of the sweep's identity, so --resume and merge refuse another stack")
+      ->check([](const std::string& text) { return FlightStackCommandError(text); });
+  app.add_option("--flight-timeout", a->flight_timeout_s,
+                 "with a flight stack: seconds to wait for its whole reply to one tick before "
+                 "that run ends with a run error, in [0.001, 3600]")
+      ->check(FlightTimeoutError);
   AddGlOption(app, &a->gl);
 }
 
@@ -110,7 +120,19 @@ void PrepareResultsFile(const std::string& jsonl, bool retry_errors) {
 std::set<int> RecordedRuns(const std::string& jsonl, const SweepArgs& a, SweepSpec* spec) {
   std::set<int> done;
   const std::string inputs_id = spec->sweep_id;
+  const auto shown = [](const std::string& command) {
+    return command.empty() ? std::string("in process") : "by the flight stack '" + command + "'";
+  };
   for (const Record& r : sweep::ReadRecords(jsonl)) {
+    // one sweep flies one stack: its runs compare with each other only then (not even
+    // --allow-changed-inputs mixes them)
+    if (r.flight_stack != spec->flight_stack) {
+      throw InputError(jsonl, "",
+                       "holds runs flown " + shown(r.flight_stack) + " (run " +
+                           std::to_string(r.run) + "), but this sweep's runs are flown " +
+                           shown(spec->flight_stack) +
+                           ": one sweep flies one flight stack; use another --out");
+    }
     if (r.sweep_id != spec->sweep_id) {
       if (!a.allow_changed_inputs || !done.empty()) {
         throw InputError(jsonl, "",
@@ -244,7 +266,8 @@ int SweepMain(int argc, char** argv) {
   const auto [shard_k, shard_n] = ParseShard(a.shard);
   CheckResumeFlags(a);
 
-  SweepSpec spec = LoadSweep(a.sweep_file);
+  SweepSpec spec = LoadSweep(a.sweep_file, a.flight_stack);
+  spec.flight_timeout_s = a.flight_timeout_s;
   const Params params = LoadParams(DefaultParamsPath());
   const std::vector<SweepRun> all_runs = ExpandSweep(spec);
   std::vector<SweepRun> runs = SelectShard(all_runs, shard_k, shard_n);
@@ -266,6 +289,9 @@ int SweepMain(int argc, char** argv) {
   std::printf("sweep %s: %zu runs in all, shard %d/%d: %zu to run (%zu already done), %d jobs\n",
               spec.file.c_str(), all_runs.size(), shard_k, shard_n, runs.size(), done.size(),
               a.jobs);
+  if (!spec.flight_stack.empty()) {
+    std::printf("each run flies its own flight stack: %s\n", spec.flight_stack.c_str());
+  }
   std::fflush(stdout);
   ResultsAppender results(out, jsonl, runs.size());
   // the rendered camera's tables, once here rather than in every forked run
@@ -322,11 +348,12 @@ std::vector<Record> ReadShardRecords(const std::vector<std::string>& dirs, std::
   return all;
 }
 
-// The sweep file's spec when it is still the sweep recorded (same sweep_id), else nothing: then
-// how many runs the sweep has is unknown.
-std::optional<SweepSpec> SameSweep(const std::string& sweep_file, const std::string& sweep_id) {
+// The sweep file's spec, with the flight stack its runs recorded, when it is still the sweep
+// recorded (same sweep_id), else nothing: then how many runs the sweep has is unknown.
+std::optional<SweepSpec> SameSweep(const std::string& sweep_file, const std::string& sweep_id,
+                                   const std::string& flight_stack) {
   try {
-    SweepSpec loaded = LoadSweep(sweep_file);
+    SweepSpec loaded = LoadSweep(sweep_file, flight_stack);
     if (loaded.sweep_id == sweep_id) return loaded;
   } catch (const InputError&) {
   }
@@ -382,7 +409,8 @@ int MergeMain(int argc, char** argv) {
   const std::vector<Record> all = ReadShardRecords(dirs, &sweep_id);
   if (all.empty()) throw InputError("", "DIR", "no runs recorded in the folders given");
   // how many runs the sweep has: from its file when it is still the same sweep, else unknown
-  const std::optional<SweepSpec> spec = SameSweep(all.front().sweep_file, sweep_id);
+  const std::optional<SweepSpec> spec =
+      SameSweep(all.front().sweep_file, sweep_id, all.front().flight_stack);
   const long expected = spec ? SweepRunCount(*spec) : -1;
   std::vector<std::string> warnings;
   const std::vector<Record> records = sweep::UniqueRecords(all, expected, &warnings);

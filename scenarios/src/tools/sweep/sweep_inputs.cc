@@ -77,7 +77,8 @@ void WriteInputsSnapshot(const SweepSpec& spec, const std::string& dir) {
     if (role == "params") entry["text"] = text;
     files.push_back(entry);
   }
-  const Json snapshot = {{"sweep_id", spec.sweep_id}, {"files", files}};
+  Json snapshot = {{"sweep_id", spec.sweep_id}, {"files", files}};
+  if (!spec.flight_stack.empty()) snapshot["flight_stack"] = spec.flight_stack;
   WriteFileAtomic(dir + kInputsFile,
                   snapshot.dump(1, ' ', false, Json::error_handler_t::replace) + "\n");
 }
@@ -90,6 +91,7 @@ std::optional<InputsSnapshot> ReadInputsSnapshot(const std::string& dir) {
   try {
     const Json j = Json::parse(ReadInputFile(path, "a sweep's inputs.json"));
     snapshot.sweep_id = j.at("sweep_id").get<std::string>();
+    if (j.contains("flight_stack")) snapshot.flight_stack = j.at("flight_stack").get<std::string>();
     for (const Json& f : j.at("files")) {
       // a file kept by its hash alone compares by that hash
       snapshot.files.push_back({f.at("role").get<std::string>(), f.at("path").get<std::string>(),
@@ -115,6 +117,13 @@ void CopyInputsSnapshot(const std::vector<std::string>& from_dirs, const std::st
 
 std::vector<std::string> DescribeInputChanges(const InputsSnapshot& a, const InputsSnapshot& b) {
   std::vector<std::string> changes;
+  if (a.flight_stack != b.flight_stack) {
+    const auto shown = [](const std::string& command) {
+      return command.empty() ? std::string("in process") : "'" + command + "'";
+    };
+    changes.push_back("flight stack: " + shown(a.flight_stack) + " (A) vs " +
+                      shown(b.flight_stack) + " (B)");
+  }
   for (const InputFile& fa : a.files) {
     for (const InputFile& fb : b.files) {
       if (fa.role != fb.role || fa.text == fb.text) continue;

@@ -1,6 +1,6 @@
 #pragma once
-// Private pieces of `hpa sweep` and `hpa merge`, shared by the files of scenarios/src/tools/sweep/ and
-// their unit tests: results I/O (runs.jsonl records, the output-folder lock), the worker pool
+// Private pieces of `hpa sweep` and `hpa merge`, shared by the files of scenarios/src/tools/sweep/
+// and their unit tests: results I/O (runs.jsonl records, the output-folder lock), the worker pool
 // and the summary.
 
 #include <cstdint>
@@ -37,7 +37,8 @@ struct Record {
   unsigned long seed = 0;
   std::string sweep_id, sweep_file, base;
   std::vector<std::pair<std::string, std::string>> values;
-  std::string controller;
+  std::string controller;    // what flew: a controller type, or the name a flight stack gave
+  std::string flight_stack;  // the flight-stack command that flew the run ("": in process)
   bool error = false;
   std::string error_text;
   bool crashed = false;
@@ -78,8 +79,9 @@ std::vector<Record> UniqueRecords(const std::vector<Record>& records, long expec
 /// Reads runs.jsonl; an unreadable line is skipped with a warning naming it.
 std::vector<Record> ReadRecords(const std::string& path);
 
-/// One JSON line of runs.jsonl: the run's identity and values, then its outcome. `metrics_json`
-/// empty means none; `error` empty means the run finished.
+/// One JSON line of runs.jsonl: the run's identity and values, the spec's flight stack (when
+/// one flies), then its outcome. `controller` labels what flew; `metrics_json` empty means none;
+/// `error` empty means the run finished.
 std::string RecordLine(const SweepSpec& spec, const SweepRun& run, const std::string& controller,
                        const std::string& error, const std::string& metrics_json);
 
@@ -105,6 +107,7 @@ struct InputFile {
 struct InputsSnapshot {
   std::string sweep_id;
   std::vector<InputFile> files;
+  std::string flight_stack;  // the flight-stack command every run flew ("": in process)
 };
 
 /// Writes DIR/inputs.json from the spec's snapshots unless the folder has one (a resume keeps
@@ -119,7 +122,8 @@ void CopyInputsSnapshot(const std::vector<std::string>& from_dirs, const std::st
                         const std::string& to_dir);
 
 /// What changed between two sweeps' input files, one line per changed YAML key ("base file
-/// scenarios/x.yaml: reference.period_s: 5 (A) vs 4 (B)"); empty when the files are the same.
+/// scenarios/x.yaml: reference.period_s: 5 (A) vs 4 (B)"), and their flight stacks when they
+/// differ; empty when the files are the same.
 std::vector<std::string> DescribeInputChanges(const InputsSnapshot& a, const InputsSnapshot& b);
 
 /// Wilson score interval (95 %) for k successes in n trials; [0, 1] for n = 0.

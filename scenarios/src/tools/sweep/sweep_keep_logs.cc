@@ -77,6 +77,8 @@ void KeepWorstLogs(const SweepSpec& spec, const std::vector<Record>& records,
     if (run == runs.end()) continue;
     RunOptions options;
     options.gl_backend = gl_backend;
+    options.flight_stack = spec.flight_stack;  // the stack that flew it flies the replay
+    options.flight_step_timeout_s = spec.flight_timeout_s;
     const RunResult result = RunScenario(BuildScenario(spec, *run), params, options);
     const std::string dir = out_dir + "/logs/run_" + std::to_string(run->index);
     MakeOutputDir(dir);

@@ -22,6 +22,7 @@
 
 #include "hpa/scenarios/metrics.h"
 #include "hpa/scenarios/runner.h"
+#include "scenarios/src/runner/flight_process.h"
 #include "scenarios/src/tools/sweep/sweep_internal.h"
 
 namespace hpa::sweep {
@@ -29,8 +30,10 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-// The controller type of a run (for records of runs whose process died).
+// What flew a run whose process died: its controller type, or "external" for a flight stack
+// (its name is known only from its hello, which the dead worker did not pass on).
 std::string ControllerOf(const SweepSpec& spec, const SweepRun& run) {
+  if (!spec.flight_stack.empty()) return "external";
   try {
     return BuildScenario(spec, run).controller.type;
   } catch (const std::exception&) {
@@ -38,18 +41,24 @@ std::string ControllerOf(const SweepSpec& spec, const SweepRun& run) {
   }
 }
 
-// Runs one sweep run in this (child) process and returns its JSON line.
+// Runs one sweep run in this (child) process and returns its JSON line. A flight stack is
+// started for this run alone (its socket folder and frame ring carry this worker's pid, so
+// parallel workers' never meet); its failure is this run's run error.
 std::string RunOne(const SweepSpec& spec, const SweepRun& run, const Params& params,
                    sim::GlBackend gl_backend) {
-  std::string controller = "?";
+  std::string controller = spec.flight_stack.empty() ? "?" : "external";
   try {
     const Scenario scenario = BuildScenario(spec, run);
-    controller = scenario.controller.type;
+    if (spec.flight_stack.empty()) controller = scenario.controller.type;
     RunOptions options;
     options.gl_backend = gl_backend;
+    options.flight_stack = spec.flight_stack;
+    options.flight_step_timeout_s = spec.flight_timeout_s;
     const RunResult result = RunScenario(scenario, params, options);
     const std::string metrics = MetricsToJson(result.metrics);
-    return RecordLine(spec, run, controller, result.metrics.run_error.value_or(""), metrics);
+    // labelled by what flew: the controller type, or the name the stack gave in its hello
+    return RecordLine(spec, run, result.metrics.controller, result.metrics.run_error.value_or(""),
+                      metrics);
   } catch (const std::exception& e) {
     return RecordLine(spec, run, controller, e.what(), "");
   }
@@ -133,6 +142,11 @@ int RunPool(
     }
     return status;
   };
+  // a worker killed in a run leaves its flight stack's processes, socket folder and frame ring
+  // (it could not clean up); reclaimed as soon as it is reaped, not at the next stack's start
+  const auto reclaim_stack = [&]() {
+    if (!spec.flight_stack.empty()) runner::RemoveStaleFlightRuns();
+  };
   const auto path_of = [&](size_t position) {
     return tmp_dir + "/" + std::to_string(runs[position].index) + ".json";
   };
@@ -143,6 +157,7 @@ int RunPool(
       if (w.run) std::remove(path_of(*w.run).c_str());
     }
     workers.clear();
+    reclaim_stack();
     return StopRequested();
   };
   // a worker forked from this process: it flies the runs it is handed, one at a time, until
@@ -251,6 +266,7 @@ int RunPool(
       if ((revents & (POLLIN | POLLHUP | POLLERR)) != 0) {
         // it died (end of file on its pipe), with its run unfinished
         const int status = end_worker(w, true);
+        reclaim_stack();
         if (w.run) {
           const SweepRun& run = runs[*w.run];
           const std::string why =
@@ -264,9 +280,10 @@ int RunPool(
         fds.erase(fds.begin() + static_cast<long>(i));
         continue;
       }
-      if (w.run && std::chrono::duration<double>(Clock::now() - w.start).count() >
-                       spec.time_limit_s) {
+      if (w.run &&
+          std::chrono::duration<double>(Clock::now() - w.start).count() > spec.time_limit_s) {
         end_worker(w, true);
+        reclaim_stack();
         const SweepRun& run = runs[*w.run];
         std::remove(path_of(*w.run).c_str());
         record(RecordLine(

@@ -14,8 +14,8 @@
 
 #include "hpa/models/file_io.h"
 #include "hpa/models/input_error.h"
-#include "hpa/scenarios/provenance.h"
 #include "hpa/scenarios/metric_defs.h"
+#include "hpa/scenarios/provenance.h"
 #include "scenarios/src/tools/cli_parse.h"
 #include "scenarios/src/tools/sweep/sweep_internal.h"
 
@@ -144,6 +144,7 @@ std::vector<Record> ReadRecords(const std::string& path) {
         r.values.emplace_back(key, value.is_string() ? value.get<std::string>() : value.dump());
       }
       r.controller = n.at("controller").get<std::string>();
+      if (n.contains("flight_stack")) r.flight_stack = n.at("flight_stack").get<std::string>();
       r.error = n.at("status").get<std::string>() != "ok";
       if (r.error) {
         r.error_text = n.at("error").is_string() ? n.at("error").get<std::string>() : "";
@@ -195,6 +196,7 @@ std::string RecordLine(const SweepSpec& spec, const SweepRun& run, const std::st
     line["values"][path] = IsNumber(value, &number) ? Json(number) : Json(value);
   }
   line["controller"] = controller;
+  if (!spec.flight_stack.empty()) line["flight_stack"] = spec.flight_stack;
   line["status"] = error.empty() ? "ok" : "error";
   line["error"] = error.empty() ? Json() : Json(error);
   line["metrics"] = metrics_json.empty() ? Json() : Json::parse(metrics_json);

@@ -154,7 +154,7 @@ void SnapshotReferencedFiles(SweepSpec* s) {
   s->reference_csv_text = ReadInputFile(file, "a reference CSV", kMaxReferenceCsvBytes);
 }
 
-SweepSpec LoadSweep(const std::string& path) {
+SweepSpec LoadSweep(const std::string& path, const std::string& flight_stack) {
   SweepSpec s;
   s.file = path;
   s.sweep_text = ReadYamlFile(path);
@@ -171,6 +171,16 @@ SweepSpec LoadSweep(const std::string& path) {
   s.runs = static_cast<int>(root.Integer("runs", 1, 1000000));
   s.seed = static_cast<unsigned long>(root.Integer("seed", 0, 4294967295L, 1));
   s.time_limit_s = root.Number("time_limit", 1.0, 1e6, 600.0);
+  s.flight_stack = root.String("flight_stack", "");
+  if (root.Has("flight_stack")) {
+    const std::string why = FlightStackCommandError(s.flight_stack);
+    if (!why.empty()) root.Fail("flight_stack", why);
+  }
+  if (!flight_stack.empty()) {
+    const std::string why = FlightStackCommandError(flight_stack);
+    if (!why.empty()) throw InputError("", "--flight-stack", why);
+    s.flight_stack = flight_stack;
+  }
   if (root.Has("vary")) {
     const YamlMap vary = root.Map("vary");
     const YAML::Node node = root.Node("vary");
@@ -185,10 +195,12 @@ SweepSpec LoadSweep(const std::string& path) {
   }
   SnapshotReferencedFiles(&s);
   ValidateRuns(s, path);
-  // the id hashes every input: the sweep and base files, the reference CSV and the data files
-  // every run reads (params, the MJCF scene, the world profiles)
+  // the id hashes every input: the sweep and base files, the reference CSV, the data files
+  // every run reads (params, the MJCF scene, the world profiles) and the flight stack that flies
+  // (absent in process, so a sweep without one keeps its id)
   std::string inputs = s.sweep_text + "\n--base--\n" + s.base_text;
   if (s.reference_csv_text) inputs += "\n--reference.file--\n" + *s.reference_csv_text;
+  if (!s.flight_stack.empty()) inputs += "\n--flight_stack--\n" + s.flight_stack;
   for (const auto& [role, file] : DataInputFiles()) {
     inputs += "\n--" + role + "--\n" + ReadInputFile(file, "a data file of hpa");
   }

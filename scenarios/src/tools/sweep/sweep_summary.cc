@@ -175,10 +175,18 @@ SummaryTable Tabulate(const std::vector<Record>& records, const SweepSpec* spec)
 // A number for summary.json; non-finite values (e.g. quantiles of no run) are null.
 Json Num(double v) { return std::isfinite(v) ? Json(v) : Json(); }
 
-// The command that replays a run exactly.
+// `text` as one shell word: in single quotes, each quote inside closed, escaped and reopened.
+std::string ShellQuoted(const std::string& text) {
+  std::string quoted = "'";
+  for (const char c : text) quoted += c == '\'' ? std::string("'\\''") : std::string(1, c);
+  return quoted + "'";
+}
+
+// The command that replays a run exactly (with the flight stack that flew it).
 std::string ReplayCommand(const Record& r) {
   std::string command = "hpa run " + r.base + " --seed " + std::to_string(r.seed);
   for (const auto& [path, value] : r.values) command += " --set " + path + "=" + value;
+  if (!r.flight_stack.empty()) command += " --flight-stack " + ShellQuoted(r.flight_stack);
   return command;
 }
 
@@ -297,9 +305,7 @@ void WorstRunsMarkdown(const std::vector<Record>& records, std::ostringstream& m
        << (r.error ? "ERROR " + r.error_text
                    : (r.crashed ? std::string("crashed") : std::string("ok")) +
                          ", quad deviation " + Fixed(r.quad_dev_max_m) + " m")
-       << "\n  `hpa run " << r.base << " --seed " << r.seed;
-    for (const auto& [path, value] : r.values) md << " --set " << path << "=" << value;
-    md << "`\n";
+       << "\n  `" << ReplayCommand(r) << "`\n";
   }
 }
 
@@ -312,6 +318,11 @@ void WriteSummaryMarkdown(const std::vector<Record>& records, const SummaryTable
     md << " of `" << records.front().sweep_file << "` (base `" << records.front().base << "`)";
   md << ". Crash rates with 95 % Wilson intervals; RMSE is the norm of the per-axis payload RMSE "
         "over runs that did not crash.\n\n";
+  if (!records.empty() && !records.front().flight_stack.empty()) {
+    md << "Flown by the flight stack `" << records.front().flight_stack
+       << "`, started once per run; a run's controller is the name the stack gave in its hello "
+          "(`external`: it never did).\n\n";
+  }
   GroupTableMarkdown(t, md);
   BinTableMarkdown(t, md);
   WorstRunsMarkdown(records, md);
