@@ -154,3 +154,9 @@ add_test(NAME cli.external_stack_sweep
          COMMAND bash ${SCEN}/tests/external_stack_sweep_test.sh ${HPA_BIN} ${CMAKE_SOURCE_DIR}
                  ${HPA_PYTHON3})
 set_tests_properties(cli.external_stack_sweep PROPERTIES LABELS "cli;scenario" TIMEOUT 600)
+
+# hpa render-frame's --camera (payload | chase) and --size WxH: the PNG's size read back, bad
+# sizes and cameras refused with exit 2
+add_test(NAME cli.render_frame
+         COMMAND bash ${SCEN}/tests/render_frame_test.sh ${HPA_BIN} ${SCEN} ${SCEN_OUT}/render_frame)
+set_tests_properties(cli.render_frame PROPERTIES LABELS cli TIMEOUT 300)

@@ -85,6 +85,13 @@ void World::ApplyImpulse(Body body, const Eigen::Vector3d& impulse_W_Ns, double 
   forces_.push_back({body, impulse_W_Ns / (steps * kPhysicsDt_s), step_ + steps});
 }
 
+void World::AddVelocity(Body body, const Eigen::Vector3d& dv_W_mps) {
+  if (!dv_W_mps.allFinite()) throw std::invalid_argument("World::AddVelocity: non-finite dv");
+  // a free joint's first three velocity coordinates are its linear velocity in the world frame
+  const int dof = body == Body::kQuadrotor ? ids_.quad_jnt_dof : ids_.payload_jnt_dof;
+  for (int i = 0; i < 3; ++i) data_->qvel[dof + i] += dv_W_mps(i);
+}
+
 void World::SetWind(const Eigen::Vector3d& force_W_N, double duration_s) {
   if (!force_W_N.allFinite() || !std::isfinite(duration_s)) {
     throw std::invalid_argument("World::SetWind: non-finite force or duration");

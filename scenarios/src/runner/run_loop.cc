@@ -249,6 +249,16 @@ RunLoop::RunLoop(const Scenario& scenario, const Params& params, const RunOption
   rate_loop_ = px4_rate_ ? -1 : clock_->AddLoop("rate", rates.imu.rate_hz);
   video_loop_ = video_rate_hz > 0.0 ? clock_->AddLoop("video", video_rate_hz) : -1;
   rate_loop_dt_s_ = 1.0 / rates.imu.rate_hz;
+  // an implausible event is flown as written, but said once at run start (the world's params,
+  // which the event's plausibility depends on, are known only now)
+  for (size_t i = 0; i < scenario.events.size(); ++i) {
+    const EventSpec& event = scenario.events[i];
+    if (!event.action) continue;
+    const std::string warning = event.action->Warning(world_->world_params());
+    if (warning.empty()) continue;
+    std::fprintf(stderr, "warning: %s: events.%zu (%s at %g s): %s\n", scenario.name.c_str(), i,
+                 event.type.c_str(), event.at_s, warning.c_str());
+  }
   events_ = scenario.events;
   std::stable_sort(events_.begin(), events_.end(),
                    [](const EventSpec& a, const EventSpec& b) { return a.at_s < b.at_s; });

@@ -11,6 +11,7 @@
 #include <cstring>
 #include <fstream>
 #include <nlohmann/json.hpp>
+#include <opencv2/imgproc.hpp>
 #include <optional>
 #include <string>
 #include <vector>
@@ -453,18 +454,40 @@ int CompareMain(int argc, char** argv) {
 
 int RenderFrameMain(int argc, char** argv) {
   ScenarioOptions o;
-  std::string out, controller;
+  std::string out, controller, camera = "payload", size;
   double at_s = 0.0;
-  CLI::App app{"Runs the scenario to time T and writes one onboard payload-camera frame (PNG).",
-               "hpa render-frame"};
+  CLI::App app{
+      "Runs the scenario to time T and writes one camera frame (PNG): the onboard payload "
+      "camera, or the videos' chase camera.",
+      "hpa render-frame"};
   AddScenarioOptions(app, &o, false, false);
   app.add_option("--at", at_s, "time T [s] in [0, duration]")->required();
   app.add_option("--out", out, "FILE.png")->required();
   app.add_option("--controller", controller, "a registered controller (see hpa --help)");
+  app.add_option("--camera", camera, "payload (the onboard camera, default) | chase");
+  app.add_option("--size", size,
+                 "WxH pixels, each side 16-4096 (default: the camera's own size; payload "
+                 "1280x720, chase 960x540)");
   if (const auto code = ParseCommandLine(app, argc, argv)) return *code;
   if (out.size() < 5 || out.compare(out.size() - 4, 4, ".png") != 0) {
     throw InputError("", "--out",
                      "the frame is written as PNG: give a FILE.png, got '" + out + "'");
+  }
+  if (camera != "payload" && camera != "chase") {
+    throw InputError("", "--camera", "expected payload | chase, got '" + camera + "'");
+  }
+  const bool chase = camera == "chase";
+  // the chase camera's size is the videos'; a side beyond 4096 px is no frame anyone looks at
+  constexpr int kMinSide_px = 16, kMaxSide_px = 4096;
+  int width_px = chase ? VideoRecorder::kWidthPx : 0;  // 0: the payload camera's own
+  int height_px = chase ? VideoRecorder::kHeightPx : 0;
+  if (!size.empty()) {
+    char tail = 0;
+    if (std::sscanf(size.c_str(), "%dx%d%c", &width_px, &height_px, &tail) != 2 ||
+        width_px < kMinSide_px || width_px > kMaxSide_px || height_px < kMinSide_px ||
+        height_px > kMaxSide_px) {
+      throw InputError("", "--size", "expected WxH with each side 16-4096 px, got '" + size + "'");
+    }
   }
   const Params params = LoadParamsOf(o);
   Scenario scenario = LoadScenarioOf(o);
@@ -483,7 +506,24 @@ int RenderFrameMain(int argc, char** argv) {
   double frame_time_s = at_s;
   options.at_stop = [&](sim::World& world) {
     frame_time_s = world.time_s();
-    const cv::Mat frame = world.RenderPayloadCamera();
+    cv::Mat frame;
+    if (chase) {
+      // the offscreen buffer bounds a render (World::RenderChaseCamera: at most 1280x720): a
+      // larger frame is scaled up from the largest render of its aspect that fits
+      constexpr double kMaxRenderWidth_px = 1280.0, kMaxRenderHeight_px = 720.0;
+      const double fit =
+          std::min({1.0, kMaxRenderWidth_px / width_px, kMaxRenderHeight_px / height_px});
+      frame = world.RenderChaseCamera(std::max(1, static_cast<int>(width_px * fit)),
+                                      std::max(1, static_cast<int>(height_px * fit)));
+    } else {
+      frame = world.RenderPayloadCamera();
+    }
+    if (width_px > 0 && (frame.cols != width_px || frame.rows != height_px)) {
+      cv::Mat scaled;
+      cv::resize(frame, scaled, cv::Size(width_px, height_px), 0, 0,
+                 frame.cols > width_px ? cv::INTER_AREA : cv::INTER_LINEAR);
+      frame = scaled;
+    }
     try {
       written = WriteImage(out, frame);  // false for an extension OpenCV cannot encode too
     } catch (const OutputError& e) {
@@ -502,7 +542,7 @@ int RenderFrameMain(int argc, char** argv) {
     std::printf("note: the vehicle crashed at t = %.3f s (%s); the frame is from then\n",
                 frame_time_s, result.metrics.crash_reason.value_or("").c_str());
   }
-  std::printf("wrote %s (payload camera at t = %.3f s)\n", out.c_str(), frame_time_s);
+  std::printf("wrote %s (%s camera at t = %.3f s)\n", out.c_str(), camera.c_str(), frame_time_s);
   return kExitOk;
 }
 

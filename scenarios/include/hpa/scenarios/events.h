@@ -14,6 +14,7 @@
 namespace hpa {
 
 class YamlMap;
+struct Params;
 namespace sim {
 class World;
 }
@@ -23,6 +24,10 @@ struct EventAction {
   virtual ~EventAction() = default;
   /// Applies the event at its start time.
   virtual void Apply(sim::World* world) const = 0;
+  /// Why the event is implausible for a world with these parameters (the world's, with its
+  /// overrides), or empty; printed as a warning at run start (the params are not known when the
+  /// scenario is parsed).
+  virtual std::string Warning(const Params& world_params) const { return {}; }
 };
 
 /// The gripper takes the payload where it is.
@@ -51,6 +56,15 @@ struct ImpulseEvent final : EventAction {
   double duration_s = 0.01;
   bool on_payload = true;  // body: payload or quadrotor
   static ImpulseEvent Parse(const YamlMap& map);
+  void Apply(sim::World* world) const override;
+  std::string Warning(const Params& world_params) const override;
+};
+
+/// A velocity change of the payload or the quadrotor, at once.
+struct VelocityChangeEvent final : EventAction {
+  Eigen::Vector3d dv_W_mps = Eigen::Vector3d::Zero();  // added to the body's velocity  (3)
+  bool on_payload = true;                              // body: payload or quadrotor
+  static VelocityChangeEvent Parse(const YamlMap& map);
   void Apply(sim::World* world) const override;
 };
 

@@ -22,6 +22,8 @@ Registry<EventRegistration>& TheRegistry() {
           {"gripper_move", "moves the gripper to `to` over `duration` s", Parse<GripperMoveEvent>},
           {"gripper_release", "the gripper lets the payload go", Parse<GripperReleaseEvent>},
           {"impulse", "`impulse` N s on the `body` (payload | quadrotor)", Parse<ImpulseEvent>},
+          {"velocity_change", "adds `dv` m/s at once to the `body` (payload or quadrotor)",
+           Parse<VelocityChangeEvent>},
           {"wind", "`force` N on the quadrotor for `duration` s", Parse<WindEvent>},
       });
   return registry;

@@ -176,6 +176,9 @@ class World {
   /// Applies impulse_W_Ns (N s, world frame) at the body's centre of mass as a constant force
   /// over duration_s (rounded to whole steps, at least one).
   void ApplyImpulse(Body body, const Eigen::Vector3d& impulse_W_Ns, double duration_s = 0.01);
+  /// Adds dv_W_mps (m/s, world frame) to the body's linear velocity at once (its free joint's
+  /// qvel; a taut cable or a held gripper then acts on the new velocity from the next step).
+  void AddVelocity(Body body, const Eigen::Vector3d& dv_W_mps);
   /// Constant force (N, world frame) on the quadrotor's centre of mass for duration_s.
   void SetWind(const Eigen::Vector3d& force_W_N, double duration_s);
   /// Adds a wind velocity (m/s, world frame) to the profile's wind for duration_s; it acts
