@@ -20,6 +20,7 @@ packages=(
   libbenchmark-dev         # mpc_bench and other benchmarks
   python3-numpy            # the Python flight-stack client and result loaders (python/hpa_sim)
   python3-venv python3-pip # hpa_sim pip-installed offline into a venv (ctest python.package)
+  python3-matplotlib       # scripts/redraw_plots.py redraws plots from their CSV (cli.redraw_plots)
   parallel                 # shard sweeps across processes/machines (CI runs two shards)
   slurm-wlm munge          # a single-node Slurm cluster: the job-array sweep test
   clang-14 libclang-rt-14-dev  # ASan + UBSan build and libFuzzer (ci/sanitize.sh)

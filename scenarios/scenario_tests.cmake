@@ -160,3 +160,9 @@ set_tests_properties(cli.external_stack_sweep PROPERTIES LABELS "cli;scenario" T
 add_test(NAME cli.render_frame
          COMMAND bash ${SCEN}/tests/render_frame_test.sh ${HPA_BIN} ${SCEN} ${SCEN_OUT}/render_frame)
 set_tests_properties(cli.render_frame PROPERTIES LABELS cli TIMEOUT 300)
+
+# scripts/redraw_plots.py redraws a run's and a comparison's plot with matplotlib
+# (python3-matplotlib, installed by ci/setup.sh)
+add_test(NAME cli.redraw_plots
+         COMMAND bash ${SCEN}/tests/redraw_plots_test.sh ${HPA_BIN} ${CMAKE_SOURCE_DIR} ${HPA_PYTHON3})
+set_tests_properties(cli.redraw_plots PROPERTIES LABELS cli TIMEOUT 300)

@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # hpa replay: renders a finished run's video from DIR/log.csv and DIR/run.json without changing
-# the run's files; works on a sweep's kept runs and on a csv-reference run whose CSV is gone,
+# the run's files; works on a sweep's kept runs, on an hpa compare output (a video per
+# controller) and on a csv-reference run whose CSV is gone,
 # from another working directory; refuses bad input with exit 2 naming the file and key (a
 # folder without run.json, an edited log, run.json values, FIFOs, --rate); exit 4 for a folder
 # it cannot write; a stop by SIGINT / SIGTERM exits 130 / 143 within a frame, and a stopped or
@@ -174,6 +175,16 @@ YAML
 kept=$(ls -d "$out"/sweep/logs/run_* 2>/dev/null | head -1)
 [ -n "$kept" ] && [ -s "$kept/run.json" ] || fail "the kept run has no run.json"
 expect_exit 0 "replay.mp4 \(61 frames" replay "$kept"
+
+echo "== an hpa compare output: one video per controller, each from its own run.json"
+"$hpa" compare "$src/scenarios/hover.yaml" --controllers geometric,nonhybrid_mpc --quiet \
+  --out "$out/cmp" --set duration=2.5 > /dev/null 2>&1 || fail "compare failed"
+for c in geometric nonhybrid_mpc; do
+  [ -s "$out/cmp/$c/run.json" ] || fail "compare wrote no run.json for $c"
+done
+expect_exit 0 "cmp/nonhybrid_mpc/replay.mp4" replay "$out/cmp"
+[ -s "$out/cmp/geometric/replay.mp4" ] || fail "no video for the geometric run of the comparison"
+expect_exit 2 "one video per run of a comparison" replay "$out/cmp" --out "$out/x.mp4"
 
 echo "replay_cli_test: $failures failure(s)"
 [ "$failures" -eq 0 ]

@@ -1,10 +1,14 @@
 // The `hpa` command line (docs/design.md section 7).
 
+#include <sys/stat.h>
+
 #include <algorithm>
 #include <csignal>
 #include <cstdio>
 #include <cstring>
+#include <filesystem>
 #include <string>
+#include <vector>
 
 #include "hpa/controller/controller_registry.h"
 #include "hpa/estimator/estimator_registry.h"
@@ -128,14 +132,34 @@ std::string Usage() {
   return text;
 }
 
+// The entries of an hpa compare output folder (DIR/comparison.md, DIR/NAME/run.json), sorted;
+// empty for any other folder.
+std::vector<std::string> ComparedRuns(const std::string& dir) {
+  std::vector<std::string> runs;
+  struct stat st;
+  if (stat((dir + "/run.json").c_str(), &st) == 0) return runs;
+  if (stat((dir + "/comparison.md").c_str(), &st) != 0) return runs;
+  std::error_code ec;
+  for (const auto& entry : std::filesystem::directory_iterator(dir, ec)) {
+    if (entry.is_directory() && std::filesystem::exists(entry.path() / "run.json")) {
+      runs.push_back(entry.path().filename().string());
+    }
+  }
+  std::sort(runs.begin(), runs.end());
+  return runs;
+}
+
+int ReplayOne(const ReplayOptions& options, const std::string& out, bool quiet);
+
 int ReplayMain(int argc, char** argv) {
   ReplayOptions options;
   std::string out, gl = "osmesa";
   bool quiet = false;
   CLI::App app{
       "Renders a run's chase video (onboard inset, heads-up line) from its DIR/log.csv "
-      "and DIR/run.json, without running it again: DIR is an hpa run output folder or "
-      "a sweep's DIR/logs/run_N (--keep-logs). Writes DIR/replay.mp4 by default.",
+      "and DIR/run.json, without running it again: DIR is an hpa run output folder, "
+      "a sweep's DIR/logs/run_N (--keep-logs), or an hpa compare output folder (each "
+      "controller's run into DIR/NAME/replay.mp4). Writes DIR/replay.mp4 by default.",
       "hpa replay"};
   app.add_option("DIR", options.dir, "the run's folder (log.csv, run.json)")->required();
   app.add_option("-o,--out", out, "the MP4 to write (default DIR/replay.mp4)");
@@ -146,7 +170,25 @@ int ReplayMain(int argc, char** argv) {
   if (const auto code = ParseCommandLine(app, argc, argv)) return *code;
   options.gl_backend = ParseGlOption(gl);
   options.progress = !quiet;
+  // an hpa compare output: each flown entry's folder (with its run.json), one video each
+  const std::vector<std::string> runs = ComparedRuns(options.dir);
+  if (!runs.empty()) {
+    if (!out.empty())
+      throw InputError("", "--out", "one video per run of a comparison: leave it out");
+    for (const std::string& run : runs) {
+      ReplayOptions one = options;
+      one.dir = options.dir + "/" + run;
+      const int code = ReplayOne(one, one.dir + "/replay.mp4", quiet);
+      if (code != kExitOk) return code;
+    }
+    return kExitOk;
+  }
   if (out.empty()) out = options.dir + "/replay.mp4";
+  return ReplayOne(options, out, quiet);
+}
+
+// Replays one run folder into `out`; the exit code (128 + signal when stopped).
+int ReplayOne(const ReplayOptions& options, const std::string& out, bool quiet) {
   const ReplaySummary replay = ReplayToVideo(options, out);
   if (replay.stop_signal != 0) {
     std::fprintf(stderr, "hpa: replay stopped by signal %d (%s) after %d frames; %s is unchanged\n",

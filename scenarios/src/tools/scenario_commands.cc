@@ -409,6 +409,8 @@ int CompareMain(int argc, char** argv) {
     if (entry.flight_stack.empty()) s.controller.type = entry.name;
     const std::string dir = out_dir + "/" + entry.name;
     MakeOutputDir(dir);
+    // what the run is run from, as hpa run keeps it: `hpa replay DIR` renders it later
+    WriteRunRecord(dir, RecordOf(o, entry.flight_stack.empty() ? entry.name : "", params));
     RunOptions options;
     options.progress = !o.quiet;
     options.gl_backend = ParseGlOption(o.gl);
