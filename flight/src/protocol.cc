@@ -1,5 +1,7 @@
 #include "hpa/flight/protocol.h"
 
+#include "message_table.h"
+
 #include <poll.h>
 #include <sys/socket.h>
 #include <sys/un.h>
@@ -18,131 +20,121 @@
 namespace hpa::flight {
 namespace {
 
-static_assert(sizeof(double) == 8, "the protocol's numbers are IEEE doubles");
+using wire::Bind;
+using wire::BindBit;
+using wire::Codec;
 
-// Appends little-endian numbers (this machine's order: x86-64 and arm64 are little-endian).
-class Writer {
- public:
-  void F64(double v) { Raw(&v, 8); }
-  void U32(uint32_t v) { Raw(&v, 4); }
-  void Vec(const Eigen::Vector3d& v) {
-    for (int i = 0; i < 3; ++i) F64(v[i]);
-  }
-  void Quat(const Eigen::Quaterniond& q) { F64(q.w()), F64(q.x()), F64(q.y()), F64(q.z()); }
-  void Rect(const cv::Rect& r) {
-    for (const int v : {r.x, r.y, r.width, r.height}) U32(static_cast<uint32_t>(v));
-  }
-  void Str(const std::string& s) {
-    U32(static_cast<uint32_t>(s.size()));
-    Raw(s.data(), s.size());
-  }
-  void State(const SystemState& s) {
-    F64(s.time_s), Vec(s.p_WL_W), Vec(s.v_WL_W), Vec(s.p_WQ_W), Vec(s.v_WQ_W), Quat(s.q_WB);
-    Vec(s.w_B);
-    U32(s.mode == CableMode::kTaut ? 1 : 0);
-    U32((s.payload_visible ? 1u : 0u) | (s.payload_lost ? 2u : 0u) |
-        (s.payload_supported ? 4u : 0u));
-  }
-  std::vector<uint8_t> bytes;
+// Each struct that crosses the wire, bound member by member to its struct of the message table
+// (python/hpa_sim/messages.json): the table declares the fields' order, types, units and checks,
+// these bindings say which member holds each.
 
- private:
-  void Raw(const void* p, size_t n) {
-    const auto* b = static_cast<const uint8_t*>(p);
-    bytes.insert(bytes.end(), b, b + n);
-  }
-};
+const Codec<SystemState>& StateCodec() {
+  static const Codec<SystemState> codec(
+      "state", {Bind("time_s", &SystemState::time_s), Bind("p_WL_W", &SystemState::p_WL_W),
+                Bind("v_WL_W", &SystemState::v_WL_W), Bind("p_WQ_W", &SystemState::p_WQ_W),
+                Bind("v_WQ_W", &SystemState::v_WQ_W), Bind("q_WB", &SystemState::q_WB),
+                Bind("w_B", &SystemState::w_B), Bind("mode", &SystemState::mode),
+                BindBit("payload_visible", &SystemState::payload_visible),
+                BindBit("payload_lost", &SystemState::payload_lost),
+                BindBit("payload_supported", &SystemState::payload_supported)});
+  return codec;
+}
 
-// Reads what Writer wrote; every read is bounds-checked.
-class Reader {
- public:
-  Reader(const std::vector<uint8_t>& bytes, const char* what) : bytes_(bytes), what_(what) {}
-  double F64() {
-    double v;
-    Raw(&v, 8);
-    return v;
-  }
-  uint32_t U32() {
-    uint32_t v;
-    Raw(&v, 4);
-    return v;
-  }
-  Eigen::Vector3d Vec() {
-    Eigen::Vector3d v;
-    for (int i = 0; i < 3; ++i) v[i] = F64();
-    return v;
-  }
-  Eigen::Quaterniond Quat() {
-    const double w = F64(), x = F64(), y = F64(), z = F64();
-    return Eigen::Quaterniond(w, x, y, z);
-  }
-  cv::Rect Rect() {
-    const int x = static_cast<int32_t>(U32()), y = static_cast<int32_t>(U32());
-    const int w = static_cast<int32_t>(U32()), h = static_cast<int32_t>(U32());
-    return cv::Rect(x, y, w, h);
-  }
-  std::string Str() {
-    const uint32_t n = U32();
-    if (n > bytes_.size() - pos_) Fail("a string longer than the message");
-    std::string s(reinterpret_cast<const char*>(bytes_.data() + pos_), n);
-    pos_ += n;
-    return s;
-  }
-  // a count of items of at least item_bytes each (refused when the message cannot hold them)
-  uint32_t Count(size_t item_bytes) {
-    const uint32_t n = U32();
-    if (static_cast<size_t>(n) * item_bytes > bytes_.size() - pos_) Fail("a count beyond its end");
-    return n;
-  }
-  SystemState State() {
-    SystemState s;
-    s.time_s = F64();
-    s.p_WL_W = Vec(), s.v_WL_W = Vec(), s.p_WQ_W = Vec(), s.v_WQ_W = Vec();
-    s.q_WB = Quat();
-    s.w_B = Vec();
-    const uint32_t mode = U32();
-    if (mode > 1) Fail("cable mode " + std::to_string(mode) + " (0 slack, 1 taut)");
-    s.mode = mode == 1 ? CableMode::kTaut : CableMode::kSlack;
-    const uint32_t flags = U32();
-    if ((flags & ~7u) != 0) {
-      Fail("state flags " + std::to_string(flags) +
-           " with unknown bits (1 payload visible, 2 payload lost, 4 payload supported)");
-    }
-    s.payload_visible = (flags & 1u) != 0;
-    s.payload_lost = (flags & 2u) != 0;
-    s.payload_supported = (flags & 4u) != 0;
-    return s;
-  }
-  void End() {
-    if (pos_ != bytes_.size()) {
-      Fail(std::to_string(bytes_.size() - pos_) + " bytes after its end");
-    }
-  }
-  [[noreturn]] void Fail(const std::string& what) const {
-    throw ProtocolError(std::string("malformed ") + what_ + " message: " + what);
-  }
+const Codec<ReferenceSample>& ReferenceCodec() {
+  static const Codec<ReferenceSample> codec(
+      "reference_sample", {Bind("p_WL_W", &ReferenceSample::p_WL_W),
+                           Bind("v_WL_W", &ReferenceSample::v_WL_W),
+                           Bind("a_WL_W", &ReferenceSample::a_WL_W)});
+  return codec;
+}
 
- private:
-  void Raw(void* p, size_t n) {
-    if (n > bytes_.size() - pos_) Fail("it ends early");
-    std::memcpy(p, bytes_.data() + pos_, n);
-    pos_ += n;
-  }
-  const std::vector<uint8_t>& bytes_;
-  const char* what_;
-  size_t pos_ = 0;
-};
+const Codec<AllocationReport>& AllocationCodec() {
+  static const Codec<AllocationReport> codec(
+      "allocation_report", {Bind("thrust_allocated_N", &AllocationReport::thrust_allocated_N)});
+  return codec;
+}
 
-constexpr uint32_t kHasAllocation = 1u, kSaturated = 2u, kHasTruth = 4u, kNeedEstimate = 8u,
-                   kGripperActive = 16u;
-constexpr uint32_t kHasCommand = 1u, kHasEstimate = 2u;
+const Codec<ImuSample>& ImuCodec() {
+  static const Codec<ImuSample> codec(
+      "imu_sample", {Bind("time_s", &ImuSample::time_s),
+                     Bind("gyro_B_radps", &ImuSample::gyro_B_radps),
+                     Bind("accel_B_mps2", &ImuSample::accel_B_mps2)});
+  return codec;
+}
 
-bool Finite(const SystemState& s) { return s.AllFinite() && std::isfinite(s.time_s); }
+const Codec<VioSample>& VioCodec() {
+  static const Codec<VioSample> codec(
+      "vio_sample", {Bind("time_s", &VioSample::time_s), Bind("p_WB_W", &VioSample::p_WB_W),
+                     Bind("q_WB", &VioSample::q_WB), Bind("v_WB_W", &VioSample::v_WB_W)});
+  return codec;
+}
 
-// A number as an error message shows it: every digit that tells it apart.
-std::string Shown(double v) {
-  char text[40];
-  std::snprintf(text, sizeof text, "%.17g", v);
-  return text;
+const Codec<PayloadDetection>& DetectionCodec() {
+  static const Codec<PayloadDetection> codec(
+      "payload_detection",
+      {Bind("time_s", &PayloadDetection::time_s), Bind("found", &PayloadDetection::found),
+       Bind("p_CL_C", &PayloadDetection::p_CL_C), Bind("centre_px", &PayloadDetection::centre_px),
+       Bind("radius_px", &PayloadDetection::radius_px), Bind("reason", &PayloadDetection::reason)});
+  return codec;
+}
+
+const Codec<CameraFrame>& FrameCodec() {
+  static const Codec<CameraFrame> codec(
+      "camera_frame",
+      {Bind("capture_time_s", &CameraFrame::capture_time_s), Bind("region", &CameraFrame::region),
+       Bind("region_slot", &CameraFrame::region_slot),
+       Bind("whole_slot", &CameraFrame::whole_slot)});
+  return codec;
+}
+
+const Codec<FlightInputs>& TickCodec() {
+  static const Codec<FlightInputs> codec(
+      "tick",
+      {Bind("time_s", &FlightInputs::time_s),
+       // the mixer's saturation travels as a flag beside the allocation it belongs to
+       BindBit<FlightInputs>(
+           "saturated",
+           [](const FlightInputs& in) { return in.allocation && in.allocation->saturated; },
+           [](FlightInputs& in, bool v) {
+             if (in.allocation) in.allocation->saturated = v;
+           }),
+       BindBit("need_estimate", &FlightInputs::need_estimate),
+       BindBit("gripper_active", &FlightInputs::gripper_active),
+       Bind("allocation", &FlightInputs::allocation, AllocationCodec()),
+       Bind("reference", &FlightInputs::reference, ReferenceCodec()),
+       Bind("imu", &FlightInputs::imu, ImuCodec()), Bind("vio", &FlightInputs::vio, VioCodec()),
+       Bind("detections", &FlightInputs::detections, DetectionCodec()),
+       Bind("frames", &FlightInputs::frames, FrameCodec()),
+       Bind("truth", &FlightInputs::truth, StateCodec())});
+  return codec;
+}
+
+const Codec<BodyRateCommand>& BodyRateCommandCodec() {
+  static const Codec<BodyRateCommand> codec(
+      "body_rate_command", {Bind("w_B_radps", &BodyRateCommand::w_B_radps),
+                            Bind("thrust_N", &BodyRateCommand::thrust_N)});
+  return codec;
+}
+
+const Codec<ControlOutput>& ControlOutputCodec() {
+  static const Codec<ControlOutput> codec(
+      "control_output",
+      {Bind("command", &ControlOutput::command, BodyRateCommandCodec()),
+       Bind("status", &ControlOutput::status), Bind("solve_time_ms", &ControlOutput::solve_time_ms),
+       Bind("cost", &ControlOutput::cost)});
+  return codec;
+}
+
+const Codec<FlightOutputs>& ReplyCodec() {
+  static const Codec<FlightOutputs> codec(
+      "tick_reply",
+      {Bind("command", &FlightOutputs::command, ControlOutputCodec(), &FlightOutputs::has_command),
+       Bind("estimate", &FlightOutputs::estimate, StateCodec(), &FlightOutputs::has_estimate),
+       Bind("rejected_updates", &FlightOutputs::estimator_rejected_updates),
+       Bind("resets", &FlightOutputs::estimator_resets),
+       Bind("frames_detected", &FlightOutputs::frames_detected),
+       Bind("camera_roi", &FlightOutputs::camera_roi)});
+  return codec;
 }
 
 // A JSON value as an error message shows it: its text, cut after 60 bytes.
@@ -248,151 +240,53 @@ std::string MessageTypeName(MessageType type) {
 }
 
 std::vector<uint8_t> EncodeTick(const FlightInputs& in) {
-  Writer w;
-  w.F64(in.time_s);
-  uint32_t flags = 0;
-  if (in.allocation) flags |= kHasAllocation | (in.allocation->saturated ? kSaturated : 0u);
-  if (in.truth) flags |= kHasTruth;
-  if (in.need_estimate) flags |= kNeedEstimate;
-  if (in.gripper_active) flags |= kGripperActive;
-  w.U32(flags);
-  if (in.allocation) w.F64(in.allocation->thrust_allocated_N);
-  w.Vec(in.reference.p_WL_W), w.Vec(in.reference.v_WL_W), w.Vec(in.reference.a_WL_W);
-  w.U32(static_cast<uint32_t>(in.imu.size()));
-  for (const ImuSample& s : in.imu) w.F64(s.time_s), w.Vec(s.gyro_B_radps), w.Vec(s.accel_B_mps2);
-  w.U32(static_cast<uint32_t>(in.vio.size()));
-  for (const VioSample& s : in.vio)
-    w.F64(s.time_s), w.Vec(s.p_WB_W), w.Quat(s.q_WB), w.Vec(s.v_WB_W);
-  w.U32(static_cast<uint32_t>(in.detections.size()));
-  for (const PayloadDetection& d : in.detections) {
-    w.F64(d.time_s), w.U32(d.found ? 1 : 0), w.Vec(d.p_CL_C);
-    w.F64(d.centre_px.x()), w.F64(d.centre_px.y()), w.F64(d.radius_px), w.Str(d.reason);
-  }
-  w.U32(static_cast<uint32_t>(in.frames.size()));
-  for (const CameraFrame& f : in.frames) {
-    w.F64(f.capture_time_s), w.Rect(f.region);
-    w.U32(static_cast<uint32_t>(f.region_slot)), w.U32(static_cast<uint32_t>(f.whole_slot));
-  }
-  if (in.truth) w.State(*in.truth);
+  wire::Writer w;
+  TickCodec().Encode(in, w);
   return std::move(w.bytes);
 }
 
 FlightInputs DecodeTick(const std::vector<uint8_t>& body) {
-  Reader r(body, "tick");
+  wire::Reader r(body, "tick");
   FlightInputs in;
-  in.time_s = r.F64();
-  const uint32_t flags = r.U32();
-  if (flags & kHasAllocation) {
-    in.allocation = AllocationReport{r.F64(), (flags & kSaturated) != 0};
-  }
-  in.need_estimate = (flags & kNeedEstimate) != 0;
-  in.gripper_active = (flags & kGripperActive) != 0;
-  in.reference.p_WL_W = r.Vec(), in.reference.v_WL_W = r.Vec(), in.reference.a_WL_W = r.Vec();
-  in.imu.resize(r.Count(7 * 8));
-  for (ImuSample& s : in.imu)
-    s.time_s = r.F64(), s.gyro_B_radps = r.Vec(), s.accel_B_mps2 = r.Vec();
-  in.vio.resize(r.Count(11 * 8));
-  for (VioSample& s : in.vio)
-    s.time_s = r.F64(), s.p_WB_W = r.Vec(), s.q_WB = r.Quat(), s.v_WB_W = r.Vec();
-  in.detections.resize(r.Count(7 * 8 + 2 * 4));
-  for (PayloadDetection& d : in.detections) {
-    d.time_s = r.F64();
-    d.found = r.U32() != 0;
-    d.p_CL_C = r.Vec();
-    d.centre_px.x() = r.F64();
-    d.centre_px.y() = r.F64();
-    d.radius_px = r.F64();
-    d.reason = r.Str();
-  }
-  in.frames.resize(r.Count(8 + 6 * 4));
-  for (CameraFrame& f : in.frames) {
-    f.capture_time_s = r.F64();
-    f.region = r.Rect();
-    f.region_slot = static_cast<int32_t>(r.U32());
-    f.whole_slot = static_cast<int32_t>(r.U32());
-  }
-  if (flags & kHasTruth) in.truth = r.State();
+  TickCodec().Decode(r, in, "");
   r.End();
   return in;
 }
 
 std::vector<uint8_t> EncodeReply(const FlightOutputs& out) {
-  Writer w;
-  w.U32((out.has_command ? kHasCommand : 0u) | (out.has_estimate ? kHasEstimate : 0u));
-  if (out.has_command) {
-    w.Vec(out.command.command.w_B_radps);
-    w.F64(out.command.command.thrust_N);
-    w.U32(static_cast<uint32_t>(out.command.status));
-    w.F64(out.command.solve_time_ms);
-    w.F64(out.command.cost);
-  }
-  if (out.has_estimate) w.State(out.estimate);
-  w.U32(static_cast<uint32_t>(out.estimator_rejected_updates));
-  w.U32(static_cast<uint32_t>(out.estimator_resets));
-  w.U32(static_cast<uint32_t>(out.frames_detected));
-  w.Rect(out.camera_roi);
+  wire::Writer w;
+  ReplyCodec().Encode(out, w);
   return std::move(w.bytes);
 }
 
 FlightOutputs DecodeReply(const std::vector<uint8_t>& body) {
-  Reader r(body, "tick_reply");
+  wire::Reader r(body, "tick_reply");
   FlightOutputs out;
-  const uint32_t flags = r.U32();
-  out.has_command = (flags & kHasCommand) != 0;
-  out.has_estimate = (flags & kHasEstimate) != 0;
-  if (out.has_command) {
-    out.command.command.w_B_radps = r.Vec();
-    out.command.command.thrust_N = r.F64();
-    const uint32_t status = r.U32();
-    if (status > static_cast<uint32_t>(ControlStatus::kRecovery)) {
-      r.Fail("control status " + std::to_string(status) + " (0 to " +
-             std::to_string(static_cast<int>(ControlStatus::kRecovery)) + ")");
-    }
-    out.command.status = static_cast<ControlStatus>(status);
-    out.command.solve_time_ms = r.F64();
-    out.command.cost = r.F64();
-    if (!out.command.command.w_B_radps.allFinite() ||
-        !std::isfinite(out.command.command.thrust_N)) {
-      r.Fail("a non-finite command (body rate or thrust)");
-    }
-    // a wall-clock time, at most the longest wait for a reply
-    const double solve_ms = out.command.solve_time_ms;
-    if (!(solve_ms >= 0.0 && solve_ms <= kMaxSolveTimeMs)) {
-      r.Fail("solve time " + Shown(solve_ms) + " ms, expected a time in [0, " +
-             Shown(kMaxSolveTimeMs) + "] ms");
-    }
-    // a sum of squared residuals (0 for a controller that is not an MPC)
-    if (!(std::isfinite(out.command.cost) && out.command.cost >= 0.0)) {
-      r.Fail("cost " + Shown(out.command.cost) + ", expected a finite number >= 0");
-    }
-  }
-  if (out.has_estimate) {
-    out.estimate = r.State();
-    if (!Finite(out.estimate)) r.Fail("a non-finite estimate");
-    // an attitude: a unit quaternion; one off by more than rounding is renormalised, one far
-    // from unit (zero, or scaled) is not an attitude
-    const double norm = out.estimate.q_WB.norm();
-    if (!(norm >= 0.9 && norm <= 1.1)) {
-      r.Fail("an estimate quaternion q_WB of norm " + Shown(norm) +
-             ", expected a unit quaternion (norm in [0.9, 1.1])");
-    }
-    if (std::fabs(norm - 1.0) > 1e-9) out.estimate.q_WB.normalize();
-  }
-  const uint32_t rejected = r.U32(), resets = r.U32(), frames = r.U32();
-  // counters beyond INT_MAX are refused here, the tighter bounds by CheckReply
-  for (const auto& [name, v] : {std::pair<const char*, uint32_t>{"rejected_updates", rejected},
-                                {"resets", resets},
-                                {"frames_detected", frames}}) {
-    if (v > static_cast<uint32_t>(std::numeric_limits<int32_t>::max())) {
-      r.Fail(std::string(name) + " " + std::to_string(v) + " (at most 2^31 - 1)");
-    }
-  }
-  out.estimator_rejected_updates = static_cast<int>(rejected);
-  out.estimator_resets = static_cast<int>(resets);
-  out.frames_detected = static_cast<int>(frames);
-  out.camera_roi = r.Rect();
+  ReplyCodec().Decode(r, out, "");
   r.End();
   return out;
+}
+
+const nlohmann::json& MessageTable() { return wire::Table::Get().json(); }
+
+void CheckMessageBindings() {
+  TickCodec();
+  ReplyCodec();
+  // every struct of the table is bound, through the tick's or the reply's codec
+  std::set<std::string> bound;
+  const auto visit = [&](const auto& self, const wire::Struct& s) -> void {
+    bound.insert(s.name);
+    for (const wire::Field& f : s.fields) {
+      if (f.type != nullptr) self(self, *f.type);
+    }
+  };
+  visit(visit, TickCodec().spec());
+  visit(visit, ReplyCodec().spec());
+  for (const auto& item : MessageTable().at("structs").items()) {
+    if (bound.count(item.key()) == 0) {
+      throw std::logic_error("messages.json's struct " + item.key() + " is in no message");
+    }
+  }
 }
 
 void CheckReply(const FlightOutputs& out, const ReplyBounds& bounds) {

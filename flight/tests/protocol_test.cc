@@ -292,7 +292,7 @@ TEST(ProtocolTest, CountersPastInt32AreRefused) {
   body = EncodeReply(out);
   const uint32_t flags = 8;
   std::memcpy(body.data() + body.size() - 16 - 12 - 4, &flags, 4);
-  EXPECT_TRUE(Has(ErrorOf([&] { DecodeReply(body); }), "state flags 8"));
+  EXPECT_TRUE(Has(ErrorOf([&] { DecodeReply(body); }), "estimate flags 0x8 with unknown bits"));
 }
 
 // A reply checked against its tick: detections within the frames delivered, counters within the

@@ -16,6 +16,7 @@ each reply (lockstep), so a slow controller slows the run, never the simulated v
 """
 
 import json
+import math
 import mmap
 import os
 import socket
@@ -27,27 +28,151 @@ import numpy as np
 
 from .results import _decode_utf8, _parse_json, _require_object
 
-PROTOCOL_VERSION = 1
-MAGIC = 0x46415048  # "HPAF"
-HELLO, HELLO_ACK, TICK, TICK_REPLY, FINISH, FINISH_REPLY, ERROR = range(1, 8)
-MESSAGE_TYPES = {HELLO: "hello", HELLO_ACK: "hello_ack", TICK: "tick", TICK_REPLY: "tick_reply",
-                 FINISH: "finish", FINISH_REPLY: "finish_reply", ERROR: "error"}
-MAX_MESSAGE_BYTES = 64 << 20  # the simulator's own limit on a message body
+def _load_table():
+    # the message table beside this file (installed with the package): the one declaration of
+    # every message, which the C++ side compiles in
+    path = os.path.join(os.path.dirname(os.path.abspath(__file__)), "messages.json")
+    with open(path, encoding="utf-8") as f:
+        return json.load(f)
+
+
+TABLE = _load_table()  # the message table (messages.json): framing, message types, structs
+PROTOCOL_VERSION = TABLE["protocol_version"]
+MAGIC = TABLE["magic"]  # "HPAF"
+MESSAGE_TYPES = {t["id"]: t["name"] for t in TABLE["message_types"]}
+_TYPE_IDS = {name: kind for kind, name in MESSAGE_TYPES.items()}
+HELLO, HELLO_ACK, TICK, TICK_REPLY, FINISH, FINISH_REPLY, ERROR = (
+    _TYPE_IDS[name] for name in ("hello", "hello_ack", "tick", "tick_reply", "finish",
+                                 "finish_reply", "error"))
+MAX_MESSAGE_BYTES = TABLE["max_message_bytes"]  # the simulator's own limit on a message body
 ERROR_FRAMES = 3  # the innermost stack frames an error message names
 # An error message's length: a run error is read by a person in metrics.json and on stderr, so a
 # page of text, far inside MAX_MESSAGE_BYTES (the whole traceback goes to the stack's stderr)
 ERROR_MAX_BYTES = 4096
 
-_HAS_ALLOCATION, _SATURATED, _HAS_TRUTH, _NEED_ESTIMATE, _GRIPPER = 1, 2, 4, 8, 16
-_TICK_FLAGS = "1 allocation, 2 mixer saturated, 4 truth, 8 estimate needed, 16 gripper"
-_STATE_FLAGS = "1 payload visible, 2 payload lost, 4 payload supported"
-_HAS_COMMAND, _HAS_ESTIMATE = 1, 2
-STATUS = ["success", "max_iterations", "qp_failure", "non_finite", "fallback", "recovery"]
-MODES = ["slack", "taut"]  # a state's cable mode by its wire value (0 slack, 1 taut)
-
 
 class ProtocolError(RuntimeError):
     """A malformed or unexpected message; the text names the message and what was wrong."""
+
+
+def _format(text, **values):
+    # an error template of the table with each {name} replaced (as the C++ side fills them)
+    for name, value in values.items():
+        text = text.replace("{" + name + "}", str(value))
+    return text
+
+
+def _error(key, **values):
+    return _format(TABLE["errors"][key], **values)
+
+
+def _shown_value(v):
+    return "%.17g" % v  # every digit that tells a number apart
+
+
+def _shown_limit(v):
+    return "%.15g" % v  # a declared limit as it was written
+
+
+def _in(at):
+    return at + " " if at else ""
+
+
+def _of(at):
+    return at + "'s " if at else ""
+
+
+class _Field:
+    """One field of a struct of the table, resolved: its base kind, size and checks."""
+
+    def __init__(self, spec, structs):
+        self.name = spec["name"]
+        self.label = spec.get("label", self.name)
+        kind = spec["type"]
+        checks = dict(spec)
+        named = TABLE["types"].get(kind, {})
+        if "base" in named:  # a named type refines its base type with checks
+            checks = dict(named, **spec)
+            kind = named["base"]
+        self.kind = kind if kind in ("f64", "u32", "i32", "bool", "enum", "flags", "text") else "struct"
+        self.type = structs(kind) if self.kind == "struct" else None
+        self.count = spec.get("count", 1)
+        self.list = spec.get("list", False)
+        self.item = spec.get("item", self.name)
+        self.values = spec.get("values", [])
+        self.bits = spec.get("bits", [])
+        self.present_if = spec.get("present_if")
+        self.gate = 0
+        self.finite = checks.get("finite", False)
+        self.min = checks.get("min")
+        self.max = checks.get("max")
+        self.refused = checks.get("refused", "")
+        self.checked = self.finite or self.min is not None or self.max is not None
+        self.unit_quaternion = spec.get("unit_quaternion")
+        self.fmt = "<%d%s" % (self.count, {"f64": "d", "u32": "I", "i32": "i"}.get(self.kind, "I"))
+        self.default = spec.get("default")
+        if self.default is None:
+            self.default = {"f64": 0.0, "u32": 0, "i32": 0, "bool": False, "text": ""}.get(self.kind)
+            if self.kind in ("f64", "u32", "i32") and self.count > 1:
+                self.default = [self.default] * self.count
+            if self.kind == "enum":
+                self.default = self.values[0]
+        if self.list or self.kind == "text":
+            self.min_bytes = 4
+        elif self.kind == "struct":
+            self.min_bytes = self.type.min_bytes
+        else:
+            self.min_bytes = self.count * (8 if self.kind == "f64" else 4)
+
+
+class _Struct:
+    """A struct of the table: its fields in wire order. One of f64 fields alone, unchecked and
+    always there, is a row: a list of them decodes to an (n, width) float array."""
+
+    def __init__(self, name, structs):
+        self.name = name
+        self.fields, bits, self.gates = [], {}, {}
+        for spec in TABLE["structs"][name]["fields"]:
+            f = _Field(spec, structs)
+            if f.present_if is not None:
+                f.gate = bits[f.present_if]
+                self.gates[f.gate] = f.name
+            for b in f.bits:
+                bits[b["name"]] = b["value"]
+            self.fields.append(f)
+        self.min_bytes = sum(f.min_bytes for f in self.fields if not f.gate)
+        self.rows = all(f.kind == "f64" and not f.gate and not f.checked for f in self.fields)
+        self.width = sum(f.count for f in self.fields)
+
+
+def _structs():
+    # every struct of the table, resolved (a struct's fields resolve the structs they hold)
+    resolved = {}
+
+    def find(name):
+        if name not in resolved:
+            if name not in TABLE["structs"]:
+                raise ValueError("messages.json: unknown type %r" % name)
+            resolved[name] = _Struct(name, find)
+        return resolved[name]
+
+    for name in TABLE["structs"]:
+        find(name)
+    return resolved
+
+
+STRUCTS = _structs()  # the table's structs by name, resolved
+_LAYOUTS = {t["name"]: t["layout"] for t in TABLE["message_types"] if "layout" in t}
+
+
+def _field_of(struct, name):
+    return next(f for f in STRUCTS[struct].fields if f.name == name)
+
+
+STATUS = _field_of("control_output", "status").values  # a command's status by its wire value
+MODES = _field_of("state", "mode").values  # a state's cable mode by its wire value
+# What an estimate that says nothing of the payload tells the simulator: not seen, lost
+_ESTIMATE_DEFAULTS = {"payload_visible": False, "payload_lost": True, "payload_supported": False}
 
 
 class Command:
@@ -62,15 +187,14 @@ class Command:
 
 
 class Tick:
-    """One tick's inputs. imu: (n, 7) array [t_s, gyro_B (3) rad/s, accel_B (3) m/s^2];
-    vio: (n, 11) array [t_s, p_WB_W (3) m, q_WB (w, x, y, z), v_WB_W (3) m/s] stamped with
-    their capture time; detections: dicts (time_s, found, reason, p_CL_C, centre_px, radius_px);
-    frames: dicts (capture_time_s, image: the whole (h, w, 3) uint8 BGR frame, a view valid
-    during the tick); allocation: (thrust_allocated_N, saturated) or None; truth: a state dict (only with
-    the scenario's ground-truth switch) or None; reference: dict p_WL_W, v_WL_W, a_WL_W."""
-
-    __slots__ = ("time_s", "allocation", "imu", "vio", "detections", "frames", "truth",
-                 "need_estimate", "gripper_active", "reference")
+    """One tick's inputs, an attribute per field of the table's tick (messages.json). imu: (n, 7)
+    array [t_s, gyro_B (3) rad/s, accel_B (3) m/s^2]; vio: (n, 11) array [t_s, p_WB_W (3) m,
+    q_WB (w, x, y, z), v_WB_W (3) m/s] stamped with their capture time; detections: dicts
+    (time_s, found, reason, p_CL_C, centre_px, radius_px); frames: dicts (capture_time_s,
+    region, region_slot, whole_slot, image: the whole (h, w, 3) uint8 BGR frame, a view valid
+    during the tick); allocation: (thrust_allocated_N, saturated) or None; truth: a state dict
+    (only with the scenario's ground-truth switch) or None; reference: dict p_WL_W, v_WL_W,
+    a_WL_W; need_estimate, gripper_active: the tick's flags."""
 
 
 class _Reader:
@@ -79,104 +203,211 @@ class _Reader:
         self.data, self.pos, self.what = data, 0, what
 
     def fail(self, why):
-        raise ProtocolError("malformed %s message: %s" % (self.what, why))
+        raise ProtocolError(_error("malformed", message=self.what, what=why))
 
     def take(self, fmt):
         size = struct.calcsize(fmt)
         if self.pos + size > len(self.data):
-            self.fail("it ends early (byte %d of %d, %d more needed)"
-                      % (self.pos, len(self.data), size))
+            self.fail(_error("ends_early", pos=self.pos, size=len(self.data), need=size))
         values = struct.unpack_from(fmt, self.data, self.pos)
         self.pos += size
         return values
 
-    def f64s(self, n):
-        return np.array(self.take("<%dd" % n))
-
     def u32(self):
         return self.take("<I")[0]
 
-    def text(self, name):
+    def text(self, f, at):
         length = self.u32()
         if length > len(self.data) - self.pos:
-            self.fail("%s of %d bytes, longer than the rest of the message" % (name, length))
+            self.fail(_error("text_too_long", of=_of(at), label=f.label, value=length))
         raw = bytes(self.data[self.pos:self.pos + length])
         self.pos += length
         try:
             return raw.decode("utf-8")
         except UnicodeDecodeError as e:
-            bad = e
-        self.fail("%s is not UTF-8 (byte %d of it, 0x%02x: %s)"
-                  % (name, bad.start, raw[bad.start], bad.reason))
+            bad = e.start
+        self.fail(_error("text_not_utf8", of=_of(at), label=f.label,
+                         why="byte %d of it, 0x%02x" % (bad, raw[bad])))
 
-    def state(self, name):
-        v = self.take("<20d")
-        mode, flags = self.take("<II")
-        if mode >= len(MODES):
-            self.fail("%s cable mode %d, expected 0 slack or 1 taut" % (name, mode))
-        if flags & ~7:
-            self.fail("%s flags 0x%x with unknown bits, expected %s" % (name, flags, _STATE_FLAGS))
-        return {"time_s": v[0], "p_WL_W": np.array(v[1:4]), "v_WL_W": np.array(v[4:7]),
-                "p_WQ_W": np.array(v[7:10]), "v_WQ_W": np.array(v[10:13]),
-                "q_WB": np.array(v[13:17]), "w_B": np.array(v[17:20]), "mode": MODES[mode],
-                "payload_visible": bool(flags & 1), "payload_lost": bool(flags & 2),
-                "payload_supported": bool(flags & 4)}
+    def count(self, f):
+        n = self.u32()
+        if n * max(f.type.min_bytes, 1) > len(self.data) - self.pos:
+            self.fail(_error("list_too_long", label=f.label, value=n))
+        return n
 
 
-def _pack_state(s):
-    def vec(key, n, default=0.0):
-        v = s.get(key)
-        return [default] * n if v is None else [float(x) for x in v]
-    q = s.get("q_WB")
-    q = [1.0, 0.0, 0.0, 0.0] if q is None else [float(x) for x in q]
-    values = ([float(s.get("time_s", 0.0))] + vec("p_WL_W", 3) + vec("v_WL_W", 3) +
-              vec("p_WQ_W", 3) + vec("v_WQ_W", 3) + q + vec("w_B", 3))
-    flags = ((1 if s.get("payload_visible", False) else 0) | (2 if s.get("payload_lost", True) else 0)
-             | (4 if s.get("payload_supported", False) else 0))
-    mode = s.get("mode", "taut")
-    if mode not in MODES:
-        raise ValueError("estimate mode %r, expected one of %s" % (mode, ", ".join(MODES)))
-    return struct.pack("<20dII", *values, MODES.index(mode), flags)
+def _check_number(r, f, at, v):
+    if ((f.finite and not math.isfinite(v)) or (f.min is not None and not v >= f.min)
+            or (f.max is not None and not v <= f.max)):
+        r.fail(_format(f.refused, label=f.label, value=_shown_value(v),
+                       min="" if f.min is None else _shown_limit(f.min),
+                       max="" if f.max is None else _shown_limit(f.max), **{"in": _in(at)}))
+
+
+def _check_flags(r, f, at, flags):
+    known = 0
+    for b in f.bits:
+        known |= b["value"]
+    if flags & ~known:
+        r.fail(_error("unknown_bits", label=f.label, value="0x%x" % flags, choices=", ".join(
+            "%d %s" % (b["value"], b.get("label", b["name"])) for b in f.bits), **{"in": _in(at)}))
+    for b in f.bits:
+        if "requires" in b and flags & b["value"]:
+            required = next(o["value"] for o in f.bits if o["name"] == b["requires"])
+            if not flags & required:
+                r.fail(_format(b["refused"], label=f.label, value="0x%x" % flags, **{"in": _in(at)}))
+
+
+def _all_finite(value):
+    # every number of a decoded value (a dict of numbers, arrays, texts, lists and dicts)
+    if isinstance(value, dict):
+        return all(_all_finite(v) for v in value.values())
+    if isinstance(value, (list, tuple)):
+        return all(_all_finite(v) for v in value)
+    if isinstance(value, np.ndarray):
+        return bool(np.all(np.isfinite(value)))
+    if isinstance(value, float):
+        return math.isfinite(value)
+    return True
+
+
+def _check_struct(r, f, value):
+    # a struct-typed field's own checks: every number finite, a unit quaternion
+    if f.finite and not _all_finite(value):
+        r.fail(f.refused)
+    uq = f.unit_quaternion
+    if uq:
+        q = value[uq["field"]]
+        norm = math.sqrt(float(np.dot(q, q)))
+        if not uq["min_norm"] <= norm <= uq["max_norm"]:
+            r.fail(_format(uq["refused"], value=_shown_value(norm),
+                           min=_shown_limit(uq["min_norm"]), max=_shown_limit(uq["max_norm"])))
+        if abs(norm - 1.0) > uq["renormalise_beyond"]:
+            value[uq["field"]] = q / norm
+
+
+def _decode_struct(r, s, at):
+    out, flags = {}, 0
+    for f in s.fields:
+        if f.gate and not flags & f.gate:
+            out[f.name] = None
+            continue
+        kind = f.kind
+        if kind == "flags":
+            flags = r.u32()
+            _check_flags(r, f, at, flags)
+            for b in f.bits:
+                out[b["name"]] = bool(flags & b["value"])
+        elif kind in ("f64", "u32", "i32"):
+            v = r.take(f.fmt)
+            if f.checked:
+                for x in v:
+                    _check_number(r, f, at, x)
+            out[f.name] = v[0] if f.count == 1 else np.array(v) if kind == "f64" else v
+        elif kind == "bool":
+            v = r.u32()
+            if v > 1:
+                r.fail(_error("bool", label=f.label, value=v, **{"in": _in(at)}))
+            out[f.name] = v == 1
+        elif kind == "enum":
+            v = r.u32()
+            if v >= len(f.values):
+                choices = ", ".join("%d %s" % item for item in enumerate(f.values[:-1]))
+                choices += " or %d %s" % (len(f.values) - 1, f.values[-1])
+                r.fail(_error("enum", label=f.label, value=v, choices=choices, **{"in": _in(at)}))
+            out[f.name] = f.values[v]
+        elif kind == "text":
+            out[f.name] = r.text(f, at)
+        elif f.list:
+            n = r.count(f)
+            if f.type.rows:
+                out[f.name] = np.array(r.take("<%dd" % (n * f.type.width))).reshape(n, f.type.width)
+            else:
+                out[f.name] = [_decode_struct(r, f.type, "%s %d" % (f.item, i)) for i in range(n)]
+        else:
+            v = _decode_struct(r, f.type, f.name)
+            _check_struct(r, f, v)
+            out[f.name] = v
+    return out
+
+
+def decode(layout, data, what=None):
+    """Decodes a binary message body of the table's `layout` ("tick", "tick_reply") into a dict
+    keyed by the table's field and bit names: numbers as floats and ints, vectors of f64 as
+    numpy arrays, of i32 as tuples, enums by name, texts as str, an absent gated field as None,
+    a list of rows (f64 structs) as an (n, width) array, other lists as lists of dicts. A value
+    outside its declaration is a ProtocolError naming the message (`what`, default the
+    layout) and the field."""
+    r = _Reader(data, what or layout)
+    out = _decode_struct(r, STRUCTS[layout], "")
+    if r.pos != len(data):
+        r.fail(_error("trailing", value=len(data) - r.pos))
+    return out
+
+
+def _encode_struct(parts, s, value):
+    flags = 0
+    for f in s.fields:
+        if f.kind == "flags":
+            flags = 0
+            for b in f.bits:
+                gated = s.gates.get(b["value"])
+                on = (value.get(gated) is not None if gated else
+                      value.get(b["name"], b.get("default", False)))
+                flags |= b["value"] if on else 0
+            parts.append(struct.pack("<I", flags))
+            continue
+        if f.gate and not flags & f.gate:
+            continue
+        v = value.get(f.name)
+        if v is None:
+            v = f.default
+        kind = f.kind
+        if kind in ("f64", "u32", "i32"):
+            v = [v] if f.count == 1 else list(v)
+            if len(v) != f.count:
+                raise ValueError("%s has %d numbers, expected %d" % (f.name, len(v), f.count))
+            parts.append(struct.pack(f.fmt, *(float(x) if kind == "f64" else int(x) for x in v)))
+        elif kind == "bool":
+            parts.append(struct.pack("<I", 1 if v else 0))
+        elif kind == "enum":
+            if v not in f.values:
+                raise ValueError("%s %r, expected one of %s" % (f.label, v, ", ".join(f.values)))
+            parts.append(struct.pack("<I", f.values.index(v)))
+        elif kind == "text":
+            data = v.encode("utf-8")
+            parts.append(struct.pack("<I", len(data)) + data)
+        elif f.list:
+            items = [] if v is None else list(v)
+            parts.append(struct.pack("<I", len(items)))
+            for item in items:
+                if isinstance(item, dict):
+                    _encode_struct(parts, f.type, item)
+                else:  # a row of a rows struct's numbers
+                    parts.append(struct.pack("<%dd" % f.type.width, *(float(x) for x in item)))
+        else:
+            _encode_struct(parts, f.type, v or {})
+
+
+def encode(layout, value):
+    """Encodes a dict keyed as decode() returns them into a binary message body of `layout`: a
+    missing field takes its declared default (zeros, an identity quaternion, an enum's first
+    value); a flag bit that gates a field is set when that field is not None. Values are not
+    checked here: the receiver checks them."""
+    parts = []
+    _encode_struct(parts, STRUCTS[layout], value)
+    return b"".join(parts)
 
 
 def decode_tick(data, what="tick"):
     """Decodes a tick (or finish: what="finish") message body into a Tick (frames without
     images); ProtocolError naming the message on a malformed one or an unknown flag or mode."""
-    r = _Reader(data, what)
     t = Tick()
-    t.time_s, flags = r.take("<dI")
-    if flags & ~(_HAS_ALLOCATION | _SATURATED | _HAS_TRUTH | _NEED_ESTIMATE | _GRIPPER):
-        r.fail("flags 0x%x with unknown bits, expected %s" % (flags, _TICK_FLAGS))
-    if flags & _SATURATED and not flags & _HAS_ALLOCATION:
-        r.fail("flags 0x%x: mixer saturated without an allocation" % flags)
-    t.allocation = None
-    if flags & _HAS_ALLOCATION:
-        t.allocation = (r.take("<d")[0], bool(flags & _SATURATED))
-    t.need_estimate = bool(flags & _NEED_ESTIMATE)
-    t.gripper_active = bool(flags & _GRIPPER)
-    ref = r.f64s(9)
-    t.reference = {"p_WL_W": ref[0:3], "v_WL_W": ref[3:6], "a_WL_W": ref[6:9]}
-    n = r.u32()
-    t.imu = r.f64s(7 * n).reshape(n, 7)
-    n = r.u32()
-    t.vio = r.f64s(11 * n).reshape(n, 11)
-    t.detections = []
-    for i in range(r.u32()):
-        time_s, found = r.take("<dI")
-        if found > 1:
-            r.fail("detection %d found %d, expected 0 or 1" % (i, found))
-        v = r.f64s(6)
-        reason = r.text("detection %d's reason" % i)
-        t.detections.append({"time_s": time_s, "found": bool(found), "p_CL_C": v[0:3],
-                             "centre_px": v[3:5], "radius_px": v[5], "reason": reason})
-    t.frames = []
-    for _ in range(r.u32()):
-        capture_time_s, x, y, w, h, region_slot, whole_slot = r.take("<d4iII")
-        t.frames.append({"capture_time_s": capture_time_s, "region": (x, y, w, h),
-                         "region_slot": region_slot, "whole_slot": whole_slot, "image": None})
-    t.truth = r.state("truth") if flags & _HAS_TRUTH else None
-    if r.pos != len(data):
-        r.fail("%d bytes after its end" % (len(data) - r.pos))
+    t.__dict__.update(decode(_LAYOUTS["tick"], data, what))
+    if t.allocation is not None:
+        t.allocation = (t.allocation["thrust_allocated_N"], t.saturated)
+    for f in t.frames:
+        f["image"] = None
     return t
 
 
@@ -234,20 +465,19 @@ def decode_hello(body):
 
 
 def encode_reply(command, estimate, rejected=0, resets=0, frames_detected=0, camera_roi=(0, 0, 0, 0)):
-    """Encodes a tick reply: a Command or None, a state dict or None, health counters and the
-    region of interest (x, y, width, height pixels) the camera should read out next besides
-    the whole frame (zero size: none)."""
-    flags = (_HAS_COMMAND if command is not None else 0) | (_HAS_ESTIMATE if estimate is not None else 0)
-    out = struct.pack("<I", flags)
+    """Encodes a tick reply: a Command or None, a state dict or None (what it leaves out takes
+    the table's defaults, the payload's flags an estimate's: not visible, lost), health counters
+    and the region of interest (x, y, width, height pixels) the camera should read out next
+    besides the whole frame (zero size: none)."""
     if command is not None:
-        if command.status not in STATUS:
-            raise ValueError("command status %r, expected one of %s"
-                             % (command.status, ", ".join(STATUS)))
-        out += struct.pack("<4dIdd", *command.w_B_radps, command.thrust_N,
-                           STATUS.index(command.status), command.solve_time_ms, command.cost)
+        command = {"command": {"w_B_radps": command.w_B_radps, "thrust_N": command.thrust_N},
+                   "status": command.status, "solve_time_ms": command.solve_time_ms,
+                   "cost": command.cost}
     if estimate is not None:
-        out += _pack_state(estimate)
-    return out + struct.pack("<III4i", rejected, resets, frames_detected, *camera_roi)
+        estimate = dict(_ESTIMATE_DEFAULTS, **{k: v for k, v in estimate.items() if v is not None})
+    return encode(_LAYOUTS["tick_reply"], {
+        "command": command, "estimate": estimate, "rejected_updates": rejected, "resets": resets,
+        "frames_detected": frames_detected, "camera_roi": camera_roi})
 
 
 def describe_exception(exc, frames=ERROR_FRAMES, max_bytes=ERROR_MAX_BYTES):

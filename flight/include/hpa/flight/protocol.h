@@ -4,7 +4,10 @@
 // simulated clock is one request (the tick's sensor messages) and one reply (the estimate and,
 // when the controller ran, its command), so simulated time waits for the flight code. Rendered
 // camera frames travel through a shared-memory ring named in the hello. Numbers are
-// little-endian IEEE doubles and unsigned 32-bit integers, so both sides see the same bits.
+// little-endian IEEE doubles and 32-bit integers, so both sides see the same bits. Every binary
+// message's fields (order, type, unit, range, refusal text, doc) are declared once, in the
+// message table python/hpa_sim/messages.json: this library compiles it in and its encoder and
+// decoder walk it; the Python client reads the same file.
 
 #include <cstdint>
 #include <functional>
@@ -57,19 +60,28 @@ std::string CleanUtf8(std::string_view text);
 
 /// Encodes one tick's inputs (frames as their slot and capture time).
 std::vector<uint8_t> EncodeTick(const FlightInputs& in);
-/// Decodes a tick; frames get their slot and capture time (no pixels: the caller maps slots).
+/// Decodes a tick (or a finish); frames get their slot and capture time (no pixels: the caller
+/// maps slots). Throws ProtocolError naming the field and its value for a value outside its
+/// declaration in the message table (an unknown flag, mode or bool value, text that is not
+/// UTF-8) or a body of the wrong length.
 FlightInputs DecodeTick(const std::vector<uint8_t>& body);
 /// Encodes a tick's reply.
 std::vector<uint8_t> EncodeReply(const FlightOutputs& out);
-/// Decodes a tick's reply; throws ProtocolError naming the field and its value for a non-finite
-/// command or estimate, an unknown status or state flag, a negative or non-finite solve time
-/// (or one past kMaxSolveTimeMs), a negative or non-finite cost, or an estimate quaternion of
-/// norm outside [0.9, 1.1]. A quaternion within that range but not unit to 1e-9 is
-/// renormalised (a unit one keeps every bit).
+/// Decodes a tick's reply; throws ProtocolError naming the field and its value for a value the
+/// message table refuses: a non-finite command or estimate, an unknown status or state flag, a
+/// negative, non-finite or over-an-hour solve time, a negative or non-finite cost, an estimate
+/// quaternion of norm outside [0.9, 1.1], a counter past 2^31 - 1. A quaternion within that
+/// range but not unit to 1e-9 is renormalised (a unit one keeps every bit).
 FlightOutputs DecodeReply(const std::vector<uint8_t>& body);
 
-/// Longest solve time a reply may state (ms): an hour, the longest wait for a reply.
-constexpr double kMaxSolveTimeMs = 3.6e6;
+/// The message table (python/hpa_sim/messages.json as compiled in): the framing constants, the
+/// message types and every binary message's structs with their fields' types, units, checks
+/// and docs.
+const nlohmann::json& MessageTable();
+/// Binds every binary message's C++ structs to the message table; throws std::logic_error
+/// naming a field or bit of the table no member carries, a member bound to a name the table
+/// lacks or to a field of another type, or a struct of the table no message uses.
+void CheckMessageBindings();
 
 /// What a tick's reply is checked against: the tick it answers and the run so far.
 struct ReplyBounds {
