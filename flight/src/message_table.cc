@@ -16,8 +16,10 @@ constexpr char kMessagesJson[] =
 
 // The keys a field of the table may have (a misspelt key is an error, not ignored).
 const std::set<std::string> kFieldKeys = {
-    "name",    "label", "type", "unit",    "count",           "list",    "item", "values", "bits",
-    "present_if", "finite", "min", "max", "refused", "unit_quaternion", "default", "doc"};
+    "name",    "label", "type",   "unit",    "count",
+    "list",    "item",  "values", "bits",    "present_if",
+    "finite",  "min",   "max",    "refused", "unit_quaternion",
+    "default", "doc"};
 
 [[noreturn]] void Inconsistent(const std::string& where, const std::string& what) {
   throw std::logic_error("messages.json: " + where + ": " + what);
@@ -28,7 +30,8 @@ const std::set<std::string> kFieldKeys = {
 std::string Format(std::string text, const Vars& vars) {
   for (const auto& [name, value] : vars) {
     const std::string key = "{" + name + "}";
-    for (size_t at = text.find(key); at != std::string::npos; at = text.find(key, at + value.size())) {
+    for (size_t at = text.find(key); at != std::string::npos;
+         at = text.find(key, at + value.size())) {
       text.replace(at, key.size(), value);
     }
   }
@@ -171,9 +174,9 @@ Field Table::ParseField(const nlohmann::json& j, const std::string& where) {
   if ((f.finite || f.min || f.max) && f.refused.empty()) Inconsistent(at, "a check but no refused");
   if (j.contains("unit_quaternion")) {
     const nlohmann::json& q = j.at("unit_quaternion");
-    f.unit_quaternion = UnitQuaternion{q.at("field").get<std::string>(), q.at("min_norm"),
-                                       q.at("max_norm"), q.at("renormalise_beyond"),
-                                       q.at("refused").get<std::string>()};
+    f.unit_quaternion =
+        UnitQuaternion{q.at("field").get<std::string>(), q.at("min_norm"), q.at("max_norm"),
+                       q.at("renormalise_beyond"), q.at("refused").get<std::string>()};
   }
   // its smallest encoding
   if (f.list || f.kind == Kind::kText) {

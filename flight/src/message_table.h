@@ -61,7 +61,7 @@ struct Field {
   const Struct* type = nullptr;     // kStruct: the struct it holds
   std::vector<std::string> values;  // kEnum: the names of 0, 1, ...
   std::vector<Bit> bits;            // kFlags
-  uint32_t gate = 0;  // the bit of its struct's flags field that says it is present (0: always)
+  uint32_t gate = 0;    // the bit of its struct's flags field that says it is present (0: always)
   bool finite = false;  // every number in it is finite
   std::optional<double> min, max;  // each number's range
   std::string refused;             // the error when a check fails ({label}, {value}, {min}, ...)
@@ -166,8 +166,8 @@ struct Slot {
   const Field* field = nullptr;
   std::function<void(const T&, Writer&)> put;
   std::function<void(Reader&, T&, const std::string& at)> get;
-  std::function<bool(const T&)> present;     // a gated field: whether it is there
-  std::function<bool(const T&)> all_finite;  // every number in it is finite
+  std::function<bool(const T&)> present;              // a gated field: whether it is there
+  std::function<bool(const T&)> all_finite;           // every number in it is finite
   std::function<Eigen::Quaterniond*(T&)> quaternion;  // a quaternion member, else null
 };
 
@@ -229,7 +229,8 @@ class Codec {
       const Binding<T>* b = take(f.name);
       if (b == nullptr || !b->make) Mismatch(f.name, "is not bound to a C++ member");
       slots_.push_back(b->make(f));
-      if (f.gate != 0 && !slots_.back().present) Mismatch(f.name, "is gated but bound as always there");
+      if (f.gate != 0 && !slots_.back().present)
+        Mismatch(f.name, "is gated but bound as always there");
     }
     if (!by_name.empty()) Mismatch(by_name.begin()->first, "is bound but not in the table");
   }
@@ -367,8 +368,8 @@ Slot<T> ValueSlot(const Field& f, M T::*m) {
     };
   } else if constexpr (std::is_same_v<M, int>) {
     // an i32, or a u32 whose declared range fits an int
-    const bool fits_int = f.kind == Kind::kU32 && f.max.has_value() &&
-                          *f.max <= std::numeric_limits<int32_t>::max();
+    const bool fits_int =
+        f.kind == Kind::kU32 && f.max.has_value() && *f.max <= std::numeric_limits<int32_t>::max();
     Expect(f, f.count == 1 && (f.kind == Kind::kI32 || fits_int), "an int");
     s.put = [m](const T& o, Writer& w) { w.U32(static_cast<uint32_t>(o.*m)); };
     if (f.kind == Kind::kI32) {
@@ -407,7 +408,9 @@ Slot<T> ValueSlot(const Field& f, M T::*m) {
       if (v >= f.values.size()) {
         std::string choices;
         for (size_t i = 0; i < f.values.size(); ++i) {
-          choices += (i == 0 ? "" : i + 1 == f.values.size() ? " or " : ", ") +
+          choices += (i == 0                     ? ""
+                      : i + 1 == f.values.size() ? " or "
+                                                 : ", ") +
                      std::to_string(i) + " " + f.values[i];
         }
         r.Fail(Table::Get().Error("enum", {{"in", In(at)},
@@ -488,7 +491,9 @@ Binding<T> Bind(const std::string& name, U T::*m, const Codec<U>& codec, bool T:
               detail::CheckStruct(r, f, codec, o.*m);
             };
             s.present = [has](const T& o) { return o.*has; };
-            s.all_finite = [m, has, &codec](const T& o) { return !(o.*has) || codec.AllFinite(o.*m); };
+            s.all_finite = [m, has, &codec](const T& o) {
+              return !(o.*has) || codec.AllFinite(o.*m);
+            };
             return s;
           },
           {},

@@ -1,7 +1,5 @@
 #include "hpa/flight/protocol.h"
 
-#include "message_table.h"
-
 #include <poll.h>
 #include <sys/socket.h>
 #include <sys/un.h>
@@ -16,6 +14,8 @@
 #include <limits>
 #include <optional>
 #include <set>
+
+#include "message_table.h"
 
 namespace hpa::flight {
 namespace {
@@ -42,9 +42,9 @@ const Codec<SystemState>& StateCodec() {
 
 const Codec<ReferenceSample>& ReferenceCodec() {
   static const Codec<ReferenceSample> codec(
-      "reference_sample", {Bind("p_WL_W", &ReferenceSample::p_WL_W),
-                           Bind("v_WL_W", &ReferenceSample::v_WL_W),
-                           Bind("a_WL_W", &ReferenceSample::a_WL_W)});
+      "reference_sample",
+      {Bind("p_WL_W", &ReferenceSample::p_WL_W), Bind("v_WL_W", &ReferenceSample::v_WL_W),
+       Bind("a_WL_W", &ReferenceSample::a_WL_W)});
   return codec;
 }
 
@@ -56,9 +56,9 @@ const Codec<AllocationReport>& AllocationCodec() {
 
 const Codec<ImuSample>& ImuCodec() {
   static const Codec<ImuSample> codec(
-      "imu_sample", {Bind("time_s", &ImuSample::time_s),
-                     Bind("gyro_B_radps", &ImuSample::gyro_B_radps),
-                     Bind("accel_B_mps2", &ImuSample::accel_B_mps2)});
+      "imu_sample",
+      {Bind("time_s", &ImuSample::time_s), Bind("gyro_B_radps", &ImuSample::gyro_B_radps),
+       Bind("accel_B_mps2", &ImuSample::accel_B_mps2)});
   return codec;
 }
 
@@ -110,9 +110,9 @@ const Codec<FlightInputs>& TickCodec() {
 }
 
 const Codec<BodyRateCommand>& BodyRateCommandCodec() {
-  static const Codec<BodyRateCommand> codec(
-      "body_rate_command", {Bind("w_B_radps", &BodyRateCommand::w_B_radps),
-                            Bind("thrust_N", &BodyRateCommand::thrust_N)});
+  static const Codec<BodyRateCommand> codec("body_rate_command",
+                                            {Bind("w_B_radps", &BodyRateCommand::w_B_radps),
+                                             Bind("thrust_N", &BodyRateCommand::thrust_N)});
   return codec;
 }
 

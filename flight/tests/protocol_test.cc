@@ -11,78 +11,10 @@
 #include <limits>
 #include <thread>
 
+#include "flight/tests/protocol_samples.h"
+
 namespace hpa::flight {
 namespace {
-
-FlightInputs SampleInputs() {
-  FlightInputs in;
-  in.time_s = 1.234;
-  in.allocation = AllocationReport{7.891234567890123, true};
-  in.need_estimate = true;
-  in.gripper_active = true;
-  in.reference.p_WL_W = {0.1, -0.2, 0.7};
-  in.reference.v_WL_W = {1e-17, 2.0, -3.0};
-  ImuSample imu;
-  imu.time_s = 1.232;
-  imu.gyro_B_radps = {0.1, 0.2, M_PI};
-  imu.accel_B_mps2 = {0.0, -0.0, 9.81};
-  in.imu = {imu, imu};
-  VioSample vio;
-  vio.time_s = 1.2;
-  vio.p_WB_W = {1, 2, 3};
-  vio.q_WB = Eigen::Quaterniond(Eigen::AngleAxisd(0.3, Eigen::Vector3d(1, 2, 3).normalized()));
-  in.vio = {vio};
-  PayloadDetection d;
-  d.time_s = 1.201;
-  d.found = false;
-  d.reason = "partly out of view";
-  d.p_CL_C = {0.01, 0.02, 0.5};
-  in.detections = {d};
-  CameraFrame frame;
-  frame.capture_time_s = 1.2;
-  frame.region = cv::Rect(10, 20, 30, 40);
-  frame.region_slot = 2;
-  frame.whole_slot = 3;
-  in.frames = {frame};
-  SystemState truth;
-  truth.p_WQ_W = {0, 0, 1.2};
-  truth.mode = CableMode::kSlack;
-  truth.payload_lost = true;
-  in.truth = truth;
-  return in;
-}
-
-// Every number crosses the wire with all its bits: the in-process and the out-of-process flight
-// stack see the same inputs.
-TEST(ProtocolTest, TickRoundTripsBitForBit) {
-  const FlightInputs in = SampleInputs();
-  const FlightInputs out = DecodeTick(EncodeTick(in));
-  EXPECT_EQ(out.time_s, in.time_s);
-  ASSERT_TRUE(out.allocation.has_value());
-  EXPECT_EQ(out.allocation->thrust_allocated_N, in.allocation->thrust_allocated_N);
-  EXPECT_TRUE(out.allocation->saturated);
-  EXPECT_TRUE(out.need_estimate);
-  EXPECT_TRUE(out.gripper_active);
-  EXPECT_EQ(out.reference.v_WL_W, in.reference.v_WL_W);
-  ASSERT_EQ(out.imu.size(), 2u);
-  EXPECT_EQ(out.imu[1].gyro_B_radps, in.imu[1].gyro_B_radps);
-  EXPECT_TRUE(std::signbit(out.imu[0].accel_B_mps2.y()));
-  ASSERT_EQ(out.vio.size(), 1u);
-  EXPECT_EQ(out.vio[0].q_WB.coeffs(), in.vio[0].q_WB.coeffs());
-  ASSERT_EQ(out.detections.size(), 1u);
-  EXPECT_EQ(out.detections[0].reason, "partly out of view");
-  EXPECT_FALSE(out.detections[0].found);
-  EXPECT_EQ(out.detections[0].p_CL_C, in.detections[0].p_CL_C);
-  ASSERT_EQ(out.frames.size(), 1u);
-  EXPECT_EQ(out.frames[0].whole_slot, 3);
-  EXPECT_EQ(out.frames[0].region_slot, 2);
-  EXPECT_EQ(out.frames[0].region, cv::Rect(10, 20, 30, 40));
-  EXPECT_EQ(out.frames[0].capture_time_s, 1.2);
-  ASSERT_TRUE(out.truth.has_value());
-  EXPECT_EQ(out.truth->p_WQ_W, in.truth->p_WQ_W);
-  EXPECT_EQ(out.truth->mode, CableMode::kSlack);
-  EXPECT_TRUE(out.truth->payload_lost);
-}
 
 // The smallest detection (found, no reason) as the tick's last message: the count check must
 // accept exactly its size.
@@ -127,7 +59,7 @@ TEST(ProtocolTest, ReplyRoundTripsAndRefusesNonFiniteCommands) {
 }
 
 TEST(ProtocolTest, MalformedMessagesAreRefusedNamingWhy) {
-  std::vector<uint8_t> tick = EncodeTick(SampleInputs());
+  std::vector<uint8_t> tick = EncodeTick(SampleTick());
   std::vector<uint8_t> cut(tick.begin(), tick.begin() + tick.size() / 2);
   EXPECT_THROW(DecodeTick(cut), ProtocolError);
   std::vector<uint8_t> longer = tick;

@@ -1,0 +1,253 @@
+// Every message type of the lockstep protocol through the C++ encoder and decoder, every field
+// set to a value other than its default: what is encoded is what is decoded, the message table
+// (python/hpa_sim/messages.json) binds every field, and the encodings equal the committed golden
+// ones (flight/tests/protocol_golden.json), which the Python client's test decodes and
+// re-encodes too (python/tests/test_protocol_messages.py): both languages agree byte for byte.
+//
+// A new field: set it in the samples below, then rewrite the golden file's hex with
+// HPA_UPDATE_PROTOCOL_GOLDEN=1 flight_test --gtest_filter='ProtocolMessagesTest.*' and its
+// values with python3 python/tests/test_protocol_messages.py --update.
+
+#include <gtest/gtest.h>
+#include <sys/socket.h>
+
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <map>
+#include <sstream>
+#include <string>
+
+#include "flight/tests/protocol_samples.h"
+#include "hpa/flight/protocol.h"
+
+namespace hpa::flight {
+namespace {
+
+const std::string kGoldenPath = std::string(HPA_SOURCE_DIR) + "/flight/tests/protocol_golden.json";
+
+void ExpectSameState(const SystemState& a, const SystemState& b) {
+  EXPECT_EQ(a.time_s, b.time_s);
+  EXPECT_EQ(a.p_WL_W, b.p_WL_W);
+  EXPECT_EQ(a.v_WL_W, b.v_WL_W);
+  EXPECT_EQ(a.p_WQ_W, b.p_WQ_W);
+  EXPECT_EQ(a.v_WQ_W, b.v_WQ_W);
+  EXPECT_EQ(a.q_WB.coeffs(), b.q_WB.coeffs());
+  EXPECT_EQ(a.w_B, b.w_B);
+  EXPECT_EQ(a.mode, b.mode);
+  EXPECT_EQ(a.payload_visible, b.payload_visible);
+  EXPECT_EQ(a.payload_lost, b.payload_lost);
+  EXPECT_EQ(a.payload_supported, b.payload_supported);
+}
+
+// Every member of a tick, bit for bit (a negative zero keeps its sign).
+void ExpectSameTick(const FlightInputs& a, const FlightInputs& b) {
+  EXPECT_EQ(a.time_s, b.time_s);
+  ASSERT_EQ(a.allocation.has_value(), b.allocation.has_value());
+  if (a.allocation) {
+    EXPECT_EQ(a.allocation->thrust_allocated_N, b.allocation->thrust_allocated_N);
+    EXPECT_EQ(a.allocation->saturated, b.allocation->saturated);
+  }
+  EXPECT_EQ(a.need_estimate, b.need_estimate);
+  EXPECT_EQ(a.gripper_active, b.gripper_active);
+  EXPECT_EQ(a.reference.p_WL_W, b.reference.p_WL_W);
+  EXPECT_EQ(a.reference.v_WL_W, b.reference.v_WL_W);
+  EXPECT_EQ(a.reference.a_WL_W, b.reference.a_WL_W);
+  EXPECT_EQ(std::signbit(a.reference.a_WL_W.x()), std::signbit(b.reference.a_WL_W.x()));
+  ASSERT_EQ(a.imu.size(), b.imu.size());
+  for (size_t i = 0; i < a.imu.size(); ++i) {
+    EXPECT_EQ(a.imu[i].time_s, b.imu[i].time_s);
+    EXPECT_EQ(a.imu[i].gyro_B_radps, b.imu[i].gyro_B_radps);
+    EXPECT_EQ(a.imu[i].accel_B_mps2, b.imu[i].accel_B_mps2);
+    EXPECT_EQ(std::signbit(a.imu[i].accel_B_mps2.y()), std::signbit(b.imu[i].accel_B_mps2.y()));
+  }
+  ASSERT_EQ(a.vio.size(), b.vio.size());
+  for (size_t i = 0; i < a.vio.size(); ++i) {
+    EXPECT_EQ(a.vio[i].time_s, b.vio[i].time_s);
+    EXPECT_EQ(a.vio[i].p_WB_W, b.vio[i].p_WB_W);
+    EXPECT_EQ(a.vio[i].q_WB.coeffs(), b.vio[i].q_WB.coeffs());
+    EXPECT_EQ(a.vio[i].v_WB_W, b.vio[i].v_WB_W);
+  }
+  ASSERT_EQ(a.detections.size(), b.detections.size());
+  for (size_t i = 0; i < a.detections.size(); ++i) {
+    EXPECT_EQ(a.detections[i].time_s, b.detections[i].time_s);
+    EXPECT_EQ(a.detections[i].found, b.detections[i].found);
+    EXPECT_EQ(a.detections[i].p_CL_C, b.detections[i].p_CL_C);
+    EXPECT_EQ(a.detections[i].centre_px, b.detections[i].centre_px);
+    EXPECT_EQ(a.detections[i].radius_px, b.detections[i].radius_px);
+    EXPECT_EQ(a.detections[i].reason, b.detections[i].reason);
+  }
+  ASSERT_EQ(a.frames.size(), b.frames.size());
+  for (size_t i = 0; i < a.frames.size(); ++i) {
+    EXPECT_EQ(a.frames[i].capture_time_s, b.frames[i].capture_time_s);
+    EXPECT_EQ(a.frames[i].region, b.frames[i].region);
+    EXPECT_EQ(a.frames[i].region_slot, b.frames[i].region_slot);
+    EXPECT_EQ(a.frames[i].whole_slot, b.frames[i].whole_slot);
+  }
+  ASSERT_EQ(a.truth.has_value(), b.truth.has_value());
+  if (a.truth) ExpectSameState(*a.truth, *b.truth);
+}
+
+// Every member of a reply the protocol carries.
+void ExpectSameReply(const FlightOutputs& a, const FlightOutputs& b) {
+  ASSERT_EQ(a.has_command, b.has_command);
+  if (a.has_command) {
+    EXPECT_EQ(a.command.command.w_B_radps, b.command.command.w_B_radps);
+    EXPECT_EQ(a.command.command.thrust_N, b.command.command.thrust_N);
+    EXPECT_EQ(a.command.status, b.command.status);
+    EXPECT_EQ(a.command.solve_time_ms, b.command.solve_time_ms);
+    EXPECT_EQ(a.command.cost, b.command.cost);
+  }
+  ASSERT_EQ(a.has_estimate, b.has_estimate);
+  if (a.has_estimate) ExpectSameState(a.estimate, b.estimate);
+  EXPECT_EQ(a.estimator_rejected_updates, b.estimator_rejected_updates);
+  EXPECT_EQ(a.estimator_resets, b.estimator_resets);
+  EXPECT_EQ(a.frames_detected, b.frames_detected);
+  EXPECT_EQ(a.camera_roi, b.camera_roi);
+}
+
+std::string Hex(const std::vector<uint8_t>& bytes) {
+  std::string out;
+  char two[3];
+  for (const uint8_t b : bytes) {
+    std::snprintf(two, sizeof two, "%02x", b);
+    out += two;
+  }
+  return out;
+}
+
+std::vector<uint8_t> Unhex(const std::string& hex) {
+  std::vector<uint8_t> out;
+  for (size_t i = 0; i + 1 < hex.size(); i += 2) {
+    out.push_back(static_cast<uint8_t>(std::stoul(hex.substr(i, 2), nullptr, 16)));
+  }
+  return out;
+}
+
+// The golden samples: name, message type, and the encoding of the C++ sample.
+struct Golden {
+  std::string name;
+  std::string message;
+  std::vector<uint8_t> bytes;
+};
+
+std::vector<Golden> Encodings() {
+  return {{"tick", "tick", EncodeTick(SampleTick())},
+          {"finish", "finish", EncodeTick(SampleFinish())},
+          {"empty_tick", "tick", EncodeTick(FlightInputs())},
+          {"tick_reply", "tick_reply", EncodeReply(SampleReply())},
+          {"estimate_reply", "tick_reply", EncodeReply(SampleEstimateReply())},
+          {"empty_reply", "tick_reply", EncodeReply(FlightOutputs())}};
+}
+
+// The table binds every field and bit of every binary message, and declares each field's type
+// and doc (and each number's unit): CheckMessageBindings refuses a field no C++ member carries,
+// a member bound to a name the table lacks, and a struct no message uses.
+TEST(ProtocolMessagesTest, TheTableCoversEveryField) {
+  EXPECT_NO_THROW(CheckMessageBindings());
+  const nlohmann::json& table = MessageTable();
+  EXPECT_EQ(table.at("protocol_version"), kProtocolVersion);
+  EXPECT_EQ(table.at("magic"), kMagic);
+  EXPECT_EQ(table.at("max_message_bytes"), kMaxMessageBytes);
+  for (const nlohmann::json& type : table.at("message_types")) {
+    EXPECT_EQ(MessageTypeName(static_cast<MessageType>(type.at("id").get<uint32_t>())),
+              type.at("name"));
+  }
+  for (const auto& item : table.at("structs").items()) {
+    for (const nlohmann::json& f : item.value().at("fields")) {
+      const std::string where = item.key() + "." + f.at("name").get<std::string>();
+      EXPECT_TRUE(f.contains("doc")) << where;
+      if (f.at("type") == "f64") EXPECT_TRUE(f.contains("unit")) << where;
+    }
+  }
+}
+
+// Every message type through encode and decode: each field comes back with every bit. The JSON
+// messages (hello_ack, finish_reply) through their parsers, the error message through a channel.
+TEST(ProtocolMessagesTest, EveryMessageTypeRoundTrips) {
+  for (const FlightInputs& in : {SampleTick(), SampleFinish(), FlightInputs()}) {
+    ExpectSameTick(DecodeTick(EncodeTick(in)), in);
+  }
+  for (const FlightOutputs& out : {SampleReply(), SampleEstimateReply(), FlightOutputs()}) {
+    ExpectSameReply(DecodeReply(EncodeReply(out)), out);
+  }
+
+  const nlohmann::json ack = {{"protocol_version", kProtocolVersion},
+                              {"name", "sample stack"},
+                              {"controller", "pd"},
+                              {"control_rate_hz", 125.5}};
+  const std::string ack_text = ack.dump();
+  const HelloAck back = ParseHelloAck(std::vector<uint8_t>(ack_text.begin(), ack_text.end()));
+  EXPECT_EQ(back.name, "sample stack");
+  EXPECT_EQ(back.controller, "pd");
+  EXPECT_EQ(back.control_rate_hz, 125.5);
+
+  const nlohmann::json finish = {
+      {"estimator", "hybrid"},
+      {"estimator_health", nlohmann::json::array({nlohmann::json::array({"resets", 2}),
+                                                  nlohmann::json::array({"innovation_m", 0.25})})},
+      {"frames_detected", 3}};
+  const std::string finish_text = finish.dump();
+  const FinishReply reply =
+      ParseFinishReply(std::vector<uint8_t>(finish_text.begin(), finish_text.end()), 4);
+  EXPECT_EQ(reply.estimator, "hybrid");
+  ASSERT_EQ(reply.estimator_health.size(), 2u);
+  EXPECT_EQ(reply.estimator_health[1], std::make_pair(std::string("innovation_m"), 0.25));
+  EXPECT_EQ(reply.frames_detected, 3);
+
+  int fds[2];
+  ASSERT_EQ(::socketpair(AF_UNIX, SOCK_STREAM, 0, fds), 0);
+  Channel a(fds[0]), b(fds[1]);
+  const std::string text = "stopped: \xc3\xa9";
+  a.Send(MessageType::kError, std::vector<uint8_t>(text.begin(), text.end()));
+  std::vector<uint8_t> body;
+  try {
+    b.Receive(&body, 1.0);
+    FAIL() << "an error message was not thrown";
+  } catch (const ProtocolError& e) {
+    EXPECT_EQ(std::string(e.what()), "the peer reported: " + text);
+  }
+}
+
+// The encodings are the committed golden ones (the Python client's test checks the same
+// bytes); with HPA_UPDATE_PROTOCOL_GOLDEN set, the test rewrites their hex instead.
+TEST(ProtocolMessagesTest, EncodingsEqualTheGoldenFile) {
+  nlohmann::json golden;
+  {
+    std::ifstream file(kGoldenPath);
+    ASSERT_TRUE(file) << kGoldenPath;
+    file >> golden;
+  }
+  std::map<std::string, nlohmann::json*> by_name;
+  for (nlohmann::json& entry : golden.at("messages")) by_name[entry.at("name")] = &entry;
+  if (std::getenv("HPA_UPDATE_PROTOCOL_GOLDEN") != nullptr) {
+    nlohmann::json messages = nlohmann::json::array();
+    for (const Golden& g : Encodings()) {
+      nlohmann::json entry = by_name.count(g.name) ? *by_name[g.name] : nlohmann::json::object();
+      entry["name"] = g.name;
+      entry["message"] = g.message;
+      entry["hex"] = Hex(g.bytes);
+      messages.push_back(entry);
+    }
+    golden["messages"] = messages;
+    std::ofstream(kGoldenPath) << golden.dump(2) << "\n";
+    GTEST_SKIP() << "rewrote " << kGoldenPath;
+  }
+  for (const Golden& g : Encodings()) {
+    ASSERT_EQ(by_name.count(g.name), 1u) << g.name << " is not in " << kGoldenPath;
+    const nlohmann::json& entry = *by_name[g.name];
+    EXPECT_EQ(entry.at("message"), g.message) << g.name;
+    EXPECT_EQ(entry.at("hex").get<std::string>(), Hex(g.bytes)) << g.name;
+    // and the golden bytes decode to what encodes to them
+    const std::vector<uint8_t> bytes = Unhex(entry.at("hex").get<std::string>());
+    if (g.message == "tick_reply") {
+      EXPECT_EQ(EncodeReply(DecodeReply(bytes)), bytes) << g.name;
+    } else {
+      EXPECT_EQ(EncodeTick(DecodeTick(bytes)), bytes) << g.name;
+    }
+  }
+}
+
+}  // namespace
+}  // namespace hpa::flight

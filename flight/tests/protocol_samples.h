@@ -1,0 +1,119 @@
+#pragma once
+// Sample lockstep messages for the protocol tests: every field of each set away from its
+// default, as the golden encodings (protocol_golden.json) record them.
+
+#include <cmath>
+
+#include "hpa/flight/protocol.h"
+
+namespace hpa::flight {
+
+/// A state with every field away from SystemState's defaults.
+inline SystemState SampleState(double time_s) {
+  SystemState s;
+  s.time_s = time_s;
+  s.p_WL_W = {0.1, -0.2, 0.7};
+  s.v_WL_W = {1e-17, 2.0, -3.0};
+  s.p_WQ_W = {0.25, 0.5, 1.25};
+  s.v_WQ_W = {-0.5, 0.125, 1.0 / 3.0};
+  s.q_WB = Eigen::Quaterniond(0.3, -0.5, 0.7, 0.1).normalized();
+  s.w_B = {0.01, -0.02, M_PI};
+  s.mode = CableMode::kSlack;
+  s.payload_visible = false;
+  s.payload_lost = true;
+  s.payload_supported = true;
+  return s;
+}
+
+/// A tick with every field and flag set, two items in most lists (one of them mostly default).
+inline FlightInputs SampleTick() {
+  FlightInputs in;
+  in.time_s = 1.234;
+  in.allocation = AllocationReport{7.891234567890123, true};
+  in.need_estimate = true;
+  in.gripper_active = true;
+  in.reference.p_WL_W = {0.1, -0.2, 0.7};
+  in.reference.v_WL_W = {1e-17, 2.0, -3.0};
+  in.reference.a_WL_W = {-0.0, 9.81, 0.5};
+  ImuSample imu;
+  imu.time_s = 1.232;
+  imu.gyro_B_radps = {0.1, 0.2, M_PI};
+  imu.accel_B_mps2 = {0.0, -0.0, 9.81};
+  ImuSample imu2 = imu;
+  imu2.time_s = 1.233;
+  imu2.accel_B_mps2 = {0.5, 0.25, 9.5};
+  in.imu = {imu, imu2};
+  VioSample vio;
+  vio.time_s = 1.2;
+  vio.p_WB_W = {1, 2, 3};
+  vio.q_WB = Eigen::Quaterniond(Eigen::AngleAxisd(0.3, Eigen::Vector3d(1, 2, 3).normalized()));
+  vio.v_WB_W = {0.5, -0.5, 0.25};
+  in.vio = {vio};
+  PayloadDetection d;
+  d.time_s = 1.201;
+  d.found = true;
+  d.reason = "partly out of view \xc3\xa9";
+  d.p_CL_C = {0.01, 0.02, 0.5};
+  d.centre_px = {320.5, 240.25};
+  d.radius_px = 12.75;
+  PayloadDetection lost;
+  lost.time_s = 1.202;
+  lost.reason = "out of view";
+  in.detections = {d, lost};
+  CameraFrame frame;
+  frame.capture_time_s = 1.2;
+  frame.region = cv::Rect(10, 20, 30, 40);
+  frame.region_slot = 2;
+  frame.whole_slot = 3;
+  CameraFrame whole;  // no region of interest: its slot stays -1
+  whole.capture_time_s = 1.21;
+  whole.whole_slot = 0;
+  in.frames = {frame, whole};
+  in.truth = SampleState(1.234);
+  return in;
+}
+
+/// A finish: the last step's samples, nothing optional.
+inline FlightInputs SampleFinish() {
+  FlightInputs in;
+  in.time_s = 8.0;
+  ImuSample imu;
+  imu.time_s = 7.999;
+  imu.gyro_B_radps = {0.0, -0.1, 0.2};
+  imu.accel_B_mps2 = {0.1, 0.2, 9.7};
+  in.imu = {imu};
+  in.reference.p_WL_W = {0, 0, 1};
+  return in;
+}
+
+/// A reply with a command, its estimate, every counter and a camera region.
+inline FlightOutputs SampleReply() {
+  FlightOutputs out;
+  out.has_command = true;
+  out.command.command.w_B_radps = {0.1, -0.2, 0.3};
+  out.command.command.thrust_N = 8.123456789;
+  out.command.status = ControlStatus::kFallback;
+  out.command.solve_time_ms = 0.3125;
+  out.command.cost = 12.5;
+  out.has_estimate = true;
+  out.estimate = SampleState(1.234);
+  out.estimator_rejected_updates = 3;
+  out.estimator_resets = 2;
+  out.frames_detected = 1;
+  out.camera_roi = cv::Rect(5, 6, 7, 8);
+  return out;
+}
+
+/// A reply with the estimate alone (a tick that asked for it, no control step).
+inline FlightOutputs SampleEstimateReply() {
+  FlightOutputs out;
+  out.has_estimate = true;
+  out.estimate = SampleState(0.5);
+  out.estimate.mode = CableMode::kTaut;
+  out.estimate.payload_visible = true;
+  out.estimate.payload_lost = false;
+  out.estimate.payload_supported = false;
+  return out;
+}
+
+}  // namespace hpa::flight
