@@ -9,15 +9,15 @@
 #include <fstream>
 
 #include "hpa/controller/reference.h"
+#include "hpa/controller/reference_types.h"
 #include "hpa/models/input_error.h"
 #include "models/tests/temp_dir.h"
 
 namespace hpa {
 namespace {
 
-// The hover reference's declared position range (scenarios/src/runner/reference_types.cc); the
-// scenario loader passes that declaration, the tests a copy of its value.
-constexpr PositionRange kRange{-1e3, 1e3};
+// The position bound every reference shares (reference_types.h), as the csv type passes it.
+constexpr PositionRange kRange{-kReferencePositionBound_m, kReferencePositionBound_m};
 
 std::string Write(const std::string& text) {
   const std::string path = TestTempDir() + "reference.csv";

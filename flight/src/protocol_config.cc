@@ -1,9 +1,13 @@
 // The flight config as JSON (the hello's "config"): what hpa-flight needs to build the flight
 // stack the runner would (params, controller, estimator, reference, initial state).
 
+#include <map>
+#include <optional>
 #include <string>
 #include <variant>
+#include <vector>
 
+#include "hpa/controller/reference_types.h"
 #include "hpa/flight/protocol.h"
 
 namespace hpa::flight {
@@ -144,6 +148,8 @@ nlohmann::json ConfigToJson(const FlightConfig& c) {
                        s.v_WL_W.z(), s.a_WL_W.x(), s.a_WL_W.y(), s.a_WL_W.z()});
   }
   reference["samples_t_p_v_a"] = samples;
+  // a type that keeps its key values as read (one registered beyond the built-ins) sends them
+  if (!r.values.empty()) reference["key_values"] = r.values;
   return {{"params", params},
           {"controller",
            {{"type", c.controller.type},
@@ -199,6 +205,13 @@ FlightConfig ConfigFromJson(const nlohmann::json& j) {
       s.v_WL_W = {row[4].get<double>(), row[5].get<double>(), row[6].get<double>()};
       s.a_WL_W = {row[7].get<double>(), row[8].get<double>(), row[9].get<double>()};
       r.samples.push_back(s);
+    }
+    if (rj.contains("key_values")) {
+      r.values = rj.at("key_values").get<std::map<std::string, std::vector<double>>>();
+    }
+    // the type is one this stack has, its key values within the ranges it declares
+    if (const std::optional<std::string> error = ReferenceValuesError(r)) {
+      throw ProtocolError("reference: " + *error);
     }
     c.ground_truth = j.at("ground_truth").get<bool>();
     c.estimate_latency_s = j.at("estimate_latency_s").get<double>();

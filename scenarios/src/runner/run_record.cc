@@ -62,10 +62,11 @@ void WriteRunRecord(const std::string& dir, const RunRecord& record) {
   if (!r.scenario_file.empty()) {
     r.scenario_file = std::filesystem::absolute(r.scenario_file).lexically_normal().string();
   }
-  // a csv reference's samples travel with the record: replay needs no file to still be there
+  // the reference's file (a csv reference's samples) travels with the record: replay needs no
+  // file to still be there
   if (!r.reference_csv_text) {
     const Scenario scenario = ScenarioOf(r);
-    if (scenario.reference.type == "csv") {
+    if (!scenario.reference.file.empty()) {
       r.reference_csv_text =
           ReadInputFile(scenario.reference.file, "a reference CSV", kMaxReferenceCsvBytes);
     }

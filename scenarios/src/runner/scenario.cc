@@ -19,15 +19,9 @@
 namespace hpa {
 namespace {
 
-constexpr double kBig = 1e3;  // generous bound on positions (m), forces (N), impulses (N s)
-
 // The run keeps its log in memory (one row per control step): an hour of flight, several
 // battery lifetimes, stays in the hundreds of megabytes.
 constexpr double kMaxScenarioDuration_s = 3600.0;
-
-Eigen::Vector3d Vec3(const YamlMap& map, const std::string& key, double min, double max) {
-  return map.Vector(key, 3, min, max);
-}
 
 ExpectSpec ParseExpect(const YamlMap& e) {
   ExpectSpec x;
@@ -47,81 +41,6 @@ ExpectSpec ParseExpect(const YamlMap& e) {
   }
   e.RejectUnknownKeys();
   return x;
-}
-
-// A number of reference type `type`, with its declared range and default.
-double RefNumber(const YamlMap& r, const std::string& type, const std::string& key) {
-  const ReferenceKey& k = FindReferenceKey(type, key);
-  return k.fallback ? r.Number(key, k.min, k.max, *k.fallback) : r.Number(key, k.min, k.max);
-}
-
-// A vector of reference type `type`, with its declared range and default.
-Eigen::Vector3d RefVec3(const YamlMap& r, const std::string& type, const std::string& key) {
-  const ReferenceKey& k = FindReferenceKey(type, key);
-  if (!r.Has(key) && k.fallback) return Eigen::Vector3d::Constant(*k.fallback);
-  return Vec3(r, key, k.min, k.max);
-}
-
-// `csv_text`, when given, is the reference CSV's text (a run.json's snapshot), parsed in place
-// of reading the file.
-ReferenceSpec ParseReference(const YamlMap& r, const std::optional<std::string>& csv_text) {
-  ReferenceSpec ref;
-  std::vector<std::string> names;
-  for (const ReferenceType& t : ReferenceTypes()) names.push_back(t.name);
-  ref.type = r.Choice("type", names, "hover");
-  const std::string& type = ref.type;
-  if (type == "csv") {
-    // a file of samples, relative to the scenario file
-    ref.file = r.String("file");
-    if (ref.file.empty() || ref.file[0] != '/') {
-      const size_t slash = r.file().rfind('/');
-      ref.file = (slash == std::string::npos ? "" : r.file().substr(0, slash + 1)) + ref.file;
-    }
-    // positions within the one range the hover reference declares
-    const ReferenceKey& hover = FindReferenceKey("hover", "payload_position");
-    const PositionRange range{hover.min, hover.max};
-    ref.samples = csv_text ? ParseTrajectoryCsv(*csv_text, ref.file, range)
-                           : LoadTrajectoryCsv(ref.file, range);
-  } else if (type == "circle" || type == "figure_eight") {
-    // the Lissajous family (reference_types.cc gives each one's formula)
-    LissajousSpec& s = ref.lissajous;
-    if (type == "circle") {
-      s.a = s.b = RefNumber(r, type, "radius");
-      s.n = 1.0;
-      s.phi = M_PI / 2.0;
-    } else {
-      s.a = RefNumber(r, type, "half_length");
-      s.b = RefNumber(r, type, "half_width");
-      s.n = 2.0;
-      s.phi = 0.0;
-    }
-    s.c = 0.0;
-    s.psi = RefNumber(r, type, "height");
-    s.period_s = RefNumber(r, type, "period");
-    s.ramp_s = RefNumber(r, type, "ramp");
-    s.centre = RefVec3(r, type, "centre");
-  } else if (type == "hover") {
-    ref.payload_position_W_m = RefVec3(r, type, "payload_position");
-  } else if (type == "lissajous") {
-    LissajousSpec& s = ref.lissajous;
-    s.a = RefNumber(r, type, "a");
-    s.b = RefNumber(r, type, "b");
-    s.c = RefNumber(r, type, "c");
-    s.n = RefNumber(r, type, "n");
-    s.m = RefNumber(r, type, "m");
-    s.phi = RefNumber(r, type, "phi");
-    s.psi = RefNumber(r, type, "psi");
-    s.period_s = RefNumber(r, type, "period");
-    s.ramp_s = RefNumber(r, type, "ramp");
-    s.centre = RefVec3(r, type, "centre");
-  } else {
-    ref.line_start_W_m = RefVec3(r, type, "start");
-    ref.line_end_W_m = RefVec3(r, type, "end");
-    ref.line_duration_s = RefNumber(r, type, "duration");
-    ref.line_start_time_s = RefNumber(r, type, "start_time");
-  }
-  r.RejectUnknownKeys();
-  return ref;
 }
 
 bool IsNumber(const std::string& s, double* v = nullptr) {
@@ -278,7 +197,7 @@ Scenario ParseScenario(const YamlMap& root, const std::optional<std::string>& re
     e.RejectUnknownKeys();
   }
   if (root.Has("reference")) {
-    s.reference = ParseReference(root.Map("reference"), reference_csv_text);
+    s.reference = ParseReferenceBlock(root.Map("reference"), reference_csv_text);
   }
   if (root.Has("events")) {
     const YAML::Node list = root.Node("events");

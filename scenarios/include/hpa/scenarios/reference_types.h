@@ -1,34 +1,22 @@
 #pragma once
-// The payload reference types and their keys, declared once: the scenario loader reads each
-// key with the range and default declared here, and `hpa schema references` prints the table.
+// The scenario side of the payload reference types (controller/reference_types.h declares them,
+// with their keys and behaviour): a scenario's `reference:` block read as its type's key table
+// says, each key with its declared range and default; `hpa schema references` prints the table.
 
 #include <optional>
 #include <string>
-#include <vector>
+
+#include "hpa/controller/reference_types.h"
+#include "hpa/models/yaml_reader.h"
 
 namespace hpa {
 
-/// One key of a reference type's `reference:` block.
-struct ReferenceKey {
-  std::string key;
-  std::string unit;                // "m", "s", "-" (a number), "" (a file name)
-  int size = 1;                    // 1: a number, 3: a vector, 0: text
-  double min = 0.0, max = 0.0;     // each element's allowed range
-  std::optional<double> fallback;  // the default (every element of a vector); none: required
-  std::string meaning;
-};
-
-/// One reference type: its name, what it traces (with its formula) and its keys.
-struct ReferenceType {
-  std::string name;
-  std::string description;
-  std::vector<ReferenceKey> keys;
-};
-
-/// Every reference type, in the order `hpa schema` lists them.
-const std::vector<ReferenceType>& ReferenceTypes();
-
-/// The declaration of `key` of reference type `type` (std::out_of_range if there is none).
-const ReferenceKey& FindReferenceKey(const std::string& type, const std::string& key);
+/// The spec a scenario's `reference:` block describes: `type` (default hover) chosen among the
+/// registered types, each of its keys read with its declared range and default (a file key
+/// relative to the scenario file), then the type's read; unknown keys are refused.
+/// `file_text`, when given, is the text of the type's file (a run.json's snapshot), read in
+/// place of the file. Throws InputError naming the file and key.
+ReferenceSpec ParseReferenceBlock(const YamlMap& block,
+                                  const std::optional<std::string>& file_text);
 
 }  // namespace hpa
