@@ -166,3 +166,11 @@ set_tests_properties(cli.render_frame PROPERTIES LABELS cli TIMEOUT 300)
 add_test(NAME cli.redraw_plots
          COMMAND bash ${SCEN}/tests/redraw_plots_test.sh ${HPA_BIN} ${CMAKE_SOURCE_DIR} ${HPA_PYTHON3})
 set_tests_properties(cli.redraw_plots PROPERTIES LABELS cli TIMEOUT 300)
+
+# A sweep with two grid factors: crash_rate.png in small multiples (one panel per grid cell, one
+# colour per controller, one legend above the panels) and summary.md's pivot tables (rows the
+# first factor, columns the second, one table per controller); one factor keeps today's layout
+add_test(NAME cli.sweep_grid_factors
+         COMMAND bash ${SCEN}/tests/sweep_grid_factors_test.sh ${HPA_BIN} ${SCEN}
+                 ${SCEN_OUT}/sweep_grid_factors)
+set_tests_properties(cli.sweep_grid_factors PROPERTIES LABELS cli TIMEOUT 300)

@@ -34,6 +34,16 @@ class Figure {
   /// The raster (what the PNG holds).
   cv::Mat& image() { return image_; }
 
+  /// Text outside any panel (a header, a note) with its baseline's left end at `at` (pixels).
+  void Caption(const cv::Point& at, const std::string& text, double scale = 0.5);
+
+  /// A legend outside the panels, shared by all of them: its entries side by side from
+  /// `top_left` (pixels), wrapping at the figure's right edge, each drawn in the dash of the
+  /// figure's lines of its colour; each name also names every unnamed series of its colour in
+  /// the CSV. Returns the height it took (pixels).
+  int Legend(const cv::Point& top_left,
+             const std::vector<std::pair<std::string, cv::Scalar>>& entries);
+
   /// A stroked polyline in figure pixels (clipped to `clip` if it has an area).
   struct Stroke {
     std::vector<cv::Point2d> points;

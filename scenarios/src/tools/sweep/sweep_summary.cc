@@ -7,6 +7,7 @@
 #include <map>
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 #include <set>
 #include <sstream>
 
@@ -68,11 +69,28 @@ struct Cell {
   std::vector<double> rmse, dev, solve;
 };
 
+// A grid variable that splits the groups besides the controller, with its values in the sweep
+// file's order.
+struct GridFactor {
+  std::string path;
+  std::string name;  // in panel titles: the path's last part, or the whole path if not unique
+  std::vector<std::string> values;
+};
+
+// A group's place in the grid: its controller and its value of each grid factor.
+struct GroupPlace {
+  std::string controller;
+  std::vector<std::string> values;  // one per SummaryTable::factors entry
+};
+
 // How a summary groups and bins a sweep's runs, and the tallies of each group and bin.
 struct SummaryTable {
   std::set<std::string> grid_keys;  // grid variables that split the groups, besides the controller
-  std::string main_path;            // the main varied quantity ("" when none)
-  std::string main_label;           // its label (its `label:`, else its path)
+  std::vector<GridFactor> factors;  // the same, in the sweep file's order
+  std::vector<std::string> controllers;         // every controller that flew, sorted
+  std::map<std::string, GroupPlace> place;      // each group's controller and grid values
+  std::string main_path;                        // the main varied quantity ("" when none)
+  std::string main_label;                       // its label (its `label:`, else its path)
   std::vector<std::pair<double, double>> bins;  // over the main varied quantity
   std::set<std::string> groups;                 // controller and grid values
   std::map<std::string, Cell> total;
@@ -132,6 +150,38 @@ std::vector<std::pair<double, double>> MainBins(const std::vector<Record>& recor
   return bins;
 }
 
+// A run's value of a vary path as its record spells it ("" when it has none).
+std::string ValueOf(const Record& r, const std::string& path) {
+  for (const auto& [p, value] : r.values) {
+    if (p == path) return value;
+  }
+  return "";
+}
+
+// The grid variables besides the controller in the sweep file's order, each with its values in
+// the file's order (then any value only the records hold) and its short name.
+std::vector<GridFactor> GridFactors(const std::vector<Record>& records, const SweepSpec* spec,
+                                    const std::set<std::string>& grid_keys) {
+  std::vector<GridFactor> factors;
+  if (spec == nullptr) return factors;
+  for (const VarySpec& v : spec->vary) {
+    if (!grid_keys.count(v.path)) continue;
+    GridFactor f{v.path, v.path.substr(v.path.rfind('.') + 1), v.values};
+    for (const Record& r : records) {
+      const std::string value = ValueOf(r, v.path);
+      if (std::find(f.values.begin(), f.values.end(), value) == f.values.end())
+        f.values.push_back(value);
+    }
+    factors.push_back(std::move(f));
+  }
+  for (GridFactor& f : factors) {
+    for (const GridFactor& other : factors) {
+      if (&other != &f && other.path.substr(other.path.rfind('.') + 1) == f.name) f.name = f.path;
+    }
+  }
+  return factors;
+}
+
 // Adds one run to a cell's tallies (an error counts apart; RMSE only of runs that did not crash).
 void AddRun(const Record& r, Cell* cell) {
   if (r.error) {
@@ -162,7 +212,18 @@ SummaryTable Tabulate(const std::vector<Record>& records, const SweepSpec* spec)
   const VarySpec* main_vary = vary_of.count(t.main_path) ? vary_of[t.main_path] : nullptr;
   t.main_label = main_vary != nullptr && !main_vary->label.empty() ? main_vary->label : t.main_path;
   t.bins = MainBins(records, t.main_path, main_vary);
-  for (const Record& r : records) t.groups.insert(GroupOf(r, t.grid_keys));
+  t.factors = GridFactors(records, spec, t.grid_keys);
+  std::set<std::string> controllers;
+  for (const Record& r : records) {
+    const std::string group = GroupOf(r, t.grid_keys);
+    t.groups.insert(group);
+    controllers.insert(r.controller);
+    GroupPlace& place = t.place[group];
+    place.controller = r.controller;
+    place.values.clear();
+    for (const GridFactor& f : t.factors) place.values.push_back(ValueOf(r, f.path));
+  }
+  t.controllers.assign(controllers.begin(), controllers.end());
   for (const auto& c : t.groups) t.per_bin[c].resize(t.bins.size());
   for (const Record& r : records) {
     const std::string group = GroupOf(r, t.grid_keys);
@@ -170,6 +231,69 @@ SummaryTable Tabulate(const std::vector<Record>& records, const SweepSpec* spec)
     for (Cell* cell : {&t.total[group], &t.per_bin[group][bin]}) AddRun(r, cell);
   }
   return t;
+}
+
+// Adds one cell's tallies to another's (bins merged into one row).
+void AddCell(const Cell& from, Cell* to) {
+  to->n += from.n;
+  to->crashes += from.crashes;
+  to->errors += from.errors;
+  to->expect_failures += from.expect_failures;
+  to->rmse.insert(to->rmse.end(), from.rmse.begin(), from.rmse.end());
+  to->dev.insert(to->dev.end(), from.dev.begin(), from.dev.end());
+  to->solve.insert(to->solve.end(), from.solve.begin(), from.solve.end());
+}
+
+// The grid cells of a sweep with two or more grid factors that hold runs, each as its value of
+// every factor, in the layout's order: the third and later factors outermost, then the first
+// factor's values, the second's innermost (a row of panels or of a table).
+std::vector<std::vector<std::string>> GridCells(const SummaryTable& t) {
+  std::vector<std::vector<std::string>> cells;
+  const size_t k = t.factors.size();
+  for (const GridFactor& f : t.factors) {
+    if (f.values.empty()) return cells;
+  }
+  std::vector<size_t> order;  // factors from the outermost to the innermost
+  for (size_t i = 2; i < k; ++i) order.push_back(i);
+  order.push_back(0);
+  order.push_back(1);
+  std::vector<size_t> index(k, 0);
+  for (;;) {
+    std::vector<std::string> values(k);
+    for (size_t i = 0; i < k; ++i) values[i] = t.factors[i].values[index[i]];
+    for (const auto& [group, place] : t.place) {
+      if (place.values == values) {
+        cells.push_back(values);
+        break;
+      }
+    }
+    int pos = static_cast<int>(order.size()) - 1;  // count on, the innermost factor first
+    for (; pos >= 0; --pos) {
+      const size_t f = order[static_cast<size_t>(pos)];
+      if (++index[f] < t.factors[f].values.size()) break;
+      index[f] = 0;
+    }
+    if (pos < 0) return cells;
+  }
+}
+
+// The group of a controller in a grid cell (null when no run of it lies there).
+const std::string* GroupAt(const SummaryTable& t, const std::string& controller,
+                           const std::vector<std::string>& values) {
+  for (const auto& [group, place] : t.place) {
+    if (place.controller == controller && place.values == values) return &group;
+  }
+  return nullptr;
+}
+
+// "name=value, name=value" of the factors from `first` on: a panel's title, a table's heading.
+std::string CellTitle(const SummaryTable& t, const std::vector<std::string>& values,
+                      size_t first = 0) {
+  std::string title;
+  for (size_t i = first; i < t.factors.size(); ++i) {
+    title += (title.empty() ? "" : ", ") + t.factors[i].name + "=" + values[i];
+  }
+  return title;
 }
 
 // A number for summary.json; non-finite values (e.g. quantiles of no run) are null.
@@ -265,9 +389,119 @@ void GroupTableMarkdown(const SummaryTable& t, std::ostringstream& md) {
   }
 }
 
+// A cell of summary.md's rate tables: crashes/runs [95 % Wilson interval] and expect failures.
+std::string RateText(const Cell& cell) {
+  const auto ci = Wilson(cell.crashes, cell.n);
+  return std::to_string(cell.crashes) + "/" + std::to_string(cell.n) + " [" + Fixed(ci.first, 2) +
+         ", " + Fixed(ci.second, 2) + "] (expect failed " + std::to_string(cell.expect_failures) +
+         ")";
+}
+
+// summary.md with two or more grid factors: one table per controller (and per combination of
+// the third and later factors), rows the first factor's values, columns the second's, each cell
+// the crash rate of that group's runs.
+void GridTablesMarkdown(const SummaryTable& t, std::ostringstream& md) {
+  const GridFactor &rows = t.factors[0], &cols = t.factors[1];
+  md << "\n## Crash rate per grid cell (and expect-failure count)\n\nOne table per controller"
+     << (t.factors.size() > 2 ? " and combination of the further grid variables" : "") << ": rows `"
+     << rows.path << "`, columns `" << cols.path << "`; crashes/runs [95% Wilson CI].\n";
+  // the combinations of the third and later factors, in the layout's order
+  std::vector<std::vector<std::string>> blocks;
+  for (const auto& cell : GridCells(t)) {
+    const std::vector<std::string> rest(cell.begin() + 2, cell.end());
+    if (std::find(blocks.begin(), blocks.end(), rest) == blocks.end()) blocks.push_back(rest);
+  }
+  for (const std::string& controller : t.controllers) {
+    for (const auto& rest : blocks) {
+      std::vector<std::string> values = {"", ""};
+      values.insert(values.end(), rest.begin(), rest.end());
+      const std::string further = CellTitle(t, values, 2);
+      md << "\n### " << controller << (further.empty() ? "" : ", " + further) << "\n\n| "
+         << rows.name << " \\ " << cols.name << " |";
+      for (const std::string& c : cols.values) md << " " << c << " |";
+      md << "\n|---|";
+      for (size_t i = 0; i < cols.values.size(); ++i) md << "---|";
+      md << "\n";
+      for (const std::string& r : rows.values) {
+        values[0] = r;
+        md << "| " << r << " |";
+        for (const std::string& c : cols.values) {
+          values[1] = c;
+          const std::string* group = GroupAt(t, controller, values);
+          md << " " << (group != nullptr ? RateText(t.total.at(*group)) : "-") << " |";
+        }
+        md << "\n";
+      }
+    }
+  }
+}
+
+// summary.md's crash rate per bin of the main varied quantity with two or more grid factors:
+// one column per controller, its grid cells pooled (every cell sees the same draws); bins are
+// merged with the next until each controller's column holds at least two runs, so no row rests
+// on a single run.
+void PooledBinTableMarkdown(const SummaryTable& t, std::ostringstream& md) {
+  std::map<std::string, std::vector<Cell>> pooled;  // controller -> bins
+  for (const std::string& c : t.controllers) pooled[c].resize(t.bins.size());
+  for (const auto& [group, place] : t.place) {
+    for (size_t b = 0; b < t.bins.size(); ++b)
+      AddCell(t.per_bin.at(group)[b], &pooled[place.controller][b]);
+  }
+  // rows of merged bins: [first bin, last bin] and each controller's tallies
+  struct Row {
+    size_t first = 0, last = 0;
+    std::map<std::string, Cell> cells;
+  };
+  std::vector<Row> rows;
+  Row pending;
+  bool open = false;
+  for (size_t b = 0; b < t.bins.size(); ++b) {
+    if (!open) pending = Row{b, b, {}};
+    open = true;
+    pending.last = b;
+    bool enough = true;
+    for (const std::string& c : t.controllers) {
+      AddCell(pooled[c][b], &pending.cells[c]);
+      int total = 0;  // a controller with fewer than two runs in all does not hold rows open
+      for (const Cell& cell : pooled[c]) total += cell.n;
+      if (total >= 2 && pending.cells[c].n < 2) enough = false;
+    }
+    if (enough) {
+      rows.push_back(pending);
+      open = false;
+    }
+  }
+  if (open && !rows.empty()) {  // the last bins join the row before them
+    rows.back().last = pending.last;
+    for (const auto& [c, cell] : pending.cells) AddCell(cell, &rows.back().cells[c]);
+  } else if (open) {
+    rows.push_back(pending);
+  }
+  md << "\n## Crash rate (and expect-failure count) against " << t.main_label << " (`"
+     << t.main_path
+     << "`), each controller's grid cells pooled\n\nBins holding fewer than two "
+        "runs of a controller are merged with the next.\n\n| bin |";
+  for (const std::string& c : t.controllers) md << " " << c << " |";
+  md << "\n|---|";
+  for (size_t i = 0; i < t.controllers.size(); ++i) md << "---|";
+  md << "\n";
+  for (const Row& row : rows) {
+    const double lo = t.bins[row.first].first, hi = t.bins[row.last].second;
+    md << "| " << Fixed(lo) << (lo == hi ? "" : " - " + Fixed(hi)) << " |";
+    for (const std::string& c : t.controllers) md << " " << RateText(row.cells.at(c)) << " |";
+    md << "\n";
+  }
+}
+
 // summary.md's crash rate (and expect-failure count) of each group per bin of the main varied
-// quantity; nothing when no quantity is varied.
+// quantity; with two or more grid factors the grid tables and the pooled bins instead; nothing
+// when no quantity is varied (and fewer than two grid factors).
 void BinTableMarkdown(const SummaryTable& t, std::ostringstream& md) {
+  if (t.factors.size() >= 2) {
+    GridTablesMarkdown(t, md);
+    if (!t.main_path.empty()) PooledBinTableMarkdown(t, md);
+    return;
+  }
   if (t.main_path.empty()) return;
   md << "\n## Crash rate (and expect-failure count) against " << t.main_label << " (`"
      << t.main_path << "`)\n\n| bin |";
@@ -278,12 +512,7 @@ void BinTableMarkdown(const SummaryTable& t, std::ostringstream& md) {
   for (size_t b = 0; b < t.bins.size(); ++b) {
     md << "| " << Fixed(t.bins[b].first)
        << (t.bins[b].first == t.bins[b].second ? "" : " - " + Fixed(t.bins[b].second)) << " |";
-    for (const auto& c : t.groups) {
-      const Cell& cell = t.per_bin.at(c)[b];
-      const auto ci = Wilson(cell.crashes, cell.n);
-      md << " " << cell.crashes << "/" << cell.n << " [" << Fixed(ci.first, 2) << ", "
-         << Fixed(ci.second, 2) << "] (expect failed " << cell.expect_failures << ") |";
-    }
+    for (const auto& c : t.groups) md << " " << RateText(t.per_bin.at(c)[b]) << " |";
     md << "\n";
   }
 }
@@ -341,9 +570,11 @@ void WriteSummaryMarkdown(const std::vector<Record>& records, const SummaryTable
 }
 
 // Draws one group's crash rate per bin (thick, with its Wilson interval) and expect-failure rate
-// (thin); lines join neighbouring bins only, so an empty bin breaks them.
-void DrawGroupRates(PlotPanel* p, const std::vector<Cell>& cells,
-                    const std::vector<std::pair<double, double>>& bins, const cv::Scalar& colour) {
+// (thin); lines join neighbouring bins only, so an empty bin breaks them. The CSV names the
+// series `name`, `name (expect-failure rate)` and `name (95% CI)`.
+void DrawGroupRates(Figure* fig, PlotPanel* p, const std::vector<Cell>& cells,
+                    const std::vector<std::pair<double, double>>& bins, const cv::Scalar& colour,
+                    const std::string& name) {
   std::vector<double> x, y, lo, hi, fail;
   std::vector<bool> segment_break;  // an empty bin lies before this point
   bool gap = false;
@@ -365,7 +596,9 @@ void DrawGroupRates(PlotPanel* p, const std::vector<Cell>& cells,
   std::vector<double> sx, sy, sfail;
   const auto flush = [&]() {
     p->Line(sx, sfail, colour, 1);
+    fig->series.back().name = name + " (expect-failure rate)";
     p->Line(sx, sy, colour, 2);
+    fig->series.back().name = name;
     sx.clear();
     sy.clear();
     sfail.clear();
@@ -378,25 +611,97 @@ void DrawGroupRates(PlotPanel* p, const std::vector<Cell>& cells,
   }
   flush();
   p->ErrorBars(x, y, lo, hi, colour);
+  fig->series.back().name = name + " (95% CI)";
 }
 
-// Writes crash_rate.png: each group's crash rate against the main varied quantity; nothing when
-// no quantity is varied.
+// The x range of the crash-rate plots: the main varied quantity's bins with a 5 % margin.
+void SetRateRange(const SummaryTable& t, PlotPanel* p) {
+  double x0 = t.bins.front().first, x1 = t.bins.back().second;
+  if (x1 <= x0) x1 = x0 + 1;
+  const double pad = 0.05 * (x1 - x0);
+  p->SetRange(x0 - pad, x1 + pad, -0.02, 1.02);
+}
+
+// Writes crash_rate.png with two or more grid factors: small multiples, one panel per grid
+// cell (rows: the first factor's values, and the combinations of the third and later factors;
+// columns: the second factor's values, wrapped past kMaxColumns), one colour per controller in
+// every panel, one legend above the panels. At most kMaxPanels panels are drawn (the figure
+// stays a few megapixels); the header says when cells are left out.
+void WriteCrashRatePanels(const SummaryTable& t, const std::string& dir) {
+  constexpr size_t kMaxColumns = 6, kMaxPanels = 96;
+  constexpr int kPanelHeight_px = 260, kMinPanelWidth_px = 400;
+  const std::vector<std::vector<std::string>> cells = GridCells(t);
+  const size_t drawn = std::min(cells.size(), kMaxPanels);
+  const size_t columns = std::max<size_t>(
+      1, std::min({t.factors[1].values.size(), kMaxColumns, std::max<size_t>(drawn, 1)}));
+  // wide enough for the longest title (drawn 100 px into the plot, which starts 70 px in)
+  int panel_width_px = kMinPanelWidth_px;
+  for (size_t i = 0; i < drawn; ++i) {
+    int baseline = 0;
+    const int title_px =
+        cv::getTextSize(CellTitle(t, cells[i]), cv::FONT_HERSHEY_SIMPLEX, 0.55, 1, &baseline).width;
+    panel_width_px = std::max(panel_width_px, 170 + title_px + 30);
+  }
+  const int width_px = static_cast<int>(columns) * panel_width_px;
+  // header: what is drawn, the panels' layout, then the shared legend
+  std::vector<std::pair<std::string, cv::Scalar>> legend;
+  for (size_t k = 0; k < t.controllers.size(); ++k) {
+    legend.emplace_back(t.controllers[k], SeriesColour(static_cast<int>(k)));
+  }
+  std::string layout = "one panel per grid cell: rows " + t.factors[0].path;
+  for (size_t i = 2; i < t.factors.size(); ++i) layout += " (within " + t.factors[i].path + ")";
+  layout += ", columns " + t.factors[1].path;
+  if (drawn < cells.size()) {
+    layout += "; the first " + std::to_string(drawn) + " of " + std::to_string(cells.size()) +
+              " cells (summary.json has all)";
+  }
+  // the legend's height is known once drawn: measure it on a scratch figure of the same width
+  Figure scratch(width_px, 200);
+  const int legend_px = scratch.Legend(cv::Point(10, 0), legend);
+  const int header_px = 50 + legend_px;
+  const int rows = static_cast<int>((drawn + columns - 1) / columns);
+  Figure fig(width_px, header_px + std::max(rows, 1) * kPanelHeight_px);
+  fig.Caption(
+      cv::Point(10, 20),
+      "crash rate (thick, 95% Wilson CI) and expect-failure rate (thin) against " + t.main_label,
+      0.55);
+  fig.Caption(cv::Point(10, 42), layout, 0.45);
+  for (size_t i = 0; i < drawn; ++i) {
+    const cv::Rect area(static_cast<int>(i % columns) * panel_width_px,
+                        header_px + static_cast<int>(i / columns) * kPanelHeight_px, panel_width_px,
+                        kPanelHeight_px);
+    PlotPanel p(&fig, area, CellTitle(t, cells[i]), t.main_label, "rate [fraction]");
+    SetRateRange(t, &p);
+    p.DrawAxes();
+    for (size_t k = 0; k < t.controllers.size(); ++k) {
+      const cv::Scalar colour = SeriesColour(static_cast<int>(k));
+      const std::string* group = GroupAt(t, t.controllers[k], cells[i]);
+      if (group != nullptr) {
+        DrawGroupRates(&fig, &p, t.per_bin.at(*group), t.bins, colour, t.controllers[k]);
+      } else {
+        p.Line({}, {}, colour);  // keeps the controller's dash where it has no runs
+      }
+    }
+  }
+  fig.Legend(cv::Point(10, 50), legend);
+  fig.Write(dir + "/crash_rate", PlotFormat::kPng);
+}
+
+// Writes crash_rate.png: each group's crash rate against the main varied quantity (small
+// multiples with two or more grid factors); nothing when no quantity is varied.
 void WriteCrashRatePlot(const SummaryTable& t, const std::string& dir) {
   if (t.main_path.empty()) return;
+  if (t.factors.size() >= 2) return WriteCrashRatePanels(t, dir);
   Figure fig(1000, 600);
   PlotPanel p(&fig, cv::Rect(0, 0, 1000, 600),
               "crash rate (thick, 95% Wilson CI) and expect-failure rate (thin)", t.main_label,
               "rate [fraction of runs]");
-  double x0 = t.bins.front().first, x1 = t.bins.back().second;
-  if (x1 <= x0) x1 = x0 + 1;
-  const double pad = 0.05 * (x1 - x0);
-  p.SetRange(x0 - pad, x1 + pad, -0.02, 1.02);
+  SetRateRange(t, &p);
   p.DrawAxes();
   std::vector<std::pair<std::string, cv::Scalar>> legend;
   int k = 0;
   for (const auto& c : t.groups) {
-    DrawGroupRates(&p, t.per_bin.at(c), t.bins, SeriesColour(k));
+    DrawGroupRates(&fig, &p, t.per_bin.at(c), t.bins, SeriesColour(k), c);
     legend.emplace_back(c, SeriesColour(k));
     ++k;
   }
