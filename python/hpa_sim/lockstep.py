@@ -28,6 +28,7 @@ import numpy as np
 
 from .results import _decode_utf8, _parse_json, _require_object
 
+
 def _load_table():
     # the message table beside this file (installed with the package): the one declaration of
     # every message, which the C++ side compiles in
@@ -94,7 +95,8 @@ class _Field:
         if "base" in named:  # a named type refines its base type with checks
             checks = dict(named, **spec)
             kind = named["base"]
-        self.kind = kind if kind in ("f64", "u32", "i32", "bool", "enum", "flags", "text") else "struct"
+        base = ("f64", "u32", "i32", "bool", "enum", "flags", "text")
+        self.kind = kind if kind in base else "struct"
         self.type = structs(kind) if self.kind == "struct" else None
         self.count = spec.get("count", 1)
         self.list = spec.get("list", False)
@@ -112,7 +114,8 @@ class _Field:
         self.fmt = "<%d%s" % (self.count, {"f64": "d", "u32": "I", "i32": "i"}.get(self.kind, "I"))
         self.default = spec.get("default")
         if self.default is None:
-            self.default = {"f64": 0.0, "u32": 0, "i32": 0, "bool": False, "text": ""}.get(self.kind)
+            zeros = {"f64": 0.0, "u32": 0, "i32": 0, "bool": False, "text": ""}
+            self.default = zeros.get(self.kind)
             if self.kind in ("f64", "u32", "i32") and self.count > 1:
                 self.default = [self.default] * self.count
             if self.kind == "enum":
@@ -255,7 +258,8 @@ def _check_flags(r, f, at, flags):
         if "requires" in b and flags & b["value"]:
             required = next(o["value"] for o in f.bits if o["name"] == b["requires"])
             if not flags & required:
-                r.fail(_format(b["refused"], label=f.label, value="0x%x" % flags, **{"in": _in(at)}))
+                r.fail(_format(b["refused"], label=f.label, value="0x%x" % flags,
+                               **{"in": _in(at)}))
 
 
 def _all_finite(value):

@@ -157,7 +157,8 @@ class RoundTripTest(unittest.TestCase):
         self.assertEqual([k for k, _ in replies],
                          [lockstep.HELLO_ACK, lockstep.TICK_REPLY, lockstep.FINISH_REPLY])
         ack = json.loads(replies[0][1])
-        self.assertEqual((ack["protocol_version"], ack["name"]), (lockstep.PROTOCOL_VERSION, "test"))
+        self.assertEqual((ack["protocol_version"], ack["name"]),
+                         (lockstep.PROTOCOL_VERSION, "test"))
         reply = lockstep.decode("tick_reply", replies[1][1])
         self.assertEqual(reply["command"]["status"], "max_iterations")
         self.assertEqual(list(reply["command"]["command"]["w_B_radps"]), [0.25, -0.5, 0.125])
