@@ -14,9 +14,11 @@ const ParamTable<Px4RateParams>& Px4RateParamTable() {
       "PX4's multicopter rate controller and control allocation (flight-code parameters)",
       {{"rate_hz", "Hz", 50.0, 1000.0,
         "loop and gyro rate (PX4 runs the loop on each gyro sample); divides 1000 Hz", &P::rate_hz},
-       {"p", "1/(rad/s)", 0.0, 0.6, "MC_ROLLRATE_P, MC_PITCHRATE_P, MC_YAWRATE_P", &P::p},
+       {"p", "1/(rad/s)", 0.0, 0.6, "MC_ROLLRATE_P, MC_PITCHRATE_P, MC_YAWRATE_P", &P::p, "", 3,
+        {{{0.01, 0.5}, {0.01, 0.6}, {0.0, 0.6}}}},
        {"i", "1/rad", 0.0, 5.0, "MC_*RATE_I", &P::i},
-       {"d", "1/(rad/s^2)", 0.0, 0.05, "MC_*RATE_D", &P::d},
+       {"d", "1/(rad/s^2)", 0.0, 0.05, "MC_ROLLRATE_D, MC_PITCHRATE_D, MC_YAWRATE_D", &P::d, "", 3,
+        {{{0.0, 0.01}, {0.0, 0.05}, {0.0, 0.05}}}},
        {"k", "-", 0.01, 5.0, "MC_*RATE_K: scales P, I and D", &P::k},
        {"integrator_limit", "-", 0.0, 1.0, "MC_RR_INT_LIM, MC_PR_INT_LIM, MC_YR_INT_LIM",
         &P::integrator_limit},
@@ -25,7 +27,11 @@ const ParamTable<Px4RateParams>& Px4RateParamTable() {
        {"dgyro_cutoff_hz", "Hz", 0.0, 1000.0, "IMU_DGYRO_CUTOFF: Butterworth on d(gyro)/dt",
         &P::dgyro_cutoff_hz},
        {"yaw_torque_cutoff_hz", "Hz", 0.0, 10.0, "MC_YAW_TQ_CUTOFF: low-pass on the yaw torque",
-        &P::yaw_torque_cutoff_hz}}};
+        &P::yaw_torque_cutoff_hz},
+       {"yaw_headroom", "-", 0.0, 1.0,
+        "mixYaw: yaw may push actuators this fraction past their maximum (a constant in PX4's "
+        "ControlAllocationSequentialDesaturation, not a parameter)",
+        &P::yaw_headroom}}};
   return t;
 }
 namespace {

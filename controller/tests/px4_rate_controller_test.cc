@@ -119,8 +119,8 @@ TEST(Px4RateControllerTest, RollSaturationLowersThrustAndKeepsRoll) {
   const Params p;
   // thrust 0.8, roll 0.5: rotors 0.8 +- 0.5 / sqrt(2); the high pair exceeds 1 by
   // 0.8 + 0.3536 - 1 = 0.1536, so the thrust drops by exactly that and roll is kept
-  const Px4Allocation a =
-      Px4RateController::AllocateAirmodeDisabled(p, Eigen::Vector3d(0.5, 0, 0), 0.8);
+  const Px4Allocation a = Px4RateController::AllocateAirmodeDisabled(
+      p, Eigen::Vector3d(0.5, 0, 0), 0.8, Px4RateParams{}.yaw_headroom);
   const double over = 0.8 + 0.5 / std::sqrt(2.0) - 1.0;
   EXPECT_NEAR(a.torque(0), 0.5, 1e-12);
   EXPECT_NEAR(a.thrust, 0.8 - over, 1e-12);
@@ -133,8 +133,8 @@ TEST(Px4RateControllerTest, RollBeyondTheRotorsIsScaledAtMidThrust) {
   const Params p;
   // thrust 0.5, roll 1: rotors 0.5 +- 0.707 break both bounds equally; thrust cannot help (its
   // gains cancel), roll is scaled to the most the rotors give at this thrust, 0.5 * sqrt(2)
-  const Px4Allocation a =
-      Px4RateController::AllocateAirmodeDisabled(p, Eigen::Vector3d(1.0, 0, 0), 0.5);
+  const Px4Allocation a = Px4RateController::AllocateAirmodeDisabled(
+      p, Eigen::Vector3d(1.0, 0, 0), 0.5, Px4RateParams{}.yaw_headroom);
   EXPECT_NEAR(a.torque(0), 0.5 * std::sqrt(2.0), 1e-12);
   EXPECT_NEAR(a.thrust, 0.5, 1e-12);
   EXPECT_NEAR(a.u.maxCoeff(), 1.0, 1e-12);
@@ -145,8 +145,8 @@ TEST(Px4RateControllerTest, YawHasTheLowestPriority) {
   const Params p;
   // thrust 0.5, roll 0.3 (rotors +-0.2121), yaw 0.5 (rotors +-0.5): the rotor with both negative
   // would reach -0.2121; yaw alone gives way, to 0.5 - 0.2121, roll and thrust are kept
-  const Px4Allocation a =
-      Px4RateController::AllocateAirmodeDisabled(p, Eigen::Vector3d(0.3, 0, 0.5), 0.5);
+  const Px4Allocation a = Px4RateController::AllocateAirmodeDisabled(
+      p, Eigen::Vector3d(0.3, 0, 0.5), 0.5, Px4RateParams{}.yaw_headroom);
   EXPECT_NEAR(a.torque(0), 0.3, 1e-12);
   EXPECT_NEAR(a.thrust, 0.5, 1e-12);
   EXPECT_NEAR(a.torque(2), 0.5 - 0.3 / std::sqrt(2.0), 1e-12);
@@ -155,8 +155,8 @@ TEST(Px4RateControllerTest, YawHasTheLowestPriority) {
   // near full thrust: roll first lowers the thrust (0.9 + 0.1414 - 1 = 0.0414), yaw 0.1 then
   // fits inside the 15 % headroom and the thrust is lowered again by what yaw added (0.1):
   // roll and yaw are both kept, the thrust gives way
-  const Px4Allocation b =
-      Px4RateController::AllocateAirmodeDisabled(p, Eigen::Vector3d(0.2, 0, 0.1), 0.9);
+  const Px4Allocation b = Px4RateController::AllocateAirmodeDisabled(
+      p, Eigen::Vector3d(0.2, 0, 0.1), 0.9, Px4RateParams{}.yaw_headroom);
   EXPECT_NEAR(b.torque(0), 0.2, 1e-12);
   EXPECT_NEAR(b.torque(2), 0.1, 1e-12);
   EXPECT_NEAR(b.thrust, 0.9 - (0.9 + 0.2 / std::sqrt(2.0) - 1.0) - 0.1, 1e-12);
@@ -273,6 +273,25 @@ TEST(Px4RateControllerTest, RollRateStepOnTheAnalyticPlant) {
   EXPECT_LT(peak, 1.0 + 0.039 * 1.5);
   EXPECT_NEAR(at_250ms, 1.0, 0.05);
   EXPECT_LT(cross_max, 1e-9);
+}
+
+// PX4's per-axis limits (mc_rate_control_params.c): MC_ROLLRATE_P stops at 0.5 where
+// MC_PITCHRATE_P goes to 0.6, and MC_ROLLRATE_D stops at 0.01; the defaults sit within them.
+TEST(Px4RateParamTableTest, ChecksEachAxisAgainstItsOwnPx4Range) {
+  EXPECT_NO_THROW(CheckParamTable(Px4RateParamTable(), "rate_loop.", Px4RateParams{}));
+  Px4RateParams roll_p;
+  roll_p.p.x() = 0.55;
+  EXPECT_THROW(CheckParamTable(Px4RateParamTable(), "rate_loop.", roll_p), std::invalid_argument);
+  Px4RateParams pitch_p;
+  pitch_p.p.y() = 0.55;
+  EXPECT_NO_THROW(CheckParamTable(Px4RateParamTable(), "rate_loop.", pitch_p));
+  Px4RateParams roll_d;
+  roll_d.d.x() = 0.02;
+  EXPECT_THROW(CheckParamTable(Px4RateParamTable(), "rate_loop.", roll_d), std::invalid_argument);
+  Px4RateParams yaw_headroom;
+  yaw_headroom.yaw_headroom = 1.5;
+  EXPECT_THROW(CheckParamTable(Px4RateParamTable(), "rate_loop.", yaw_headroom),
+               std::invalid_argument);
 }
 
 }  // namespace

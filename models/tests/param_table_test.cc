@@ -25,6 +25,20 @@ const ParamTable<Toy>& ToyTable() {
   return t;
 }
 
+// A vector whose elements have ranges of their own (PX4's per-axis gain limits).
+struct PerAxis {
+  Eigen::Vector3d p{0.1, 0.1, 0.1};
+};
+
+const ParamTable<PerAxis>& PerAxisTable() {
+  static const ParamTable<PerAxis> t{
+      "per_axis",
+      "elements with ranges of their own",
+      {{"p", "-", 0.0, 0.6, "roll, pitch, yaw", &PerAxis::p, "", 3,
+        {{{0.01, 0.5}, {0.01, 0.6}, {0.0, 0.6}}}}}};
+  return t;
+}
+
 Toy Read(const std::string& text) {
   Toy toy;
   ReadParamTable(YamlMap(LoadYamlText(text, "toy.yaml"), "toy.yaml", "toy"), ToyTable(), &toy);
@@ -70,6 +84,38 @@ TEST(ParamTableTest, RangeCheckAndMarkdownComeFromTheSameDeclaration) {
   EXPECT_NE(md.find("| `toy.gain` | - | 0 to 1 | 0.5 | a gain |"), std::string::npos) << md;
   EXPECT_NE(md.find("| `toy.enabled` |  | true / false | false | switch |"), std::string::npos);
   EXPECT_NE(md.find("| `toy.axes` | m | -5 to 5 | [1, 2, 3] | per axis |"), std::string::npos);
+}
+
+TEST(ParamTableTest, AnElementOutsideItsOwnRangeIsNamedWithItsIndex) {
+  const auto read = [](const std::string& text) {
+    PerAxis config;
+    ReadParamTable(YamlMap(LoadYamlText(text, "a.yaml"), "a.yaml", "per_axis"), PerAxisTable(),
+                   &config);
+    return config;
+  };
+  // 0.55 is within the pitch element's range and the envelope, not the roll element's
+  EXPECT_EQ(read("{p: [0.1, 0.55, 0.0]}").p, Eigen::Vector3d(0.1, 0.55, 0.0));
+  try {
+    read("{p: [0.55, 0.1, 0.1]}");
+    FAIL() << "a roll gain past its own range was accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("per_axis.p"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("element 0: expected 0.01 to 0.5, got 0.55"),
+              std::string::npos)
+        << e.what();
+  }
+  // the yaw element may be 0, the roll element may not
+  EXPECT_THROW(read("{p: [0.0, 0.1, 0.1]}"), InputError);
+  EXPECT_NO_THROW(read("{p: [0.1, 0.1, 0.0]}"));
+  // the same ranges for a config built in code, and in the printed table
+  PerAxis built;
+  built.p.x() = 0.55;
+  EXPECT_THROW(CheckParamTable(PerAxisTable(), "rate_loop.", built), std::invalid_argument);
+  built.p = Eigen::Vector3d(0.5, 0.6, 0.6);
+  EXPECT_NO_THROW(CheckParamTable(PerAxisTable(), "rate_loop.", built));
+  EXPECT_NE(ParamTableMarkdown(PerAxisTable(), PerAxis{}, "", "default")
+                .find("0.01 to 0.5 / 0.01 to 0.6 / 0 to 0.6"),
+            std::string::npos);
 }
 
 }  // namespace

@@ -13,6 +13,7 @@
 #include <string>
 
 #include "hpa/models/input_error.h"
+#include "hpa/models/params.h"
 #include "hpa/models/rotor_model.h"
 #include "hpa/models/seed_streams.h"
 #include "hpa/sim/camera_image_model.h"
@@ -170,20 +171,21 @@ void World::ResolveIds() {
 
 // The scenario's explicit world overrides (they win over the mismatch draw).
 void World::ApplyOverrides() {
-  if (config_.overrides.payload_mass_kg) {
-    if (!(*config_.overrides.payload_mass_kg > 0)) {
+  // each override within the range params.yaml declares for the field it replaces
+  const auto apply = [&](const std::optional<double>& value, double Params::*member,
+                         const char* key) {
+    if (!value) return;
+    const ParamDecl<Params>& d = FindParamDecl(ParamsTables(), member);
+    if (!InDeclRange(d, *value)) {
       mj_deleteModel(model_);
-      throw InputError("", "world.payload_mass", "must be positive");
+      throw InputError("", key,
+                       "expected " + ParamValueText(d.min) + " to " + ParamValueText(d.max) +
+                           " " + d.unit + ", got " + ParamValueText(*value));
     }
-    world_params_.payload_mass_kg = *config_.overrides.payload_mass_kg;
-  }
-  if (config_.overrides.cable_length_m) {
-    if (!(*config_.overrides.cable_length_m > 0)) {
-      mj_deleteModel(model_);
-      throw InputError("", "world.cable_length", "must be positive");
-    }
-    world_params_.cable_length_m = *config_.overrides.cable_length_m;
-  }
+    world_params_.*member = *value;
+  };
+  apply(config_.overrides.payload_mass_kg, &Params::payload_mass_kg, "world.payload_mass");
+  apply(config_.overrides.cable_length_m, &Params::cable_length_m, "world.cable_length");
 }
 
 World::~World() {

@@ -8,6 +8,7 @@
 #include <string>
 
 #include "hpa/models/input_error.h"
+#include "hpa/models/params.h"
 #include "hpa/models/rotor_model.h"
 #include "hpa/models/seed_streams.h"
 #include "hpa/sim/world.h"
@@ -116,9 +117,14 @@ void World::DrawMismatch() {
   const MismatchProfile& m = config_.profile.mismatch;
   if (m.enabled) {
     Params& p = world_params_;
-    p.payload_mass_kg = std::max(1e-3, p.payload_mass_kg + m.payload_mass_sigma_kg * normal(rng));
-    p.cable_length_m = std::max(0.05, p.cable_length_m + m.cable_length_sigma_m * normal(rng));
-    p.quad_mass_kg = std::max(0.05, p.quad_mass_kg + m.quad_mass_sigma_kg * normal(rng));
+    // a draw that leaves a field's declared range is brought back to it
+    const auto draw = [&](double Params::*member, double sigma) {
+      p.*member = ClampToDecl(FindParamDecl(ParamsTables(), member),
+                              p.*member + sigma * normal(rng));
+    };
+    draw(&Params::payload_mass_kg, m.payload_mass_sigma_kg);
+    draw(&Params::cable_length_m, m.cable_length_sigma_m);
+    draw(&Params::quad_mass_kg, m.quad_mass_sigma_kg);
     for (int i = 0; i < 3; ++i) {
       p.inertia_B_kgm2(i) *= std::max(0.2, 1.0 + m.inertia_sigma_fraction * normal(rng));
     }

@@ -16,6 +16,7 @@
 #include <string_view>
 #include <vector>
 
+#include "hpa/controller/controller.h"
 #include "hpa/controller/reference.h"
 #include "hpa/models/hybrid_model.h"
 #include "hpa/models/params.h"
@@ -67,7 +68,7 @@ struct Ocp {
   // are taut, and the jump map (HybridModel::ProjectToTaut) is applied to the state entering
   // stage retaut_stage. -1: `mode` is held over the whole horizon (the paper's form).
   int retaut_stage = -1;
-  double perception_weight = 1.0;  // scale on q_cam (0: L_cam off)
+  double perception_weight = ControllerConfig{}.perception_weight;  // scale on q_cam (0: off)
   // slack and held up (SystemState::payload_supported): L_cam sees the payload without the free
   // fall the model predicts for it (SeenPayloadOffset)
   bool payload_supported = false;

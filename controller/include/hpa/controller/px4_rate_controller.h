@@ -42,8 +42,9 @@ struct Px4RateParams {
 };
 
 /// The PX4 parameters of Px4RateParams as a scenario sets them (the world profile's `rate_loop`
-/// section): YAML key, unit, the range of PX4's parameter declarations (@min/@max; a generous
-/// bound where PX4 gives no @max), meaning. Flight-code parameters, declared once here.
+/// section): YAML key, unit, the range of PX4's parameter declarations per axis
+/// (mc_rate_control_params.c's @min/@max; a generous bound where PX4 gives no @max), meaning.
+/// Flight-code parameters, declared once here: their values are Px4RateParams' defaults.
 const ParamTable<Px4RateParams>& Px4RateParamTable();
 
 /// Physical size of a unit normalised command: N m per unit roll, pitch, yaw torque and N per
@@ -96,10 +97,10 @@ class Px4RateController {
   static Px4TorqueScale TorqueScale(const Params& params);
   /// PX4's mixAirmodeDisabled on this vehicle: normalised torque (roll, pitch, yaw) and thrust
   /// to normalised rotor thrusts in [0, 1]. Thrust is only ever lowered to unsaturate; roll and
-  /// pitch are then scaled; yaw is added last and scaled to fit (15 % headroom), then thrust is
+  /// pitch are then scaled; yaw is added last and scaled to fit (yaw_headroom), then thrust is
   /// lowered again if yaw pushed a rotor past its maximum; the result is clipped to [0, 1].
   static Px4Allocation AllocateAirmodeDisabled(const Params& params, const Eigen::Vector3d& torque,
-                                               double thrust, double yaw_headroom = 0.15);
+                                               double thrust, double yaw_headroom);
   /// Rotor speeds (rad/s) of normalised rotor thrusts u in [0, 1].
   static InputVector RotorSpeeds(const Params& params, const Eigen::Vector4d& u);
 

@@ -5,9 +5,11 @@
 // the docs print it (ParamTableMarkdown) with each default taken from the struct itself.
 
 #include <Eigen/Core>
+#include <array>
 #include <sstream>
 #include <stdexcept>
 #include <string>
+#include <utility>
 #include <variant>
 #include <vector>
 
@@ -29,7 +31,18 @@ struct ParamDecl {
                Eigen::Matrix3d C::*>
       member;
   std::string wire_key = "";  // its name in the lockstep protocol's JSON ("": the YAML key)
+  // a vector whose elements have ranges of their own (PX4's per-axis limits): one [min, max]
+  // per element, the first element_range_count of them; 0: every element in [min, max]
+  int element_range_count = 0;
+  std::array<std::pair<double, double>, 4> element_ranges{};
 };
+
+/// The allowed range of element `i` of the parameter `d` (its own, or the declaration's).
+template <class C>
+std::pair<double, double> ElementRange(const ParamDecl<C>& d, size_t i) {
+  return static_cast<int>(i) < d.element_range_count ? d.element_ranges[i]
+                                                      : std::make_pair(d.min, d.max);
+}
 
 /// The parameters of one config struct, in the order they are documented.
 template <class C>
@@ -39,17 +52,45 @@ struct ParamTable {
   std::vector<ParamDecl<C>> params;
 };
 
+/// The declaration of `member` in `tables` (std::out_of_range when none declares it): code that
+/// checks or clamps one field elsewhere takes its range from here rather than spelling it again.
+template <class C, class M>
+const ParamDecl<C>& FindParamDecl(const std::vector<ParamTable<C>>& tables, M C::*member) {
+  for (const ParamTable<C>& table : tables) {
+    for (const ParamDecl<C>& d : table.params) {
+      const auto* held = std::get_if<M C::*>(&d.member);
+      if (held != nullptr && *held == member) return d;
+    }
+  }
+  throw std::out_of_range("no parameter declares this member");
+}
+
+/// `value` brought into the declared range of `d` (a drawn value that left it).
+template <class C>
+double ClampToDecl(const ParamDecl<C>& d, double value) {
+  return value < d.min ? d.min : (value > d.max ? d.max : value);
+}
+
+/// Whether `value` lies in the declared range of `d` (false for NaN).
+template <class C>
+bool InDeclRange(const ParamDecl<C>& d, double value) {
+  return value >= d.min && value <= d.max;
+}
+
 /// Checks `value` of the parameter `key` of `table` against its declared range; throws
 /// std::invalid_argument "PREFIXkey: expected MIN to MAX, got VALUE" (code that builds a config
 /// without the YAML loader gets the loader's range).
 template <class C>
 void CheckParamValue(const ParamTable<C>& table, const std::string& prefix, const std::string& key,
-                     double value) {
+                     double value, size_t element = 0) {
   for (const ParamDecl<C>& d : table.params) {
     if (d.key != key) continue;
-    if (!(value >= d.min && value <= d.max)) {
+    const auto [min, max] = ElementRange(d, element);
+    if (!(value >= min && value <= max)) {
       std::ostringstream what;
-      what << prefix << key << ": expected " << d.min << " to " << d.max << ", got " << value;
+      what << prefix << key;
+      if (d.element_range_count > 0) what << "." << element;
+      what << ": expected " << min << " to " << max << ", got " << value;
       throw std::invalid_argument(what.str());
     }
     return;
@@ -70,7 +111,7 @@ void CheckParamTable(const ParamTable<C>& table, const std::string& prefix, cons
           } else if constexpr (!std::is_same_v<T, bool>) {
             const auto& m = config.*member;
             for (Eigen::Index i = 0; i < m.size(); ++i) {
-              CheckParamValue(table, prefix, d.key, m.data()[i]);
+              CheckParamValue(table, prefix, d.key, m.data()[i], static_cast<size_t>(i));
             }
           }
         },
@@ -120,8 +161,13 @@ std::string ParamTableMarkdown(const ParamTable<C>& table, const C& values,
           value = ParamValueText(values.*member);
           if constexpr (std::is_same_v<T, bool>) {
             range = "true / false";
-          } else {
+          } else if (d.element_range_count == 0) {
             range = ParamValueText(d.min) + " to " + ParamValueText(d.max);
+          } else {
+            for (size_t i = 0; static_cast<int>(i) < d.element_range_count; ++i) {
+              range += (i ? " / " : "") + ParamValueText(d.element_ranges[i].first) + " to " +
+                       ParamValueText(d.element_ranges[i].second);
+            }
           }
         },
         d.member);

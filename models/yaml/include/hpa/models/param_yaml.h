@@ -14,7 +14,8 @@ namespace hpa {
 /// Reads a matrix given as a list of rows, each element in [min, max].
 Eigen::Matrix3d ReadMatrix3(const YamlMap& map, const std::string& key, double min, double max);
 
-/// Reads the keys of `table` from `map` into `*config`; rejects unknown keys of `map`. With
+/// Reads the keys of `table` from `map` into `*config` (each element of a vector within its own
+/// range where the declaration gives one per element); rejects unknown keys of `map`. With
 /// `required`, every declared key must be present (a file that is the one source of its
 /// numbers); otherwise an absent key keeps the struct's value.
 template <class C>
@@ -36,8 +37,18 @@ void ReadParamTable(const YamlMap& map, const ParamTable<C>& table, C* config,
             if (map.Has(d.key)) config->*member = ReadMatrix3(map, d.key, d.min, d.max);
           } else {
             if (map.Has(d.key)) {
-              config->*member =
+              const T value =
                   map.Vector(d.key, static_cast<int>(T::RowsAtCompileTime), d.min, d.max);
+              for (size_t i = 0; static_cast<int>(i) < d.element_range_count; ++i) {
+                const auto [min, max] = ElementRange(d, i);
+                const double v = value(static_cast<Eigen::Index>(i));
+                if (!(v >= min && v <= max)) {
+                  map.Fail(d.key, "element " + std::to_string(i) + ": expected " +
+                                      ParamValueText(min) + " to " + ParamValueText(max) +
+                                      ", got " + ParamValueText(v));
+                }
+              }
+              config->*member = value;
             }
           }
         },
