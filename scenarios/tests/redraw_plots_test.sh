@@ -54,7 +54,7 @@ for csv in "$out/cmp/comparison.csv" "$out/run/tracking.csv" "$out/slack/trackin
 done
 
 # what the redrawn figures hold, read from matplotlib's artists
-"$python" - "$src/scripts" "$out" <<'PY' || fail "the redrawn figures lack the shading or the colours"
+"$python" - "$src/scripts" "$out" <<'PY' || fail "a redrawn figure lacks its shading or colours"
 import csv, sys
 sys.path.insert(0, sys.argv[1])
 import redraw_plots
@@ -86,7 +86,8 @@ for name in ("tracking", "retaut"):
 fig = redraw_plots.draw(out + "/slack_cmp/comparison.csv")
 for ax in fig.axes:
     colours = {c for _, _, c in spans(ax)}
-    assert len(colours) == 2, "comparison panel '%s': shading colours %s" % (ax.get_title(), colours)
+    assert len(colours) == 2, \
+        "comparison panel '%s': shading colours %s" % (ax.get_title(), colours)
 
 # a sweep's controllers: one colour each, the same in every panel
 fig = redraw_plots.draw(out + "/grid/crash_rate.csv")
