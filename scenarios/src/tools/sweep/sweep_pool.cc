@@ -14,6 +14,7 @@
 #include <cstdio>
 #include <cstring>
 #include <fstream>
+#include <functional>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <stdexcept>
@@ -29,6 +30,8 @@ namespace hpa::sweep {
 namespace {
 
 using Clock = std::chrono::steady_clock;
+// What the pool calls with each finished run's JSON line, whether it failed, and the run.
+using RecordFn = std::function<void(const std::string& line, bool failed, const SweepRun&)>;
 
 // What flew a run whose process died: its controller type, or "external" for a flight stack
 // (its name is known only from its hello, which the dead worker did not pass on).
@@ -114,55 +117,15 @@ class IgnoreSigpipe {
   void (*previous_)(int);
 };
 
-// One worker process: the pipe its runs go down, the pipe it says "done" on, and its run.
-struct Worker {
-  pid_t pid = -1;
-  int to_worker = -1, from_worker = -1;  // the parent's ends
-  std::optional<size_t> run;             // position in `runs` of the run it flies
-  Clock::time_point start;               // when that run was handed to it
-};
-
-}  // namespace
-
-int RunPool(
-    const SweepSpec& spec, const std::vector<SweepRun>& runs, const Params& params,
-    sim::GlBackend gl_backend, int jobs, const std::string& tmp_dir,
-    const std::function<void(const std::string& line, bool failed, const SweepRun&)>& record) {
-  const pid_t parent_pid = getpid();
-  const IgnoreSigpipe ignore_sigpipe;
-  size_t next = 0;
-  std::vector<Worker> workers;
-  // ends a worker: closes its pipes and reaps it (killed first when `kill_it`); its status
-  const auto end_worker = [&](Worker& w, bool kill_it) {
-    if (kill_it) kill(w.pid, SIGKILL);
-    close(w.to_worker);
-    close(w.from_worker);
-    int status = 0;
-    while (waitpid(w.pid, &status, 0) < 0 && errno == EINTR) {
-    }
-    return status;
-  };
-  // a worker killed in a run leaves its flight stack's processes, socket folder and frame ring
-  // (it could not clean up); reclaimed as soon as it is reaped, not at the next stack's start
-  const auto reclaim_stack = [&]() {
-    if (!spec.flight_stack.empty()) runner::RemoveStaleFlightRuns();
-  };
-  const auto path_of = [&](size_t position) {
-    return tmp_dir + "/" + std::to_string(runs[position].index) + ".json";
-  };
-  // a stop: the workers die with their runs unrecorded (resume runs them again)
-  const auto stop = [&]() {
-    for (Worker& w : workers) {
-      end_worker(w, true);
-      if (w.run) std::remove(path_of(*w.run).c_str());
-    }
-    workers.clear();
-    reclaim_stack();
-    return StopRequested();
-  };
-  // a worker forked from this process: it flies the runs it is handed, one at a time, until
-  // its pipe closes
-  const auto start_worker = [&]() {
+// One forked worker process: it flies the runs it is handed down one pipe, one at a time, and
+// says each is done on the other (its record is in the run's file by then).
+class Worker {
+ public:
+  // Forks a worker that calls `fly(position)` for each position it is handed, until its pipe
+  // closes. `siblings` are the other workers: their pipe ends are not this one's and are closed
+  // in the child (they close when those workers die).
+  Worker(const std::function<void(uint64_t)>& fly, const std::vector<Worker>& siblings,
+         pid_t parent_pid) {
     int down[2], up[2];
     if (pipe(down) != 0) throw std::runtime_error("pipe failed");
     if (pipe(up) != 0) {
@@ -171,133 +134,232 @@ int RunPool(
       throw std::runtime_error("pipe failed");
     }
     std::fflush(nullptr);
-    const pid_t pid = fork();
-    if (pid < 0) throw std::runtime_error("fork failed");
-    if (pid == 0) {
+    pid_ = fork();
+    if (pid_ < 0) throw std::runtime_error("fork failed");
+    if (pid_ == 0) {
       // a worker dies with the sweep (kill -9 of the parent included)
       prctl(PR_SET_PDEATHSIG, SIGKILL);
       if (getppid() != parent_pid) _exit(1);
-      // the other workers' pipes are not this one's: their ends close when they die
-      for (const Worker& other : workers) {
-        close(other.to_worker);
-        close(other.from_worker);
+      for (const Worker& other : siblings) {
+        close(other.to_worker_);
+        close(other.from_worker_);
       }
       close(down[1]);
       close(up[0]);
       uint64_t position = 0;
       while (ReadFully(down[0], &position, sizeof position)) {
-        const SweepRun& run = runs[position];
-        const std::string line = RunOne(spec, run, params, gl_backend);
-        {
-          std::ofstream out(path_of(position));
-          out << line;
-        }
+        fly(position);
         if (!WriteFully(up[1], &position, sizeof position)) _exit(1);
       }
       _exit(0);
     }
     close(down[0]);
     close(up[1]);
-    Worker w;
-    w.pid = pid;
-    w.to_worker = down[1];
-    w.from_worker = up[0];
-    workers.push_back(w);
-  };
+    to_worker_ = down[1];
+    from_worker_ = up[0];
+  }
 
-  while (next < runs.size() || !workers.empty()) {
-    if (StopRequested() != 0) return stop();
-    // every idle worker gets the next run, or ends when none is left (two workers that finish
-    // in one round may both be idle with one run left); workers are started up to --jobs while
-    // runs remain
-    for (size_t i = 0; i < workers.size();) {
-      Worker& w = workers[i];
-      if (!w.run && next >= runs.size()) {
-        end_worker(w, false);  // its pipe closes and it exits
-        workers.erase(workers.begin() + static_cast<long>(i));
+  // Hands it the run at `position`; false when it died (reaped by the caller's next poll).
+  bool Hand(size_t position) {
+    const uint64_t p = position;
+    if (!WriteFully(to_worker_, &p, sizeof p)) return false;
+    run_ = position;
+    start_ = Clock::now();
+    return true;
+  }
+
+  // What its pipe said after a poll: the run it flies is done, it died, or nothing yet.
+  enum class Answer { kNone, kDone, kDied };
+  Answer Read(short revents) {
+    uint64_t done = 0;
+    if ((revents & POLLIN) != 0 && ReadFully(from_worker_, &done, sizeof done) && run_ &&
+        done == *run_) {
+      return Answer::kDone;
+    }
+    return (revents & (POLLIN | POLLHUP | POLLERR)) != 0 ? Answer::kDied : Answer::kNone;
+  }
+
+  // Closes its pipes and reaps it (killed first when `kill_it`); its wait status.
+  int End(bool kill_it) {
+    if (kill_it) kill(pid_, SIGKILL);
+    close(to_worker_);
+    close(from_worker_);
+    int status = 0;
+    while (waitpid(pid_, &status, 0) < 0 && errno == EINTR) {
+    }
+    return status;
+  }
+
+  // Seconds since it was handed its run.
+  double RunSeconds() const { return std::chrono::duration<double>(Clock::now() - start_).count(); }
+
+  // The position of the run it flies, if any.
+  const std::optional<size_t>& run() const { return run_; }
+  // It has no run: the next round hands it one or ends it.
+  void SetIdle() { run_.reset(); }
+  // The end of the pipe it answers on.
+  int answer_fd() const { return from_worker_; }
+
+ private:
+  pid_t pid_ = -1;
+  int to_worker_ = -1, from_worker_ = -1;  // the parent's ends
+  std::optional<size_t> run_;              // position of the run it flies
+  Clock::time_point start_;                // when that run was handed to it
+};
+
+// Why a worker's process ended, from its wait status.
+std::string EndedBecause(int status) {
+  return WIFSIGNALED(status) ? std::string("worker killed by signal ") + strsignal(WTERMSIG(status))
+                             : "worker exited with status " + std::to_string(WEXITSTATUS(status));
+}
+
+// The pool: hands runs to idle workers, starts workers up to `jobs`, and turns each worker's
+// answer (done, died, past the time limit) into the run's record.
+class Pool {
+ public:
+  Pool(const SweepSpec& spec, const std::vector<SweepRun>& runs, const Params& params,
+       sim::GlBackend gl_backend, int jobs, const std::string& tmp_dir, const RecordFn& record)
+      : spec_(spec), runs_(runs), jobs_(jobs), tmp_dir_(tmp_dir), record_(record) {
+    fly_ = [this, &params, gl_backend](uint64_t position) {
+      const std::string line = RunOne(spec_, runs_[position], params, gl_backend);
+      std::ofstream out(PathOf(position));
+      out << line;
+    };
+  }
+
+  // Runs every run; 0, or the signal of a stop request.
+  int Run() {
+    const IgnoreSigpipe ignore_sigpipe;
+    while (next_ < runs_.size() || !workers_.empty()) {
+      if (StopRequested() != 0) return Stop();
+      HandOut();
+      if (next_ >= runs_.size() && workers_.empty()) break;
+      const std::vector<pollfd> fds = Wait();
+      if (StopRequested() != 0) return Stop();
+      Collect(fds);
+    }
+    return 0;
+  }
+
+ private:
+  // Each idle worker gets the next run, or ends when none is left (two workers that finish in
+  // one round may both be idle with one run left); workers are started up to --jobs while runs
+  // remain.
+  void HandOut() {
+    for (size_t i = 0; i < workers_.size();) {
+      Worker& w = workers_[i];
+      if (!w.run() && next_ >= runs_.size()) {
+        w.End(false);  // its pipe closes and it exits
+        workers_.erase(workers_.begin() + static_cast<long>(i));
         continue;
       }
-      if (!w.run) {
-        const uint64_t position = next;
-        if (WriteFully(w.to_worker, &position, sizeof position)) {
-          w.run = next++;
-          w.start = Clock::now();
-        }
-      }
+      if (!w.run() && w.Hand(next_)) ++next_;
       ++i;
     }
-    if (next >= runs.size() && workers.empty()) break;
-    while (next < runs.size() && static_cast<int>(workers.size()) < jobs) {
-      start_worker();
-      Worker& w = workers.back();
-      const uint64_t position = next;
-      if (!WriteFully(w.to_worker, &position, sizeof position)) break;  // it died: reaped below
-      w.run = next++;
-      w.start = Clock::now();
+    while (next_ < runs_.size() && static_cast<int>(workers_.size()) < jobs_) {
+      const std::vector<Worker> siblings = workers_;
+      workers_.emplace_back(fly_, siblings, parent_pid_);
+      if (!workers_.back().Hand(next_)) break;  // it died: reaped by Collect
+      ++next_;
     }
-    // wait for a worker to answer (or die), at most 20 ms: stops and time limits are checked
+  }
+
+  // Waits at most 20 ms for a worker to answer (or die): stops and time limits are checked.
+  std::vector<pollfd> Wait() const {
     std::vector<pollfd> fds;
-    for (const Worker& w : workers) fds.push_back({w.from_worker, POLLIN, 0});
+    for (const Worker& w : workers_) fds.push_back({w.answer_fd(), POLLIN, 0});
     if (poll(fds.data(), fds.size(), 20) < 0 && errno != EINTR) {
       throw std::runtime_error(std::string("poll failed: ") + std::strerror(errno));
     }
-    if (StopRequested() != 0) return stop();
-    for (size_t i = 0; i < workers.size();) {
-      Worker& w = workers[i];
-      const short revents = fds[i].revents;
-      uint64_t done = 0;
-      if ((revents & POLLIN) != 0 && ReadFully(w.from_worker, &done, sizeof done) && w.run &&
-          done == *w.run) {
-        // its run finished: the record it wrote
-        std::ifstream in(path_of(*w.run));
-        std::string line;
-        const SweepRun& run = runs[*w.run];
-        if (std::getline(in, line) && !line.empty()) {
-          record(line, RecordFailed(line), run);
-        } else {
-          record(RecordLine(spec, run, ControllerOf(spec, run), "worker wrote no record", ""), true,
-                 run);
-        }
-        std::remove(path_of(*w.run).c_str());
-        w.run.reset();  // idle: the next round hands it a run or ends it
-        ++i;
-        continue;
-      }
-      if ((revents & (POLLIN | POLLHUP | POLLERR)) != 0) {
-        // it died (end of file on its pipe), with its run unfinished
-        const int status = end_worker(w, true);
-        reclaim_stack();
-        if (w.run) {
-          const SweepRun& run = runs[*w.run];
-          const std::string why =
-              WIFSIGNALED(status)
-                  ? std::string("worker killed by signal ") + strsignal(WTERMSIG(status))
-                  : "worker exited with status " + std::to_string(WEXITSTATUS(status));
-          record(RecordLine(spec, run, ControllerOf(spec, run), why, ""), true, run);
-          std::remove(path_of(*w.run).c_str());
-        }
-        workers.erase(workers.begin() + static_cast<long>(i));
-        fds.erase(fds.begin() + static_cast<long>(i));
-        continue;
-      }
-      if (w.run &&
-          std::chrono::duration<double>(Clock::now() - w.start).count() > spec.time_limit_s) {
-        end_worker(w, true);
-        reclaim_stack();
-        const SweepRun& run = runs[*w.run];
-        std::remove(path_of(*w.run).c_str());
-        record(RecordLine(
-                   spec, run, ControllerOf(spec, run),
-                   "killed after the time limit of " + FormatNumber(spec.time_limit_s) + " s", ""),
-               true, run);
-        workers.erase(workers.begin() + static_cast<long>(i));
-        fds.erase(fds.begin() + static_cast<long>(i));
-        continue;
-      }
-      ++i;
-    }
+    return fds;
   }
-  return 0;
+
+  // Records what each worker's answer says; a worker that died or ran past the time limit is
+  // reaped, its flight stack reclaimed, and its run recorded as failed.
+  void Collect(const std::vector<pollfd>& fds) {
+    std::vector<Worker> alive;
+    for (size_t i = 0; i < workers_.size(); ++i) {
+      Worker& w = workers_[i];
+      const Worker::Answer answer = w.Read(fds[i].revents);
+      if (answer == Worker::Answer::kDone) {
+        RecordFinished(*w.run());
+        w.SetIdle();
+      } else if (answer == Worker::Answer::kDied) {
+        const int status = w.End(true);
+        if (w.run()) RecordLost(*w.run(), EndedBecause(status));
+        ReclaimStack();
+        continue;
+      } else if (w.run() && w.RunSeconds() > spec_.time_limit_s) {
+        w.End(true);
+        RecordLost(*w.run(),
+                   "killed after the time limit of " + FormatNumber(spec_.time_limit_s) + " s");
+        ReclaimStack();
+        continue;
+      }
+      alive.push_back(w);
+    }
+    workers_ = std::move(alive);
+  }
+
+  // The record a worker wrote for the run at `position` (a failure when it wrote none).
+  void RecordFinished(size_t position) {
+    std::ifstream in(PathOf(position));
+    std::string line;
+    const SweepRun& run = runs_[position];
+    if (std::getline(in, line) && !line.empty()) {
+      record_(line, RecordFailed(line), run);
+    } else {
+      RecordLost(position, "worker wrote no record");
+    }
+    std::remove(PathOf(position).c_str());
+  }
+
+  // A failed record for the run at `position`, which its worker did not finish.
+  void RecordLost(size_t position, const std::string& why) {
+    const SweepRun& run = runs_[position];
+    std::remove(PathOf(position).c_str());
+    record_(RecordLine(spec_, run, ControllerOf(spec_, run), why, ""), true, run);
+  }
+
+  // A stop: the workers die with their runs unrecorded (resume runs them again).
+  int Stop() {
+    for (Worker& w : workers_) {
+      w.End(true);
+      if (w.run()) std::remove(PathOf(*w.run()).c_str());
+    }
+    workers_.clear();
+    ReclaimStack();
+    return StopRequested();
+  }
+
+  // A worker killed in a run leaves its flight stack's processes, socket folder and frame ring
+  // (it could not clean up): reclaimed as soon as it is reaped, not at the next stack's start.
+  void ReclaimStack() const {
+    if (!spec_.flight_stack.empty()) runner::RemoveStaleFlightRuns();
+  }
+
+  // The file a worker writes the record of the run at `position` into.
+  std::string PathOf(size_t position) const {
+    return tmp_dir_ + "/" + std::to_string(runs_[position].index) + ".json";
+  }
+
+  const SweepSpec& spec_;
+  const std::vector<SweepRun>& runs_;
+  const int jobs_;
+  const std::string tmp_dir_;
+  const RecordFn& record_;
+  const pid_t parent_pid_ = getpid();
+  std::function<void(uint64_t)> fly_;  // what a worker does with a run (in the child)
+  std::vector<Worker> workers_;
+  size_t next_ = 0;  // position of the next run to hand out
+};
+
+}  // namespace
+
+int RunPool(const SweepSpec& spec, const std::vector<SweepRun>& runs, const Params& params,
+            sim::GlBackend gl_backend, int jobs, const std::string& tmp_dir,
+            const RecordFn& record) {
+  return Pool(spec, runs, params, gl_backend, jobs, tmp_dir, record).Run();
 }
 
 }  // namespace hpa::sweep
