@@ -174,3 +174,10 @@ add_test(NAME cli.sweep_grid_factors
          COMMAND bash ${SCEN}/tests/sweep_grid_factors_test.sh ${HPA_BIN} ${SCEN}
                  ${SCEN_OUT}/sweep_grid_factors)
 set_tests_properties(cli.sweep_grid_factors PROPERTIES LABELS cli TIMEOUT 300)
+
+# The README's "your controller against hpa_mpc" block, run as written (a Python stack compared
+# and swept against hpa_mpc, then sweep-diff): labels, run counts and the diff's names checked
+add_test(NAME cli.readme_your_controller
+         COMMAND bash ${SCEN}/tests/readme_your_controller_test.sh ${HPA_BIN} ${CMAKE_SOURCE_DIR}
+                 ${HPA_PYTHON3} ${CMAKE_BINARY_DIR}/readme_your_controller)
+set_tests_properties(cli.readme_your_controller PROPERTIES LABELS "cli;scenario" TIMEOUT 600)
