@@ -97,12 +97,17 @@ const ReferenceKey& FindReferenceKey(const std::string& type, const std::string&
   throw std::out_of_range("no reference key " + type + "." + key);
 }
 
+const ReferenceKey* FileKeyOf(const ReferenceType& type) {
+  for (const ReferenceKey& k : type.keys) {
+    if (k.size == 0) return &k;
+  }
+  return nullptr;
+}
+
 ReferenceSpec ReadReferenceSpec(const ReferenceType& type, const ReferenceKeyValues& values) {
   ReferenceSpec spec;
   spec.type = type.name;
-  for (const ReferenceKey& k : type.keys) {
-    if (k.size == 0) spec.file = values.File(k.key);
-  }
+  if (const ReferenceKey* file = FileKeyOf(type)) spec.file = values.File(file->key);
   if (type.read) {
     type.read(values, &spec);
   } else {

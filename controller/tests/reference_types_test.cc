@@ -40,6 +40,12 @@ TEST(ReferenceTypeRegistryTest, ARegistrationCarriesItsBehaviour) {
   }
 }
 
+TEST(ReferenceTypeRegistryTest, TheFileKeyIsTheOneOfSizeZero) {
+  EXPECT_EQ(FileKeyOf(*FindReferenceType("hover")), nullptr);
+  ASSERT_NE(FileKeyOf(*FindReferenceType("csv")), nullptr);
+  EXPECT_EQ(FileKeyOf(*FindReferenceType("csv"))->key, "file");
+}
+
 TEST(ReferenceTypeRegistryTest, KeyValuesAreReadAsDeclared) {
   ReferenceKeyValues v;
   v.numbers = {{"r", {0.5}}, {"p", {1, 2, 3}}};

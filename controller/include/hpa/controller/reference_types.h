@@ -88,6 +88,9 @@ void RegisterReferenceType(ReferenceType type);
 /// The declaration of `key` of reference type `type` (std::out_of_range if there is none).
 const ReferenceKey& FindReferenceKey(const std::string& type, const std::string& key);
 
+/// The file key of `type` (the one of size 0), or nullptr if it reads no file.
+const ReferenceKey* FileKeyOf(const ReferenceType& type);
+
 /// Builds a spec of `type` from its key values: the spec's file from the file key, then the
 /// type's read (or the numbers kept as read). The scenario loader and tests call it.
 ReferenceSpec ReadReferenceSpec(const ReferenceType& type, const ReferenceKeyValues& values);
