@@ -10,10 +10,10 @@ panel, and its qualified variants share it: `NAME (dotted)` (a reference, drawn 
 `NAME (expect-failure rate)` (drawn thin and dashed) and `NAME (95% CI)` (error bars) take
 NAME's colour. Panels titled `a=1, b=2` (a sweep's crash_rate.csv with two or more grid
 factors) are laid out as a grid: one column per value of the second name, wrapped past six,
-with one y scale. One legend for the whole figure, below the panels. Panels against time
-(`t [s]`) get the slack shading the hpa plot has, read from the run's log.csv beside the CSV
-(DIR/log.csv, or DIR/NAME/log.csv for each series NAME of a comparison): the true slack
-intervals, and in retaut.csv's panels each re-taut instant marked in red. Needs matplotlib
+with one y scale. One legend for the whole figure, below the panels. Each panel gets the
+shading the hpa plot has (the true slack intervals, a comparison's per run, and retaut.csv's
+re-taut marks), read from NAME.shading.csv, which the plot writes beside NAME.csv with every
+span it shades: the redraw does not derive them again. Needs matplotlib
 (Debian: python3-matplotlib); only the standard library otherwise.
 """
 
@@ -26,14 +26,6 @@ from collections import OrderedDict
 
 # qualifiers a series name may end with; the series takes the colour of the name before it
 QUALIFIERS = (" (dotted)", " (expect-failure rate)", " (95% CI)")
-# shorter true-mode flips are tendon chatter: the slack intervals of TrueSlackIntervals
-# (scenarios/src/runner/metrics.cc, kMinSlackInterval_s), which the hpa plots shade
-MIN_SLACK_INTERVAL_S = 0.03
-# the hpa plots' shading colours (RGB): a run's slack, a comparison's other runs' slack, re-taut
-SLACK_RGB = (1.0, 165 / 255, 0.0)
-COMPARISON_FIRST_SLACK_RGB = (1.0, 200 / 255, 0.0)
-COMPARISON_OTHER_SLACK_RGB = (150 / 255, 200 / 255, 1.0)
-RETAUT_RGB = (220 / 255, 0.0, 0.0)
 MAX_GRID_COLUMNS = 6
 
 
@@ -87,47 +79,26 @@ def facet_layout(titles):
     return (len(titles) + columns - 1) // columns, columns
 
 
-def slack_intervals(log_path):
-    """The true slack intervals [start, end) of a run's log.csv (true_mode 0), as the hpa plots
-    shade them, and the log's time span."""
-    times, slack = [], []
-    with open(log_path, newline="") as f:
-        for row in csv.DictReader(f):
-            times.append(float(row["time_s"]))
-            slack.append(float(row["true_mode"]) == 0.0)
-    intervals = []
-    i = 0
-    while i < len(times):
-        if not slack[i]:
-            i += 1
-            continue
-        j = i
-        while j < len(times) and slack[j]:
-            j += 1
-        end = times[j] if j < len(times) else times[-1]
-        if end - times[i] >= MIN_SLACK_INTERVAL_S:
-            intervals.append((times[i], end))
-        i = j
-    span = (times[0], times[-1]) if times else (0.0, 0.0)
-    return intervals, span
-
-
-def slack_shading(csv_path, keys):
-    """[(colour, intervals, span)] for the runs behind a plot: DIR/log.csv (a run's plot), else
-    DIR/KEY/log.csv for each series KEY (a comparison: the first run's slack orange, the
-    others' light blue, as hpa compare draws them)."""
-    folder = os.path.dirname(os.path.abspath(csv_path))
-    own = os.path.join(folder, "log.csv")
-    if os.path.isfile(own):
-        return [(SLACK_RGB,) + slack_intervals(own)]
-    shading = []
-    for key in keys:
-        for name in (key, key[:-len(" (CRASHED)")] if key.endswith(" (CRASHED)") else None):
-            log = name and os.path.join(folder, name, "log.csv")
-            if log and os.path.isfile(log):
-                colour = COMPARISON_FIRST_SLACK_RGB if not shading else COMPARISON_OTHER_SLACK_RGB
-                shading.append((colour,) + slack_intervals(log))
-                break
+def read_shading(csv_path):
+    """{panel: [(label, x0, x1, rgb)]} from NAME.shading.csv, written beside the plot's CSV with
+    every span the hpa plot shades (slack intervals, re-taut marks); {} when it shades none."""
+    path = csv_path[:-len(".csv")] + ".shading.csv" if csv_path.endswith(".csv") else None
+    shading = OrderedDict()
+    if not path or not os.path.isfile(path):
+        return shading
+    with open(path, newline="") as f:
+        reader = csv.DictReader(f)
+        need = {"panel", "label", "x0", "x1", "r", "g", "b"}
+        if reader.fieldnames is None or not need.issubset(reader.fieldnames):
+            raise SystemExit("%s: not an hpa shading CSV (expected columns %s)"
+                             % (path, sorted(need)))
+        for line, row in enumerate(reader, start=2):
+            try:
+                span = (float(row["x0"]), float(row["x1"]))
+                rgb = tuple(float(row[c]) / 255.0 for c in "rgb")
+            except ValueError:
+                raise SystemExit("%s line %d: a span or colour that is not a number" % (path, line))
+            shading.setdefault(row["panel"], []).append((row["label"], span[0], span[1], rgb))
     return shading
 
 
@@ -164,20 +135,13 @@ def draw(csv_path):
     for ax in flat_axes[len(panels):]:
         ax.set_visible(False)
 
-    shading = slack_shading(csv_path, keys)
-    retaut = os.path.basename(csv_path) == "retaut.csv"
+    shading = read_shading(csv_path)
     handles = OrderedDict()  # legend label -> artist, over all panels
     for ax, (title, panel) in zip(flat_axes, panels.items()):
-        if panel["x_label"] == "t [s]":
-            for colour, intervals, span in shading:
-                for a, b in intervals:
-                    label = "slack (shaded)" if len(shading) == 1 else "slack (shaded per run)"
-                    handles.setdefault(label, ax.axvspan(
-                        a, b, color=colour, alpha=0.35, lw=0, zorder=0))
-                    if retaut and b < span[1]:
-                        mark = ax.axvspan(b, b + 0.004 * (span[1] - span[0]), color=RETAUT_RGB,
-                                          alpha=0.35, lw=0, zorder=0)
-                        handles.setdefault("re-taut", mark)
+        for label, a, b, rgb in shading.get(title, []):
+            span = ax.axvspan(a, b, color=rgb, alpha=0.35, lw=0, zorder=0)
+            if label:
+                handles.setdefault(label + " (shaded)", span)
         for name, s in panel["series"].items():
             colour = colour_of[colour_key(name)]
             finite_value = any(v == v for v in s["value"])

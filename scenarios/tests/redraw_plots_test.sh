@@ -82,6 +82,16 @@ for name in ("tracking", "retaut"):
     for ax in fig.axes:
         assert any(a <= t_slack <= b for a, b, _ in spans(ax)), \
             "%s panel '%s' shades no span over t = %.3f s" % (name, ax.get_title(), t_slack)
+# the spans come from the plot's own NAME.shading.csv, not from the log: without log.csv the
+# redraw shades the same spans, and a plot that shades nothing writes no shading file
+import os, shutil, tempfile
+bare = tempfile.mkdtemp()
+for f in ("tracking.csv", "tracking.shading.csv"):
+    shutil.copy(os.path.join(out, "slack", f), bare)
+fig = redraw_plots.draw(os.path.join(bare, "tracking.csv"))
+assert all(any(a <= t_slack <= b for a, b, _ in spans(ax)) for ax in fig.axes), \
+    "the redraw needs log.csv for its shading"
+assert not os.path.exists(out + "/grid/crash_rate.shading.csv"), "a shading file with no shade"
 # a comparison shades each run's slack in its own colour
 fig = redraw_plots.draw(out + "/slack_cmp/comparison.csv")
 for ax in fig.axes:

@@ -136,6 +136,16 @@ const char* PlotExtension(PlotFormat format) {
   return "png";
 }
 
+std::vector<std::string> PlotFiles(const std::string& stem) {
+  std::vector<std::string> files;
+  for (const PlotFormat f : {PlotFormat::kPng, PlotFormat::kSvg, PlotFormat::kPdf}) {
+    files.push_back(stem + "." + PlotExtension(f));
+  }
+  files.push_back(stem + ".csv");
+  files.push_back(stem + ".shading.csv");
+  return files;
+}
+
 Figure::Figure(int width_px, int height_px)
     : image_(height_px, width_px, CV_8UC3, cv::Scalar(255, 255, 255)) {}
 
@@ -184,6 +194,22 @@ std::string Figure::Write(const std::string& stem, PlotFormat format) const {
     }
   }
   WriteFileAtomic(csv, out.str());
+  // what the plot shades (slack intervals, re-taut marks), so a redraw shades the same spans
+  // without deriving them again; no shade: no file (an older one removed)
+  const std::string shading_csv = stem + ".shading.csv";
+  if (shades.empty()) {
+    std::remove(shading_csv.c_str());
+  } else {
+    std::ostringstream shading;
+    shading << "panel,label,x0,x1,r,g,b\n";
+    for (const Shade& sh : shades) {
+      // cv::Scalar is BGR; the CSV gives RGB in 0-255
+      shading << CsvText(sh.panel) << "," << CsvText(sh.label) << "," << CsvNumber({sh.x0}, 0)
+              << "," << CsvNumber({sh.x1}, 0) << "," << sh.colour[2] << "," << sh.colour[1] << ","
+              << sh.colour[0] << "\n";
+    }
+    WriteFileAtomic(shading_csv, shading.str());
+  }
   return path;
 }
 
@@ -341,10 +367,12 @@ void PlotPanel::DrawAxes() {
   AddText(cv::Point(area_.x + 8, plot_.y - 8), y_label_, 0.45);
 }
 
-void PlotPanel::ShadeX(double x0, double x1, const cv::Scalar& colour) {
+void PlotPanel::ShadeX(double x0, double x1, const cv::Scalar& colour,
+                       const std::string& label) {
   x0 = std::max(x0, x_min_);
   x1 = std::min(x1, x_max_);
   if (x1 <= x0) return;
+  figure_->shades.push_back({title_, label, x0, x1, colour});
   const cv::Point a = ToPixel(x0, y_max_), b = ToPixel(x1, y_min_);
   cv::Mat roi = (*image_)(cv::Rect(a, b) & plot_);
   cv::Mat overlay(roi.size(), roi.type(), colour);

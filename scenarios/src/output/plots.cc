@@ -6,6 +6,11 @@
 #include "hpa/scenarios/plot_canvas.h"
 
 namespace hpa {
+// The run plots' file stems (RunPlotStems lists them for the tools that clear old outputs).
+constexpr const char* kTrackingStem = "tracking";
+constexpr const char* kXyPathStem = "xy_path";
+constexpr const char* kRetautStem = "retaut";
+
 namespace {
 
 const cv::Scalar kSlackShade(0, 165, 255);  // orange (BGR)
@@ -21,7 +26,7 @@ std::vector<double> Column(const std::vector<LogRow>& rows, F f) {
 }
 
 void ShadeSlack(PlotPanel* panel, const std::vector<LogRow>& rows) {
-  for (const auto& [a, b] : TrueSlackIntervals(rows)) panel->ShadeX(a, b, kSlackShade);
+  for (const auto& [a, b] : TrueSlackIntervals(rows)) panel->ShadeX(a, b, kSlackShade, "slack");
 }
 
 // Slack shading plus a red mark at each re-taut instant (the end of a slack interval).
@@ -29,7 +34,9 @@ void ShadeSlackMarkRetaut(PlotPanel* panel, const std::vector<LogRow>& rows) {
   ShadeSlack(panel, rows);
   const double span_s = rows.back().time_s - rows.front().time_s;
   for (const auto& [a, b] : TrueSlackIntervals(rows)) {
-    if (b < rows.back().time_s) panel->ShadeX(b, b + 0.004 * span_s, cv::Scalar(0, 0, 220));
+    if (b < rows.back().time_s) {
+      panel->ShadeX(b, b + 0.004 * span_s, cv::Scalar(0, 0, 220), "re-taut");
+    }
   }
 }
 
@@ -60,7 +67,7 @@ std::string WriteTrackingPlot(const std::vector<LogRow>& rows, const std::vector
                 {"slack (shaded)", kSlackShade}});
     }
   }
-  return fig.Write(dir + "/tracking", format);
+  return fig.Write(dir + "/" + kTrackingStem, format);
 }
 
 // The payload's x-y path coloured by its speed over the reference path, on equal axis scales
@@ -89,7 +96,7 @@ std::string WriteXyPathPlot(const RunResult& result, const std::string& title_su
   const double v_max = std::max(1e-3, result.metrics.payload_max_speed_mps);
   p.ColouredPath(x, y, speed, 0.0, v_max);
   p.ColourBar(0.0, v_max, "|v_L| m/s");
-  return fig.Write(dir + "/xy_path", format);
+  return fig.Write(dir + "/" + kXyPathStem, format);
 }
 
 // Quadrotor deviation, vertical velocity and body rates with slack shaded and each re-taut
@@ -126,10 +133,15 @@ std::string WriteRetautPlot(const std::vector<LogRow>& rows, const std::vector<d
              {"w_y", SeriesColour(1)},
              {"w_z", SeriesColour(2)},
              {"re-taut", cv::Scalar(0, 0, 220)}});
-  return fig.Write(dir + "/retaut", format);
+  return fig.Write(dir + "/" + kRetautStem, format);
 }
 
 }  // namespace
+
+const std::vector<std::string>& RunPlotStems() {
+  static const std::vector<std::string> stems{kTrackingStem, kXyPathStem, kRetautStem};
+  return stems;
+}
 
 std::vector<std::string> WriteRunPlots(const RunResult& result, const Params& params,
                                        const std::string& dir, PlotFormat format) {
@@ -176,7 +188,8 @@ std::string WriteComparisonPlot(const std::vector<RunResult>& results, const Par
     // slack shading from the first run (its colour is the first series')
     for (size_t i = 0; i < results.size(); ++i) {
       for (const auto& [a, b] : TrueSlackIntervals(results[i].rows)) {
-        p.ShadeX(a, b, i == 0 ? cv::Scalar(0, 200, 255) : cv::Scalar(255, 200, 150));
+        p.ShadeX(a, b, i == 0 ? cv::Scalar(0, 200, 255) : cv::Scalar(255, 200, 150),
+                 "slack, " + (i < labels.size() ? labels[i] : results[i].metrics.controller));
       }
     }
     p.DrawAxes();

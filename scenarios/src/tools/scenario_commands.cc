@@ -96,11 +96,11 @@ void WriteText(const std::string& path, const std::string& text) { WriteFileAtom
 // Removes the outputs a previous run left in `dir`, so a run that is killed leaves nothing
 // that looks complete (metrics.json appears last, whole, when the run has finished).
 void RemoveStaleOutputs(const std::string& dir) {
-  for (const char* name :
-       {"metrics.json", "log.csv", "run.json", "tracking.png", "xy_path.png", "retaut.png",
-        "tracking.svg", "xy_path.svg", "retaut.svg", "tracking.pdf", "xy_path.pdf", "retaut.pdf",
-        "tracking.csv", "xy_path.csv", "retaut.csv"}) {
+  for (const char* name : {"metrics.json", "log.csv", "run.json"}) {
     std::remove((dir + "/" + name).c_str());
+  }
+  for (const std::string& stem : RunPlotStems()) {
+    for (const std::string& file : PlotFiles(dir + "/" + stem)) std::remove(file.c_str());
   }
 }
 
@@ -108,10 +108,8 @@ void RemoveStaleOutputs(const std::string& dir) {
 // each registered controller and of each of this comparison's names), so a killed comparison
 // never mixes old and new results.
 void RemoveStaleComparison(const std::string& dir, const std::vector<std::string>& names) {
-  for (const char* name :
-       {"comparison.md", "comparison.png", "comparison.svg", "comparison.pdf", "comparison.csv"}) {
-    std::remove((dir + "/" + name).c_str());
-  }
+  std::remove((dir + "/comparison.md").c_str());
+  for (const std::string& file : PlotFiles(dir + "/comparison")) std::remove(file.c_str());
   std::vector<std::string> folders = ControllerNames();
   folders.insert(folders.end(), names.begin(), names.end());
   for (const std::string& folder : folders) {

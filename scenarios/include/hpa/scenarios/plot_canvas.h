@@ -20,6 +20,10 @@ PlotFormat ParsePlotFormat(const std::string& text, const std::string& option = 
 /// The file extension of a format, without the dot.
 const char* PlotExtension(PlotFormat format);
 
+/// Every file a figure written to STEM may leave: STEM.png, .svg, .pdf, STEM.csv and
+/// STEM.shading.csv (so a rerun can remove what an earlier one wrote).
+std::vector<std::string> PlotFiles(const std::string& stem);
+
 /// One figure: its raster, its vector primitives and the data of its series.
 class Figure {
  public:
@@ -73,8 +77,16 @@ class Figure {
     std::vector<double> x, y, low, high, value;
   };
 
+  /// One shaded x interval of a panel, in data units (for the shading CSV).
+  struct Shade {
+    std::string panel, label;
+    double x0 = 0.0, x1 = 0.0;
+    cv::Scalar colour;
+  };
+
   std::vector<Stroke> strokes;
   std::vector<Fill> fills;
+  std::vector<Shade> shades;
   std::vector<Text> texts;
   std::vector<Series> series;
   // drawing order across the three primitive lists: (kind 0 stroke, 1 fill, 2 text, index)
@@ -98,8 +110,9 @@ class PlotPanel {
                 const std::vector<std::vector<double>>& ys);
   /// Frame, grid, ticks, title and labels.
   void DrawAxes();
-  /// Shades x in [x0, x1) over the full height (e.g. slack intervals).
-  void ShadeX(double x0, double x1, const cv::Scalar& colour);
+  /// Shades x in [x0, x1) over the full height (e.g. slack intervals); `label` names what the
+  /// shade means in the shading CSV written beside the plot ("slack", "re-taut").
+  void ShadeX(double x0, double x1, const cv::Scalar& colour, const std::string& label = "");
   /// Polyline of (x, y): dotted if `dashed` (a reference), else solid for the panel's first
   /// colour, dashed for its second, and so on, so series that overlap stay apart.
   void Line(const std::vector<double>& x, const std::vector<double>& y, const cv::Scalar& colour,

@@ -18,6 +18,9 @@ std::vector<std::string> WriteRunPlots(const RunResult& result, const Params& pa
                                        const std::string& dir,
                                        PlotFormat format = PlotFormat::kPng);
 
+/// The stems WriteRunPlots writes under DIR ("tracking", "xy_path", "retaut").
+const std::vector<std::string>& RunPlotStems();
+
 /// One figure comparing controllers on one scenario: payload z, quadrotor z and deviation,
 /// body-rate norm, slack shaded. Writes STEM.png|svg|pdf and STEM.csv; returns the plot's path.
 /// `labels` name the runs in the legend (default: each run's metrics' controller).
