@@ -70,6 +70,23 @@ TEST(ScenarioTest, DefaultsWhenBlocksAreLeftOut) {
   EXPECT_EQ(s.reference.type, "hover");
 }
 
+// world.cable_length and world.payload_mass take params.yaml's declared range for the field
+// they replace (one range, as the world's own check and the mismatch draw use it).
+TEST(ScenarioTest, WorldOverridesTakeParamsDeclaredRange) {
+  const ParamDecl<Params>& l = FindParamDecl(ParamsTables(), &Params::cable_length_m);
+  const std::string world = std::string(kMinimal) + "world:\n  cable_length: ";
+  EXPECT_EQ(*LoadScenario(Write("long.yaml", world + ParamValueText(l.max) + "\n"))
+                 .world_cable_length_m,
+            l.max);
+  ExpectError(world + ParamValueText(2 * l.max) + "\n",
+              {"world.cable_length", ParamValueText(l.min), ParamValueText(l.max)});
+  ExpectError(world + "0.0\n", {"world.cable_length"});
+  const ParamDecl<Params>& m = FindParamDecl(ParamsTables(), &Params::payload_mass_kg);
+  ExpectError(std::string(kMinimal) + "world:\n  payload_mass: " + ParamValueText(2 * m.max) +
+                  "\n",
+              {"world.payload_mass", ParamValueText(m.max)});
+}
+
 TEST(ScenarioTest, UnknownKeysAreNamedWithTheirPath) {
   ExpectError(std::string(kMinimal) + "colour: red\n", {"colour", "unknown key"});
   ExpectError(std::string(kMinimal) + "world:\n  payload_mas: 0.2\n",

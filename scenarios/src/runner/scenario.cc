@@ -164,8 +164,17 @@ Scenario ParseScenario(const YamlMap& root, const std::optional<std::string>& re
     const YamlMap w = root.Map("world");
     profile = LoadWorldProfile(w.Choice("profile", WorldProfileNames(), "flight"));
     ReadWorldProfileSections(w, &profile);
-    if (w.Has("payload_mass")) s.world_payload_mass_kg = w.Number("payload_mass", 1e-3, 10.0);
-    if (w.Has("cable_length")) s.world_cable_length_m = w.Number("cable_length", 0.05, 5.0);
+    // each override within the range params.yaml declares for the field it replaces
+    const auto world_override = [&](const char* key, double Params::*member) {
+      const ParamDecl<Params>& d = FindParamDecl(ParamsTables(), member);
+      return w.Number(key, d.min, d.max);
+    };
+    if (w.Has("payload_mass")) {
+      s.world_payload_mass_kg = world_override("payload_mass", &Params::payload_mass_kg);
+    }
+    if (w.Has("cable_length")) {
+      s.world_cable_length_m = world_override("cable_length", &Params::cable_length_m);
+    }
     w.RejectUnknownKeys();
   }
   s.world = profile.world;
