@@ -13,6 +13,12 @@
 namespace hpa::flight {
 namespace {
 
+// The controller block's declared table, as the list the table walkers take.
+const std::vector<ParamTable<ControllerConfig>>& ControllerTables() {
+  static const std::vector<ParamTable<ControllerConfig>> tables{ControllerParamTable()};
+  return tables;
+}
+
 // A vector as a JSON array of its 3 numbers.
 nlohmann::json Vec3(const Eigen::Vector3d& v) { return {v.x(), v.y(), v.z()}; }
 
@@ -47,22 +53,23 @@ SystemState StateFromJson(const nlohmann::json& j) {
   return s;
 }
 
-// Every field of Params as the protocol names it (ParamsTables' wire names): numbers as
-// numbers, vectors as arrays, the camera rotation as its 9 numbers row by row.
-nlohmann::json ParamsJson(const Params& p) {
+// Every declared field of `config` as the protocol names it (the tables' wire names): numbers
+// as numbers, switches as booleans, vectors as arrays, a matrix as its numbers row by row.
+template <class C>
+nlohmann::json TablesToJson(const std::vector<ParamTable<C>>& tables, const C& config) {
   nlohmann::json out = nlohmann::json::object();
-  for (const ParamTable<Params>& table : ParamsTables()) {
-    for (const ParamDecl<Params>& d : table.params) {
+  for (const ParamTable<C>& table : tables) {
+    for (const ParamDecl<C>& d : table.params) {
       const std::string& name = d.wire_key.empty() ? d.key : d.wire_key;
       std::visit(
           [&](auto member) {
-            using T = std::decay_t<decltype(p.*member)>;
+            using T = std::decay_t<decltype(config.*member)>;
             if constexpr (std::is_same_v<T, double> || std::is_same_v<T, int> ||
                           std::is_same_v<T, bool>) {
-              out[name] = p.*member;
+              out[name] = config.*member;
             } else {
               nlohmann::json values = nlohmann::json::array();
-              const auto& m = p.*member;
+              const auto& m = config.*member;
               for (Eigen::Index i = 0; i < m.rows(); ++i) {
                 for (Eigen::Index j = 0; j < m.cols(); ++j) values.push_back(m(i, j));
               }
@@ -75,39 +82,43 @@ nlohmann::json ParamsJson(const Params& p) {
   return out;
 }
 
-// Params from ParamsJson's JSON, each value checked against its declared range; throws
-// ProtocolError naming the field.
-Params ParamsFromJson(const nlohmann::json& j) {
-  Params p;
-  for (const ParamTable<Params>& table : ParamsTables()) {
-    for (const ParamDecl<Params>& d : table.params) {
+// Reads every declared field of `*config` from TablesToJson's JSON, each value checked against
+// its declared range (per element where it has one); throws ProtocolError naming
+// SECTION.field.
+template <class C>
+void TablesFromJson(const std::vector<ParamTable<C>>& tables, const nlohmann::json& j,
+                    const std::string& section, C* config) {
+  for (const ParamTable<C>& table : tables) {
+    for (const ParamDecl<C>& d : table.params) {
       const std::string& name = d.wire_key.empty() ? d.key : d.wire_key;
-      const auto in_range = [&](double v) {
-        if (!(v >= d.min && v <= d.max)) {
-          throw ProtocolError("params." + name + ": " + std::to_string(v) + " outside " +
-                              std::to_string(d.min) + " to " + std::to_string(d.max));
+      const auto in_range = [&](double v, size_t element) {
+        const auto [min, max] = ElementRange(d, element);
+        if (!(v >= min && v <= max)) {
+          throw ProtocolError(section + "." + name + ": " + std::to_string(v) + " outside " +
+                              std::to_string(min) + " to " + std::to_string(max));
         }
         return v;
       };
       std::visit(
           [&](auto member) {
-            using T = std::decay_t<decltype(p.*member)>;
+            using T = std::decay_t<decltype(config->*member)>;
             const nlohmann::json& v = j.at(name);
             if constexpr (std::is_same_v<T, bool>) {
-              p.*member = v.get<bool>();
+              config->*member = v.get<bool>();
             } else if constexpr (std::is_same_v<T, int>) {
-              p.*member = static_cast<int>(in_range(v.get<int>()));
+              config->*member = static_cast<int>(in_range(v.get<int>(), 0));
             } else if constexpr (std::is_same_v<T, double>) {
-              p.*member = in_range(v.get<double>());
+              config->*member = in_range(v.get<double>(), 0);
             } else {
-              auto& m = p.*member;
+              auto& m = config->*member;
               if (!v.is_array() || v.size() != static_cast<size_t>(m.size())) {
-                throw ProtocolError("params." + name + ": expected " + std::to_string(m.size()) +
-                                    " numbers");
+                throw ProtocolError(section + "." + name + ": expected " +
+                                    std::to_string(m.size()) + " numbers");
               }
               for (Eigen::Index i = 0; i < m.rows(); ++i) {
                 for (Eigen::Index k = 0; k < m.cols(); ++k) {
-                  m(i, k) = in_range(v.at(i * m.cols() + k).template get<double>());
+                  const Eigen::Index at = i * m.cols() + k;
+                  m(i, k) = in_range(v.at(at).template get<double>(), static_cast<size_t>(at));
                 }
               }
             }
@@ -115,13 +126,12 @@ Params ParamsFromJson(const nlohmann::json& j) {
           d.member);
     }
   }
-  return p;
 }
 
 }  // namespace
 
 nlohmann::json ConfigToJson(const FlightConfig& c) {
-  const nlohmann::json params = ParamsJson(c.params);
+  const nlohmann::json params = TablesToJson(ParamsTables(), c.params);
   const ReferenceSpec& r = c.reference;
   const LissajousSpec& l = r.lissajous;
   nlohmann::json reference = {{"type", r.type},
@@ -150,13 +160,13 @@ nlohmann::json ConfigToJson(const FlightConfig& c) {
   reference["samples_t_p_v_a"] = samples;
   // a type that keeps its key values as read (one registered beyond the built-ins) sends them
   if (!r.values.empty()) reference["key_values"] = r.values;
+  // the controller's names, then every key of its declared table
+  nlohmann::json controller = TablesToJson(ControllerTables(), c.controller);
+  controller["type"] = c.controller.type;
+  controller["solver"] = c.controller.solver;
+  controller["qp_method"] = c.controller.qp_method;
   return {{"params", params},
-          {"controller",
-           {{"type", c.controller.type},
-            {"perception_weight", c.controller.perception_weight},
-            {"solver", c.controller.solver},
-            {"qp_method", c.controller.qp_method},
-            {"predict_retaut", c.controller.predict_retaut}}},
+          {"controller", controller},
           {"estimator", c.estimator},
           {"slack_tension_cue", c.slack_tension_cue},
           {"reference", reference},
@@ -169,14 +179,13 @@ nlohmann::json ConfigToJson(const FlightConfig& c) {
 FlightConfig ConfigFromJson(const nlohmann::json& j) {
   try {
     FlightConfig c;
-    c.params = ParamsFromJson(j.at("params"));
+    TablesFromJson(ParamsTables(), j.at("params"), "params", &c.params);
     const nlohmann::json& cj = j.at("controller");
     c.controller.type = cj.at("type").get<std::string>();
-    c.controller.perception_weight = cj.at("perception_weight").get<double>();
     c.controller.solver = cj.at("solver").get<std::string>();
     // absent from the first version-1 stacks' configurations: the default
     c.controller.qp_method = cj.value("qp_method", ControllerConfig{}.qp_method);
-    c.controller.predict_retaut = cj.at("predict_retaut").get<bool>();
+    TablesFromJson(ControllerTables(), cj, "controller", &c.controller);
     c.estimator = j.at("estimator").get<std::string>();
     c.slack_tension_cue = j.at("slack_tension_cue").get<bool>();
     const nlohmann::json& rj = j.at("reference");

@@ -1,5 +1,6 @@
-// The flight configuration's params through the protocol's JSON: every field ParamsTables
-// declares goes through, by construction, and a value outside its declared range is refused.
+// The flight configuration's params and controller block through the protocol's JSON: every
+// field their tables declare goes through, by construction, and a value outside its declared
+// range is refused.
 
 #include <gtest/gtest.h>
 
@@ -15,10 +16,11 @@ namespace {
 
 // Sets every declared field of `p` to a value of its own inside its range (the k-th field at
 // the k-th of 97 steps through the range), so that a field lost or swapped on the way shows.
-void SetEveryField(Params* p) {
+template <class C>
+void SetEveryField(const std::vector<ParamTable<C>>& tables, C* p) {
   int k = 0;
-  for (const ParamTable<Params>& table : ParamsTables()) {
-    for (const ParamDecl<Params>& d : table.params) {
+  for (const ParamTable<C>& table : tables) {
+    for (const ParamDecl<C>& d : table.params) {
       const double value = d.min + (d.max - d.min) * (++k) / 97.0;
       std::visit(
           [&](auto member) {
@@ -32,7 +34,8 @@ void SetEveryField(Params* p) {
             } else {
               auto& m = p->*member;
               for (Eigen::Index i = 0; i < m.size(); ++i) {
-                m.data()[i] = d.min + (d.max - d.min) * (k + 0.1 * i) / 97.0;
+                const auto [min, max] = ElementRange(d, static_cast<size_t>(i));
+                m.data()[i] = min + (max - min) * (k + 0.1 * i) / 97.0;
               }
             }
           },
@@ -43,7 +46,7 @@ void SetEveryField(Params* p) {
 
 TEST(ProtocolConfigTest, EveryDeclaredParamRoundTripsThroughJson) {
   FlightConfig c;
-  SetEveryField(&c.params);
+  SetEveryField(ParamsTables(), &c.params);
   const nlohmann::json json = ConfigToJson(c);
   const FlightConfig back = ConfigFromJson(nlohmann::json::parse(json.dump()));
   int fields = 0;
@@ -77,6 +80,39 @@ TEST(ProtocolConfigTest, AValueOutsideItsDeclaredRangeIsRefusedByName) {
   json = ConfigToJson(FlightConfig{});
   json["params"]["R_BC_rowmajor"] = {1, 0, 0};
   EXPECT_THROW(ConfigFromJson(json), ProtocolError);
+}
+
+TEST(ProtocolConfigTest, EveryDeclaredControllerKeyRoundTripsThroughJson) {
+  FlightConfig c;
+  c.controller.type = "nonhybrid_mpc";
+  c.controller.solver = "nlopt";
+  c.controller.qp_method = "riccati";
+  const std::vector<ParamTable<ControllerConfig>> tables{ControllerParamTable()};
+  SetEveryField(tables, &c.controller);
+  const nlohmann::json json = ConfigToJson(c);
+  const FlightConfig back = ConfigFromJson(nlohmann::json::parse(json.dump()));
+  EXPECT_EQ(back.controller.type, c.controller.type);
+  EXPECT_EQ(back.controller.solver, c.controller.solver);
+  EXPECT_EQ(back.controller.qp_method, c.controller.qp_method);
+  std::set<std::string> names{"type", "solver", "qp_method"};
+  for (const ParamDecl<ControllerConfig>& d : ControllerParamTable().params) {
+    names.insert(d.key);
+    std::visit([&](auto m) { EXPECT_EQ(back.controller.*m, c.controller.*m) << d.key; },
+               d.member);
+  }
+  for (const auto& [name, value] : json.at("controller").items()) {
+    EXPECT_TRUE(names.count(name)) << name << " is sent but not declared";
+  }
+  EXPECT_EQ(json.at("controller").size(), names.size());
+  nlohmann::json bad = json;
+  bad["controller"]["perception_weight"] = -1.0;
+  try {
+    ConfigFromJson(bad);
+    FAIL() << "a negative perception weight was accepted";
+  } catch (const ProtocolError& e) {
+    EXPECT_NE(std::string(e.what()).find("controller.perception_weight"), std::string::npos)
+        << e.what();
+  }
 }
 
 }  // namespace
