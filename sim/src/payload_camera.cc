@@ -53,7 +53,7 @@ void PayloadCameraSensor::Reset() {
 
 std::optional<CameraCapture> PayloadCameraSensor::Capture(
     World& world, int64_t step, double time_s, CameraReadout* readout,
-    std::optional<PayloadDetection>* detection, std::optional<CameraFrames>* frames) {
+    std::optional<PayloadDetection>* detection, std::optional<CameraFrame>* frames) {
   // the k-th frame is due at the step nearest k / rate (a step with no capture call skips it)
   const auto step_of = [&](int64_t k) {
     return static_cast<int64_t>(std::llround(k * physics_hz_ / rate_hz_));
@@ -117,10 +117,10 @@ PayloadDetection PayloadCameraSensor::RenderAndDetect(World& world, double time_
 
 // The region of interest the stack asked for last and the whole frame (its fallback), each into
 // a buffer of the readout's (its shared ring); the pixels are those the in-process path renders.
-CameraFrames PayloadCameraSensor::RenderFrames(World& world, double time_s, CameraReadout* readout,
-                                               CameraCapture* capture) {
-  CameraFrames out;
-  out.time_s = time_s;
+CameraFrame PayloadCameraSensor::RenderFrames(World& world, double time_s, CameraReadout* readout,
+                                              CameraCapture* capture) {
+  CameraFrame out;
+  out.capture_time_s = time_s;
   const cv::Rect region = readout->Region();
   if (region.area() > 0) {
     cv::Mat* bgr = readout->NextFrameSlot(&out.region_slot);

@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <sstream>
+#include <type_traits>
 
 #include "hpa/models/input_error.h"
 #include "hpa/models/seed_streams.h"
@@ -39,7 +40,16 @@ int WholeSteps(double physics_hz, double rate_hz, const std::string& key, const 
 }  // namespace
 
 double Sensor::CaptureTime(const SensorMessage& m) {
-  return std::visit([](const auto& message) { return message.time_s; }, m);
+  // a rendered frame names its capture time as the flight code reads it
+  return std::visit(
+      [](const auto& message) {
+        if constexpr (std::is_same_v<std::decay_t<decltype(message)>, CameraFrame>) {
+          return message.capture_time_s;
+        } else {
+          return message.time_s;
+        }
+      },
+      m);
 }
 
 ImuSensor::ImuSensor(const WorldConfig& config, std::mt19937_64* rng)

@@ -374,12 +374,12 @@ std::optional<CameraCapture> World::CaptureTickStart(CameraReadout* readout) {
   deliveries_[static_cast<size_t>(gripper_line_)].Push(
       time_s(), gripper_sensor_->Sample(time_s(), gripper_active()));
   std::optional<PayloadDetection> detection;
-  std::optional<CameraFrames> frames;
+  std::optional<CameraFrame> frames;
   std::optional<CameraCapture> capture =
       camera_->Capture(*this, step_, time_s(), readout, &detection, &frames);
   DelayLine<SensorMessage>& line = deliveries_[static_cast<size_t>(camera_line_)];
   if (detection) line.Push(detection->time_s, std::move(*detection));
-  if (frames) line.Push(frames->time_s, std::move(*frames));
+  if (frames) line.Push(frames->capture_time_s, std::move(*frames));
   return capture;
 }
 

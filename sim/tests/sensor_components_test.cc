@@ -117,7 +117,7 @@ TEST(SensorComponentsTest, ACameraWithoutImagesRecordsTheCaptureAndDeliversNothi
   for (int k = 0; k < 100; ++k) world.Step();
   for (const SensorMessage& m : world.TakeInFlight()) {
     EXPECT_FALSE(std::holds_alternative<PayloadDetection>(m));
-    EXPECT_FALSE(std::holds_alternative<CameraFrames>(m));
+    EXPECT_FALSE(std::holds_alternative<CameraFrame>(m));
   }
 }
 

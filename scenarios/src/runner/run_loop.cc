@@ -349,7 +349,7 @@ void RunLoop::CameraStep() {
     camera_readout_->Delivered(d);
     pending_.detections.push_back(std::move(d));
   }
-  for (flight::CameraFrame& f : camera_frames_) pending_.frames.push_back(std::move(f));
+  for (CameraFrame& f : camera_frames_) pending_.frames.push_back(std::move(f));
   camera_detections_.clear();
   camera_frames_.clear();
 }
@@ -359,16 +359,7 @@ void RunLoop::CameraStep() {
 void RunLoop::KeepTickStartMessage(sim::SensorMessage* message) {
   if (auto* g = std::get_if<GripperSample>(message)) pending_.gripper_active = g->active;
   if (auto* d = std::get_if<PayloadDetection>(message)) camera_detections_.push_back(std::move(*d));
-  if (auto* f = std::get_if<sim::CameraFrames>(message)) {
-    flight::CameraFrame frame;
-    frame.capture_time_s = f->time_s;
-    frame.region = f->region;
-    frame.region_bgr = f->region_bgr;
-    frame.whole_bgr = f->whole_bgr;
-    frame.region_slot = f->region_slot;
-    frame.whole_slot = f->whole_slot;
-    camera_frames_.push_back(std::move(frame));
-  }
+  if (auto* f = std::get_if<CameraFrame>(message)) camera_frames_.push_back(std::move(*f));
 }
 
 cv::Rect FlightCameraReadout::Region() {
@@ -499,7 +490,7 @@ void RunLoop::Finish(RunResult* result) {
   // the flight stack's end: the last step's sensors, the frames still in flight (detected, not
   // delivered) and its estimator's health
   for (sim::SensorMessage& m : world_->TakeInFlight()) KeepTickStartMessage(&m);
-  for (flight::CameraFrame& f : camera_frames_) pending_.frames.push_back(std::move(f));
+  for (CameraFrame& f : camera_frames_) pending_.frames.push_back(std::move(f));
   // the commands still on the control thread: computed and logged, as the run computed them
   while (!rows_awaiting_command_.empty()) {
     LogRow row = std::move(rows_awaiting_command_.front());

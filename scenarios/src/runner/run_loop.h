@@ -143,7 +143,7 @@ class RunLoop {
   // the camera's messages delivered by a step, joining the flight stack's inputs at the next
   // tick after that tick's capture (whose region is around the detections delivered before)
   std::vector<PayloadDetection> camera_detections_;
-  std::vector<flight::CameraFrame> camera_frames_;
+  std::vector<CameraFrame> camera_frames_;
   ControlOutput control_;         // the command the rate loop tracks
   flight::FlightInputs pending_;  // what reaches the flight stack at the next tick
 

@@ -16,6 +16,7 @@
 #include "hpa/controller/controller.h"
 #include "hpa/controller/reference_spec.h"
 #include "hpa/estimator/payload_detector.h"
+#include "hpa/models/camera_frame.h"
 #include "hpa/models/lockstep.h"
 #include "hpa/models/params.h"
 #include "hpa/models/sensor_types.h"
@@ -52,15 +53,9 @@ struct AllocationReport {
   bool saturated = false;           // the allocation fell short of the command
 };
 
-/// One rendered payload-camera frame for the flight stack's detector, read out as the camera's
-/// region of interest (the stack's last request) and, for when that cannot decide, whole.
-struct CameraFrame {
-  double capture_time_s = 0.0;
-  cv::Rect region;     // the region of interest read out (empty: none, only the whole frame)
-  cv::Mat region_bgr;  // CV_8UC3, top row first; valid inside `region` only
-  cv::Mat whole_bgr;   // CV_8UC3, top row first, the whole frame
-  int region_slot = -1, whole_slot = -1;  // their shared-memory slots (through the protocol)
-};
+/// The rendered frame the simulator hands over (models/camera_frame.h), under the flight code's
+/// name for it (the protocol's tick carries its capture time, region and ring slots).
+using hpa::CameraFrame;
 
 /// The payload reference at one tick, for flight stacks that do not build their own.
 struct ReferenceSample {

@@ -12,6 +12,7 @@
 #include <optional>
 #include <random>
 
+#include "hpa/models/camera_frame.h"
 #include "hpa/models/params.h"
 #include "hpa/models/sensor_types.h"
 #include "hpa/sim/analytic_camera.h"
@@ -53,15 +54,6 @@ class CameraReadout {
   virtual cv::Mat* NextFrameSlot(int* slot) = 0;
 };
 
-/// Rendered frames in flight to a flight stack that detects on its side.
-struct CameraFrames {
-  double time_s = 0.0;  // capture time
-  cv::Rect region;      // the region of interest read out (empty: none, only the whole frame)
-  cv::Mat region_bgr;   // CV_8UC3, top row first; valid inside `region` only
-  cv::Mat whole_bgr;    // CV_8UC3, top row first, the whole frame
-  int region_slot = -1, whole_slot = -1;  // the NextFrameSlot slots they were rendered into
-};
-
 /// One capture, as the recorders see it (metrics inputs, the video's HUD).
 struct CameraCapture {
   double time_s = 0.0;             // capture time
@@ -87,13 +79,13 @@ class PayloadCameraSensor {
   std::optional<CameraCapture> Capture(World& world, int64_t step, double time_s,
                                        CameraReadout* readout,
                                        std::optional<PayloadDetection>* detection,
-                                       std::optional<CameraFrames>* frames);
+                                       std::optional<CameraFrame>* frames);
 
  private:
   PayloadDetection RenderAndDetect(World& world, double time_s, CameraReadout* readout,
                                    CameraCapture* capture);
-  CameraFrames RenderFrames(World& world, double time_s, CameraReadout* readout,
-                            CameraCapture* capture);
+  CameraFrame RenderFrames(World& world, double time_s, CameraReadout* readout,
+                           CameraCapture* capture);
 
   Params params_;  // flight params: the camera's mount and intrinsics as the detector knows them
   PayloadCameraConfig config_;

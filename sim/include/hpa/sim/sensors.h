@@ -35,7 +35,7 @@ struct SensorInput {
 
 /// A sample a sensor produced.
 using SensorMessage =
-    std::variant<ImuSample, GyroSample, VioSample, PayloadDetection, CameraFrames, GripperSample>;
+    std::variant<ImuSample, GyroSample, VioSample, PayloadDetection, CameraFrame, GripperSample>;
 
 /// A simulated sensor: declares itself and samples the world once per physics step.
 class Sensor {
