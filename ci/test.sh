@@ -23,18 +23,6 @@ if grep -rIl -e '#include "hpa/estimator' -e '#include "hpa/controller' sim/src 
   exit 1
 fi
 
-echo "== scenarios layers: runner <- output <- tools (the runner includes neither)"
-if grep -rIlE '#include "hpa/scenarios/(plots|plot_canvas|video_recorder|golden|schema|sweep|sweep_diff|cli)\.h"|scenarios/src/(tools|output)/' \
-     scenarios/src/runner; then
-  echo "scenarios/src/runner/ may not include output or tools headers (files above)" >&2
-  exit 1
-fi
-if grep -rIlE '#include "hpa/scenarios/(golden|schema|sweep|sweep_diff|cli)\.h"|scenarios/src/tools/' \
-     scenarios/src/output; then
-  echo "scenarios/src/output/ may not include tools headers (files above)" >&2
-  exit 1
-fi
-
 echo "== flight-only build (HPA_FLIGHT_ONLY=ON: no MuJoCo, no GL, no sim target)"
 cmake -S . -B build-flight -G Ninja -DCMAKE_BUILD_TYPE=Release -DHPA_FLIGHT_ONLY=ON \
   -DHPA_BUILD_TESTS=OFF -DHPA_BUILD_BENCHMARKS=OFF > /dev/null

@@ -181,3 +181,12 @@ add_test(NAME cli.readme_your_controller
          COMMAND bash ${SCEN}/tests/readme_your_controller_test.sh ${HPA_BIN} ${CMAKE_SOURCE_DIR}
                  ${HPA_PYTHON3} ${CMAKE_BINARY_DIR}/readme_your_controller)
 set_tests_properties(cli.readme_your_controller PROPERTIES LABELS "cli;scenario" TIMEOUT 600)
+
+# The scenarios layers enforced by the build: with the runner's include directories an output or
+# tools header is not found, with output's a tools header is not (their own are)
+add_test(NAME build.scenarios_layers
+         COMMAND bash ${SCEN}/tests/layers_test.sh ${CMAKE_CXX_COMPILER}
+                 "$<TARGET_PROPERTY:hpa_runner,INCLUDE_DIRECTORIES>"
+                 "$<TARGET_PROPERTY:hpa_output,INCLUDE_DIRECTORIES>"
+                 "$<TARGET_PROPERTY:hpa_tools,INCLUDE_DIRECTORIES>")
+set_tests_properties(build.scenarios_layers PROPERTIES LABELS build)
