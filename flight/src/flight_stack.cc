@@ -156,7 +156,10 @@ int FlightStack::Deliver(const FlightInputs& in) {
   if (in.allocation) estimator_->OnAllocatedThrust(in.allocation->thrust_allocated_N);
   for (const ImuSample& imu : in.imu) estimator_->OnImu(imu);
   for (const VioSample& vio : in.vio) estimator_->OnVio(vio);
-  for (const PayloadDetection& d : in.detections) estimator_->OnPayloadDetection(d);
+  for (const PayloadDetection& d : in.detections) {
+    recent_detections_.Push(d);
+    estimator_->OnPayloadDetection(d);
+  }
   int found = 0;
   for (const CameraFrame& frame : in.frames) {
     recent_detections_.Push(DetectFrame(*detector_, frame));

@@ -259,6 +259,25 @@ TEST(FlightStackTest, CameraFramesAreDetectedAndSetTheNextRegion) {
   EXPECT_TRUE(missed.camera_roi.empty());
 }
 
+TEST(FlightStackTest, DeliveredDetectionsSetTheNextRegion) {
+  // the camera's detections (the analytic camera's, or made at capture in process) steer the
+  // region of interest as the stack's own detections in frames do
+  const FlightConfig config = HoverConfig("geometric");
+  FlightStack stack(config);
+  const PayloadDetector detector(config.params);
+  const SystemState truth = HoverState(config.params);
+  const Eigen::Vector3d p_CL_C = PayloadInCamera_C(config.params, truth);
+  const PayloadDetection d =
+      detector.Detect(testing_frames::RenderSphere(config.params, p_CL_C), 0.0);
+  ASSERT_TRUE(d.found) << d.reason;
+  FlightInputs in = HoverInputs(config.params, truth, 0);
+  in.detections = {d};
+  const FlightOutputs seen = stack.Step(in);
+  EXPECT_EQ(seen.frames_detected, 0);  // a detection is not a frame
+  EXPECT_EQ(seen.camera_roi, detector.RegionAround({PayloadDetection(), d}, kRegionMarginPx));
+  ASSERT_FALSE(seen.camera_roi.empty());
+}
+
 TEST(FlightStackTest, DetectFrameFallsBackToTheWholeFrame) {
   const Params params = TestParams();
   const PayloadDetector detector(params);

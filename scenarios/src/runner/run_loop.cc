@@ -334,9 +334,9 @@ void RunLoop::ApplyDueEvents(double t) {
   }
 }
 
-// The payload camera: the world captures it if due (its message delivered after its latency);
-// then the camera's messages delivered by now join this tick's inputs, and the next in-process
-// region is around the last of them (a separate stack's is the one it asked for last).
+// The payload camera: the world captures it if due (its message delivered after its latency),
+// reading out the region the flight stack asked for last; then the camera's messages delivered
+// by now join this tick's inputs.
 void RunLoop::CameraStep() {
   if (const std::optional<sim::CameraCapture> capture =
           world_->CaptureTickStart(camera_readout_.get())) {
@@ -345,10 +345,7 @@ void RunLoop::CameraStep() {
   // the gripper's switch, and a camera without latency, deliver at their capture tick
   world_->TakeDelivered(&delivered_);
   for (sim::SensorMessage& m : delivered_) KeepTickStartMessage(&m);
-  for (PayloadDetection& d : camera_detections_) {
-    camera_readout_->Delivered(d);
-    pending_.detections.push_back(std::move(d));
-  }
+  for (PayloadDetection& d : camera_detections_) pending_.detections.push_back(std::move(d));
   for (CameraFrame& f : camera_frames_) pending_.frames.push_back(std::move(f));
   camera_detections_.clear();
   camera_frames_.clear();
@@ -360,10 +357,6 @@ void RunLoop::KeepTickStartMessage(sim::SensorMessage* message) {
   if (auto* g = std::get_if<GripperSample>(message)) pending_.gripper_active = g->active;
   if (auto* d = std::get_if<PayloadDetection>(message)) camera_detections_.push_back(std::move(*d));
   if (auto* f = std::get_if<CameraFrame>(message)) camera_frames_.push_back(std::move(*f));
-}
-
-cv::Rect FlightCameraReadout::Region() {
-  return SendsFrames() ? stack_roi_ : detector_->RegionAround(recent_, flight::kRegionMarginPx);
 }
 
 // In process: DetectInRegion on a region (its result equals the whole frame's when it gives

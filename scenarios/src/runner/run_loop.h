@@ -43,28 +43,26 @@ class LogRecorder final : public RunRecorder {
   MetricsInputs* inputs_;
 };
 
-/// The flight stack's side of the payload camera's read-out: in process, its detector on the
-/// region around the last detection delivered; a separate stack detects on its side, from the
-/// region of interest it asked for and the whole frame, rendered into its shared-memory ring.
+/// The flight stack's side of the payload camera's read-out: the region of interest the stack
+/// asked for with its last reply (around the detections delivered to it); in process, its
+/// detector in that region (the whole frame when the region cannot decide); a separate stack
+/// detects on its side, in the region and the whole frame rendered into its shared-memory ring.
 class FlightCameraReadout final : public sim::CameraReadout {
  public:
   /// Reads out for `flight` (not owned), detecting in process with `detector` (not owned).
   FlightCameraReadout(FlightLink* flight, const PayloadDetector* detector)
       : flight_(flight), detector_(detector) {}
-  cv::Rect Region() override;
+  cv::Rect Region() override { return stack_roi_; }
   bool SendsFrames() const override { return flight_->wants_reference(); }
   std::optional<PayloadDetection> Detect(const cv::Mat& bgr, const cv::Rect& area,
                                          double time_s) override;
   cv::Mat* NextFrameSlot(int* slot) override { return flight_->NextFrameSlot(slot); }
-  /// A detection reached the flight stack: the next in-process region is around it.
-  void Delivered(const PayloadDetection& detection) { recent_.Push(detection); }
-  /// The region of interest a separate stack asked for with its last reply.
+  /// The region of interest the stack asked for with its last reply.
   void SetStackRegion(const cv::Rect& roi) { stack_roi_ = roi; }
 
  private:
   FlightLink* flight_;
   const PayloadDetector* detector_;
-  RecentDetections recent_;  // the last two delivered
   cv::Rect stack_roi_;
 };
 

@@ -103,7 +103,9 @@ struct FlightOutputs {
   int estimator_rejected_updates = 0;  // estimator health after this tick (0 with ground truth)
   int estimator_resets = 0;
   int frames_detected = 0;  // of this tick's frames, those in which the payload was found
-  cv::Rect camera_roi;      // the region the camera should read out next (empty: whole frame)
+  // the region the camera should read out next, around the detections delivered so far (empty:
+  // the whole frame)
+  cv::Rect camera_roi;
 };
 
 /// Estimator health as named numbers (metrics.json's estimator_health), in a fixed order.
@@ -147,7 +149,9 @@ class FlightStack {
   DelayLine<SystemState> estimates_in_flight_;
   SystemState delayed_state_;  // latest estimate old enough to have reached the controller
   bool have_delayed_state_ = false;
-  RecentDetections recent_detections_;  // the region of the next frame's search follows them
+  // the last two detections delivered (the camera's, or its own in delivered frames): the region
+  // of interest of the next frame follows them (FlightOutputs::camera_roi)
+  RecentDetections recent_detections_;
   std::unique_ptr<ControlThread> control_thread_;  // config_.control_thread only
 };
 
