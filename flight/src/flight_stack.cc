@@ -124,14 +124,18 @@ class ControlThread {
   std::thread thread_;  // last: starts once the members above exist
 };
 
-PayloadDetection DetectFrame(const PayloadDetector& detector, const CameraFrame& frame) {
+PayloadDetection DetectFrame(const PayloadDetector& detector, const CameraFrame& frame,
+                             const WholeFrameReader& read_whole) {
   if (frame.region.area() > 0 && !frame.region_bgr.empty()) {
     if (std::optional<PayloadDetection> d =
             detector.DetectInRegion(frame.region_bgr, frame.region, frame.capture_time_s)) {
       return *d;
     }
   }
-  return detector.Detect(frame.whole_bgr, frame.capture_time_s);
+  // DetectInRegion's result equals the whole frame's when it gives one, so the whole frame is
+  // read out only here
+  const bool read = frame.whole_bgr.empty() && read_whole;
+  return detector.Detect(read ? read_whole() : frame.whole_bgr, frame.capture_time_s);
 }
 
 FlightStack::FlightStack(const FlightConfig& config)

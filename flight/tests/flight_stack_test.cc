@@ -295,6 +295,41 @@ TEST(FlightStackTest, DetectFrameFallsBackToTheWholeFrame) {
   EXPECT_LT((d.p_CL_C - p_CL_C).norm(), 3e-3);
 }
 
+TEST(FlightStackTest, DetectFrameReadsTheWholeFrameOnlyWhenTheRegionCannotDecide) {
+  // the in-process camera's frame holds its region alone and renders the whole frame on request
+  const Params params = TestParams();
+  const PayloadDetector detector(params);
+  const Eigen::Vector3d p_CL_C(0.0, 0.0, 0.45);
+  const cv::Mat whole = testing_frames::RenderSphere(params, p_CL_C);
+  int reads = 0;
+  const WholeFrameReader read_whole = [&]() -> const cv::Mat& {
+    ++reads;
+    return whole;
+  };
+  const PayloadDetection expected = detector.Detect(whole, 1.0);
+  ASSERT_TRUE(expected.found) << expected.reason;
+  RecentDetections recent;
+  recent.Push(expected);
+
+  // a region around the ball decides alone, with the whole frame's result
+  CameraFrame around;
+  around.capture_time_s = 1.0;
+  around.region = detector.RegionAround(recent, kRegionMarginPx);
+  around.region_bgr = whole;
+  const PayloadDetection in_region = DetectFrame(detector, around, read_whole);
+  EXPECT_EQ(reads, 0);
+  EXPECT_EQ(in_region.centre_px, expected.centre_px);
+
+  // a region of empty floor cannot: the whole frame is read out once
+  CameraFrame away;
+  away.capture_time_s = 1.0;
+  away.region = cv::Rect(0, 0, 64, 64);
+  away.region_bgr = testing_frames::RenderSphere(params, Eigen::Vector3d(0, 0, -1.0));
+  const PayloadDetection fallen_back = DetectFrame(detector, away, read_whole);
+  EXPECT_EQ(reads, 1);
+  EXPECT_EQ(fallen_back.centre_px, expected.centre_px);
+}
+
 TEST(FlightStackTest, ControlThreadGivesTheCallersThreadsCommandsInOrder) {
   // hpa_mpc from a displaced start (its plan moves every step); the threaded stack's commands
   // are taken in batches of up to seven, so that more are pending than its ring first holds

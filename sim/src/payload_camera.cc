@@ -85,34 +85,37 @@ std::optional<CameraCapture> PayloadCameraSensor::Capture(
   return capture;
 }
 
-// The readout's region first; the whole frame when the region cannot decide (a detector whose
-// region result equals the whole frame's when it gives one makes the detection independent of
-// the region).
+// The readout's region rendered, the whole frame only when its detector asks for it (when the
+// region cannot decide, or there is none).
 PayloadDetection PayloadCameraSensor::RenderAndDetect(World& world, double time_s,
                                                       CameraReadout* readout,
                                                       CameraCapture* capture) {
-  const cv::Rect region = readout->Region();
-  // renders `area` (empty: the whole frame) and detects in it; times add up
-  const auto render_and_detect = [&](const cv::Rect& area) {
-    world.RenderPayloadCamera(&rendered_, area);
+  CameraFrame frame;
+  frame.capture_time_s = time_s;
+  frame.region = readout->Region();
+  if (frame.region.area() > 0) {
+    world.RenderPayloadCamera(&rendered_, frame.region);
     AddRenderTiming(world, capture);
-    const auto detect_start = std::chrono::steady_clock::now();
-    std::optional<PayloadDetection> d = readout->Detect(rendered_, area, time_s);
-    capture->detector_ms += MsSince(detect_start);
-    return d;
-  };
-  std::optional<PayloadDetection> in_region;
-  if (region.area() > 0) in_region = render_and_detect(region);
-  capture->region_only = in_region.has_value();
-  std::optional<PayloadDetection> detection = in_region ? in_region : render_and_detect(cv::Rect());
-  capture->frame = &rendered_;
-  if (!detection) {
-    // a whole-frame read-out always decides: a readout that does not is a broken detector
-    detection = PayloadDetection();
-    detection->time_s = time_s;
-    detection->reason = "the detector gave no result for the whole frame";
+    frame.region_bgr = rendered_;
   }
-  return *detection;
+  // the whole frame into the same buffer (the region has been read by then); its render time
+  // is not the detector's
+  double whole_read_ms = 0.0;
+  bool whole_read = false;
+  const WholeFrameReader read_whole = [&]() -> const cv::Mat& {
+    const auto render_start = std::chrono::steady_clock::now();
+    world.RenderPayloadCamera(&rendered_, cv::Rect());
+    AddRenderTiming(world, capture);
+    whole_read = true;
+    whole_read_ms = MsSince(render_start);
+    return rendered_;
+  };
+  const auto detect_start = std::chrono::steady_clock::now();
+  PayloadDetection detection = readout->Detect(frame, read_whole);
+  capture->detector_ms += MsSince(detect_start) - whole_read_ms;
+  capture->region_only = !whole_read;
+  capture->frame = &rendered_;
+  return detection;
 }
 
 // The region of interest the stack asked for last and the whole frame (its fallback), each into

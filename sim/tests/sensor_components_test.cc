@@ -70,9 +70,9 @@ TEST(SensorComponentsTest, AnAddedSensorIsDeliveredAfterItsDeclaredLatency) {
 class NoReadout final : public CameraReadout {
  public:
   cv::Rect Region() override { return {}; }
-  std::optional<PayloadDetection> Detect(const cv::Mat&, const cv::Rect&, double) override {
+  PayloadDetection Detect(const CameraFrame&, const WholeFrameReader&) override {
     ADD_FAILURE() << "a camera without pixels asked for a detection";
-    return std::nullopt;
+    return PayloadDetection();
   }
   cv::Mat* NextFrameSlot(int*) override { return nullptr; }
 };

@@ -359,14 +359,6 @@ void RunLoop::KeepTickStartMessage(sim::SensorMessage* message) {
   if (auto* f = std::get_if<CameraFrame>(message)) camera_frames_.push_back(std::move(*f));
 }
 
-// In process: DetectInRegion on a region (its result equals the whole frame's when it gives
-// one), Detect on the whole frame.
-std::optional<PayloadDetection> FlightCameraReadout::Detect(const cv::Mat& bgr,
-                                                            const cv::Rect& area, double time_s) {
-  if (area.area() > 0) return detector_->DetectInRegion(bgr, area, time_s);
-  return detector_->Detect(bgr, time_s);
-}
-
 namespace {
 // A log row's command fields.
 void FillCommand(const ControlOutput& computed, LogRow* row) {

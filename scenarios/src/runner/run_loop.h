@@ -54,8 +54,9 @@ class FlightCameraReadout final : public sim::CameraReadout {
       : flight_(flight), detector_(detector) {}
   cv::Rect Region() override { return stack_roi_; }
   bool SendsFrames() const override { return flight_->wants_reference(); }
-  std::optional<PayloadDetection> Detect(const cv::Mat& bgr, const cv::Rect& area,
-                                         double time_s) override;
+  PayloadDetection Detect(const CameraFrame& frame, const WholeFrameReader& read_whole) override {
+    return flight::DetectFrame(*detector_, frame, read_whole);
+  }
   cv::Mat* NextFrameSlot(int* slot) override { return flight_->NextFrameSlot(slot); }
   /// The region of interest the stack asked for with its last reply.
   void SetStackRegion(const cv::Rect& roi) { stack_roi_ = roi; }

@@ -156,8 +156,10 @@ class FlightStack {
 };
 
 /// Detects the payload in a frame: in its region of interest first, in the whole frame when the
-/// region cannot decide (the order the in-process camera path uses).
-PayloadDetection DetectFrame(const PayloadDetector& detector, const CameraFrame& frame);
+/// region cannot decide: frame.whole_bgr, or, when the frame does not hold it, the image
+/// `read_whole` reads out (if given). The one read-out order of both camera paths.
+PayloadDetection DetectFrame(const PayloadDetector& detector, const CameraFrame& frame,
+                             const WholeFrameReader& read_whole = nullptr);
 
 /// How far (pixels) the payload's image may move between two frames and stay in the region
 /// around its last detection.

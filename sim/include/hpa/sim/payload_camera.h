@@ -46,10 +46,9 @@ class CameraReadout {
   /// True: the frames travel to the flight stack, which detects on its side (Detect is not
   /// called; the region, if any, and the whole frame are read out into NextFrameSlot buffers).
   virtual bool SendsFrames() const { return false; }
-  /// Detects in `area` of `bgr` (an empty area: the whole frame) captured at time_s; nullopt
-  /// when a region cannot decide (the whole frame is read out next).
-  virtual std::optional<PayloadDetection> Detect(const cv::Mat& bgr, const cv::Rect& area,
-                                                 double time_s) = 0;
+  /// Detects in `frame` (its region read out, if it has one), reading the whole frame of the same
+  /// exposure with `read_whole` only when it needs it.
+  virtual PayloadDetection Detect(const CameraFrame& frame, const WholeFrameReader& read_whole) = 0;
   /// The buffer the next frame sent to the flight stack is rendered into, and its slot.
   virtual cv::Mat* NextFrameSlot(int* slot) = 0;
 };
