@@ -10,7 +10,8 @@
 # camera render of the whole frame and of the region around the payload, the camera image model
 # on such a region; a figure a build does not have shows as -), the closed loop's real-time
 # factor with the analytic camera (scenarios/csv_reference.yaml) and the rendered one
-# (scenarios/hover_gripper_pull.yaml), and sweep throughput with the rendered camera
+# (scenarios/hover_gripper_pull.yaml), each in process and through hpa-flight with the ratio of
+# the two (the lockstep boundary's price), and sweep throughput with the rendered camera
 # (scenarios/sweeps/throughput_render.yaml, --jobs 2).
 # Writes DIR/bench.md (default out/bench) and prints it. Without --ref, this tree alone.
 set -euo pipefail
@@ -22,7 +23,7 @@ while [ $# -gt 0 ]; do
     --ref) ref=$2; shift 2 ;;
     --reps) reps=$2; shift 2 ;;
     --out) out=$2; shift 2 ;;
-    -h|--help) sed -n '2,15p' "$0" | sed 's/^# \{0,1\}//'; exit 0 ;;
+    -h|--help) sed -n '2,16p' "$0" | sed 's/^# \{0,1\}//'; exit 0 ;;
     *) echo "ci/bench.sh: unknown argument '$1' (see --help)" >&2; exit 2 ;;
   esac
 done
@@ -34,7 +35,7 @@ command -v ccache > /dev/null && launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache 
 # builds the benchmarks and hpa of the tree at $1 into $1/build
 build_tree() {
   cmake -S "$1" -B "$1/build" -G Ninja -DCMAKE_BUILD_TYPE=Release "${launcher[@]}" > /dev/null
-  cmake --build "$1/build" -j "$(nproc)" --target hpa mpc_bench sim_bench > /dev/null
+  cmake --build "$1/build" -j "$(nproc)" --target hpa hpa-flight mpc_bench sim_bench > /dev/null
 }
 
 sides=(this)
@@ -72,11 +73,17 @@ for ((rep = 1; rep <= reps; ++rep)); do
     "$(binary "$tree" sim_bench)" --benchmark_filter='BM_WorldStep|BM_RenderPayloadCamera|BM_CameraImageModelRegion' \
       --benchmark_format=json 2> /dev/null |
       python3 -c 'import json,sys; [print(json.dumps({"side":sys.argv[1],"figure":b["name"],"value":b["real_time"],"unit":b["time_unit"]})) for b in json.load(sys.stdin)["benchmarks"]]' "$side" >> "$raw"
+    # each scenario in process and through hpa-flight, one after the other (the boundary's
+    # price is their ratio, measured side by side)
     for scenario in csv_reference hover_gripper_pull; do
-      run_dir=$out/$side/$scenario
-      (cd "$tree" && "$hpa" run "scenarios/$scenario.yaml" --out "$run_dir" --quiet > /dev/null) || true
-      python3 -c 'import json,sys; m=json.load(open(sys.argv[2])); print(json.dumps({"side":sys.argv[1],"figure":"real-time factor, "+sys.argv[3],"value":m["sim_time_s"]/m["wall_time_s"],"unit":"x"}))' \
-        "$side" "$run_dir/metrics.json" "$scenario" >> "$raw"
+      for how in "" "through hpa-flight"; do
+        run_dir=$out/$side/$scenario${how:+_flight}
+        stack=()
+        [ -n "$how" ] && stack=(--flight-stack "$(binary "$tree" hpa-flight)")
+        (cd "$tree" && "$hpa" run "scenarios/$scenario.yaml" --out "$run_dir" --quiet "${stack[@]}" > /dev/null) || true
+        python3 -c 'import json,sys; m=json.load(open(sys.argv[2])); print(json.dumps({"side":sys.argv[1],"figure":"real-time factor, "+sys.argv[3],"value":m["sim_time_s"]/m["wall_time_s"],"unit":"x"}))' \
+          "$side" "$run_dir/metrics.json" "$scenario${how:+ $how}" >> "$raw"
+      done
     done
     sweep_dir=$out/$side/throughput_render
     rm -rf "$sweep_dir"
@@ -118,6 +125,20 @@ for f in figures:
         ratio = "-" if this is None or ref is None else f"{this / ref:.2f}"
         row += f" {text(ref)} | {ratio} |"
     lines.append(row)
+# the boundary's price: each scenario's real-time factor through hpa-flight over in process
+# (medians of the runs alternated with it; >= 0.5 is the goal)
+boundary = []
+for f in figures:
+    if f.endswith(" through hpa-flight"):
+        base = f[: -len(" through hpa-flight")]
+        for side in ("this", "ref"):
+            a, b = median(f, side), median(base, side)
+            if a is not None and b:
+                boundary.append(f"- {base.split(', ', 1)[1]} ({side}): through hpa-flight / in "
+                                f"process = {a / b:.2f}")
+if boundary:
+    lines += ["", "The boundary's price (real-time factor through hpa-flight over in process):"]
+    lines += boundary
 open(sys.argv[2], "w").write("\n".join(lines) + "\n")
 print("\n".join(lines))
 PY
