@@ -9,6 +9,7 @@
 #include <sstream>
 
 #include "hpa/controller/reference.h"
+#include "hpa/controller/reference_types.h"
 #include "hpa/models/data_dir.h"
 #include "hpa/models/file_io.h"
 #include "hpa/models/input_error.h"
@@ -145,10 +146,14 @@ void SnapshotReferencedFiles(SweepSpec* s) {
   }
   // only the reference block is read here: the runs are validated, with their values, later
   const YAML::Node reference = LoadYamlText(s->base_text, s->base_path)["reference"];
-  if (!reference.IsMap() || !reference["type"] || !reference["file"]) return;
-  if (!reference["type"].IsScalar() || reference["type"].Scalar() != "csv") return;
-  if (!reference["file"].IsScalar()) return;
-  std::string file = reference["file"].Scalar();
+  if (!reference.IsMap() || !reference["type"] || !reference["type"].IsScalar()) return;
+  // a type that reads a file names it by its file key (the registry's, whatever the type)
+  const ReferenceType* type = FindReferenceType(reference["type"].Scalar());
+  const ReferenceKey* file_key = type == nullptr ? nullptr : FileKeyOf(*type);
+  if (file_key == nullptr) return;
+  const YAML::Node file_node = reference[file_key->key];
+  if (!file_node || !file_node.IsScalar()) return;
+  std::string file = file_node.Scalar();
   if (file.empty() || file[0] != '/') file = Dirname(s->base_path) + "/" + file;
   s->reference_csv_path = file;
   s->reference_csv_text = ReadInputFile(file, "a reference CSV", kMaxReferenceCsvBytes);
