@@ -59,11 +59,16 @@ struct ScoreSums {
 
 // Every IMU and VIO sample the World has delivered goes to the filter; failures are counted.
 void FeedFilter(sim::World* world, QuadFilter* filter, SimRunResult* result) {
-  while (auto imu = world->TakeImu()) {
-    result->predict_failures += filter->Predict(*imu) != FilterStatus::kOk;
+  const std::vector<sim::SensorMessage> delivered = world->TakeDelivered();
+  for (const sim::SensorMessage& m : delivered) {
+    if (const ImuSample* imu = std::get_if<ImuSample>(&m)) {
+      result->predict_failures += filter->Predict(*imu) != FilterStatus::kOk;
+    }
   }
-  while (auto vio = world->TakeVio()) {
-    result->vio_failures += filter->UpdateVio(*vio) != FilterStatus::kOk;
+  for (const sim::SensorMessage& m : delivered) {
+    if (const VioSample* vio = std::get_if<VioSample>(&m)) {
+      result->vio_failures += filter->UpdateVio(*vio) != FilterStatus::kOk;
+    }
   }
 }
 

@@ -383,26 +383,5 @@ std::optional<CameraCapture> World::CaptureTickStart(CameraReadout* readout) {
   return capture;
 }
 
-std::optional<ImuSample> World::TakeImu() {
-  std::optional<SensorMessage> m = deliveries_[imu_sensor_].PopReady(time_s());
-  if (!m) return std::nullopt;
-  return std::get<ImuSample>(*m);
-}
-
-std::optional<GyroSample> World::TakeRateGyro() {
-  if (rate_gyro_sensor_ < 0) return std::nullopt;
-  // the newest sample since the last call (the loop runs on the latest)
-  std::optional<GyroSample> newest;
-  while (std::optional<SensorMessage> m = deliveries_[rate_gyro_sensor_].PopReady(time_s())) {
-    newest = std::get<GyroSample>(*m);
-  }
-  return newest;
-}
-
-std::optional<VioSample> World::TakeVio() {
-  std::optional<SensorMessage> m = deliveries_[vio_sensor_].PopReady(time_s());
-  if (!m) return std::nullopt;
-  return std::get<VioSample>(*m);
-}
 
 }  // namespace hpa::sim

@@ -23,12 +23,10 @@ void BM_WorldStep(benchmark::State& state) {
   hpa::sim::World world(Config());
   world.SetMotorSpeedCommand(
       hpa::InputVector::Constant(world.world_params().HoverMotorSpeedRadps()));
+  std::vector<hpa::sim::SensorMessage> delivered;
   for (auto _ : state) {
     world.Step();
-    while (world.TakeImu()) {
-    }
-    while (world.TakeVio()) {
-    }
+    world.TakeDelivered(&delivered);
   }
 }
 BENCHMARK(BM_WorldStep);

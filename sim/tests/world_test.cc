@@ -19,6 +19,17 @@
 namespace hpa::sim {
 namespace {
 
+// The messages of type T among `messages` (what World::TakeDelivered returned), in order.
+template <class T>
+std::vector<T> OfType(const std::vector<SensorMessage>& messages) {
+  std::vector<T> out;
+  for (const SensorMessage& m : messages) {
+    if (const T* t = std::get_if<T>(&m)) out.push_back(*t);
+  }
+  return out;
+}
+
+
 InputVector HoverCommand(const World& world) {
   return InputVector::Constant(world.world_params().HoverMotorSpeedRadps());
 }
@@ -97,7 +108,9 @@ TEST(WorldTest, ImuAt500HzVioAt30HzWithLatency) {
   Eigen::Vector3d accel_sum = Eigen::Vector3d::Zero();
   for (int k = 0; k < 1000; ++k) {
     world.Step();
-    while (auto imu = world.TakeImu()) {
+    const std::vector<SensorMessage> delivered = world.TakeDelivered();
+    for (const ImuSample& s : OfType<ImuSample>(delivered)) {
+      const ImuSample* imu = &s;
       if (last_imu_t >= 0) {
         EXPECT_NEAR(imu->time_s - last_imu_t, 0.002, 1e-12);
       }
@@ -105,7 +118,8 @@ TEST(WorldTest, ImuAt500HzVioAt30HzWithLatency) {
       accel_sum += imu->accel_B_mps2;
       ++n_imu;
     }
-    while (auto vio = world.TakeVio()) {
+    for (const VioSample& s : OfType<VioSample>(delivered)) {
+      const VioSample* vio = &s;
       // delivered no earlier than capture + latency and within one step after it
       const double age_s = world.time_s() - vio->time_s;
       EXPECT_GE(age_s, DefaultConfig().rates.vio.latency_s - 1e-9);
@@ -132,8 +146,9 @@ TEST(WorldTest, SameSeedSameSamplesOtherSeedOtherSamples) {
     std::vector<double> v;
     for (int k = 0; k < 100; ++k) {
       world.Step();
-      while (auto imu = world.TakeImu()) v.push_back(imu->gyro_B_radps.x());
-      while (auto vio = world.TakeVio()) v.push_back(vio->p_WB_W.x());
+      const std::vector<SensorMessage> delivered = world.TakeDelivered();
+      for (const ImuSample& imu : OfType<ImuSample>(delivered)) v.push_back(imu.gyro_B_radps.x());
+      for (const VioSample& vio : OfType<VioSample>(delivered)) v.push_back(vio.p_WB_W.x());
     }
     return v;
   };
@@ -288,7 +303,7 @@ TEST(WorldTest, RateGyroSamplesAtTheRateLoopsRateOnlyWhenPx4Flies) {
   // off (the default profile): never a sample
   World off(DefaultConfig());
   off.Step();
-  EXPECT_FALSE(off.TakeRateGyro().has_value());
+  EXPECT_TRUE(OfType<GyroSample>(off.TakeDelivered()).empty());
 
   WorldConfig c = DefaultConfig();
   c.profile.rate_gyro.enabled = true;
@@ -307,10 +322,11 @@ TEST(WorldTest, RateGyroSamplesAtTheRateLoopsRateOnlyWhenPx4Flies) {
   for (int k = 0; k < 2000; ++k) {
     const Eigen::Vector3d w_true = world.GetTruth().state.w_B;
     world.Step();
-    const std::optional<GyroSample> g = world.TakeRateGyro();
-    ASSERT_TRUE(g.has_value());
+    const std::vector<GyroSample> gyro = OfType<GyroSample>(world.TakeDelivered());
+    ASSERT_EQ(gyro.size(), 1u);
+    const GyroSample* g = &gyro.front();
     EXPECT_NEAR(g->time_s, k * World::kPhysicsDt_s, 1e-12);
-    EXPECT_FALSE(world.TakeRateGyro().has_value());
+    EXPECT_TRUE(OfType<GyroSample>(world.TakeDelivered()).empty());
     sum_sq += (g->gyro_B_radps - w_true).squaredNorm();
     n += 3;
   }
@@ -323,9 +339,9 @@ TEST(WorldTest, RateGyroSamplesAtTheRateLoopsRateOnlyWhenPx4Flies) {
   World half(c);
   half.Reset(s);
   half.Step();
-  EXPECT_FALSE(half.TakeRateGyro().has_value());
+  EXPECT_TRUE(OfType<GyroSample>(half.TakeDelivered()).empty());
   half.Step();
-  EXPECT_TRUE(half.TakeRateGyro().has_value());
+  EXPECT_EQ(OfType<GyroSample>(half.TakeDelivered()).size(), 1u);
 }
 
 }  // namespace

@@ -162,16 +162,6 @@ class World {
   /// is queued for delivery after its latency like every sensor's message (TakeDelivered).
   /// The camera's capture, if it fired.
   std::optional<CameraCapture> CaptureTickStart(CameraReadout* readout);
-  /// Oldest undelivered IMU sample (a new one every 2 ms), if any.
-  std::optional<ImuSample> TakeImu();
-  /// Newest gyro sample for the body-rate loop since the last call, if any (a new one every
-  /// physics_hz / profile.rate_gyro.rate_hz steps when the profile has the rate gyro (PX4's rate
-  /// loop); never otherwise). The same part as the IMU (its noise density, its gyro bias), sampled
-  /// at the loop's rate; its white noise comes from a generator of its own, so the IMU's stream is
-  /// the same with and without it.
-  std::optional<GyroSample> TakeRateGyro();
-  /// Oldest VIO sample whose latency has elapsed (30 Hz capture), if any.
-  std::optional<VioSample> TakeVio();
 
   /// Applies impulse_W_Ns (N s, world frame) at the body's centre of mass as a constant force
   /// over duration_s (rounded to whole steps, at least one).
