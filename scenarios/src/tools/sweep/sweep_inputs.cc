@@ -93,10 +93,16 @@ std::optional<InputsSnapshot> ReadInputsSnapshot(const std::string& dir) {
     snapshot.sweep_id = j.at("sweep_id").get<std::string>();
     if (j.contains("flight_stack")) snapshot.flight_stack = j.at("flight_stack").get<std::string>();
     for (const Json& f : j.at("files")) {
-      // a file kept by its hash alone compares by that hash
-      snapshot.files.push_back({f.at("role").get<std::string>(), f.at("path").get<std::string>(),
-                                f.contains("text") ? f.at("text").get<std::string>()
-                                                   : "hash " + f.at("hash").get<std::string>()});
+      // a file kept by its hash alone compares by that hash; one kept by its text (which
+      // may come without a hash) by the text's
+      InputFile file{f.at("role").get<std::string>(), f.at("path").get<std::string>(),
+                     std::nullopt, ""};
+      if (!f.contains("text") && !f.contains("hash")) {
+        throw InputError(path, "", "malformed: a file with neither its text nor its hash");
+      }
+      if (f.contains("text")) file.text = f.at("text").get<std::string>();
+      file.hash = f.contains("hash") ? f.at("hash").get<std::string>() : HashText(*file.text);
+      snapshot.files.push_back(file);
     }
   } catch (const Json::exception& e) {
     throw InputError(path, "", std::string("malformed: ") + e.what());
@@ -126,22 +132,22 @@ std::vector<std::string> DescribeInputChanges(const InputsSnapshot& a, const Inp
   }
   for (const InputFile& fa : a.files) {
     for (const InputFile& fb : b.files) {
-      if (fa.role != fb.role || fa.text == fb.text) continue;
+      if (fa.role != fb.role || fa.hash == fb.hash) continue;
       const std::string what =
           fa.role + " file " +
           (fa.path == fb.path ? fa.path : fa.path + " (A) / " + fb.path + " (B)");
       std::map<std::string, std::string> ka, kb;
-      if (fa.text.rfind("hash ", 0) == 0 || fb.text.rfind("hash ", 0) == 0) {
+      if (!fa.text || !fb.text) {
         changes.push_back(what + ": its content differs");
         continue;
       }
       if (fa.role == "reference.file") {
-        changes.push_back(what + ": " + FirstDifferingLine(fa.text, fb.text));
+        changes.push_back(what + ": " + FirstDifferingLine(*fa.text, *fb.text));
         continue;
       }
       try {
-        Flatten(LoadYamlText(fa.text, fa.path), "", &ka);
-        Flatten(LoadYamlText(fb.text, fb.path), "", &kb);
+        Flatten(LoadYamlText(*fa.text, fa.path), "", &ka);
+        Flatten(LoadYamlText(*fb.text, fb.path), "", &kb);
       } catch (const InputError&) {
         changes.push_back(what + ": the text differs");
         continue;

@@ -100,7 +100,8 @@ int DropErrorRecords(const std::string& jsonl);
 struct InputFile {
   std::string role;  // "sweep", "base", "reference.file", "params", "scene", "profile NAME"
   std::string path;
-  std::string text;
+  std::optional<std::string> text;  // the whole text, where the snapshot keeps it
+  std::string hash;                 // HashText of the text (every file has one)
 };
 
 /// DIR/inputs.json: the files a sweep ran from, with its sweep_id.
