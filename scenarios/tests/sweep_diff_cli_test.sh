@@ -83,7 +83,7 @@ sed -i 's/force: \[0.3, 0.1, 0\]/force: [0.6, 0.1, 0]/' "$out/edit/base.yaml"
   || fail "sweep B failed: $(tail -3 "$out/edit/b.log")"
 "$hpa" sweep-diff "$out/edit/a" "$out/edit/b" --out "$out/edit/diff" > "$out/edit/diff.log" 2>&1 \
   || fail "sweep-diff of the edited base failed: $(cat "$out/edit/diff.log")"
-grep -q "inputs: sweep_id .* (A) vs .* (B): the sweep or base file differs" "$out/edit/diff.log" \
+grep -q "inputs: sweep_id .* (A) vs .* (B): what the runs were flown from differs" "$out/edit/diff.log" \
   || fail "an edited base file not reported as differing inputs: $(cat "$out/edit/diff.log")"
 grep -q "base file .*base.yaml: events.0.force.0: 0.3 (A) vs 0.6 (B)" "$out/edit/diff.log" \
   || fail "the edited key not named: $(cat "$out/edit/diff.log")"

@@ -317,15 +317,16 @@ std::string Join(const std::set<std::string>& values) {
   return out;
 }
 
-// When A and B were flown from different inputs (sweep and base files, by their hash): says so
-// and lists what changed, from each folder's inputs.json.
+// When A and B were flown from different inputs (the sweep_id: the sweep and base files, the
+// data files and the flight stack): says so and lists what changed, from each folder's
+// inputs.json.
 std::vector<std::string> DescribeInputs(const SweepDiffOptions& options, const std::vector<Run>& a,
                                         const std::vector<Run>& b) {
   const std::set<std::string> ids_a = Distinct(a, &Run::inputs_id);
   const std::set<std::string> ids_b = Distinct(b, &Run::inputs_id);
   if (ids_a == ids_b) return {};
   std::vector<std::string> lines = {"inputs: sweep_id " + Join(ids_a) + " (A) vs " + Join(ids_b) +
-                                    " (B): the sweep or base file differs"};
+                                    " (B): what the runs were flown from differs"};
   const auto snap_a = sweep::ReadInputsSnapshot(options.a_dir);
   const auto snap_b = sweep::ReadInputsSnapshot(options.b_dir);
   if (!snap_a || !snap_b) {
