@@ -154,6 +154,12 @@ TEST(FlightProcessTest, StacksDieWithHpaAndAreFoundByTheirSocket) {
   }
   ::unlink(pids);
   ASSERT_GT(grandchild, 0);
+  // $! is written as soon as the shell forks: wait until setsid has made the session, or the
+  // group kill below would still reach it (and leave a zombie that kill(pid, 0) reports alive)
+  for (int i = 0; i < 400 && ::getsid(grandchild) != grandchild; ++i) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  }
+  ASSERT_EQ(::getsid(grandchild), grandchild) << "setsid did not make a session";
   ::kill(-shell, SIGKILL);  // the group: the grandchild is not in it
   EXPECT_TRUE(Ended(shell));
   EXPECT_EQ(::kill(grandchild, 0), 0) << "the grandchild left the group and lives";
