@@ -14,3 +14,18 @@ expect_exit() {
   [ "$status" -eq "$code" ] || fail "hpa $* exited $status, expected $code: $text"
   grep -Eq -- "$pattern" <<< "$text" || fail "hpa $* output lacks /$pattern/: $text"
 }
+
+# impulse_hover_base FILE NAME DURATION_S AT_S: writes a fast base scenario for sweeps and plots
+# (the geometric controller on ground truth with the analytic camera, a hover, an upward payload
+# impulse at AT_S that slackens the cable for a while)
+impulse_hover_base() {
+  cat > "$1" << YAML
+name: $2
+duration: $3
+controller: {type: geometric}
+estimation: {ground_truth: true, camera: analytic}
+reference: {type: hover, payload_position: [0, 0, 0.7]}
+events:
+  - {at: $4, type: impulse, body: payload, impulse: [0, 0, 0.1]}
+YAML
+}

@@ -18,15 +18,7 @@ trap 'rm -rf "$out"' EXIT
   > /dev/null 2>&1 || fail "run --plots failed"
 
 # an upward payload impulse slackens the cable for a while (about 0.2 s here)
-cat > "$out/slack.yaml" <<'YAML'
-name: redraw_slack
-duration: 1.5
-controller: {type: geometric}
-estimation: {ground_truth: true, camera: analytic}
-reference: {type: hover, payload_position: [0, 0, 0.7]}
-events:
-  - {at: 0.5, type: impulse, body: payload, impulse: [0, 0, 0.1]}
-YAML
+impulse_hover_base "$out/slack.yaml" redraw_slack 1.5 0.5
 "$hpa" run "$out/slack.yaml" --quiet --plots --out "$out/slack" > /dev/null 2>&1 \
   || fail "run --plots of the slack scenario failed"
 "$hpa" compare "$out/slack.yaml" --controllers geometric,nonhybrid_mpc --quiet \

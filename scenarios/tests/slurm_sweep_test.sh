@@ -9,6 +9,8 @@
 # Env: HPA_SLURM_CTLD_PORT (6817), HPA_SLURM_SLURMD_PORT (6818), HPA_SLURM_TIMEOUT_S (300).
 set -euo pipefail
 hpa=$(realpath "$1"); scen=$(realpath "$2"); out=$3
+# shellcheck source=cli_test_lib.sh
+source "$scen/tests/cli_test_lib.sh"
 ctld_port=${HPA_SLURM_CTLD_PORT:-6817}
 slurmd_port=${HPA_SLURM_SLURMD_PORT:-6818}
 timeout_s=${HPA_SLURM_TIMEOUT_S:-300}
@@ -124,15 +126,7 @@ done
 say "cluster up: munged, slurmctld, slurmd (node $node idle)"
 
 # a small sweep: geometric controller on ground truth, an impulse and a mass drawn per run
-cat > "$out/base.yaml" << 'YAML'
-name: slurm_base
-duration: 2.0
-controller: {type: geometric}
-estimation: {ground_truth: true, camera: analytic}
-reference: {type: hover, payload_position: [0, 0, 0.7]}
-events:
-  - {at: 0.5, type: impulse, body: payload, impulse: [0, 0, 0.1]}
-YAML
+impulse_hover_base "$out/base.yaml" slurm_base 2.0 0.5
 cat > "$out/sweep.yaml" << 'YAML'
 base: base.yaml
 runs: 4

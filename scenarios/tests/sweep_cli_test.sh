@@ -25,15 +25,7 @@ unique_runs() {
 }
 
 # a fast base: geometric controller on ground truth, a vertical impulse on the payload
-cat > "$out/base.yaml" <<'YAML'
-name: sweep_base
-duration: 2.0
-controller: {type: geometric}
-estimation: {ground_truth: true, camera: analytic}
-reference: {type: hover, payload_position: [0, 0, 0.7]}
-events:
-  - {at: 0.5, type: impulse, body: payload, impulse: [0, 0, 0.1]}
-YAML
+impulse_hover_base "$out/base.yaml" sweep_base 2.0 0.5
 cat > "$out/tiny.yaml" <<'YAML'
 base: base.yaml
 runs: 5

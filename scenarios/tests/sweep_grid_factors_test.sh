@@ -14,15 +14,7 @@ rm -rf "$out"; mkdir -p "$out"
 source "$scen/tests/cli_test_lib.sh"
 
 # a fast base: ground truth, the analytic camera, a short hover with a drawn impulse
-cat > "$out/base.yaml" <<'YAML'
-name: grid_factors_base
-duration: 0.6
-controller: {type: geometric}
-estimation: {ground_truth: true, camera: analytic}
-reference: {type: hover, payload_position: [0, 0, 0.7]}
-events:
-  - {at: 0.2, type: impulse, body: payload, impulse: [0, 0, 0.1]}
-YAML
+impulse_hover_base "$out/base.yaml" grid_factors_base 0.6 0.2
 cat > "$out/two.yaml" <<'YAML'
 base: base.yaml
 runs: 3
