@@ -200,27 +200,32 @@ ControlOutput HpaMpc::Update(const SystemState& state) {
   return finish();
 }
 
-std::unique_ptr<Controller> MakeHpaMpcController(const ControllerConfig& config,
-                                                 const Params& params,
-                                                 std::shared_ptr<const Reference> reference) {
+namespace {
+// An MPC controller from its scenario settings: hybrid (hpa_mpc, perception cost and the re-taut
+// prediction as configured) or not (nonhybrid_mpc: always taut, neither).
+std::unique_ptr<Controller> MakeMpcController(const ControllerConfig& config, const Params& params,
+                                              std::shared_ptr<const Reference> reference,
+                                              bool hybrid) {
   MpcSettings settings;
-  settings.hybrid = true;
+  settings.hybrid = hybrid;
   settings.perception_weight = config.perception_weight;
   settings.solver = config.solver;
   settings.solvers.rti.qp_method = ParseRtiQpMethod(config.qp_method);
-  settings.predict_retaut = config.predict_retaut;
+  settings.predict_retaut = hybrid && config.predict_retaut;
   return std::make_unique<HpaMpc>(params, std::move(reference), settings);
+}
+}  // namespace
+
+std::unique_ptr<Controller> MakeHpaMpcController(const ControllerConfig& config,
+                                                 const Params& params,
+                                                 std::shared_ptr<const Reference> reference) {
+  return MakeMpcController(config, params, std::move(reference), true);
 }
 
 std::unique_ptr<Controller> MakeNonhybridMpcController(const ControllerConfig& config,
                                                        const Params& params,
                                                        std::shared_ptr<const Reference> reference) {
-  MpcSettings settings;
-  settings.hybrid = false;
-  settings.perception_weight = config.perception_weight;
-  settings.solver = config.solver;
-  settings.solvers.rti.qp_method = ParseRtiQpMethod(config.qp_method);
-  return std::make_unique<HpaMpc>(params, std::move(reference), settings);
+  return MakeMpcController(config, params, std::move(reference), false);
 }
 
 }  // namespace hpa

@@ -5,6 +5,7 @@
 
 #include "hpa/models/params.h"
 #include "hpa/models/yaml_reader.h"
+#include "event_body.h"
 #include "hpa/scenarios/events.h"
 #include "hpa/sim/world.h"
 
@@ -19,14 +20,14 @@ constexpr double kPlausibleImpulseSpeed_mps = 10.0;
 
 ImpulseEvent ImpulseEvent::Parse(const YamlMap& map) {
   ImpulseEvent e;
-  e.on_payload = map.Choice("body", {"payload", "quadrotor"}, "payload") == "payload";
+  e.on_payload = EventActsOnPayload(map);
   e.impulse_W_Ns = map.Vector("impulse", 3, -1e3, 1e3);
   e.duration_s = map.Number("duration", 1e-3, 1.0, 0.01);
   return e;
 }
 
 void ImpulseEvent::Apply(sim::World* world) const {
-  world->ApplyImpulse(on_payload ? sim::Body::kPayload : sim::Body::kQuadrotor, impulse_W_Ns,
+  world->ApplyImpulse(EventBody(on_payload), impulse_W_Ns,
                       duration_s);
 }
 

@@ -3,6 +3,7 @@
 #include <cmath>
 
 #include "hpa/models/yaml_reader.h"
+#include "event_body.h"
 #include "hpa/scenarios/events.h"
 #include "hpa/sim/world.h"
 
@@ -17,13 +18,13 @@ constexpr double kMaxVelocityChange_mps = 20.0;
 
 VelocityChangeEvent VelocityChangeEvent::Parse(const YamlMap& map) {
   VelocityChangeEvent e;
-  e.on_payload = map.Choice("body", {"payload", "quadrotor"}, "payload") == "payload";
+  e.on_payload = EventActsOnPayload(map);
   e.dv_W_mps = map.Vector("dv", 3, -kMaxVelocityChange_mps, kMaxVelocityChange_mps);
   return e;
 }
 
 void VelocityChangeEvent::Apply(sim::World* world) const {
-  world->AddVelocity(on_payload ? sim::Body::kPayload : sim::Body::kQuadrotor, dv_W_mps);
+  world->AddVelocity(EventBody(on_payload), dv_W_mps);
 }
 
 }  // namespace hpa
