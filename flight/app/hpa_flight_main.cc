@@ -10,7 +10,9 @@
 #include <CLI/CLI.hpp>
 #include <cstdio>
 #include <cstdlib>
+#include <optional>
 #include <string>
+#include <utility>
 
 #include "hpa/flight/protocol.h"
 
@@ -53,6 +55,11 @@ class FrameRing {
       f.whole_bgr = Slot(f.whole_slot);
     }
   }
+  // points a frame being captured at what of it is read out so far (a slot of -1: not yet)
+  void AttachCaptured(hpa::flight::CameraFrame* f) const {
+    if (f->region.area() > 0 && f->region_slot >= 0) f->region_bgr = Slot(f->region_slot);
+    if (f->whole_slot >= 0) f->whole_bgr = Slot(f->whole_slot);
+  }
 
  private:
   cv::Mat Slot(int slot) const {
@@ -67,7 +74,29 @@ class FrameRing {
   int slots_ = 0, width_ = 0, height_ = 0;
 };
 
-int Serve(Channel& channel, const std::string& controller, const std::string& estimator) {
+// The answer to a detect: the region to read out first, the whole frame when the region cannot
+// decide (or there is none), then the detection.
+hpa::flight::DetectReply AnswerDetect(const hpa::flight::FlightStack& stack,
+                                      const hpa::flight::CameraFrame& frame) {
+  hpa::flight::DetectReply reply;
+  const bool region_read = frame.region.area() > 0 && frame.region_slot >= 0;
+  if (!region_read && frame.whole_slot < 0) {
+    reply.camera_roi = stack.CameraRegion();
+    reply.region_wanted = reply.camera_roi.area() > 0;
+    reply.whole_wanted = !reply.region_wanted;
+    return reply;
+  }
+  if (std::optional<hpa::PayloadDetection> d = stack.DetectCaptured(frame)) {
+    reply.has_detection = true;
+    reply.detection = *d;
+  } else {
+    reply.whole_wanted = true;
+  }
+  return reply;
+}
+
+int Serve(Channel& channel, const std::string& controller, const std::string& estimator,
+          bool per_tick) {
   const std::vector<uint8_t> hello_bytes = channel.Expect(MessageType::kHello, 60.0);
   const nlohmann::json hello = nlohmann::json::parse(hello_bytes.begin(), hello_bytes.end());
   const uint32_t version = hello.at("protocol_version").get<uint32_t>();
@@ -85,18 +114,32 @@ int Serve(Channel& channel, const std::string& controller, const std::string& es
   channel.SendJson(MessageType::kHelloAck, {{"protocol_version", hpa::flight::kProtocolVersion},
                                             {"name", "hpa-flight (" + config.controller.type + ")"},
                                             {"controller", config.controller.type},
-                                            {"control_rate_hz", stack.control_rate_hz()}});
+                                            {"control_rate_hz", stack.control_rate_hz()},
+                                            {"batched_ticks", !per_tick},
+                                            {"detects_at_capture", !per_tick}});
   std::vector<uint8_t> body;
+  int frames_found = 0;  // of the ticks answered by no reply yet
   while (true) {
     const MessageType type = channel.Receive(&body, 0.0);
     if (type == MessageType::kTick) {
       hpa::flight::FlightInputs in = hpa::flight::DecodeTick(body);
       ring.Attach(&in.frames);
-      channel.Send(MessageType::kTickReply, hpa::flight::EncodeReply(stack.Step(in)));
+      const hpa::flight::FlightOutputs out = stack.Step(in);
+      // a tick flagged no_reply is answered by none; its frames found join the next reply
+      frames_found += out.frames_detected;
+      if (in.no_reply) continue;
+      hpa::flight::FlightOutputs reply = out;
+      reply.frames_detected = std::exchange(frames_found, 0);
+      channel.Send(MessageType::kTickReply, hpa::flight::EncodeReply(reply));
+    } else if (type == MessageType::kDetect) {
+      hpa::flight::CameraFrame frame = hpa::flight::DecodeDetect(body);
+      ring.AttachCaptured(&frame);
+      channel.Send(MessageType::kDetectReply,
+                   hpa::flight::EncodeDetectReply(AnswerDetect(stack, frame)));
     } else if (type == MessageType::kFinish) {
       hpa::flight::FlightInputs in = hpa::flight::DecodeTick(body);
       ring.Attach(&in.frames);
-      const int found = stack.Finish(in);
+      const int found = stack.Finish(in) + frames_found;
       nlohmann::json health = nlohmann::json::array();
       for (const auto& [name, value] : stack.EstimatorHealth()) health.push_back({name, value});
       channel.SendJson(MessageType::kFinishReply,
@@ -127,6 +170,10 @@ int main(int argc, char** argv) {
                  "fly this registered controller instead of the scenario's");
   app.add_option("--estimator", estimator,
                  "use this registered estimator instead of the scenario's");
+  bool per_tick = false;
+  app.add_flag("--per-tick", per_tick,
+               "answer every tick and receive whole frames, as a stack that declares neither "
+               "batched_ticks nor detects_at_capture (the protocol's first behaviour)");
   CLI11_PARSE(app, argc, argv);
   if (socket_path.empty()) {
     const char* env = std::getenv("HPA_FLIGHT_SOCKET");
@@ -141,7 +188,7 @@ int main(int argc, char** argv) {
   std::unique_ptr<Channel> channel;
   try {
     channel = std::make_unique<Channel>(hpa::flight::ConnectUnix(socket_path));
-    return Serve(*channel, controller, estimator);
+    return Serve(*channel, controller, estimator, per_tick);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "hpa-flight: %s\n", e.what());
     if (channel) {

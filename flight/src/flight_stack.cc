@@ -240,6 +240,19 @@ ControlOutput FlightStack::AwaitCommand() {
   return control_thread_->Await();
 }
 
+cv::Rect FlightStack::CameraRegion() const {
+  return detector_ ? detector_->RegionAround(recent_detections_, kRegionMarginPx) : cv::Rect();
+}
+
+std::optional<PayloadDetection> FlightStack::DetectCaptured(const CameraFrame& frame) const {
+  if (!detector_) throw std::logic_error("FlightStack::DetectCaptured: no detector (ground truth)");
+  if (frame.whole_bgr.empty()) {
+    if (frame.region.area() <= 0 || frame.region_bgr.empty()) return std::nullopt;
+    return detector_->DetectInRegion(frame.region_bgr, frame.region, frame.capture_time_s);
+  }
+  return DetectFrame(*detector_, frame);
+}
+
 HealthFields FlightStack::EstimatorHealth() const {
   return estimator_ ? estimator_->Health().Fields() : HealthFields{};
 }

@@ -100,6 +100,7 @@ const Codec<FlightInputs>& TickCodec() {
            }),
        BindBit("need_estimate", &FlightInputs::need_estimate),
        BindBit("gripper_active", &FlightInputs::gripper_active),
+       BindBit("no_reply", &FlightInputs::no_reply),
        Bind("allocation", &FlightInputs::allocation, AllocationCodec()),
        Bind("reference", &FlightInputs::reference, ReferenceCodec()),
        Bind("imu", &FlightInputs::imu, ImuCodec()), Bind("vio", &FlightInputs::vio, VioCodec()),
@@ -134,6 +135,16 @@ const Codec<FlightOutputs>& ReplyCodec() {
        Bind("resets", &FlightOutputs::estimator_resets),
        Bind("frames_detected", &FlightOutputs::frames_detected),
        Bind("camera_roi", &FlightOutputs::camera_roi)});
+  return codec;
+}
+
+const Codec<DetectReply>& DetectReplyCodec() {
+  static const Codec<DetectReply> codec(
+      "detect_reply",
+      {BindBit("region_wanted", &DetectReply::region_wanted),
+       BindBit("whole_wanted", &DetectReply::whole_wanted),
+       Bind("camera_roi", &DetectReply::camera_roi),
+       Bind("detection", &DetectReply::detection, DetectionCodec(), &DetectReply::has_detection)});
   return codec;
 }
 
@@ -235,6 +246,10 @@ std::string MessageTypeName(MessageType type) {
       return "finish_reply";
     case MessageType::kError:
       return "error";
+    case MessageType::kDetect:
+      return "detect";
+    case MessageType::kDetectReply:
+      return "detect_reply";
   }
   return "unknown type " + std::to_string(static_cast<uint32_t>(type));
 }
@@ -267,11 +282,47 @@ FlightOutputs DecodeReply(const std::vector<uint8_t>& body) {
   return out;
 }
 
+std::vector<uint8_t> EncodeDetect(const CameraFrame& frame) {
+  wire::Writer w;
+  FrameCodec().Encode(frame, w);
+  return std::move(w.bytes);
+}
+
+CameraFrame DecodeDetect(const std::vector<uint8_t>& body) {
+  wire::Reader r(body, "detect");
+  CameraFrame frame;
+  FrameCodec().Decode(r, frame, "");
+  r.End();
+  return frame;
+}
+
+std::vector<uint8_t> EncodeDetectReply(const DetectReply& reply) {
+  wire::Writer w;
+  DetectReplyCodec().Encode(reply, w);
+  return std::move(w.bytes);
+}
+
+DetectReply DecodeDetectReply(const std::vector<uint8_t>& body) {
+  wire::Reader r(body, "detect_reply");
+  DetectReply reply;
+  DetectReplyCodec().Decode(r, reply, "");
+  r.End();
+  const int set = (reply.has_detection ? 1 : 0) + (reply.region_wanted ? 1 : 0) +
+                  (reply.whole_wanted ? 1 : 0);
+  if (set != 1) {
+    throw ProtocolError("detect_reply refused: " + std::to_string(set) +
+                        " of its flags set (detection, region wanted, whole frame wanted), "
+                        "expected exactly one");
+  }
+  return reply;
+}
+
 const nlohmann::json& MessageTable() { return wire::Table::Get().json(); }
 
 void CheckMessageBindings() {
   TickCodec();
   ReplyCodec();
+  DetectReplyCodec();
   // every struct of the table is bound, through the tick's or the reply's codec
   std::set<std::string> bound;
   const auto visit = [&](const auto& self, const wire::Struct& s) -> void {
@@ -282,6 +333,7 @@ void CheckMessageBindings() {
   };
   visit(visit, TickCodec().spec());
   visit(visit, ReplyCodec().spec());
+  visit(visit, DetectReplyCodec().spec());
   for (const auto& item : MessageTable().at("structs").items()) {
     if (bound.count(item.key()) == 0) {
       throw std::logic_error("messages.json's struct " + item.key() + " is in no message");
@@ -326,7 +378,7 @@ void CheckReply(const FlightOutputs& out, const ReplyBounds& bounds) {
   }
 }
 
-HelloAck ParseHelloAck(const std::vector<uint8_t>& body) {
+HelloAck ParseHelloAck(const std::vector<uint8_t>& body, double tick_hz) {
   const std::string what = "hello_ack";
   const nlohmann::json j = ParseObject(body, what);
   // the version: exactly the integer this side speaks (1.9 or 2^32 + 1 are not version 1)
@@ -348,6 +400,20 @@ HelloAck ParseHelloAck(const std::vector<uint8_t>& body) {
                           ", expected a finite number >= 0 (Hz)");
     }
     ack.control_rate_hz = rate.get<double>();
+  }
+  for (const auto& [key, flag] : {std::pair<const char*, bool*>{"batched_ticks", &ack.batched_ticks},
+                                  {"detects_at_capture", &ack.detects_at_capture}}) {
+    if (!j.contains(key)) continue;
+    if (!j.at(key).is_boolean()) {
+      throw ProtocolError("hello_ack's " + std::string(key) + " is " + Shown(j.at(key)) +
+                          ", expected true or false");
+    }
+    *flag = j.at(key).get<bool>();
+  }
+  if (ack.batched_ticks && !(ack.control_rate_hz > 0.0 && ack.control_rate_hz <= tick_hz)) {
+    throw ProtocolError("hello_ack's batched_ticks needs the control rate its ticks follow: "
+                        "control_rate_hz is " + Shown(j.value("control_rate_hz", nlohmann::json())) +
+                        ", expected a rate in (0, " + Shown(std::lround(tick_hz)) + "] Hz");
   }
   return ack;
 }
@@ -444,44 +510,94 @@ class MessageWait {
   std::optional<Clock::time_point> deadline_;  // none: no limit
 };
 
-// Reads n bytes into data within the wait; false on its deadline. `got` counts what arrived.
-bool ReadExact(int fd, uint8_t* data, size_t n, const MessageWait& wait, size_t* got) {
+// Bytes a read asks for at most: many small messages arrive in one read.
+constexpr size_t kReadAheadBytes = 64 * 1024;
+
+}  // namespace
+
+bool Channel::ReadExact(uint8_t* data, size_t n, const void* wait_ptr, size_t* got) {
+  const MessageWait& wait = *static_cast<const MessageWait*>(wait_ptr);
+  if (in_.size() < kReadAheadBytes) in_.resize(kReadAheadBytes);
   while (n > 0) {
-    if (!wait.Ready(fd, POLLIN)) return false;
-    const ssize_t k = ::recv(fd, data, n, MSG_DONTWAIT);
-    if (k < 0 && (errno == EINTR || errno == EAGAIN || errno == EWOULDBLOCK)) continue;
+    // what was read ahead first
+    if (in_begin_ < in_end_) {
+      const size_t k = std::min(n, in_end_ - in_begin_);
+      std::memcpy(data, in_.data() + in_begin_, k);
+      in_begin_ += k;
+      data += k;
+      n -= k;
+      *got += k;
+      continue;
+    }
+    // a large body straight into its place, a small one (or a header) through the read-ahead
+    const bool direct = n >= kReadAheadBytes;
+    uint8_t* into = direct ? data : in_.data();
+    const ssize_t k = ::recv(fd_, into, direct ? n : kReadAheadBytes, MSG_DONTWAIT);
+    if (k < 0 && errno == EINTR) continue;
+    if (k < 0 && (errno == EAGAIN || errno == EWOULDBLOCK)) {
+      if (!wait.Ready(fd_, POLLIN)) return false;
+      continue;
+    }
     if (k <= 0) throw ProtocolError("the peer closed the connection");
-    data += k;
-    n -= static_cast<size_t>(k);
-    *got += static_cast<size_t>(k);
+    if (direct) {
+      data += k;
+      n -= static_cast<size_t>(k);
+      *got += static_cast<size_t>(k);
+    } else {
+      in_begin_ = 0;
+      in_end_ = static_cast<size_t>(k);
+    }
   }
   return true;
 }
 
-}  // namespace
+void Channel::Queue(MessageType type, const std::vector<uint8_t>& body) {
+  const uint32_t header[3] = {kMagic, static_cast<uint32_t>(type),
+                              static_cast<uint32_t>(body.size())};
+  const auto* h = reinterpret_cast<const uint8_t*>(header);
+  out_.insert(out_.end(), h, h + sizeof header);
+  out_.insert(out_.end(), body.begin(), body.end());
+  out_last_type_ = type;
+}
 
 void Channel::Send(MessageType type, const std::vector<uint8_t>& body, const WaitLimit& limit) {
+  Queue(type, body);
+  Flush(limit);
+}
+
+void Channel::Flush(const WaitLimit& limit) {
   const MessageWait wait(limit);
-  uint32_t header[3] = {kMagic, static_cast<uint32_t>(type), static_cast<uint32_t>(body.size())};
-  const auto write_all = [&](const void* data, size_t n) {
-    const auto* p = static_cast<const uint8_t*>(data);
-    while (n > 0) {
-      if (!wait.Ready(fd_, POLLOUT)) {
-        throw ProtocolError("the peer took no " + MessageTypeName(type) + " message within " +
+  // a failure names the last message queued (the one a reply is awaited for)
+  const std::string what = MessageTypeName(out_last_type_) + " message";
+  size_t sent = 0;
+  while (sent < out_.size()) {
+    const ssize_t k =
+        ::send(fd_, out_.data() + sent, out_.size() - sent, MSG_NOSIGNAL | MSG_DONTWAIT);
+    if (k < 0 && errno == EINTR) continue;
+    if (k < 0 && (errno == EAGAIN || errno == EWOULDBLOCK)) {
+      bool ready = false;
+      try {
+        ready = wait.Ready(fd_, POLLOUT);
+      } catch (...) {
+        out_.clear();
+        throw;
+      }
+      if (!ready) {
+        out_.clear();
+        throw ProtocolError("the peer took no " + what + " within " +
                             std::to_string(limit.timeout_s) + " s (it reads nothing)");
       }
-      const ssize_t k = ::send(fd_, p, n, MSG_NOSIGNAL | MSG_DONTWAIT);
-      if (k < 0 && (errno == EINTR || errno == EAGAIN || errno == EWOULDBLOCK)) continue;
-      if (k <= 0) {
-        throw ProtocolError("the peer closed the connection while a " + MessageTypeName(type) +
-                            " message was sent (" + std::strerror(errno) + ")");
-      }
-      p += k;
-      n -= static_cast<size_t>(k);
+      continue;
     }
-  };
-  write_all(header, sizeof header);
-  write_all(body.data(), body.size());
+    if (k <= 0) {
+      const std::string why = std::strerror(errno);
+      out_.clear();
+      throw ProtocolError("the peer closed the connection while a " + what + " was sent (" +
+                          why + ")");
+    }
+    sent += static_cast<size_t>(k);
+  }
+  out_.clear();
 }
 
 void Channel::SendJson(MessageType type, const nlohmann::json& j, const WaitLimit& limit) {
@@ -503,7 +619,7 @@ MessageType Channel::Receive(std::vector<uint8_t>* body, const WaitLimit& limit)
     }
     return ProtocolError(what);
   };
-  if (!ReadExact(fd_, reinterpret_cast<uint8_t*>(header), sizeof header, wait, &got)) {
+  if (!ReadExact(reinterpret_cast<uint8_t*>(header), sizeof header, &wait, &got)) {
     throw late(sizeof header);
   }
   if (header[0] != kMagic) {
@@ -514,7 +630,7 @@ MessageType Channel::Receive(std::vector<uint8_t>* body, const WaitLimit& limit)
                         std::to_string(kMaxMessageBytes) + ")");
   }
   body->resize(header[2]);
-  if (!ReadExact(fd_, body->data(), body->size(), wait, &got))
+  if (!ReadExact(body->data(), body->size(), &wait, &got))
     throw late(sizeof header + header[2]);
   const auto type = static_cast<MessageType>(header[1]);
   if (type == MessageType::kError) {

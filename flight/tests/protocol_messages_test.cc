@@ -51,6 +51,7 @@ void ExpectSameTick(const FlightInputs& a, const FlightInputs& b) {
   }
   EXPECT_EQ(a.need_estimate, b.need_estimate);
   EXPECT_EQ(a.gripper_active, b.gripper_active);
+  EXPECT_EQ(a.no_reply, b.no_reply);
   EXPECT_EQ(a.reference.p_WL_W, b.reference.p_WL_W);
   EXPECT_EQ(a.reference.v_WL_W, b.reference.v_WL_W);
   EXPECT_EQ(a.reference.a_WL_W, b.reference.a_WL_W);
@@ -107,6 +108,21 @@ void ExpectSameReply(const FlightOutputs& a, const FlightOutputs& b) {
   EXPECT_EQ(a.camera_roi, b.camera_roi);
 }
 
+// Every member of a detect_reply.
+void ExpectSameDetectReply(const DetectReply& a, const DetectReply& b) {
+  EXPECT_EQ(a.has_detection, b.has_detection);
+  EXPECT_EQ(a.region_wanted, b.region_wanted);
+  EXPECT_EQ(a.whole_wanted, b.whole_wanted);
+  EXPECT_EQ(a.camera_roi, b.camera_roi);
+  if (!a.has_detection) return;
+  EXPECT_EQ(a.detection.time_s, b.detection.time_s);
+  EXPECT_EQ(a.detection.found, b.detection.found);
+  EXPECT_EQ(a.detection.p_CL_C, b.detection.p_CL_C);
+  EXPECT_EQ(a.detection.centre_px, b.detection.centre_px);
+  EXPECT_EQ(a.detection.radius_px, b.detection.radius_px);
+  EXPECT_EQ(a.detection.reason, b.detection.reason);
+}
+
 std::string Hex(const std::vector<uint8_t>& bytes) {
   std::string out;
   char two[3];
@@ -138,7 +154,10 @@ std::vector<Golden> Encodings() {
           {"empty_tick", "tick", EncodeTick(FlightInputs())},
           {"tick_reply", "tick_reply", EncodeReply(SampleReply())},
           {"estimate_reply", "tick_reply", EncodeReply(SampleEstimateReply())},
-          {"empty_reply", "tick_reply", EncodeReply(FlightOutputs())}};
+          {"empty_reply", "tick_reply", EncodeReply(FlightOutputs())},
+          {"detect", "detect", EncodeDetect(SampleDetect())},
+          {"detect_reply", "detect_reply", EncodeDetectReply(SampleDetectReply())},
+          {"region_wanted_reply", "detect_reply", EncodeDetectReply(SampleRegionWantedReply())}};
 }
 
 // The table binds every field and bit of every binary message, and declares each field's type
@@ -173,15 +192,34 @@ TEST(ProtocolMessagesTest, EveryMessageTypeRoundTrips) {
     ExpectSameReply(DecodeReply(EncodeReply(out)), out);
   }
 
+  const CameraFrame frame = DecodeDetect(EncodeDetect(SampleDetect()));
+  EXPECT_EQ(frame.capture_time_s, SampleDetect().capture_time_s);
+  EXPECT_EQ(frame.region, SampleDetect().region);
+  EXPECT_EQ(frame.region_slot, SampleDetect().region_slot);
+  EXPECT_EQ(frame.whole_slot, SampleDetect().whole_slot);
+  for (const DetectReply& r : {SampleDetectReply(), SampleRegionWantedReply()}) {
+    ExpectSameDetectReply(DecodeDetectReply(EncodeDetectReply(r)), r);
+  }
+  // exactly one of a detect_reply's flags
+  DetectReply none;
+  EXPECT_THROW(DecodeDetectReply(EncodeDetectReply(none)), ProtocolError);
+  DetectReply two = SampleDetectReply();
+  two.whole_wanted = true;
+  EXPECT_THROW(DecodeDetectReply(EncodeDetectReply(two)), ProtocolError);
+
   const nlohmann::json ack = {{"protocol_version", kProtocolVersion},
                               {"name", "sample stack"},
                               {"controller", "pd"},
-                              {"control_rate_hz", 125.5}};
+                              {"control_rate_hz", 125.5},
+                              {"batched_ticks", true},
+                              {"detects_at_capture", true}};
   const std::string ack_text = ack.dump();
   const HelloAck back = ParseHelloAck(std::vector<uint8_t>(ack_text.begin(), ack_text.end()));
   EXPECT_EQ(back.name, "sample stack");
   EXPECT_EQ(back.controller, "pd");
   EXPECT_EQ(back.control_rate_hz, 125.5);
+  EXPECT_TRUE(back.batched_ticks);
+  EXPECT_TRUE(back.detects_at_capture);
 
   const nlohmann::json finish = {
       {"estimator", "hybrid"},
@@ -243,6 +281,10 @@ TEST(ProtocolMessagesTest, EncodingsEqualTheGoldenFile) {
     const std::vector<uint8_t> bytes = Unhex(entry.at("hex").get<std::string>());
     if (g.message == "tick_reply") {
       EXPECT_EQ(EncodeReply(DecodeReply(bytes)), bytes) << g.name;
+    } else if (g.message == "detect") {
+      EXPECT_EQ(EncodeDetect(DecodeDetect(bytes)), bytes) << g.name;
+    } else if (g.message == "detect_reply") {
+      EXPECT_EQ(EncodeDetectReply(DecodeDetectReply(bytes)), bytes) << g.name;
     } else {
       EXPECT_EQ(EncodeTick(DecodeTick(bytes)), bytes) << g.name;
     }

@@ -32,6 +32,7 @@ inline FlightInputs SampleTick() {
   in.allocation = AllocationReport{7.891234567890123, true};
   in.need_estimate = true;
   in.gripper_active = true;
+  in.no_reply = true;
   in.reference.p_WL_W = {0.1, -0.2, 0.7};
   in.reference.v_WL_W = {1e-17, 2.0, -3.0};
   in.reference.a_WL_W = {-0.0, 9.81, 0.5};
@@ -114,6 +115,35 @@ inline FlightOutputs SampleEstimateReply() {
   out.estimate.payload_lost = false;
   out.estimate.payload_supported = false;
   return out;
+}
+
+/// A detect of a frame whose region is read out (asking the stack to detect in it).
+inline CameraFrame SampleDetect() {
+  CameraFrame frame;
+  frame.capture_time_s = 2.5;
+  frame.region = cv::Rect(100, 80, 64, 48);
+  frame.region_slot = 0;
+  return frame;
+}
+
+/// A detect_reply with the detection found in the frame's region.
+inline DetectReply SampleDetectReply() {
+  DetectReply reply;
+  reply.has_detection = true;
+  reply.detection.time_s = 2.5;
+  reply.detection.found = true;
+  reply.detection.p_CL_C = {-0.03, 0.04, 0.45};
+  reply.detection.centre_px = {130.5, 101.75};
+  reply.detection.radius_px = 9.5;
+  return reply;
+}
+
+/// A detect_reply asking for a region of the frame to be read out.
+inline DetectReply SampleRegionWantedReply() {
+  DetectReply reply;
+  reply.region_wanted = true;
+  reply.camera_roi = cv::Rect(100, 80, 64, 48);
+  return reply;
 }
 
 }  // namespace hpa::flight

@@ -286,6 +286,20 @@ TEST(ProtocolTest, HelloAckIsRefusedNamingTheFieldAndValue) {
   EXPECT_TRUE(Has(ErrorOf([&] { ack(R"({"protocol_version": 1, "control_rate_hz": -1})"); }),
                   "control_rate_hz is -1"));
   EXPECT_TRUE(Has(ErrorOf([&] { ack("[1]"); }), "expected a JSON object"));
+  // batched ticks follow a declared control rate within the tick clock's
+  EXPECT_FALSE(good.batched_ticks);
+  EXPECT_FALSE(good.detects_at_capture);
+  EXPECT_TRUE(ack(R"({"protocol_version": 1, "control_rate_hz": 150, "batched_ticks": true})")
+                  .batched_ticks);
+  EXPECT_TRUE(Has(ErrorOf([&] { ack(R"({"protocol_version": 1, "batched_ticks": true})"); }),
+                  "batched_ticks needs the control rate"));
+  EXPECT_TRUE(Has(
+      ErrorOf([&] {
+        ack(R"({"protocol_version": 1, "control_rate_hz": 2000, "batched_ticks": true})");
+      }),
+      "expected a rate in (0, 1000] Hz"));
+  EXPECT_TRUE(Has(ErrorOf([&] { ack(R"({"protocol_version": 1, "detects_at_capture": 1})"); }),
+                  "detects_at_capture is 1, expected true or false"));
   // bytes that are not UTF-8 are a malformed message, and the error text is UTF-8 again
   const std::string bad_name =
       ErrorOf([&] { ack("{\"protocol_version\": 1, \"name\": \"a\xff\"}"); });

@@ -361,8 +361,8 @@ class LockstepTest(unittest.TestCase):
                                  "malformed tick message", "truth flags 0x8")
 
     def test_unknown_tick_flags_are_refused(self):
-        self.assertProtocolError(lockstep.decode_tick, pack_tick(flags=32),
-                                 "malformed tick message", "flags 0x20", "unknown bits")
+        self.assertProtocolError(lockstep.decode_tick, pack_tick(flags=64),
+                                 "malformed tick message", "flags 0x40", "unknown bits")
 
     def test_saturated_without_allocation_is_refused(self):
         self.assertProtocolError(lockstep.decode_tick, pack_tick(flags=2),
@@ -398,7 +398,7 @@ class LockstepTest(unittest.TestCase):
 
     def test_header_unknown_type_is_refused(self):
         self.assertProtocolError(lockstep.decode_header,
-                                 struct.pack("<III", lockstep.MAGIC, 9, 0), "message type 9")
+                                 struct.pack("<III", lockstep.MAGIC, 99, 0), "message type 99")
 
     def test_header_too_long_is_refused(self):
         header = struct.pack("<III", lockstep.MAGIC, lockstep.TICK, lockstep.MAX_MESSAGE_BYTES + 1)

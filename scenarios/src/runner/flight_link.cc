@@ -15,6 +15,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
+#include <deque>
 #include <optional>
 #include <thread>
 
@@ -69,7 +70,7 @@ constexpr double kStopGraceS = 0.2;
 class ExternalFlight final : public FlightLink {
  public:
   ExternalFlight(const flight::FlightConfig& config, const ExternalFlightOptions& options)
-      : options_(options) {
+      : options_(options), tick_hz_(config.tick_hz), control_clock_(config.tick_hz) {
     try {
       Start(config);
     } catch (...) {
@@ -114,14 +115,21 @@ class ExternalFlight final : public FlightLink {
     Guard(
         [&] {
           channel_->SendJson(MessageType::kHello, hello, Limit());
-          const flight::HelloAck ack =
-              flight::ParseHelloAck(channel_->Expect(MessageType::kHelloAck, Limit()));
+          const flight::HelloAck ack = flight::ParseHelloAck(
+              channel_->Expect(MessageType::kHelloAck, Limit()), config.tick_hz);
           name_ = ack.name;
           // a stack that names no controller flies its own: its name labels the run
           controller_ = !ack.controller.empty() ? ack.controller
                         : !ack.name.empty()     ? ack.name
                                                 : "external";
           control_rate_hz_ = ack.control_rate_hz;
+          // the rendered frames: read at capture by a stack that says it can, else all sent
+          detects_at_capture_ = ring_ && ack.detects_at_capture;
+          // batched ticks: the replies the simulator needs follow the stack's control loop and
+          // the ticks that read the estimate; the region a rendered frame reads follows the
+          // camera's captures, so a stack that receives every frame is asked every tick
+          batched_ = ack.batched_ticks && (!ring_ || detects_at_capture_);
+          if (batched_) control_loop_ = control_clock_.AddLoop("control", ack.control_rate_hz);
         },
         "hello");
   }
@@ -145,23 +153,128 @@ class ExternalFlight final : public FlightLink {
   flight::FlightOutputs Step(const flight::FlightInputs& in) override {
     flight::FlightOutputs out;
     messages_so_far_ += in.imu.size() + in.vio.size() + in.detections.size() + in.frames.size();
+    frames_unanswered_ += in.frames.size();
+    next_tick_s_ = in.time_s + 1.0 / tick_hz_;
+    if (!batched_) {
+      Guard(
+          [&] {
+            if (ring_) ring_->Check();  // frames rendered into a ring cut short are never sent
+            channel_->Send(MessageType::kTick, flight::EncodeTick(in), Limit());
+            out = flight::DecodeReply(channel_->Expect(MessageType::kTickReply, Limit()));
+            flight::CheckReply(out, Bounds(in));
+          },
+          "tick at t = " + std::to_string(in.time_s) + " s");
+      frames_unanswered_ = 0;
+      return out;
+    }
+    // batched: this tick waits in the queue unless its reply is needed (the estimate now, a
+    // command later); its reply is read when it is needed
+    control_clock_.BeginTick();
+    const bool control = control_clock_.Fires(control_loop_);
+    control_clock_.Advance();
+    const bool wanted = control || in.need_estimate;
     Guard(
         [&] {
-          if (ring_) ring_->Check();  // frames rendered into a ring cut short are never sent
-          channel_->Send(MessageType::kTick, flight::EncodeTick(in), Limit());
-          out = flight::DecodeReply(channel_->Expect(MessageType::kTickReply, Limit()));
-          flight::ReplyBounds bounds;
-          bounds.frames = in.frames.size();
-          bounds.estimate_needed = in.need_estimate;
-          bounds.messages_so_far = messages_so_far_;
-          if (ring_) {
-            bounds.image_width_px = options_.frames.width_px;
-            bounds.image_height_px = options_.frames.height_px;
+          if (ring_) ring_->Check();
+          tick_ = in;  // the tick as sent: no_reply when no reply to it is read
+          tick_.no_reply = !wanted;
+          channel_->Queue(MessageType::kTick, flight::EncodeTick(tick_));
+          if (!wanted) return;
+          awaited_.push_back({in.time_s, Bounds(in), control, !in.need_estimate});
+          frames_unanswered_ = 0;
+          channel_->Flush(Limit());
+          if (in.need_estimate) {
+            while (!awaited_.empty()) out = ReadReply();
           }
-          flight::CheckReply(out, bounds);
         },
         "tick at t = " + std::to_string(in.time_s) + " s");
+    if (!in.need_estimate) {
+      // its command (if its control loop fired) is taken later, with its estimate and health
+      out = flight::FlightOutputs();
+      out.has_command = control;
+      out.command_pending = control;
+      out.camera_roi = last_roi_;
+    }
+    out.frames_detected = std::exchange(frames_found_, 0);
     return out;
+  }
+
+  flight::FlightOutputs AwaitReply() override {
+    flight::FlightOutputs out;
+    Guard(
+        [&] {
+          while (commands_.empty()) {
+            if (awaited_.empty()) throw std::logic_error("no control step awaits its command");
+            ReadReply();
+          }
+          out = std::move(commands_.front());
+          commands_.pop_front();
+        },
+        "the command of the control step at t = " + std::to_string(PendingCommandTime()) + " s");
+    return out;
+  }
+  ControlOutput AwaitCommand() override { return AwaitReply().command; }
+
+  bool detects_at_capture() const override { return detects_at_capture_; }
+
+  cv::Rect CaptureRegion() override {
+    flight::DetectReply reply;
+    CameraFrame frame;
+    frame.capture_time_s = next_tick_s_;
+    Guard(
+        [&] {
+          reply = Detect(frame);
+          if (reply.has_detection) {
+            throw ProtocolError("detect_reply refused: a detection before any pixels");
+          }
+        },
+        "detect at t = " + std::to_string(next_tick_s_) + " s");
+    capture_region_ = reply.region_wanted ? reply.camera_roi : cv::Rect();
+    return capture_region_;
+  }
+
+  PayloadDetection DetectCaptured(const CameraFrame& captured,
+                                  const WholeFrameReader& read_whole) override {
+    PayloadDetection detection;
+    const std::string step = "detect at t = " + std::to_string(captured.capture_time_s) + " s";
+    CameraFrame frame;
+    frame.capture_time_s = captured.capture_time_s;
+    flight::DetectReply reply;
+    reply.whole_wanted = true;
+    // the region the stack asked for, into the ring's first slot
+    if (captured.region.area() > 0 && !captured.region_bgr.empty()) {
+      Guard(
+          [&] {
+            ring_->Check();
+            cv::Mat* slot = ring_->Slot(0);
+            const cv::Rect& roi = captured.region;
+            if (captured.region_bgr.size() == slot->size()) {
+              captured.region_bgr(roi).copyTo((*slot)(roi));
+            } else {
+              captured.region_bgr.copyTo((*slot)(roi));
+            }
+            frame.region = roi;
+            frame.region_slot = 0;
+            reply = Detect(frame);
+            if (reply.region_wanted) throw ProtocolError("detect_reply refused: a second region");
+          },
+          step);
+    }
+    if (reply.has_detection) return reply.detection;
+    // the whole frame, into the second slot
+    const cv::Mat& whole = read_whole();
+    Guard(
+        [&] {
+          ring_->Check();
+          whole.copyTo(*ring_->Slot(1));
+          frame.whole_slot = 1;
+          reply = Detect(frame);
+          if (!reply.has_detection) {
+            throw ProtocolError("detect_reply refused: no detection in the whole frame");
+          }
+        },
+        step);
+    return reply.detection;
   }
 
   FlightFinish Finish(const flight::FlightInputs& pending) override {
@@ -173,11 +286,16 @@ class ExternalFlight final : public FlightLink {
     Guard(
         [&] {
           if (ring_) ring_->Check();
+          // the replies still on their way come first
+          channel_->Flush(limit);
+          while (!awaited_.empty()) ReadReply();
           channel_->Send(MessageType::kFinish, flight::EncodeTick(pending), limit);
-          const flight::FinishReply reply = flight::ParseFinishReply(
-              channel_->Expect(MessageType::kFinishReply, limit), pending.frames.size());
+          // frames of ticks no reply answered are counted in the finish's
+          const flight::FinishReply reply =
+              flight::ParseFinishReply(channel_->Expect(MessageType::kFinishReply, limit),
+                                       pending.frames.size() + frames_unanswered_);
           f.estimator = reply.estimator;
-          f.frames_detected = reply.frames_detected;
+          f.frames_detected = reply.frames_detected + std::exchange(frames_found_, 0);
           f.estimator_health = reply.estimator_health;
         },
         "finish");
@@ -197,6 +315,101 @@ class ExternalFlight final : public FlightLink {
   double control_rate_hz() const override { return control_rate_hz_; }
 
  private:
+  // A tick whose reply is read when it is needed.
+  struct Awaited {
+    double time_s;              // the tick's time
+    flight::ReplyBounds bounds;  // what its reply is checked against
+    bool control;               // its control loop fired: the reply carries a command
+    bool command_later;         // that command is taken later (AwaitReply)
+  };
+
+  // What a reply to `in` is checked against (the frames of the ticks it also answers).
+  flight::ReplyBounds Bounds(const flight::FlightInputs& in) const {
+    flight::ReplyBounds bounds;
+    bounds.frames = frames_unanswered_;
+    bounds.estimate_needed = in.need_estimate;
+    bounds.messages_so_far = messages_so_far_;
+    if (ring_) {
+      bounds.image_width_px = options_.frames.width_px;
+      bounds.image_height_px = options_.frames.height_px;
+    }
+    return bounds;
+  }
+
+  // The time of the oldest control step whose command is not taken yet (for messages).
+  double PendingCommandTime() const {
+    if (!commands_.empty()) return commands_.front().estimate.time_s;
+    for (const Awaited& a : awaited_) {
+      if (a.command_later) return a.time_s;
+    }
+    return next_tick_s_;
+  }
+
+  // Reads the reply of the oldest awaited tick and checks it against that tick; a command taken
+  // later is kept for AwaitReply.
+  flight::FlightOutputs ReadReply() {
+    return ReadReplyBody(channel_->Expect(MessageType::kTickReply, Limit()));
+  }
+
+  // The reply of the oldest awaited tick, from its body (as ReadReply).
+  flight::FlightOutputs ReadReplyBody(const std::vector<uint8_t>& body) {
+    const Awaited a = awaited_.front();
+    awaited_.pop_front();
+    const auto at = [&] {
+      return " (the reply to the tick at t = " + std::to_string(a.time_s) + " s)";
+    };
+    flight::FlightOutputs out;
+    try {
+      out = flight::DecodeReply(body);
+      flight::CheckReply(out, a.bounds);
+    } catch (const flight::WaitInterrupted&) {
+      throw;
+    } catch (const ProtocolError& e) {
+      throw ProtocolError(e.what() + at());
+    }
+    if (out.has_command != a.control) {
+      throw ProtocolError(std::string("tick_reply refused: ") +
+                          (a.control ? "no command at a tick of its declared control rate"
+                                     : "a command at a tick its declared control rate skips") +
+                          at());
+    }
+    frames_found_ += out.frames_detected;
+    last_roi_ = out.camera_roi;
+    out.estimate.time_s = a.time_s;
+    if (a.command_later) commands_.push_back(out);
+    return out;
+  }
+
+  // Sends a detect (after the ticks queued before it) and reads its reply (the replies of the
+  // ticks before it first).
+  flight::DetectReply Detect(const CameraFrame& frame) {
+    channel_->Queue(MessageType::kDetect, flight::EncodeDetect(frame));
+    channel_->Flush(Limit());
+    std::vector<uint8_t> body;
+    while (true) {
+      const MessageType type = channel_->Receive(&body, Limit());
+      if (type == MessageType::kDetectReply) break;
+      if (type != MessageType::kTickReply || awaited_.empty()) {
+        throw ProtocolError("expected a detect_reply message, got " +
+                            flight::MessageTypeName(type));
+      }
+      ReadReplyBody(body);
+    }
+    flight::DetectReply reply = flight::DecodeDetectReply(body);
+    const cv::Rect& roi = reply.camera_roi;
+    if (reply.region_wanted &&
+        (roi.width <= 0 || roi.height <= 0 || roi.x < 0 || roi.y < 0 ||
+         roi.x > options_.frames.width_px - roi.width ||
+         roi.y > options_.frames.height_px - roi.height)) {
+      throw ProtocolError("detect_reply refused: camera_roi (" + std::to_string(roi.x) + ", " +
+                          std::to_string(roi.y) + ", " + std::to_string(roi.width) + ", " +
+                          std::to_string(roi.height) + ") empty or outside the " +
+                          std::to_string(options_.frames.width_px) + " x " +
+                          std::to_string(options_.frames.height_px) + " image");
+    }
+    return reply;
+  }
+
   [[noreturn]] void Fail(const std::string& what) const {
     // the text may carry the stack's own bytes (a parse error quotes them): it becomes JSON
     throw ProtocolError(flight::CleanUtf8("flight stack '" + options_.command + "': " + what));
@@ -333,6 +546,19 @@ class ExternalFlight final : public FlightLink {
   std::unique_ptr<FrameRing> ring_;  // the rendered frames, when they cross
   int next_slot_ = 0;
   uint64_t messages_so_far_ = 0;  // sensor messages sent (the estimator counters' bound)
+  double tick_hz_;                // the lockstep clock's rate
+  double next_tick_s_ = 0.0;      // time of the tick after the last one stepped
+  bool detects_at_capture_ = false;  // the stack reads each rendered frame at its capture
+  bool batched_ = false;             // the stack declared batched_ticks (see Start)
+  LockstepClock control_clock_;      // the stack's control loop as it declared it (batched)
+  int control_loop_ = -1;
+  flight::FlightInputs tick_;               // the tick being sent (its storage reused)
+  std::deque<Awaited> awaited_;             // ticks sent whose reply is not read yet, in order
+  std::deque<flight::FlightOutputs> commands_;  // replies read whose command is not taken yet
+  size_t frames_unanswered_ = 0;  // frames sent since the last tick a reply answers
+  int frames_found_ = 0;          // frames_detected read, not yet reported to the run
+  cv::Rect last_roi_;             // camera_roi of the last reply read
+  cv::Rect capture_region_;       // the region of the frame being captured
   bool failed_ = false;           // a message failed: the stack is not asked again
   std::optional<std::chrono::steady_clock::time_point> stop_due_;  // waits end then (a stop)
 };

@@ -36,6 +36,28 @@ class FlightLink {
   virtual ControlOutput AwaitCommand() {
     throw std::logic_error("this flight stack answers every command at its step");
   }
+  /// The reply of the oldest control step that answered command_pending (waits for it): its
+  /// command and, when the step's estimate and estimator health came with it rather than at
+  /// its step (a separate stack's batched ticks), those too (has_estimate).
+  virtual flight::FlightOutputs AwaitReply() {
+    flight::FlightOutputs out;
+    out.has_command = true;
+    out.command = AwaitCommand();
+    return out;
+  }
+  /// Whether the stack reads each rendered frame at its capture (CaptureRegion, DetectCaptured)
+  /// instead of receiving every whole frame.
+  virtual bool detects_at_capture() const { return false; }
+  /// The region of the frame captured now that the stack reads first (empty: the whole frame).
+  virtual cv::Rect CaptureRegion() { return cv::Rect(); }
+  /// The stack's detection in the frame captured now (its region read out, if it has one),
+  /// reading the whole frame of the same exposure with `read_whole` only when the stack asks.
+  virtual PayloadDetection DetectCaptured(const CameraFrame& frame,
+                                          const WholeFrameReader& read_whole) {
+    (void)frame;
+    (void)read_whole;
+    throw std::logic_error("this flight stack does not detect at capture");
+  }
   /// Ends the run: hands the stack the inputs still pending and returns its final report.
   virtual FlightFinish Finish(const flight::FlightInputs& pending) = 0;
   /// The next frame-ring slot to render into (its index in *slot); nullptr: frames do not
@@ -44,7 +66,8 @@ class FlightLink {
     (void)slot;
     return nullptr;
   }
-  /// Whether the stack reads the per-tick reference sample (only a separate process does).
+  /// Whether the stack is a separate process (it reads the per-tick reference sample and, unless
+  /// it detects at capture, every rendered frame).
   virtual bool wants_reference() const { return false; }
   /// What flies: "in_process" or the name the separate stack gave in its hello.
   virtual std::string name() const = 0;

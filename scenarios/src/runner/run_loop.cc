@@ -400,10 +400,25 @@ ControlOutput RunLoop::TakeCommand(CommandInFlight* command) {
   if (!command->pending) return std::move(command->output);
   LogRow row = std::move(rows_awaiting_command_.front());
   rows_awaiting_command_.pop_front();
-  const ControlOutput output = flight_->AwaitCommand();  // a throw drops the row, as in process
-  FillCommand(output, &row);
+  const ControlOutput output = AwaitPendingCommand(&row);  // a throw drops the row
   for (RunRecorder* r : recorders_) r->OnControlStep(row);
   return output;
+}
+
+// The oldest pending control step's command into its row, with the step's estimate and
+// estimator health when they came with the command (a separate stack's batched ticks).
+ControlOutput RunLoop::AwaitPendingCommand(LogRow* row) {
+  const flight::FlightOutputs reply = flight_->AwaitReply();
+  if (reply.has_estimate) {
+    row->estimate = reply.estimate;
+    row->estimate.time_s = row->time_s;
+    if (!ground_truth_) {
+      row->estimator_rejected_updates = reply.estimator_rejected_updates;
+      row->estimator_resets = reply.estimator_resets;
+    }
+  }
+  FillCommand(reply.command, row);
+  return reply.command;
 }
 
 // The body-rate loop: PX4's runs on each new sample of its gyro (none yet at the first tick: the
@@ -481,7 +496,7 @@ void RunLoop::Finish(RunResult* result) {
     LogRow row = std::move(rows_awaiting_command_.front());
     rows_awaiting_command_.pop_front();
     try {
-      FillCommand(flight_->AwaitCommand(), &row);
+      AwaitPendingCommand(&row);
       for (RunRecorder* r : recorders_) r->OnControlStep(row);
     } catch (const std::exception& e) {
       const std::string what = std::string("at the end of the run: ") + e.what();

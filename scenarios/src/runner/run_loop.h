@@ -52,9 +52,14 @@ class FlightCameraReadout final : public sim::CameraReadout {
   /// Reads out for `flight` (not owned), detecting in process with `detector` (not owned).
   FlightCameraReadout(FlightLink* flight, const PayloadDetector* detector)
       : flight_(flight), detector_(detector) {}
-  cv::Rect Region() override { return stack_roi_; }
-  bool SendsFrames() const override { return flight_->wants_reference(); }
+  cv::Rect Region() override {
+    return flight_->detects_at_capture() ? flight_->CaptureRegion() : stack_roi_;
+  }
+  bool SendsFrames() const override {
+    return flight_->wants_reference() && !flight_->detects_at_capture();
+  }
   PayloadDetection Detect(const CameraFrame& frame, const WholeFrameReader& read_whole) override {
+    if (flight_->detects_at_capture()) return flight_->DetectCaptured(frame, read_whole);
     return flight::DetectFrame(*detector_, frame, read_whole);
   }
   cv::Mat* NextFrameSlot(int* slot) override { return flight_->NextFrameSlot(slot); }
@@ -103,6 +108,7 @@ class RunLoop {
   void ControlStep(double t, const sim::Truth& truth, const SystemState& state,
                    const flight::FlightOutputs& out);
   ControlOutput TakeCommand(CommandInFlight* command);
+  ControlOutput AwaitPendingCommand(LogRow* row);
   void RateLoopStep(const SystemState& state, bool rate_due);
   void VideoStep(double t, const sim::Truth& truth, const SystemState& state);
   bool StepWorld();  // false: crashed

@@ -77,6 +77,7 @@ struct FlightInputs {
   bool need_estimate = false;                // the simulator reads the estimate at this tick
   bool gripper_active = false;               // a gripper holds the payload (information only)
   ReferenceSample reference;                 // the payload reference now (information only)
+  bool no_reply = false;  // the simulator reads no reply to this tick (protocol flag no_reply)
 
   /// Back to a tick with no inputs (as a default FlightInputs), the lists keeping their storage.
   void Clear() {
@@ -90,6 +91,7 @@ struct FlightInputs {
     need_estimate = false;
     gripper_active = false;
     reference = ReferenceSample();
+    no_reply = false;
   }
 };
 
@@ -133,6 +135,13 @@ class FlightStack {
   /// The end of a run: delivers `in`'s sensor messages (those of the last physics step) and
   /// only detects its frames (captured, not yet delivered); returns how many had the payload.
   int Finish(const FlightInputs& in);
+  /// The region the camera should read out next (FlightOutputs::camera_roi as the last Step
+  /// gave it; empty: the whole frame, or no detector).
+  cv::Rect CameraRegion() const;
+  /// Detects in a frame at its capture, reading what of it is read out (DetectFrame's order):
+  /// the detection, or nullopt when the region cannot decide and the whole frame is not read
+  /// out yet.
+  std::optional<PayloadDetection> DetectCaptured(const CameraFrame& frame) const;
   /// The estimator's health counters (empty with ground truth).
   HealthFields EstimatorHealth() const;
   /// The controller's rate (Hz): the flight code declares it.

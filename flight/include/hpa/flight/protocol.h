@@ -37,6 +37,8 @@ enum class MessageType : uint32_t {
   kFinish = 5,       // simulator -> flight stack: the last inputs of the run (binary, a tick)
   kFinishReply = 6,  // flight stack -> simulator: JSON (estimator health)
   kError = 7,        // either way: UTF-8 text naming what went wrong; the peer stops
+  kDetect = 8,       // simulator -> a stack detecting at capture: a frame being captured (binary)
+  kDetectReply = 9,  // flight stack -> simulator: its detection, or what to read out (binary)
 };
 
 /// A malformed, unexpected or failed message (the text names what was wrong).
@@ -74,6 +76,26 @@ std::vector<uint8_t> EncodeReply(const FlightOutputs& out);
 /// range but not unit to 1e-9 is renormalised (a unit one keeps every bit).
 FlightOutputs DecodeReply(const std::vector<uint8_t>& body);
 
+/// A stack's answer to a detect message (a frame being captured): exactly one of its flags.
+struct DetectReply {
+  bool has_detection = false;  // `detection` is the frame's: the frame is done
+  bool region_wanted = false;  // read out `camera_roi` of the frame and ask again
+  bool whole_wanted = false;   // read out the whole frame and ask again
+  cv::Rect camera_roi;         // region_wanted: the region to read out (px)
+  PayloadDetection detection;  // has_detection: the detection in the pixels read out so far
+};
+
+/// Encodes a detect message: the frame being captured (its region and ring slots read out so
+/// far; none: the stack is asked which region to read).
+std::vector<uint8_t> EncodeDetect(const CameraFrame& frame);
+/// Decodes a detect message; throws ProtocolError as DecodeTick does.
+CameraFrame DecodeDetect(const std::vector<uint8_t>& body);
+/// Encodes a detect_reply.
+std::vector<uint8_t> EncodeDetectReply(const DetectReply& reply);
+/// Decodes a detect_reply; throws ProtocolError naming the field and value for a value the
+/// message table refuses, or for a reply that does not set exactly one of its flags.
+DetectReply DecodeDetectReply(const std::vector<uint8_t>& body);
+
 /// The message table (python/hpa_sim/messages.json as compiled in): the framing constants, the
 /// message types and every binary message's structs with their fields' types, units, checks
 /// and docs.
@@ -104,12 +126,19 @@ struct HelloAck {
   std::string name;              // the stack's name (metrics.json's flight_stack)
   std::string controller;        // what flies, as metrics.json's controller ("": its name)
   double control_rate_hz = 0.0;  // as the stack states it (0: not stated)
+  // the stack commands exactly at its control loop's ticks (control_rate_hz on the hello's
+  // tick_hz clock, LockstepClock's nearest-tick rounding) and answers no tick flagged no_reply:
+  // the simulator then batches the ticks between the replies it needs
+  bool batched_ticks = false;
+  // the stack answers detect messages (reads each rendered frame at its capture, region first)
+  bool detects_at_capture = false;
 };
 
 /// Parses a hello_ack; throws ProtocolError naming the field and value for a protocol_version
 /// that is not the integer kProtocolVersion, a name or controller that is not a string of at most
-/// kMaxNameBytes, or a control rate that is not a finite number >= 0.
-HelloAck ParseHelloAck(const std::vector<uint8_t>& body);
+/// kMaxNameBytes, a control rate that is not a finite number >= 0, batched_ticks or
+/// detects_at_capture not a bool, or batched_ticks without a control rate in (0, tick_hz].
+HelloAck ParseHelloAck(const std::vector<uint8_t>& body, double tick_hz = 1000.0);
 
 /// The finish_reply's content.
 struct FinishReply {
@@ -155,12 +184,18 @@ class Channel {
   Channel(const Channel&) = delete;
   Channel& operator=(const Channel&) = delete;
 
-  /// Sends one message within `limit`; throws ProtocolError if the peer has gone or reads
-  /// nothing until the limit, WaitInterrupted when the limit's stop check ends the wait.
+  /// Sends one message within `limit` (with the messages queued before it); throws
+  /// ProtocolError if the peer has gone or reads nothing until the limit, WaitInterrupted when
+  /// the limit's stop check ends the wait.
   void Send(MessageType type, const std::vector<uint8_t>& body, const WaitLimit& limit = {});
+  /// Queues one message, sent with the next Send or Flush (several messages, one write).
+  void Queue(MessageType type, const std::vector<uint8_t>& body);
+  /// Sends the queued messages within `limit` (as Send).
+  void Flush(const WaitLimit& limit = {});
   /// Sends a JSON message within `limit`.
   void SendJson(MessageType type, const nlohmann::json& j, const WaitLimit& limit = {});
-  /// Receives one whole message within `limit`; throws ProtocolError on a timeout, a closed
+  /// Receives one whole message within `limit` (read ahead in large reads: the messages already
+  /// arrived take no system call); throws ProtocolError on a timeout, a closed
   /// peer, a bad magic or an oversized length, WaitInterrupted when the stop check ends the
   /// wait. A kError message is thrown as its text (invalid UTF-8 replaced).
   MessageType Receive(std::vector<uint8_t>* body, const WaitLimit& limit);
@@ -174,7 +209,15 @@ class Channel {
   int fd() const { return fd_; }
 
  private:
+  // Reads n bytes into data within `wait` (const MessageWait*, opaque here); false on its
+  // deadline; `got` counts what arrived.
+  bool ReadExact(uint8_t* data, size_t n, const void* wait, size_t* got);
+
   int fd_;
+  std::vector<uint8_t> out_;         // queued messages, framed, not yet sent
+  MessageType out_last_type_ = MessageType::kTick;  // the last one queued (named by errors)
+  std::vector<uint8_t> in_;          // bytes read ahead
+  size_t in_begin_ = 0, in_end_ = 0;  // the unread bytes of in_
 };
 
 /// Connects to the simulator's socket at `path`; throws ProtocolError if it cannot.
