@@ -80,6 +80,45 @@ const std::map<std::string, Case>& Cases() {
        {{0.0},
         [](Metrics* m) { m->payload_quad_min_distance_m = 0.01; },
         [](Metrics* m) { m->payload_quad_min_distance_m = -0.01; }}},
+      {"fault_health_flag_max",
+       {{0.5},
+        [](Metrics* m) { m->faults = {FaultRecovery{}}, m->faults[0].health_flag_s = 0.4; },
+        [](Metrics* m) { m->faults = {FaultRecovery{}}; }}},
+      {"fault_payload_back_in_view_max",
+       {{0.5},
+        [](Metrics* m) { m->faults = {FaultRecovery{}}; },
+        [](Metrics* m) {
+          m->faults = {FaultRecovery{}};
+          m->faults[0].payload_lost = true;
+          m->faults[0].payload_back_in_view_s = 0.6;
+        }}},
+      {"fault_tracking_recovered_max",
+       {{1.0},
+        [](Metrics* m) {
+          m->faults = {FaultRecovery{}};
+          m->faults[0].tracking_left_bound = true;
+          m->faults[0].tracking_recovered_s = 0.9;
+        },
+        [](Metrics* m) {
+          m->faults = {FaultRecovery{}};
+          m->faults[0].tracking_left_bound = true;
+        }}},
+      {"fault_tracking_error_max",
+       {{0.2},
+        [](Metrics* m) { m->faults = {FaultRecovery{}}, m->faults[0].tracking_error_max_m = 0.1; },
+        [](Metrics* m) { m->faults = {FaultRecovery{}}, m->faults[0].tracking_error_max_m = 0.3; }}},
+      {"fault_estimate_error_max",
+       {{0.2},
+        [](Metrics* m) { m->faults = {FaultRecovery{}}, m->faults[0].estimate_error_max_m = 0.1; },
+        [](Metrics* m) { m->faults = {FaultRecovery{}}, m->faults[0].estimate_error_max_m = 0.3; }}},
+      {"fault_estimate_error_min",
+       {{0.2},
+        [](Metrics* m) { m->faults = {FaultRecovery{}}, m->faults[0].estimate_error_max_m = 0.3; },
+        [](Metrics* m) { m->faults = {FaultRecovery{}}, m->faults[0].estimate_error_max_m = 0.1; }}},
+      {"fault_tracking_error_min",
+       {{0.2},
+        [](Metrics* m) { m->faults = {FaultRecovery{}}, m->faults[0].tracking_error_max_m = 0.3; },
+        [](Metrics* m) { m->faults = {FaultRecovery{}}, m->faults[0].tracking_error_max_m = 0.1; }}},
   };
   return cases;
 }

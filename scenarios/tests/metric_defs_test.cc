@@ -11,7 +11,8 @@
 namespace hpa {
 namespace {
 
-// A metrics.json of a run that flew (control steps, frames and one re-taut).
+// A metrics.json of a run that flew (control steps, frames, one re-taut and one fault event it
+// recovered from).
 nlohmann::json FlownMetrics() {
   Metrics m;
   m.control_steps = 100;
@@ -24,6 +25,15 @@ nlohmann::json FlownMetrics() {
   m.retaut_peak_body_rate_radps = 1.2;
   m.slack_detection_latency_max_s = 0.02;
   m.mpc_solve_ms.median = 0.3;
+  FaultRecovery fault;
+  fault.health_flag_s = 0.1;
+  fault.payload_lost = true;
+  fault.payload_back_in_view_s = 0.2;
+  fault.tracking_left_bound = true;
+  fault.tracking_recovered_s = 0.5;
+  fault.tracking_error_max_m = 0.15;
+  fault.estimate_error_max_m = 0.05;
+  m.faults = {fault};
   return nlohmann::json::parse(MetricsToJson(m));
 }
 

@@ -61,7 +61,8 @@ World::World(const WorldConfig& config)
     : config_(config),
       world_params_(config.params),
       rng_(config.seed),
-      sensors_(MakeSensors(config, &rng_)) {
+      sensors_(MakeSensors(config, &rng_)),
+      faults_(config.seed) {
   // each sensor's output reaches its reader after the latency it declares
   for (size_t i = 0; i < sensors_.size(); ++i) {
     const SensorDeclaration& d = sensors_[i]->declaration();
@@ -212,6 +213,7 @@ void World::Reset(const SystemState& initial) {
   for (DelayLine<SensorMessage>& line : deliveries_) line.Clear();
   wind_->Reset();
   crash_ = CrashStatus{};
+  faults_.Clear();
   contact_counts_ = ContactCounts{};
   for (bool& t : touching_) t = false;
 
@@ -262,10 +264,18 @@ void World::SetMotorSpeedCommand(const InputVector& w_cmd_radps) {
 }
 
 void World::WriteMotorControls() {
+  // a motor fault scales its rotor's thrust, down to zero (the actuator's lower bound with it)
+  Eigen::Vector4d fault_factor;
+  const bool motor_fault = !faults_.empty() && faults_.MotorThrustFactors(time_s(), &fault_factor);
   for (int i = 0; i < 4; ++i) {
     const double w = motor_speed_radps_(i);
-    data_->ctrl[ids_.rotor_actuator[i]] =
-        world_params_.k_f_N_per_radps2 * rotor_kf_factor_(i) * w * w;
+    const int a = ids_.rotor_actuator[i];
+    data_->ctrl[a] = world_params_.k_f_N_per_radps2 * rotor_kf_factor_(i) * w * w;
+    if (!motor_fault) continue;
+    data_->ctrl[a] *= fault_factor(i);
+    const double w_min = world_params_.motor_speed_min_radps;
+    model_->actuator_ctrlrange[2 * a] =
+        world_params_.k_f_N_per_radps2 * rotor_kf_factor_(i) * w_min * w_min * fault_factor(i);
   }
 }
 
@@ -280,6 +290,10 @@ void World::Step() {
                                        ? InputVector(motor_command_radps_ * BatterySpeedFactor())
                                        : motor_command_radps_;
   motor_speed_radps_ += alpha * (target_radps - motor_speed_radps_);
+  if (!faults_.empty() && faults_.TakeGripperRelease(time_s())) {
+    model_->eq_active[ids_.gripper_weld] = 0;  // a gripper fault lets go
+    gripper_moving_ = false;
+  }
   WriteMotorControls();
   ApplyDisturbances();
 
@@ -353,6 +367,7 @@ void World::TakeDelivered(std::vector<SensorMessage>* out) {
   for (DelayLine<SensorMessage>& line : deliveries_) {
     while (std::optional<SensorMessage> m = line.PopReady(time_s())) out->push_back(std::move(*m));
   }
+  if (!faults_.empty()) faults_.FilterDelivered(time_s(), out);
 }
 
 void World::AddSensor(std::unique_ptr<Sensor> sensor) {
@@ -367,6 +382,10 @@ std::vector<SensorMessage> World::TakeInFlight() {
   for (DelayLine<SensorMessage>& line : deliveries_) {
     while (std::optional<SensorMessage> m = line.PopReady(1e300)) out.push_back(std::move(*m));
   }
+  if (!faults_.empty()) {
+    faults_.FilterDelivered(time_s(), &out);
+    faults_.TakeHeld(&out);
+  }
   return out;
 }
 
@@ -377,6 +396,9 @@ std::optional<CameraCapture> World::CaptureTickStart(CameraReadout* readout) {
   std::optional<CameraFrame> frames;
   std::optional<CameraCapture> capture =
       camera_->Capture(*this, step_, time_s(), readout, &detection, &frames);
+  if (capture && !faults_.empty()) {
+    faults_.OnCameraCapture(time_s(), readout, &detection, &frames, &*capture);
+  }
   DelayLine<SensorMessage>& line = deliveries_[static_cast<size_t>(camera_line_)];
   if (detection) line.Push(detection->time_s, std::move(*detection));
   if (frames) line.Push(frames->capture_time_s, std::move(*frames));

@@ -125,6 +125,7 @@ void World::GripperMove(const Eigen::Vector3d& to_W_m, double duration_s) {
 }
 
 void World::GripperRelease() {
+  if (!faults_.empty() && faults_.DefersRelease(time_s())) return;  // a late gripper
   model_->eq_active[ids_.gripper_weld] = 0;
   gripper_moving_ = false;
 }

@@ -61,6 +61,47 @@ ExpectKey AxesMax(std::string key, std::string metric, std::string description,
   return k;
 }
 
+// every fault event's recovery time <= bound; `lost` says the event needed a recovery it never
+// made (fails), a time of null with `lost` false means none was needed (passes); no fault event
+// fails as not measured
+ExpectKey FaultRecoveryMax(
+    std::string key, std::string metric, std::string description,
+    std::function<std::optional<double>(const FaultRecovery&)> time,
+    std::function<bool(const FaultRecovery&)> needed) {
+  ExpectKey k{key, metric, "metric <= bound, every fault event", "s", description, 1, 0.0, kBig,
+              false, {}};
+  k.check = [key, time, needed](const Metrics& m, const std::vector<double>& bound) {
+    std::vector<std::string> failed;
+    if (m.faults.empty()) failed.push_back(key + ": not measured in this run (no fault event)");
+    for (const FaultRecovery& r : m.faults) {
+      const std::string which = key + " (events." + std::to_string(r.window.event) + ")";
+      const std::optional<double> t = time(r);
+      if (!t && needed(r)) failed.push_back(which + ": never");
+      if (t && *t > bound[0]) failed.push_back(Failure(which, *t, ">", bound[0]));
+    }
+    return failed;
+  };
+  return k;
+}
+
+// the largest payload error in any fault event's span
+double FaultTrackingErrorMax(const Metrics& m) {
+  double e = NAN;
+  for (const FaultRecovery& r : m.faults) {
+    if (r.tracking_error_max_m && !(*r.tracking_error_max_m <= e)) e = *r.tracking_error_max_m;
+  }
+  return e;
+}
+
+// the largest quadrotor position estimate error in any fault event's span
+double FaultEstimateErrorMax(const Metrics& m) {
+  double e = NAN;
+  for (const FaultRecovery& r : m.faults) {
+    if (r.estimate_error_max_m && !(*r.estimate_error_max_m <= e)) e = *r.estimate_error_max_m;
+  }
+  return e;
+}
+
 std::vector<ExpectKey> BuildTable() {
   std::vector<ExpectKey> t;
   {
@@ -159,6 +200,37 @@ std::vector<ExpectKey> BuildTable() {
   t.push_back(Min("payload_quad_min_distance_min", "payload_quad_min_distance_m", "m",
                   "smallest payload-to-vehicle surface distance, at least (< 0: overlap)", -kBig,
                   kBig, [](const Metrics& m) { return m.payload_quad_min_distance_m; }));
+  t.push_back(FaultRecoveryMax(
+      "fault_health_flag_max", "fault_recovery.health_flag_s",
+      "the estimator's health flags every fault event within this (never: fails)",
+      [](const FaultRecovery& r) { return r.health_flag_s; },
+      [](const FaultRecovery&) { return true; }));
+  t.push_back(FaultRecoveryMax(
+      "fault_payload_back_in_view_max", "fault_recovery.payload_back_in_view_s",
+      "after each fault event's end the payload is back in view within this (never lost: passes)",
+      [](const FaultRecovery& r) { return r.payload_back_in_view_s; },
+      [](const FaultRecovery& r) { return r.payload_lost; }));
+  t.push_back(FaultRecoveryMax(
+      "fault_tracking_recovered_max", "fault_recovery.tracking_recovered_s",
+      "after each fault event's end the payload error is back within its tracking_bound within "
+      "this (never out: passes)",
+      [](const FaultRecovery& r) { return r.tracking_recovered_s; },
+      [](const FaultRecovery& r) { return r.tracking_left_bound; }));
+  t.push_back(Max("fault_tracking_error_max", "fault_recovery.tracking_error_max_m", "m",
+                  "largest payload error in any fault event's span, at most", kBig,
+                  FaultTrackingErrorMax));
+  t.push_back(Min("fault_tracking_error_min", "fault_recovery.tracking_error_max_m", "m",
+                  "a fault must show its effect: the largest payload error in a fault event's "
+                  "span at least this",
+                  0.0, kBig, FaultTrackingErrorMax));
+  t.push_back(Max("fault_estimate_error_max", "fault_recovery.estimate_error_max_m", "m",
+                  "largest error of the quadrotor's position estimate in any fault event's span, "
+                  "at most",
+                  kBig, FaultEstimateErrorMax));
+  t.push_back(Min("fault_estimate_error_min", "fault_recovery.estimate_error_max_m", "m",
+                  "a sensor fault must show its effect: the largest position estimate error in a "
+                  "fault event's span at least this",
+                  0.0, kBig, FaultEstimateErrorMax));
   return t;
 }
 

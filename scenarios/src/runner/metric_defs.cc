@@ -57,6 +57,28 @@ const Registry<MetricDef>& TheRegistry() {
            "MPC failures", "MPC updates with a QP failure, non-finite result or fallback"},
           {"expect_passed", "expect.passed", R::kFlag, "0/1", Better::kHigher, 0.05, false, false,
            "expect passed", "the scenario's expect bounds held (1) or not (0)"},
+          {"fault_health_flag_s", "fault_recovery.health_flag_s", R::kNumber, "s",
+           Better::kLower, kControlPeriodS, false, false, "",
+           "slowest time from a fault event's start until the estimator's health flagged it "
+           "(runs with a fault event; null: none flagged)"},
+          {"fault_payload_back_in_view_s", "fault_recovery.payload_back_in_view_s", R::kNumber,
+           "s", Better::kLower, 0.05, false, false, "",
+           "slowest time from a fault event's end until the payload was back in view (null: "
+           "never lost, or never back)"},
+          {"fault_tracking_recovered_s", "fault_recovery.tracking_recovered_s", R::kNumber, "s",
+           Better::kLower, 0.05, false, false, "",
+           "slowest time from a fault event's end until the payload error was back within its "
+           "tracking_bound (null: never out, or never back)"},
+          {"fault_tracking_error_max_m", "fault_recovery.tracking_error_max_m", R::kNumber, "m",
+           Better::kLower, 0.01, false, false, "",
+           "largest payload error in any fault event's span (runs with a fault event)"},
+          {"fault_estimate_error_max_m", "fault_recovery.estimate_error_max_m", R::kNumber, "m",
+           Better::kLower, 0.01, false, false, "",
+           "largest quadrotor position estimate error in any fault event's span (null with "
+           "ground truth)"},
+          {"fault_unrecovered", "fault_recovery.unrecovered", R::kNumber, "events",
+           Better::kLower, 1.0, false, false, "",
+           "fault events after which the payload stayed lost or out of its tracking bound"},
           {"mpc_solve_median_ms", "mpc_solve_ms.median", R::kNumber, "ms", Better::kLower, 0.02,
            true, true, "", "median wall time of one MPC update (the machine's, not the run's)"},
       });

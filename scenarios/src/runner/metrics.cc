@@ -179,6 +179,66 @@ void CameraAndTimingMetrics(const MetricsInputs& in, Metrics* m) {
   m->image_model_ms = ComputeQuantiles(in.image_model_ms);
 }
 
+// Each fault event's recovery over its span (its start to the next later fault's start, or the
+// end of the log).
+void FaultMetrics(const MetricsInputs& in, Metrics* m) {
+  const std::vector<LogRow>& rows = in.rows;
+  m->faults.clear();
+  for (size_t k = 0; k < in.faults.size(); ++k) {
+    FaultRecovery r;
+    r.window = in.faults[k];
+    const FaultWindow& w = r.window;
+    double span_end_s = rows.empty() ? w.start_s : rows.back().time_s + 1e-9;
+    for (const FaultWindow& later : in.faults) {
+      if (later.start_s > w.start_s + 1e-9) span_end_s = std::min(span_end_s, later.start_s);
+    }
+    r.span_end_s = span_end_s;
+    // the rows of the span, and the estimate's counts just before it
+    size_t first = 0;
+    while (first < rows.size() && rows[first].time_s < w.start_s - 1e-9) ++first;
+    size_t last = first;  // one past the span's last row
+    while (last < rows.size() && rows[last].time_s < span_end_s) ++last;
+    if (first == last) {
+      m->faults.push_back(r);
+      continue;
+    }
+    const LogRow& before = rows[first > 0 ? first - 1 : first];
+    const bool lost_before = first > 0 && before.estimate.payload_lost;
+    const int rejected0 = first > 0 ? before.estimator_rejected_updates : 0;
+    const int resets0 = first > 0 ? before.estimator_resets : 0;
+    const double recovery_from_s = w.end_s.value_or(w.start_s);
+    std::optional<size_t> last_lost, last_out;
+    double error_max_m = 0.0, estimate_error_max_m = 0.0;
+    for (size_t i = first; i < last; ++i) {
+      const LogRow& row = rows[i];
+      const bool flagged = row.estimator_rejected_updates > rejected0 ||
+                           row.estimator_resets > resets0 ||
+                           (row.estimate.payload_lost && !lost_before);
+      if (flagged && !r.health_flag_s) r.health_flag_s = row.time_s - w.start_s;
+      if (row.estimate.payload_lost) last_lost = i;
+      const double error_m = (row.truth.p_WL_W - row.reference.p_WL_W).norm();
+      error_max_m = std::max(error_max_m, error_m);
+      estimate_error_max_m =
+          std::max(estimate_error_max_m, (row.estimate.p_WQ_W - row.truth.p_WQ_W).norm());
+      if (error_m > w.tracking_bound_m) last_out = i;
+    }
+    r.tracking_error_max_m = error_max_m;
+    if (!in.ground_truth) r.estimate_error_max_m = estimate_error_max_m;
+    // back: the row after the last one out, if the span goes on past it
+    const auto back_after = [&](const std::optional<size_t>& last_bad) -> std::optional<double> {
+      if (!last_bad || *last_bad + 1 >= last) return std::nullopt;
+      return std::max(0.0, rows[*last_bad + 1].time_s - recovery_from_s);
+    };
+    r.payload_lost = last_lost.has_value();
+    r.payload_back_in_view_s = back_after(last_lost);
+    r.tracking_left_bound = last_out.has_value();
+    r.tracking_recovered_s = back_after(last_out);
+    r.estimator_resets = rows[last - 1].estimator_resets - resets0;
+    r.rejected_updates = rows[last - 1].estimator_rejected_updates - rejected0;
+    m->faults.push_back(r);
+  }
+}
+
 }  // namespace
 
 void ComputeMetrics(const MetricsInputs& in, Metrics* m) {
@@ -192,6 +252,7 @@ void ComputeMetrics(const MetricsInputs& in, Metrics* m) {
                              : 0.0;
   SlackMetrics(rows, slack, m);
   CameraAndTimingMetrics(in, m);
+  FaultMetrics(in, m);
 }
 
 void CheckExpectations(const ExpectSpec& e, Metrics* m) {
@@ -288,6 +349,50 @@ std::string MetricsToJson(const Metrics& m) {
               : num(value);
     }
     o["estimator"] = estimator;
+  }
+  if (!m.faults.empty()) {
+    // one entry per fault event, and the slowest recovery over them (null: none applies)
+    Json faults = Json::array();
+    std::optional<double> worst_flag_s, worst_view_s, worst_tracking_s, worst_error_m,
+        worst_estimate_m;
+    int unrecovered = 0;
+    const auto worst = [](std::optional<double>* w, const std::optional<double>& v) {
+      if (v && (!*w || *v > **w)) *w = v;
+    };
+    for (const FaultRecovery& r : m.faults) {
+      const FaultWindow& w = r.window;
+      faults.push_back({{"event", w.event},
+                        {"component", w.component},
+                        {"mode", w.mode},
+                        {"start_s", num(w.start_s)},
+                        {"end_s", opt_num(w.end_s)},
+                        {"span_end_s", num(r.span_end_s)},
+                        {"health_flag_s", opt_num(r.health_flag_s)},
+                        {"payload_lost", r.payload_lost},
+                        {"payload_back_in_view_s", opt_num(r.payload_back_in_view_s)},
+                        {"tracking_bound_m", num(w.tracking_bound_m)},
+                        {"tracking_left_bound", r.tracking_left_bound},
+                        {"tracking_recovered_s", opt_num(r.tracking_recovered_s)},
+                        {"tracking_error_max_m", opt_num(r.tracking_error_max_m)},
+                        {"estimate_error_max_m", opt_num(r.estimate_error_max_m)},
+                        {"estimator_resets", r.estimator_resets},
+                        {"rejected_updates", r.rejected_updates}});
+      worst(&worst_flag_s, r.health_flag_s);
+      worst(&worst_view_s, r.payload_back_in_view_s);
+      worst(&worst_tracking_s, r.tracking_recovered_s);
+      worst(&worst_error_m, r.tracking_error_max_m);
+      worst(&worst_estimate_m, r.estimate_error_max_m);
+      const bool lost_for_good = r.payload_lost && !r.payload_back_in_view_s;
+      const bool out_for_good = r.tracking_left_bound && !r.tracking_recovered_s;
+      unrecovered += (lost_for_good || out_for_good) ? 1 : 0;
+    }
+    o["faults"] = faults;
+    o["fault_recovery"] = {{"health_flag_s", opt_num(worst_flag_s)},
+                           {"payload_back_in_view_s", opt_num(worst_view_s)},
+                           {"tracking_recovered_s", opt_num(worst_tracking_s)},
+                           {"tracking_error_max_m", opt_num(worst_error_m)},
+                           {"estimate_error_max_m", opt_num(worst_estimate_m)},
+                           {"unrecovered", unrecovered}};
   }
   o["expect"] = {{"passed", m.expect_passed}, {"failed", m.expect_failed}};
   return o.dump(2) + "\n";

@@ -18,6 +18,7 @@
 #include "hpa/scenarios/runner.h"
 #include "hpa/scenarios/scenario.h"
 #include "hpa/scenarios/world_profile_yaml.h"
+#include "hpa/sim/faults.h"
 #include "scenarios/src/tools/cli_parse.h"
 
 namespace hpa {
@@ -93,6 +94,30 @@ std::string EventsSection() {
     rows.push_back({"`" + e.name + "`", e.description});
   }
   return "## Event types (`events[].type`)\n\n" + Table({"type", "what it does"}, rows);
+}
+
+// The fault event's components and modes (sim::FaultComponents), each with its keys.
+std::string FaultsSection() {
+  std::vector<std::vector<std::string>> rows;
+  for (const sim::FaultComponentDecl& c : sim::FaultComponents()) {
+    for (const sim::FaultModeDecl& m : c.modes) {
+      std::string keys = m.has_duration ? "`duration` s (default: to the end)" : "";
+      for (const sim::FaultKeyDecl& k : m.keys) {
+        std::ostringstream line;
+        line << "`" << k.key << "` " << k.unit << (k.vector != nullptr ? " (3)" : "") << ", "
+             << k.min << " to " << k.max;
+        if (k.fallback) line << ", default " << *k.fallback;
+        line << ": " << k.description;
+        keys += (keys.empty() ? "" : "; ") + line.str();
+      }
+      rows.push_back({"`" + c.name + "`", "`" + m.name + "`", m.px4.empty() ? "-" : m.px4,
+                      m.description, keys.empty() ? "-" : keys});
+    }
+  }
+  return "## Faults (`events[]` of `type: fault`)\n\nEvery fault event also takes "
+         "`tracking_bound` (m, 0.001 to 10, default 0.1): the payload error its recovery "
+         "metrics count as tracking again ([faults.md](faults.md)).\n\n" +
+         Table({"component", "mode", "PX4", "what it does", "keys"}, rows);
 }
 
 // The expect keys with the metric each bounds, its comparison and unit.
@@ -181,13 +206,14 @@ std::string Section(const std::string& section) {
       {"solvers", &SolversSection},         {"events", &EventsSection},
       {"expect", &ExpectSection},           {"metrics", &MetricsSection},
       {"references", &ReferencesSection},   {"params", &ParamsSection},
-      {"controller", &ControllerSection},   {"world", &WorldSection}};
+      {"controller", &ControllerSection},   {"world", &WorldSection},
+      {"faults", &FaultsSection}};
   const auto it = kSections.find(section);
   if (it != kSections.end()) return it->second();
   throw InputError("", "schema",
                    "unknown section '" + section +
                        "' (expected all, controllers, estimators, solvers, controller, events, "
-                       "expect, metrics, world, references, params or rates)");
+                       "faults, expect, metrics, world, references, params or rates)");
 }
 
 }  // namespace
@@ -199,7 +225,7 @@ std::string SchemaMarkdown(const std::string& section) {
       "read; do not edit by hand (ctest `cli.schema_docs` compares it with the binary's "
       "output). The rate table of a scenario: `hpa schema rates SCENARIO.yaml`.\n";
   for (const char* s : {"controllers", "estimators", "solvers", "controller", "references",
-                        "params", "events", "expect", "metrics", "world"}) {
+                        "params", "events", "faults", "expect", "metrics", "world"}) {
     md += "\n" + Section(s);
   }
   return md;

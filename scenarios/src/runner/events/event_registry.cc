@@ -4,6 +4,7 @@
 #include "hpa/models/registry.h"
 #include "hpa/models/yaml_reader.h"
 #include "hpa/scenarios/events.h"
+#include "scenarios/src/runner/events/fault_event.h"
 
 namespace hpa {
 namespace {
@@ -25,6 +26,10 @@ Registry<EventRegistration>& TheRegistry() {
           {"velocity_change", "adds `dv` m/s at once to the `body` (payload or quadrotor)",
            Parse<VelocityChangeEvent>},
           {"wind", "`force` N on the quadrotor for `duration` s", Parse<WindEvent>},
+          {"fault",
+           "a `component` fails in a `mode` for `duration` s (docs/faults.md; `hpa schema "
+           "faults`)",
+           ParseFaultEvent},
       });
   return registry;
 }

@@ -20,6 +20,7 @@
 #include "hpa/models/params.h"
 #include "hpa/models/sensor_types.h"
 #include "hpa/models/state.h"
+#include "hpa/sim/faults.h"
 #include "hpa/sim/gl_backend.h"
 #include "hpa/sim/payload_camera.h"
 #include "hpa/sim/sensor_models.h"
@@ -175,6 +176,10 @@ class World {
   /// through the profile's drag (none in a world without aerodynamics).
   void SetWindVelocity(const Eigen::Vector3d& velocity_W_mps, double duration_s);
 
+  /// The world's faults (faults.h): scenario fault events inject into it; every fault's effect
+  /// lives there, so a new fault adds no World method.
+  Faults& faults() { return faults_; }
+
   /// Welds the payload to the gripper where it is now (moves the mocap body onto it first).
   void GripperGrab();
   /// Moves the gripper (and a held payload) to to_W_m along a minimum-jerk path over duration_s.
@@ -300,6 +305,7 @@ class World {
   std::unique_ptr<PayloadCameraSensor> camera_;
   int gripper_line_ = -1, camera_line_ = -1;  // their places in deliveries_ (after the sensors')
 
+  Faults faults_;  // sensor and actuator faults (empty: every hook skipped)
   CrashStatus crash_;
   std::unique_ptr<OffscreenRenderer> renderer_;
   std::unique_ptr<CameraImageModel> camera_image_;  // created with the first payload frame

@@ -29,6 +29,39 @@ struct LogRow {
   int estimator_resets = 0;            // forced accepts after runs of rejections so far
 };
 
+/// One fault event's window, for its recovery metrics (docs/faults.md).
+struct FaultWindow {
+  int event = 0;                 // its index in the scenario's events
+  std::string component, mode;   // as written in the event
+  double start_s = 0.0;          // when it started
+  std::optional<double> end_s;   // when it ended (none: it lasted to the end of the run)
+  double tracking_bound_m = 0.1;  // payload error counted as tracking again
+};
+
+/// How the flight code recovered from one fault event (metrics.json `faults`); each time is null
+/// where it does not apply or never happened.
+struct FaultRecovery {
+  FaultWindow window;
+  // from its start to the first control step whose estimate flags it (a rejected update, a
+  // forced accept or the payload lost, beyond the counts at the start)
+  std::optional<double> health_flag_s;
+  bool payload_lost = false;  // the estimate flagged the payload lost after the start
+  // from its end (its start when it never ended) until the payload is back in view (its lost
+  // flag clear for good within the span); null when never lost or never back
+  std::optional<double> payload_back_in_view_s;
+  bool tracking_left_bound = false;  // the payload error exceeded the bound in the span
+  // from its end until the payload error is back within the bound for the rest of the span;
+  // null when it never left it or never came back
+  std::optional<double> tracking_recovered_s;
+  std::optional<double> tracking_error_max_m;  // largest payload error in the span
+  // largest error of the onboard estimate of the quadrotor's position in the span (null with
+  // ground truth)
+  std::optional<double> estimate_error_max_m;
+  int estimator_resets = 0;    // the filters' forced accepts in the span
+  int rejected_updates = 0;    // gated-out measurements in the span
+  double span_end_s = 0.0;     // the span: to the next fault's start or the run's end
+};
+
 /// Summary statistics of a sample: median, 99th percentile, max.
 struct Quantiles {
   double median = 0.0, p99 = 0.0, max = 0.0;
@@ -85,6 +118,7 @@ struct Metrics {
   // estimator variant flown ("" with ground truth) and its published health counts at the end
   std::string estimator;
   std::vector<std::pair<std::string, double>> estimator_health;
+  std::vector<FaultRecovery> faults;  // one per fault event applied (metrics.json `faults`)
   bool expect_passed = true;
   std::vector<std::string> expect_failed;  // "payload_rmse_max.x: 0.071 > 0.06"
 };
@@ -98,6 +132,8 @@ struct MetricsInputs {
   int detections = 0;
   int rate_loop_steps = 0;        // allocations made by the rate loop
   int mixer_saturated_steps = 0;  // of which fell short of the demanded thrust or torque
+  std::vector<FaultWindow> faults;  // the fault events applied, in time order
+  bool ground_truth = false;        // the flight code flew on the true state (no estimate)
 };
 
 /// Computes every metric from the log (crash fields and timing are filled by the runner).

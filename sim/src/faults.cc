@@ -1,0 +1,384 @@
+// The fault component: the declaration of every component and mode, and their effects on the
+// delivered sensor messages, the camera's captures, the motors and the gripper.
+
+#include "hpa/sim/faults.h"
+
+#include <opencv2/core.hpp>
+#include <type_traits>
+#include <utility>
+#include <variant>
+
+#include "hpa/models/seed_streams.h"
+
+namespace hpa::sim {
+namespace {
+
+// The salt of the faults' streams ("fault"), beside models/seed_streams.h's named streams.
+constexpr uint64_t kFaultSalt = 0x6661756C74ULL;
+
+FaultKeyDecl Number(std::string key, std::string unit, std::string description, double min,
+                    double max, std::optional<double> fallback, double Fault::*field,
+                    bool integer = false) {
+  return {std::move(key), std::move(unit), std::move(description), min, max, fallback, field,
+          nullptr, integer};
+}
+
+FaultKeyDecl Vector(std::string key, std::string unit, std::string description, double min,
+                    double max, std::optional<double> fallback, Eigen::Vector3d Fault::*field) {
+  return {std::move(key), std::move(unit), std::move(description), min, max, fallback, nullptr,
+          field, false};
+}
+
+// The modes every sensor stream shares.
+FaultModeDecl Off(const std::string& px4) {
+  return {FaultMode::kOff, "off", px4, "no samples at all", {}};
+}
+FaultModeDecl Stuck(const std::string& px4, const std::string& what) {
+  return {FaultMode::kStuck, "stuck", px4, "the first " + what + " of the fault, again and again "
+                                           "(each with its own time stamp)", {}};
+}
+FaultModeDecl Delayed(const std::string& px4) {
+  return {FaultMode::kDelayed,
+          "delayed",
+          px4,
+          "each sample delivered `delay` s later than declared (none overtakes another)",
+          {Number("delay", "s", "extra latency", 0.001, 2.0, std::nullopt, &Fault::delay_s)}};
+}
+FaultModeDecl Slow(const std::string& px4) {
+  return {FaultMode::kSlow,
+          "slow",
+          px4,
+          "samples kept at `rate` Hz at most (the others dropped)",
+          {Number("rate", "Hz", "the lower rate", 0.1, 1000.0, std::nullopt, &Fault::rate_hz)}};
+}
+FaultModeDecl Intermittent(const std::string& px4) {
+  return {FaultMode::kIntermittent,
+          "intermittent",
+          px4,
+          "each sample dropped with probability `drop_rate` (the fault's seeded stream)",
+          {Number("drop_rate", "1", "share of samples dropped", 0.0, 1.0, std::nullopt,
+                  &Fault::drop_fraction)}};
+}
+FaultKeyDecl GyroBias() {
+  return Vector("gyro_bias", "rad/s", "added to every gyro sample (body frame)", -10.0, 10.0, 0.0,
+                &Fault::gyro_bias_B_radps);
+}
+FaultKeyDecl GyroNoise() {
+  return Number("gyro_noise", "rad/s", "standard deviation added per sample and axis", 0.0, 10.0,
+                0.0, &Fault::gyro_noise_radps);
+}
+
+std::vector<FaultComponentDecl> BuildComponents() {
+  const FaultKeyDecl motor = Number("motor", "1", "rotor index (PX4's -i, counted from 0)", 0, 3,
+                                    std::nullopt, &Fault::motor, true);
+  return {
+      {FaultComponent::kVio,
+       "vio",
+       "visual-inertial odometry (the VioSample stream)",
+       {Off("failure vio off"), Stuck("failure vio stuck", "pose"),
+        {FaultMode::kWrong,
+         "wrong",
+         "failure vio wrong",
+         "position jumped by `offset` while the fault lasts",
+         {Vector("offset", "m", "added to the position (world frame)", -100.0, 100.0, std::nullopt,
+                 &Fault::offset_W_m)}},
+        Delayed("failure vio delayed"), Slow("failure vio slow"),
+        Intermittent("failure vio intermittent")}},
+      {FaultComponent::kImu,
+       "imu",
+       "the IMU (gyro and accelerometer, the estimator's prediction)",
+       {Stuck("failure gyro stuck; failure accel stuck", "sample"),
+        {FaultMode::kBias,
+         "bias",
+         "failure gyro wrong; failure accel wrong",
+         "a bias step on the gyro and the accelerometer",
+         {GyroBias(), Vector("accel_bias", "m/s^2", "added to every specific force sample (body "
+                                                    "frame)",
+                             -100.0, 100.0, 0.0, &Fault::accel_bias_B_mps2)}},
+        {FaultMode::kNoise,
+         "noise",
+         "failure gyro garbage; failure accel garbage",
+         "a burst of white noise on the gyro and the accelerometer",
+         {GyroNoise(), Number("accel_noise", "m/s^2", "standard deviation added per sample and "
+                                                      "axis",
+                              0.0, 100.0, 0.0, &Fault::accel_noise_mps2)}}}},
+      {FaultComponent::kRateGyro,
+       "rate_gyro",
+       "the rate loop's gyro (PX4's rate controller flies on it)",
+       {Stuck("failure gyro stuck", "sample"),
+        {FaultMode::kBias, "bias", "failure gyro wrong", "a gyro bias step", {GyroBias()}},
+        {FaultMode::kNoise,
+         "noise",
+         "failure gyro garbage",
+         "a burst of white gyro noise",
+         {GyroNoise()}}}},
+      {FaultComponent::kMotor,
+       "motor",
+       "one rotor's thrust (and its yaw torque with it)",
+       {{FaultMode::kLoss,
+         "loss",
+         "",
+         "loss of effectiveness: the rotor gives (1 - `loss`) of its thrust",
+         {motor, Number("loss", "1", "share of thrust lost, 0-1", 0.0, 1.0, std::nullopt,
+                        &Fault::loss)}},
+        {FaultMode::kOff, "off", "failure motor off -i N", "the rotor gives no thrust", {motor}}}},
+      {FaultComponent::kGripper,
+       "gripper",
+       "the gripper holding the payload (the test rig's hand)",
+       {{FaultMode::kEarly, "early", "", "lets the payload go at `at` on its own", {}, false},
+        {FaultMode::kLate,
+         "late",
+         "",
+         "a release commanded in the fault's window happens at its end",
+         {}}}},
+      {FaultComponent::kCamera,
+       "payload_camera",
+       "the payload camera (its detections in process, its frames for a separate stack)",
+       {Off(""), Stuck("", "frame"),
+        {FaultMode::kGarbage,
+         "garbage",
+         "",
+         "a uniform noise image in place of each frame (detected like any frame)",
+         {}},
+        Delayed(""), Slow(""), Intermittent("")}},
+  };
+}
+
+// The component a sensor message belongs to (none for the gripper's switch).
+std::optional<FaultComponent> ComponentOf(const SensorMessage& m) {
+  if (std::holds_alternative<ImuSample>(m)) return FaultComponent::kImu;
+  if (std::holds_alternative<GyroSample>(m)) return FaultComponent::kRateGyro;
+  if (std::holds_alternative<VioSample>(m)) return FaultComponent::kVio;
+  if (std::holds_alternative<PayloadDetection>(m) || std::holds_alternative<CameraFrame>(m)) {
+    return FaultComponent::kCamera;
+  }
+  return std::nullopt;
+}
+
+// `a` with `b`'s data and `a`'s time stamp (same message type).
+void KeepTimeTakeData(const SensorMessage& frozen, SensorMessage* m) {
+  const double t_s = Sensor::CaptureTime(*m);
+  std::visit(
+      [&](auto& now) {
+        using T = std::decay_t<decltype(now)>;
+        if constexpr (std::is_same_v<T, CameraFrame> || std::is_same_v<T, GripperSample>) {
+          return;  // frames are frozen at capture; the switch has no fault
+        } else {
+          now = std::get<T>(frozen);
+          now.time_s = t_s;
+        }
+      },
+      *m);
+}
+
+Eigen::Vector3d Gaussian3(std::mt19937_64* rng, double std_dev) {
+  std::normal_distribution<double> normal(0.0, std_dev);
+  const double x = normal(*rng), y = normal(*rng), z = normal(*rng);
+  return {x, y, z};
+}
+
+bool InWindow(const Fault& f, double t_s) { return t_s >= f.start_s - 1e-9 && t_s < f.end_s - 1e-9; }
+
+}  // namespace
+
+const std::vector<FaultComponentDecl>& FaultComponents() {
+  static const std::vector<FaultComponentDecl> components = BuildComponents();
+  return components;
+}
+
+Faults::Faults(uint64_t run_seed) : run_seed_(run_seed) {}
+
+void Faults::Clear() { faults_.clear(); }
+
+void Faults::Inject(const Fault& fault) {
+  Active a;
+  a.fault = fault;
+  a.rng.seed(SplitMix64(run_seed_ * 0x9E3779B97F4A7C15ULL + kFaultSalt + faults_.size()));
+  faults_.push_back(std::move(a));
+}
+
+bool Faults::Apply(Active* a, double now_s, SensorMessage* m) {
+  const Fault& f = a->fault;
+  const double t_s = Sensor::CaptureTime(*m);
+  // a delayed stream keeps its order: while messages are held, later ones queue behind them
+  if (f.mode == FaultMode::kDelayed) {
+    const bool in = InWindow(f, t_s);
+    if (!in && a->held.empty()) return true;
+    a->held.push_back({in ? now_s + f.delay_s : now_s, std::move(*m)});
+    return false;
+  }
+  if (!InWindow(f, t_s)) return true;
+  switch (f.mode) {
+    case FaultMode::kOff:
+      return false;
+    case FaultMode::kIntermittent:
+      return std::uniform_real_distribution<double>(0.0, 1.0)(a->rng) >= f.drop_fraction;
+    case FaultMode::kSlow:
+      if (t_s < a->last_kept_s + 1.0 / f.rate_hz - 5e-4) return false;
+      a->last_kept_s = t_s;
+      return true;
+    case FaultMode::kStuck:
+      if (f.component == FaultComponent::kCamera) return true;  // frozen at capture
+      if (!a->frozen) {
+        a->frozen = *m;
+      } else {
+        KeepTimeTakeData(*a->frozen, m);
+      }
+      return true;
+    case FaultMode::kWrong:
+      if (auto* vio = std::get_if<VioSample>(m)) vio->p_WB_W += f.offset_W_m;
+      return true;
+    case FaultMode::kBias:
+      if (auto* imu = std::get_if<ImuSample>(m)) {
+        imu->gyro_B_radps += f.gyro_bias_B_radps;
+        imu->accel_B_mps2 += f.accel_bias_B_mps2;
+      }
+      if (auto* gyro = std::get_if<GyroSample>(m)) gyro->gyro_B_radps += f.gyro_bias_B_radps;
+      return true;
+    case FaultMode::kNoise:
+      if (auto* imu = std::get_if<ImuSample>(m)) {
+        imu->gyro_B_radps += Gaussian3(&a->rng, f.gyro_noise_radps);
+        imu->accel_B_mps2 += Gaussian3(&a->rng, f.accel_noise_mps2);
+      }
+      if (auto* gyro = std::get_if<GyroSample>(m)) {
+        gyro->gyro_B_radps += Gaussian3(&a->rng, f.gyro_noise_radps);
+      }
+      return true;
+    default:
+      return true;
+  }
+}
+
+void Faults::FilterDelivered(double now_s, std::vector<SensorMessage>* messages) {
+  incoming_.clear();
+  std::swap(incoming_, *messages);
+  for (SensorMessage& m : incoming_) {
+    const std::optional<FaultComponent> component = ComponentOf(m);
+    bool keep = true;
+    for (Active& a : faults_) {
+      if (!component || a.fault.component != *component) continue;
+      keep = Apply(&a, now_s, &m);
+      if (!keep) break;
+    }
+    if (keep) messages->push_back(std::move(m));
+  }
+  for (Active& a : faults_) {
+    while (!a.held.empty() && a.held.front().release_s <= now_s + 1e-9) {
+      messages->push_back(std::move(a.held.front().message));
+      a.held.pop_front();
+    }
+  }
+}
+
+void Faults::TakeHeld(std::vector<SensorMessage>* out) {
+  for (Active& a : faults_) {
+    for (Held& h : a.held) out->push_back(std::move(h.message));
+    a.held.clear();
+  }
+}
+
+void Faults::OnCameraCapture(double now_s, CameraReadout* readout,
+                             std::optional<PayloadDetection>* detection,
+                             std::optional<CameraFrame>* frames, CameraCapture* capture) {
+  for (Active& a : faults_) {
+    const Fault& f = a.fault;
+    if (f.component != FaultComponent::kCamera || !InWindow(f, now_s)) continue;
+    if (f.mode == FaultMode::kStuck) {
+      // the first frame of the fault (its detection, or its pixels) again
+      if (*detection) {
+        if (!a.frozen) {
+          a.frozen = SensorMessage(**detection);
+        } else {
+          const PayloadDetection& frozen = std::get<PayloadDetection>(*a.frozen);
+          const double t_s = (*detection)->time_s;
+          **detection = frozen;
+          (*detection)->time_s = t_s;
+        }
+        capture->detected = (*detection)->found;
+      }
+      if (*frames) {
+        CameraFrame& frame = **frames;
+        if (a.frozen_whole.empty()) {
+          a.frozen_whole = frame.whole_bgr.clone();
+        } else {
+          a.frozen_whole.copyTo(frame.whole_bgr);
+          if (frame.region.area() > 0) {
+            a.frozen_whole(frame.region).copyTo(frame.region_bgr(frame.region));
+          }
+        }
+      }
+    } else if (f.mode == FaultMode::kGarbage) {
+      // uniform noise in every pixel, drawn from the fault's stream
+      cv::RNG noise(a.rng());
+      if (*frames) {
+        CameraFrame& frame = **frames;
+        noise.fill(frame.whole_bgr, cv::RNG::UNIFORM, 0, 256);
+        if (frame.region.area() > 0) frame.whole_bgr.copyTo(frame.region_bgr);
+      } else if (*detection) {
+        if (capture->frame != nullptr) {
+          // the rendered in-process frame: its noise detected as the stack would
+          cv::Mat garbage(capture->frame->size(), CV_8UC3);
+          noise.fill(garbage, cv::RNG::UNIFORM, 0, 256);
+          CameraFrame frame;
+          frame.capture_time_s = now_s;
+          frame.region = readout->Region();
+          frame.region_bgr = garbage;
+          const WholeFrameReader whole = [&]() -> const cv::Mat& { return garbage; };
+          const double t_s = (*detection)->time_s;
+          **detection = readout->Detect(frame, whole);
+          (*detection)->time_s = t_s;
+        } else {
+          // the analytic camera has no pixels: nothing found in noise
+          const double t_s = (*detection)->time_s;
+          **detection = PayloadDetection{};
+          (*detection)->time_s = t_s;
+          (*detection)->reason = "camera fault: garbage";
+        }
+        capture->detected = (*detection)->found;
+      }
+    }
+  }
+}
+
+bool Faults::MotorThrustFactors(double now_s, Eigen::Vector4d* factor) const {
+  bool any = false;
+  for (const Active& a : faults_) {
+    const Fault& f = a.fault;
+    if (f.component != FaultComponent::kMotor) continue;
+    if (!any) factor->setOnes();
+    any = true;
+    if (!InWindow(f, now_s)) continue;
+    const int i = static_cast<int>(f.motor);
+    (*factor)(i) *= f.mode == FaultMode::kOff ? 0.0 : 1.0 - f.loss;
+  }
+  return any;
+}
+
+bool Faults::DefersRelease(double now_s) {
+  bool defer = false;
+  for (Active& a : faults_) {
+    const Fault& f = a.fault;
+    if (f.component != FaultComponent::kGripper || f.mode != FaultMode::kLate) continue;
+    if (!InWindow(f, now_s)) continue;
+    a.release_pending = true;
+    defer = true;
+  }
+  return defer;
+}
+
+bool Faults::TakeGripperRelease(double now_s) {
+  bool release = false;
+  for (Active& a : faults_) {
+    const Fault& f = a.fault;
+    if (f.component != FaultComponent::kGripper || a.released) continue;
+    const bool early = f.mode == FaultMode::kEarly && now_s >= f.start_s - 1e-9;
+    const bool late_due = f.mode == FaultMode::kLate && a.release_pending && now_s >= f.end_s - 1e-9;
+    if (early || late_due) {
+      a.released = true;
+      release = true;
+    }
+  }
+  return release;
+}
+
+}  // namespace hpa::sim
