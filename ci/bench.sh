@@ -4,7 +4,7 @@
 # table gives medians and the ratio this / reference), because these machines are shared and
 # noisy: only ratios measured together compare.
 #
-#   ci/bench.sh [--ref COMMIT] [--reps N] [--out DIR]
+#   ci/bench.sh [--ref COMMIT] [--reps N] [--out DIR] [--build DIR]
 #
 # Figures: mpc_bench (RTI step, step Jacobians, condensing + QP), sim_bench (world step, payload
 # camera render of the whole frame and of the region around the payload, the camera image model
@@ -13,17 +13,19 @@
 # (scenarios/hover_gripper_pull.yaml), each in process and through hpa-flight with the ratio of
 # the two (the lockstep boundary's price), and sweep throughput with the rendered camera
 # (scenarios/sweeps/throughput_render.yaml, --jobs 2).
-# Writes DIR/bench.md (default out/bench) and prints it. Without --ref, this tree alone.
+# Writes DIR/bench.md (default out/bench) and prints it. Without --ref, this tree alone. --build
+# builds this tree into DIR instead of build/ (a build directory of one's own on a shared tree).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 root=$PWD
-ref="" reps=3 out=out/bench
+ref="" reps=3 out=out/bench build_dir=""
 while [ $# -gt 0 ]; do
   case $1 in
     --ref) ref=$2; shift 2 ;;
     --reps) reps=$2; shift 2 ;;
     --out) out=$2; shift 2 ;;
-    -h|--help) sed -n '2,16p' "$0" | sed 's/^# \{0,1\}//'; exit 0 ;;
+    --build) build_dir=$2; shift 2 ;;
+    -h|--help) sed -n '2,18p' "$0" | sed 's/^# \{0,1\}//'; exit 0 ;;
     *) echo "ci/bench.sh: unknown argument '$1' (see --help)" >&2; exit 2 ;;
   esac
 done
@@ -32,10 +34,18 @@ out=$(cd "$out" && pwd)
 launcher=()
 command -v ccache > /dev/null && launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache -DCMAKE_C_COMPILER_LAUNCHER=ccache)
 
-# builds the benchmarks and hpa of the tree at $1 into $1/build
+# the build directory of the tree at $1: $1/build, or --build's for this tree
+build_of() {
+  if [ "$1" = "$root" ] && [ -n "$build_dir" ]; then echo "$build_dir"; else echo "$1/build"; fi
+}
+
+# builds the benchmarks and hpa of the tree at $1 into its build directory
 build_tree() {
-  cmake -S "$1" -B "$1/build" -G Ninja -DCMAKE_BUILD_TYPE=Release "${launcher[@]}" > /dev/null
-  cmake --build "$1/build" -j "$(nproc)" --target hpa hpa-flight mpc_bench sim_bench > /dev/null
+  local b
+  b=$(build_of "$1")
+  cmake -S "$1" -B "$b" -G Ninja -DCMAKE_BUILD_TYPE=Release -DHPA_BUILD_BENCHMARKS=ON "${launcher[@]}" \
+    > /dev/null
+  cmake --build "$b" -j "$(nproc)" --target hpa hpa-flight mpc_bench sim_bench > /dev/null
 }
 
 sides=(this)
@@ -55,8 +65,8 @@ fi
 # the binary $2 of tree $1 (the build layout may put it in bin/ or its folder)
 binary() {
   local b
-  b=$(find "$1/build" -type f -name "$2" -perm -u+x | head -1)
-  [ -n "$b" ] || { echo "ci/bench.sh: no $2 in $1/build" >&2; exit 1; }
+  b=$(find "$(build_of "$1")" -type f -name "$2" -perm -u+x | head -1)
+  [ -n "$b" ] || { echo "ci/bench.sh: no $2 in $(build_of "$1")" >&2; exit 1; }
   echo "$b"
 }
 

@@ -197,7 +197,8 @@ class Tick:
     region, region_slot, whole_slot, image: the whole (h, w, 3) uint8 BGR frame, a view valid
     during the tick); allocation: (thrust_allocated_N, saturated) or None; truth: a state dict
     (only with the scenario's ground-truth switch) or None; reference: dict p_WL_W, v_WL_W,
-    a_WL_W; need_estimate, gripper_active: the tick's flags."""
+    a_WL_W; need_estimate, gripper_active, no_reply: the tick's flags; control_due: whether a
+    loop at the stack's declared control_rate_hz fires at this tick (False without one)."""
 
 
 class _Reader:
@@ -535,8 +536,9 @@ class FlightStackClient:
         """Sends one message."""
         self.sock.sendall(struct.pack("<III", MAGIC, kind, len(body)) + body)
 
-    def hello(self, name, control_rate_hz):
-        """Receives the hello (a dict), maps the frame ring, answers with the ack."""
+    def hello(self, name, control_rate_hz, batched_ticks=False):
+        """Receives the hello (a dict), maps the frame ring, answers with the ack (declaring
+        batched_ticks when asked: docs/protocol.md, Batched ticks)."""
         kind, body = self.receive()
         if kind != HELLO:
             raise ProtocolError("expected a hello, got a %s message" % MESSAGE_TYPES[kind])
@@ -553,8 +555,11 @@ class FlightStackClient:
             finally:
                 os.close(fd)
             self.camera = camera
-        self.send(HELLO_ACK, json.dumps({"protocol_version": PROTOCOL_VERSION, "name": name,
-                                         "control_rate_hz": control_rate_hz}).encode())
+        ack = {"protocol_version": PROTOCOL_VERSION, "name": name,
+               "control_rate_hz": control_rate_hz}
+        if batched_ticks:
+            ack["batched_ticks"] = True
+        self.send(HELLO_ACK, json.dumps(ack).encode())
         return hello
 
     def attach_frames(self, tick):
@@ -582,15 +587,39 @@ class FlightStackClient:
         return b"".join(chunks)
 
 
-def run(controller_class, name=None, control_rate_hz=0.0):
+class _ControlClock:
+    """The ticks a loop at rate_hz fires on a tick_hz clock from tick 0: the k-th at tick
+    round(k tick_hz / rate_hz), half away from zero (the simulator's LockstepClock)."""
+
+    def __init__(self, tick_hz, rate_hz):
+        self.tick_hz, self.rate_hz = float(tick_hz), float(rate_hz)
+        self.tick, self.k = 0, 0
+
+    def fires(self):
+        """Whether the loop fires at the current tick; moves on to the next tick."""
+        at = math.floor(self.k * self.tick_hz / self.rate_hz + 0.5)
+        due = at == self.tick
+        if due:
+            self.k += 1
+        self.tick += 1
+        return due
+
+
+def run(controller_class, name=None, control_rate_hz=0.0, batched_ticks=False):
     """Serves one run: builds controller_class(hello) and calls its step(tick) every tick.
     step returns a Command (a new command), or None (the rate loop keeps the last one); the
     controller may set `estimate` (a state dict) for the simulator's log and rate loop, else the
     latest VIO pose and IMU rate are sent (before the first VIO sample, the hello's initial
-    state)."""
+    state). With a control_rate_hz, tick.control_due says when a loop at that rate fires;
+    batched_ticks=True promises that step commands exactly then (a ProtocolError otherwise),
+    and the simulator answers with fewer round trips (docs/protocol.md, Batched ticks)."""
+    if batched_ticks and not control_rate_hz > 0:
+        raise ValueError("batched_ticks needs the control_rate_hz its commands follow")
     client = FlightStackClient()
     try:
-        hello = client.hello(name or controller_class.__name__, control_rate_hz)
+        hello = client.hello(name or controller_class.__name__, control_rate_hz, batched_ticks)
+        tick_hz = hello.get("config", {}).get("tick_hz", 1000.0)
+        clock = _ControlClock(tick_hz, control_rate_hz) if control_rate_hz > 0 else None
         controller = controller_class(hello)
         last_vio, last_gyro = None, np.zeros(3)
         # before the first VIO sample, the state the run starts from (the simulator refuses a
@@ -612,7 +641,16 @@ def run(controller_class, name=None, control_rate_hz=0.0):
                 last_vio = tick.vio[-1]
             if len(tick.imu):
                 last_gyro = tick.imu[-1, 1:4]
+            tick.control_due = clock.fires() if clock is not None else False
             command = controller.step(tick)
+            if batched_ticks and (command is not None) != tick.control_due:
+                raise ProtocolError("step returned %s at t = %g s, a tick its declared control "
+                                    "rate (%g Hz) %s" % (
+                                        "a command" if command is not None else "no command",
+                                        tick.time_s, control_rate_hz,
+                                        "skips" if command is not None else "commands at"))
+            if tick.no_reply:
+                continue  # the simulator reads no reply to this tick
             estimate = getattr(controller, "estimate", None)
             if estimate is None and tick.truth is not None:
                 estimate = tick.truth

@@ -142,6 +142,7 @@ class RoundTripTest(unittest.TestCase):
         # estimate the stack sends) with a unit quaternion
         value = dict(sample(lockstep.STRUCTS["tick"]), frames=[])
         value["truth"]["q_WB"] = [0.5, -0.5, 0.5, 0.5]
+        value["no_reply"] = False  # a tick this simulator reads the reply of
         tick = lockstep.encode("tick", value)
 
         class Stack:
