@@ -127,6 +127,12 @@ expect_exit 3 "magic" run "$hover" --quiet --out "$out/h4" --flight-timeout 2 \
   --flight-stack "$hostile garbage"
 expect_exit 3 "exited with status 7" run "$hover" --quiet --out "$out/h5" \
   --flight-stack "$hostile die"
+# a stack that declared batched ticks: its silence is found when a command is due, and a control
+# tick answered without a command breaks its declaration
+expect_exit 3 "the command of the control step at t = 0.000000 s: no answer within 0.5" run \
+  "$hover" --quiet --out "$out/h6" --flight-timeout 0.5 --flight-stack "$hostile batched_hang"
+expect_exit 3 "no command at a tick of its declared control rate" \
+  run "$hover" --quiet --out "$out/h7" --flight-stack "$hostile batched_nocommand"
 grep -q '"run_error": "flight stack' "$out/h5/metrics.json" \
   || fail "the dead stack's run error is not in metrics.json"
 grep -q '"sim_time_s": 0.05' "$out/h5/metrics.json" \
