@@ -12,6 +12,7 @@
 #include "hpa/models/camera_model.h"
 #include "hpa/models/input_error.h"
 #include "hpa/models/seed_streams.h"
+#include "scenarios/src/runner/events/fault_event.h"
 
 namespace hpa::runner {
 namespace {
@@ -262,6 +263,8 @@ RunLoop::RunLoop(const Scenario& scenario, const Params& params, const RunOption
   events_ = scenario.events;
   std::stable_sort(events_.begin(), events_.end(),
                    [](const EventSpec& a, const EventSpec& b) { return a.at_s < b.at_s; });
+  inputs_.faults = FaultWindows(scenario.events, end_s_);  // their recovery metrics
+  inputs_.ground_truth = ground_truth_;
 
   // latencies: the world delivers each sensor's messages (the camera's among them) after the
   // latency it declares; a command reaches the rate loop compute + transport after the state it
