@@ -179,8 +179,8 @@ void CameraAndTimingMetrics(const MetricsInputs& in, Metrics* m) {
   m->image_model_ms = ComputeQuantiles(in.image_model_ms);
 }
 
-// Each fault event's recovery over its span (its start to the next later fault's start, or the
-// end of the log).
+// Each fault event's recovery over its span (its start to the start of the next fault that starts
+// after it has ended, or the end of the log).
 void FaultMetrics(const MetricsInputs& in, Metrics* m) {
   const std::vector<LogRow>& rows = in.rows;
   m->faults.clear();
@@ -190,7 +190,10 @@ void FaultMetrics(const MetricsInputs& in, Metrics* m) {
     const FaultWindow& w = r.window;
     double span_end_s = rows.empty() ? w.start_s : rows.back().time_s + 1e-9;
     for (const FaultWindow& later : in.faults) {
-      if (later.start_s > w.start_s + 1e-9) span_end_s = std::min(span_end_s, later.start_s);
+      const bool after_its_end = w.end_s && later.start_s >= *w.end_s - 1e-9;
+      if (later.start_s > w.start_s + 1e-9 && after_its_end) {
+        span_end_s = std::min(span_end_s, later.start_s);
+      }
     }
     r.span_end_s = span_end_s;
     // the rows of the span, and the estimate's counts just before it

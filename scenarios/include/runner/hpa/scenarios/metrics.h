@@ -59,7 +59,8 @@ struct FaultRecovery {
   std::optional<double> estimate_error_max_m;
   int estimator_resets = 0;    // the filters' forced accepts in the span
   int rejected_updates = 0;    // gated-out measurements in the span
-  double span_end_s = 0.0;     // the span: to the next fault's start or the run's end
+  // the span: to the start of the next fault that starts after this one's end, or the run's end
+  double span_end_s = 0.0;
 };
 
 /// Summary statistics of a sample: median, 99th percentile, max.

@@ -1,0 +1,33 @@
+#!/usr/bin/env bash
+# Faults reach a separate flight stack as they reach the in-process one (docs/faults.md): a VIO
+# and an IMU-path fault (analytic camera) and a garbage payload camera (rendered frames, the noise
+# written into the frame ring) flown in process and through hpa-flight give the same metrics,
+# recovery metrics included, timings and the stack's name aside.
+# Usage: fault_flight_stack_test.sh HPA_BINARY SOURCE_DIR PYTHON
+set -uo pipefail
+hpa=$1
+src=$2
+python=$3
+source "$src/scenarios/tests/cli_test_lib.sh"
+out=$(mktemp -d)
+trap 'rm -rf "$out"' EXIT
+
+for name in fault_vio_wrong fault_imu_bias fault_payload_camera_garbage; do
+  "$hpa" run "$src/scenarios/ci/$name.yaml" --quiet --out "$out/$name/in" \
+    || fail "$name in process failed"
+  "$hpa" run "$src/scenarios/ci/$name.yaml" --quiet --out "$out/$name/ex" \
+    --flight-stack hpa-flight || fail "$name through hpa-flight failed"
+  "$python" - "$out/$name/in/metrics.json" "$out/$name/ex/metrics.json" <<'PY' \
+    || fail "$name: metrics differ"
+import json, sys
+a, b = (json.load(open(p)) for p in sys.argv[1:3])
+skip = {"wall_time_s", "mpc_solve_ms", "render_ms", "image_model_ms", "detector_ms",
+        "flight_stack", "camera_region_fraction"}
+assert b["flight_stack"].startswith("hpa-flight"), b["flight_stack"]
+assert a["faults"] and a["faults"] == b["faults"], (a.get("faults"), b.get("faults"))
+bad = [k for k in a if k not in skip and a[k] != b.get(k)]
+assert not bad, "differ: %s" % bad
+PY
+done
+echo "fault_flight_stack_test: $failures failure(s)"
+[ "$failures" -eq 0 ]
