@@ -46,6 +46,25 @@ PY
 # first behaviour): the same metrics and the same log, solve times aside
 "$hpa" run "$src/scenarios/csv_reference.yaml" --quiet --out "$out/csv_tick" \
   --flight-stack "hpa-flight --per-tick" || fail "csv through hpa-flight --per-tick"
+# and with a video, whose frames read the estimate at their ticks (a reply read at once, some
+# at control ticks: their commands are still taken when due, so the log keeps its order)
+for how in "hpa-flight" "hpa-flight --per-tick"; do
+  "$hpa" run "$src/scenarios/csv_reference.yaml" --quiet --set duration=2 \
+    --out "$out/video_${how##* }" --video "$out/video_${how##* }.mp4" --flight-stack "$how" \
+    > /dev/null 2>&1 || fail "csv with a video through $how"
+done
+"$python" - "$out/video_--per-tick" "$out/video_hpa-flight" <<'PY' || fail "batched ticks differ from per-tick with a video"
+import csv, json, sys
+a, b = (json.load(open(p + "/metrics.json")) for p in sys.argv[1:3])
+skip = {"wall_time_s", "mpc_solve_ms"}
+bad = [k for k in a if k not in skip and a[k] != b.get(k)]
+assert not bad, "metrics differ: %s" % bad
+la, lb = (list(csv.reader(open(p + "/log.csv"))) for p in sys.argv[1:3])
+col = la[0].index("solve_ms")
+assert len(la) == len(lb) > 250, (len(la), len(lb))
+bad = [i for i, (x, y) in enumerate(zip(la, lb)) if x[:col] + x[col + 1:] != y[:col] + y[col + 1:]]
+assert not bad, "log rows differ from row %d" % bad[0]
+PY
 "$python" - "$out/csv_tick" "$out/csv_ex" <<'PY' || fail "batched ticks differ from per-tick"
 import csv, json, sys
 a, b = (json.load(open(p + "/metrics.json")) for p in sys.argv[1:3])

@@ -180,7 +180,7 @@ class ExternalFlight final : public FlightLink {
           tick_.no_reply = !wanted;
           channel_->Queue(MessageType::kTick, flight::EncodeTick(tick_));
           if (!wanted) return;
-          awaited_.push_back({in.time_s, Bounds(in), control, !in.need_estimate});
+          awaited_.push_back({in.time_s, Bounds(in), control});
           frames_unanswered_ = 0;
           channel_->Flush(Limit());
           if (in.need_estimate) {
@@ -192,9 +192,11 @@ class ExternalFlight final : public FlightLink {
       // its command (if its control loop fired) is taken later, with its estimate and health
       out = flight::FlightOutputs();
       out.has_command = control;
-      out.command_pending = control;
       out.camera_roi = last_roi_;
     }
+    // every command is taken when it is due, as the in-process control thread's are (the log
+    // rows keep the order of the control steps)
+    out.command_pending = out.has_command;
     out.frames_detected = std::exchange(frames_found_, 0);
     return out;
   }
@@ -319,8 +321,8 @@ class ExternalFlight final : public FlightLink {
   struct Awaited {
     double time_s;              // the tick's time
     flight::ReplyBounds bounds;  // what its reply is checked against
-    bool control;               // its control loop fired: the reply carries a command
-    bool command_later;         // that command is taken later (AwaitReply)
+    bool control;               // its control loop fired: the reply carries a command, taken
+                                // when it is due (AwaitReply)
   };
 
   // What a reply to `in` is checked against (the frames of the ticks it also answers).
@@ -340,7 +342,7 @@ class ExternalFlight final : public FlightLink {
   double PendingCommandTime() const {
     if (!commands_.empty()) return commands_.front().estimate.time_s;
     for (const Awaited& a : awaited_) {
-      if (a.command_later) return a.time_s;
+      if (a.control) return a.time_s;
     }
     return next_tick_s_;
   }
@@ -376,7 +378,7 @@ class ExternalFlight final : public FlightLink {
     frames_found_ += out.frames_detected;
     last_roi_ = out.camera_roi;
     out.estimate.time_s = a.time_s;
-    if (a.command_later) commands_.push_back(out);
+    if (a.control) commands_.push_back(out);
     return out;
   }
 
