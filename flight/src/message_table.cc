@@ -71,8 +71,31 @@ Table::Table() : json_(nlohmann::json::parse(kMessagesJson)) {
       Inconsistent("message_types", name + "'s id differs from protocol.h's MessageType");
     }
     if (type.contains("layout")) Resolve(type.at("layout").get<std::string>());
+    if (type.at("encoding") == "json") CheckKeyDeclarations(type.at("keys"), name);
   }
   for (const auto& item : json_.at("structs").items()) Resolve(item.key());
+}
+
+void Table::CheckKeyDeclarations(const nlohmann::json& keys, const std::string& where) {
+  static const std::set<std::string> kTypes = {"integer", "number", "string",
+                                               "bool",    "object", "array"};
+  static const std::set<std::string> kKeyKeys = {"name", "type", "required", "keys", "doc"};
+  std::set<std::string> names;
+  for (const nlohmann::json& k : keys) {
+    for (const auto& item : k.items()) {
+      if (kKeyKeys.count(item.key()) == 0) Inconsistent(where, "unknown key " + item.key());
+    }
+    const std::string name = k.at("name").get<std::string>();
+    if (!names.insert(name).second) Inconsistent(where + "." + name, "declared twice");
+    if (kTypes.count(k.at("type").get<std::string>()) == 0) {
+      Inconsistent(where + "." + name, "unknown type " + k.at("type").get<std::string>());
+    }
+    if (!k.contains("doc")) Inconsistent(where + "." + name, "no doc");
+    if (k.contains("keys")) {
+      if (k.at("type") != "object") Inconsistent(where + "." + name, "keys of a non-object");
+      CheckKeyDeclarations(k.at("keys"), where + "." + name);
+    }
+  }
 }
 
 const Struct& Table::Find(const std::string& name) const {

@@ -108,6 +108,8 @@ class Table {
   Table();
   const Struct& Resolve(const std::string& name);
   Field ParseField(const nlohmann::json& j, const std::string& where);
+  // Checks a JSON message's key declarations (each named once, a known type, a doc).
+  void CheckKeyDeclarations(const nlohmann::json& keys, const std::string& where);
   nlohmann::json json_;
   std::map<std::string, Struct> structs_;  // by name (std::map: stable addresses)
   std::map<std::string, bool> resolving_;

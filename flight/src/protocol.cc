@@ -317,6 +317,61 @@ DetectReply DecodeDetectReply(const std::vector<uint8_t>& body) {
   return reply;
 }
 
+namespace {
+
+// Whether `v` is of the table's JSON type `type` (integer, number, string, bool, object, array).
+bool IsJsonType(const nlohmann::json& v, const std::string& type) {
+  if (type == "integer") return v.is_number_integer();
+  if (type == "number") return v.is_number();
+  if (type == "string") return v.is_string();
+  if (type == "bool") return v.is_boolean();
+  if (type == "object") return v.is_object();
+  if (type == "array") return v.is_array();
+  return false;
+}
+
+// Checks `j` against `keys` (the table's declarations of one object's keys); `where` names it.
+void CheckJsonKeys(const nlohmann::json& keys, const nlohmann::json& j, const std::string& where) {
+  if (!j.is_object()) throw ProtocolError(where + " is " + Shown(j) + ", expected a JSON object");
+  for (const auto& item : j.items()) {
+    const auto declared = std::find_if(keys.begin(), keys.end(), [&](const nlohmann::json& k) {
+      return k.at("name") == item.key();
+    });
+    if (declared == keys.end()) {
+      throw ProtocolError(where + "'s key '" + item.key() +
+                          "' is not declared in the message table (messages.json)");
+    }
+    const std::string& type = declared->at("type").get_ref<const std::string&>();
+    if (!IsJsonType(item.value(), type)) {
+      throw ProtocolError(where + "'s " + item.key() + " is " + Shown(item.value()) +
+                          ", expected " + (type == "integer" ? "an " : "a ") + type);
+    }
+    if (declared->contains("keys")) {
+      CheckJsonKeys(declared->at("keys"), item.value(), where + "'s " + item.key());
+    }
+  }
+  for (const nlohmann::json& k : keys) {
+    if (k.value("required", false) && !j.contains(k.at("name").get<std::string>())) {
+      throw ProtocolError(where + " has no " + k.at("name").get<std::string>());
+    }
+  }
+}
+
+}  // namespace
+
+void CheckJsonMessage(MessageType type, const nlohmann::json& j) {
+  for (const nlohmann::json& t : MessageTable().at("message_types")) {
+    if (t.at("id") != static_cast<uint32_t>(type)) continue;
+    if (!t.contains("keys")) {
+      throw ProtocolError(MessageTypeName(type) + " is not a JSON message of the table");
+    }
+    CheckJsonKeys(t.at("keys"), j, MessageTypeName(type));
+    return;
+  }
+  throw ProtocolError("message type " + std::to_string(static_cast<uint32_t>(type)) +
+                      " is not in the message table");
+}
+
 const nlohmann::json& MessageTable() { return wire::Table::Get().json(); }
 
 void CheckMessageBindings() {
@@ -601,6 +656,7 @@ void Channel::Flush(const WaitLimit& limit) {
 }
 
 void Channel::SendJson(MessageType type, const nlohmann::json& j, const WaitLimit& limit) {
+  CheckJsonMessage(type, j);
   const std::string text = j.dump();
   Send(type, std::vector<uint8_t>(text.begin(), text.end()), limit);
 }

@@ -248,6 +248,45 @@ TEST(ProtocolMessagesTest, EveryMessageTypeRoundTrips) {
   }
 }
 
+// The JSON messages' keys are the table's too: what a side sends is checked against them (an
+// undeclared key, a missing required one, a value of another JSON type), nested objects included.
+TEST(ProtocolMessagesTest, JsonMessagesAreCheckedAgainstTheTablesKeys) {
+  const nlohmann::json ack = {{"protocol_version", kProtocolVersion}, {"name", "s"},
+                              {"controller", "pd"}, {"control_rate_hz", 100},
+                              {"batched_ticks", true}, {"detects_at_capture", false}};
+  EXPECT_NO_THROW(CheckJsonMessage(MessageType::kHelloAck, ack));
+  const auto error = [](MessageType type, const nlohmann::json& j) {
+    try {
+      CheckJsonMessage(type, j);
+    } catch (const ProtocolError& e) {
+      return std::string(e.what());
+    }
+    return std::string("(accepted)");
+  };
+  nlohmann::json extra = ack;
+  extra["rate_hz"] = 1;
+  EXPECT_EQ(error(MessageType::kHelloAck, extra),
+            "hello_ack's key 'rate_hz' is not declared in the message table (messages.json)");
+  nlohmann::json typed = ack;
+  typed["batched_ticks"] = 1;
+  EXPECT_EQ(error(MessageType::kHelloAck, typed), "hello_ack's batched_ticks is 1, expected a bool");
+  EXPECT_EQ(error(MessageType::kHelloAck, {{"name", "s"}}), "hello_ack has no protocol_version");
+  const nlohmann::json hello = {
+      {"protocol_version", kProtocolVersion}, {"scenario", "hover"}, {"seed", 1},
+      {"rates", nlohmann::json::array()}, {"config", nlohmann::json::object()},
+      {"camera", {{"ring", "/r"}, {"slots", 6}, {"width_px", 4}, {"height_px", 2},
+                  {"slot_bytes", 24}}}};
+  EXPECT_NO_THROW(CheckJsonMessage(MessageType::kHello, hello));
+  nlohmann::json no_slots = hello;
+  no_slots["camera"].erase("slots");
+  EXPECT_EQ(error(MessageType::kHello, no_slots), "hello's camera has no slots");
+  EXPECT_NO_THROW(CheckJsonMessage(
+      MessageType::kFinishReply,
+      {{"estimator", "hybrid"}, {"estimator_health", nlohmann::json::array()},
+       {"frames_detected", 0}}));
+  EXPECT_THROW(CheckJsonMessage(MessageType::kTick, nlohmann::json::object()), ProtocolError);
+}
+
 // The encodings are the committed golden ones (the Python client's test checks the same
 // bytes); with HPA_UPDATE_PROTOCOL_GOLDEN set, the test rewrites their hex instead.
 TEST(ProtocolMessagesTest, EncodingsEqualTheGoldenFile) {

@@ -46,6 +46,10 @@ HELLO, HELLO_ACK, TICK, TICK_REPLY, FINISH, FINISH_REPLY, ERROR = (
     _TYPE_IDS[name] for name in ("hello", "hello_ack", "tick", "tick_reply", "finish",
                                  "finish_reply", "error"))
 MAX_MESSAGE_BYTES = TABLE["max_message_bytes"]  # the simulator's own limit on a message body
+# the JSON messages' keys, by message name: the table's declarations (name, type, required, doc)
+JSON_KEYS = {t["name"]: t["keys"] for t in TABLE["message_types"] if t["encoding"] == "json"}
+_JSON_TYPES = {"integer": (int,), "number": (int, float), "string": (str,), "bool": (bool,),
+               "object": (dict,), "array": (list,)}
 ERROR_FRAMES = 3  # the innermost stack frames an error message names
 # An error message's length: a run error is read by a person in metrics.json and on stderr, so a
 # page of text, far inside MAX_MESSAGE_BYTES (the whole traceback goes to the stack's stderr)
@@ -442,6 +446,32 @@ def _field(obj, key, where, types):
     return obj[key]
 
 
+def _check_json_keys(keys, value, where):
+    if not isinstance(value, dict):
+        raise ProtocolError("%s is %r, expected a JSON object" % (where, value))
+    declared = {k["name"]: k for k in keys}
+    for key, v in value.items():
+        if key not in declared:
+            raise ProtocolError("%s's key '%s' is not declared in the message table "
+                                "(messages.json)" % (where, key))
+        kind = declared[key]["type"]
+        if not isinstance(v, _JSON_TYPES[kind]) or (isinstance(v, bool) and kind != "bool"):
+            raise ProtocolError("%s's %s is %r, expected %s %s"
+                                % (where, key, v, "an" if kind == "integer" else "a", kind))
+        if "keys" in declared[key]:
+            _check_json_keys(declared[key]["keys"], v, "%s's %s" % (where, key))
+    for k in keys:
+        if k.get("required") and k["name"] not in value:
+            raise ProtocolError("%s has no %s" % (where, k["name"]))
+
+
+def check_json(message, value):
+    """Checks a JSON message (hello, hello_ack, finish_reply) against its keys in the message
+    table: ProtocolError naming an undeclared key, a missing required one or a value of another
+    JSON type (a nested object's keys likewise). The client checks what it sends."""
+    _check_json_keys(JSON_KEYS[message], value, message)
+
+
 def decode_hello(body):
     """The hello message's JSON object as a dict; ProtocolError naming the hello and, for bad
     UTF-8 or JSON, the line and column."""
@@ -457,8 +487,9 @@ def decode_hello(body):
         where += "'s camera"
         if not isinstance(camera, dict):
             raise ProtocolError("%s: %r, expected an object" % (where, camera))
+        camera_keys = next(k["keys"] for k in JSON_KEYS["hello"] if k["name"] == "camera")
         _field(camera, "ring", where, (str,))
-        for key in ("slots", "width_px", "height_px", "slot_bytes"):
+        for key in (k["name"] for k in camera_keys if k["type"] == "integer"):
             if _field(camera, key, where, (int,)) < 0:
                 raise ProtocolError("%s: '%s' is %d, expected 0 or more"
                                     % (where, key, camera[key]))
@@ -559,6 +590,7 @@ class FlightStackClient:
                "control_rate_hz": control_rate_hz}
         if batched_ticks:
             ack["batched_ticks"] = True
+        check_json("hello_ack", ack)
         self.send(HELLO_ACK, json.dumps(ack).encode())
         return hello
 
@@ -633,8 +665,9 @@ def run(controller_class, name=None, control_rate_hz=0.0, batched_ticks=False):
                                     % MESSAGE_TYPES[kind])
             tick = decode_tick(body, MESSAGE_TYPES[kind])
             if kind == FINISH:
-                client.send(FINISH_REPLY, json.dumps({"estimator": "", "estimator_health": [],
-                                                      "frames_detected": 0}).encode())
+                reply = {"estimator": "", "estimator_health": [], "frames_detected": 0}
+                check_json("finish_reply", reply)
+                client.send(FINISH_REPLY, json.dumps(reply).encode())
                 return 0
             client.attach_frames(tick)
             if len(tick.vio):

@@ -178,6 +178,28 @@ class RoundTripTest(unittest.TestCase):
         self.assertIn("ValueError: boom", replies[-1][1].decode("utf-8"))
 
 
+class JsonMessagesTest(unittest.TestCase):
+    """The JSON messages' keys, declared in the table, checked as the C++ side checks them."""
+
+    def test_what_the_client_sends_is_checked_against_the_tables_keys(self):
+        ack = {"protocol_version": lockstep.PROTOCOL_VERSION, "name": "s", "control_rate_hz": 100,
+               "batched_ticks": True}
+        lockstep.check_json("hello_ack", ack)
+        with self.assertRaisesRegex(lockstep.ProtocolError, "key 'rate_hz' is not declared"):
+            lockstep.check_json("hello_ack", dict(ack, rate_hz=1))
+        with self.assertRaisesRegex(lockstep.ProtocolError, "batched_ticks is 1, expected a bool"):
+            lockstep.check_json("hello_ack", dict(ack, batched_ticks=1))
+        with self.assertRaisesRegex(lockstep.ProtocolError, "hello_ack has no protocol_version"):
+            lockstep.check_json("hello_ack", {"name": "s"})
+        camera = {"ring": "/r", "slots": 6, "width_px": 4, "height_px": 2}
+        hello = {"protocol_version": 1, "scenario": "s", "seed": 1, "rates": [], "config": {},
+                 "camera": camera}
+        with self.assertRaisesRegex(lockstep.ProtocolError, "hello's camera has no slot_bytes"):
+            lockstep.check_json("hello", hello)
+        lockstep.check_json("finish_reply", {"estimator": "", "estimator_health": [],
+                                             "frames_detected": 0})
+
+
 @unittest.skipUnless(os.path.exists(GOLDEN), "no golden file (not a source tree)")
 class GoldenTest(unittest.TestCase):
     """The C++ encoder's bytes, read and written by the Python client."""

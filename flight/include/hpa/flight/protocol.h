@@ -100,6 +100,10 @@ DetectReply DecodeDetectReply(const std::vector<uint8_t>& body);
 /// message types and every binary message's structs with their fields' types, units, checks
 /// and docs.
 const nlohmann::json& MessageTable();
+/// Checks a JSON message (hello, hello_ack, finish_reply) against its keys in the message table;
+/// throws ProtocolError naming a key the table does not declare for it, a required key it lacks,
+/// or a value of another JSON type than declared (a nested object's keys likewise).
+void CheckJsonMessage(MessageType type, const nlohmann::json& j);
 /// Binds every binary message's C++ structs to the message table; throws std::logic_error
 /// naming a field or bit of the table no member carries, a member bound to a name the table
 /// lacks or to a field of another type, or a struct of the table no message uses.
@@ -192,7 +196,8 @@ class Channel {
   void Queue(MessageType type, const std::vector<uint8_t>& body);
   /// Sends the queued messages within `limit` (as Send).
   void Flush(const WaitLimit& limit = {});
-  /// Sends a JSON message within `limit`.
+  /// Sends a JSON message within `limit`, checked first against the table's keys
+  /// (CheckJsonMessage: a message this side builds wrongly is refused before it goes).
   void SendJson(MessageType type, const nlohmann::json& j, const WaitLimit& limit = {});
   /// Receives one whole message within `limit` (read ahead in large reads: the messages already
   /// arrived take no system call); throws ProtocolError on a timeout, a closed
