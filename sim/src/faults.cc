@@ -140,7 +140,17 @@ std::vector<FaultComponentDecl> BuildComponents() {
          "",
          "a uniform noise image in place of each frame (detected like any frame)",
          {}},
-        Delayed(""), Slow(""), Intermittent("")}},
+        Delayed(""), Slow(""), Intermittent(""),
+        {FaultMode::kDistractor,
+         "distractor",
+         "",
+         "a second payload (same sphere, same material) in the rendered scene at `position`, "
+         "moving at `velocity`: clutter the detector sees in real pixels (the analytic camera "
+         "has none)",
+         {Vector("position", "m", "where it is at the fault's start (world frame)", -10.0, 10.0,
+                 std::nullopt, &Fault::distractor_W_m),
+          Vector("velocity", "m/s", "its constant velocity (world frame)", -10.0, 10.0, 0.0,
+                 &Fault::distractor_velocity_W_mps)}}}},
   };
 }
 
@@ -379,6 +389,18 @@ bool Faults::TakeGripperRelease(double now_s) {
     }
   }
   return release;
+}
+
+std::vector<std::array<double, 3>> Faults::DistractorPositions_W(double now_s) const {
+  std::vector<std::array<double, 3>> out;
+  for (const Active& a : faults_) {
+    const Fault& f = a.fault;
+    if (f.mode != FaultMode::kDistractor || !InWindow(f, now_s)) continue;
+    const Eigen::Vector3d p_W =
+        f.distractor_W_m + f.distractor_velocity_W_mps * (now_s - f.start_s);
+    out.push_back({p_W.x(), p_W.y(), p_W.z()});
+  }
+  return out;
 }
 
 }  // namespace hpa::sim

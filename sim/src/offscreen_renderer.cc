@@ -250,6 +250,29 @@ cv::Mat OffscreenRenderer::Render(mjData* data, int camera_id, int width_px, int
   return bgr;
 }
 
+void OffscreenRenderer::SetGeomCopies(int geom_id, std::vector<std::array<double, 3>> positions_W) {
+  copied_geom_ = geom_id;
+  copy_positions_W_ = std::move(positions_W);
+}
+
+// The copies SetGeomCopies asked for, after the scene's own geoms (as many as the scene holds).
+void OffscreenRenderer::AddGeomCopies(mjvScene* scene) const {
+  if (copy_positions_W_.empty()) return;
+  const int n = scene->ngeom;
+  for (int i = 0; i < n; ++i) {
+    const mjvGeom& g = scene->geoms[i];
+    if (g.objtype != mjOBJ_GEOM || g.objid != copied_geom_) continue;
+    for (const std::array<double, 3>& p_W : copy_positions_W_) {
+      if (scene->ngeom >= scene->maxgeom) return;
+      mjvGeom& copy = scene->geoms[scene->ngeom++];
+      copy = g;
+      for (int k = 0; k < 3; ++k) copy.pos[k] = static_cast<float>(p_W[k]);
+      copy.segid = scene->ngeom - 1;
+    }
+    return;
+  }
+}
+
 void OffscreenRenderer::Render(mjData* data, int camera_id, int width_px, int height_px,
                                bool show_tendons, cv::Mat* bgr, const cv::Rect& region) {
   CheckRenderRequest(model_, camera_id, width_px, height_px);
@@ -263,6 +286,7 @@ void OffscreenRenderer::Render(mjData* data, int camera_id, int width_px, int he
     gl_->option.geomgroup[g] = geom_group_visible_[g] ? 1 : 0;
   }
   mjv_updateScene(model_, data, &gl_->option, nullptr, &gl_->camera, mjCAT_ALL, &gl_->scene);
+  AddGeomCopies(&gl_->scene);
   bgr->create(height_px, width_px, CV_8UC3);  // no allocation when the size is unchanged
   const cv::Rect frame(0, 0, width_px, height_px);
   const cv::Rect area = region.area() > 0 ? (region & frame) : frame;

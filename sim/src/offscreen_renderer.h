@@ -4,9 +4,11 @@
 
 #include <mujoco/mujoco.h>
 
+#include <array>
 #include <memory>
 #include <opencv2/core.hpp>
 #include <string>
+#include <vector>
 
 #include "hpa/sim/gl_backend.h"
 
@@ -45,6 +47,11 @@ class OffscreenRenderer {
   /// defaults: groups 0-2 drawn, 3-5 not).
   void SetGeomGroupVisible(int group, bool visible);
 
+  /// Draws, in the following Render calls, copies of geom `geom_id` (its shape, size, material
+  /// and orientation) centred at each of `positions_W` (m, world frame): a second object of the
+  /// same look (a camera fault's distractor). Empty: none.
+  void SetGeomCopies(int geom_id, std::vector<std::array<double, 3>> positions_W);
+
   /// Whether Render leaves out the geoms the frame cannot show (scene_culling.h): on by default;
   /// the frame is the same either way, only faster.
   void SetCullHiddenGeoms(bool cull);
@@ -68,6 +75,8 @@ class OffscreenRenderer {
   static std::unique_ptr<Gl>& KeptGl();
   // Frees a renderer's GL state: MuJoCo's resources, then the context (recycled if reuse is on).
   static void Release(std::unique_ptr<Gl> gl);
+  // Appends the copies of SetGeomCopies to a scene mjv_updateScene just made.
+  void AddGeomCopies(mjvScene* scene) const;
   const mjModel* model_;
   GlBackend backend_;
   std::unique_ptr<Gl> gl_;
@@ -76,6 +85,8 @@ class OffscreenRenderer {
   bool cull_hidden_geoms_ = true;
   int last_culled_geoms_ = 0;
   bool geom_group_visible_[6] = {true, true, true, false, false, false};
+  int copied_geom_ = -1;                                   // the geom SetGeomCopies copies
+  std::vector<std::array<double, 3>> copy_positions_W_;   // where its copies are (m, world)
 };
 
 }  // namespace hpa::sim

@@ -126,6 +126,10 @@ void World::RenderPayloadCamera(cv::Mat* bgr, const cv::Rect& region) {
     model_->cam_fovy[ids_.payload_camera] = camera_image_->render_fovy_deg();
   }
   const int w = model_->vis.global.offwidth, h = model_->vis.global.offheight;
+  // a camera fault's distractors: copies of the payload's sphere where the faults put them
+  if (!faults_.empty()) {
+    renderer_->SetGeomCopies(ids_.payload_geom, faults_.DistractorPositions_W(time_s()));
+  }
   // noise keyed by the physics step: a region and the whole frame of one instant agree
   const uint64_t frame = static_cast<uint64_t>(step_);
   const auto t0 = Clock::now();
@@ -172,6 +176,9 @@ void World::RenderPayloadCamera(cv::Mat* bgr, const cv::Rect& region) {
 cv::Mat World::RenderChaseCamera(int width_px, int height_px) {
   // the gripper (group 3) while it holds the payload
   renderer_->SetGeomGroupVisible(kGripperGeomGroup, model_->eq_active[ids_.gripper_weld] != 0);
+  if (!faults_.empty()) {
+    renderer_->SetGeomCopies(ids_.payload_geom, faults_.DistractorPositions_W(time_s()));
+  }
   const cv::Mat frame = renderer_->Render(data_, ids_.chase_camera, width_px, height_px);
   renderer_->SetGeomGroupVisible(kGripperGeomGroup, false);
   return frame;

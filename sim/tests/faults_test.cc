@@ -185,6 +185,21 @@ TEST(FaultsTest, MotorFactorsScaleTheFaultyRotorOnlyInItsWindow) {
   EXPECT_EQ(factor, Eigen::Vector4d::Ones());
 }
 
+TEST(FaultsTest, ADistractorMovesAtItsVelocityOnlyInItsWindow) {
+  Faults faults(1);
+  EXPECT_TRUE(faults.DistractorPositions_W(0.0).empty());
+  Fault d = MakeFault(FaultComponent::kCamera, FaultMode::kDistractor, 1.0, 3.0);
+  d.distractor_W_m = Eigen::Vector3d(0.4, 0, 0.6);
+  d.distractor_velocity_W_mps = Eigen::Vector3d(-0.2, 0, 0);
+  faults.Inject(d);
+  EXPECT_TRUE(faults.DistractorPositions_W(0.5).empty());
+  const std::vector<std::array<double, 3>> at_2 = faults.DistractorPositions_W(2.0);
+  ASSERT_EQ(at_2.size(), 1u);
+  EXPECT_NEAR(at_2[0][0], 0.2, 1e-12);
+  EXPECT_EQ(at_2[0][2], 0.6);
+  EXPECT_TRUE(faults.DistractorPositions_W(3.0).empty());
+}
+
 // The vehicle at hover command for 0.3 s with rotor 0 off from the start: it rolls and falls,
 // where the healthy vehicle stays level (the hover command is the world's exact hover speed).
 TEST(FaultsTest, AMotorOffTipsTheVehicle) {

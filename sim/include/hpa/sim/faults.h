@@ -8,6 +8,7 @@
 // fault is a row there and its effect in faults.cc; the world does not change.
 
 #include <Eigen/Core>
+#include <array>
 #include <cstdint>
 #include <deque>
 #include <limits>
@@ -38,6 +39,7 @@ enum class FaultMode {
   kLoss,          // motor: loss of effectiveness
   kEarly,         // gripper: lets go on its own, at the fault's start
   kLate,          // gripper: a release commanded in the fault's window waits for its end
+  kDistractor,    // camera: a second object that looks like the payload, in the rendered scene
 };
 
 /// One fault injected into the world: its component, mode, window and the mode's values.
@@ -56,6 +58,8 @@ struct Fault {
   double accel_noise_mps2 = 0.0;    // noise burst (IMU): standard deviation per sample
   double motor = 0.0;               // motor: rotor index 0-3 (PX4's -i, from 0)
   double loss = 1.0;                // motor: share of thrust lost, 0-1 (off: 1)
+  Eigen::Vector3d distractor_W_m = Eigen::Vector3d::Zero();             // where it starts  (3)
+  Eigen::Vector3d distractor_velocity_W_mps = Eigen::Vector3d::Zero();  // how it moves  (3)
 };
 
 /// One key a fault mode reads besides at, type, component, mode and duration.
@@ -122,6 +126,9 @@ class Faults {
   bool DefersRelease(double now_s);
   /// True once when the gripper lets go on its own at `now_s` (early, or a late one's end).
   bool TakeGripperRelease(double now_s);
+  /// Where the camera's distractors are at `now_s` (m, world frame): the rendered scene draws a
+  /// copy of the payload at each.
+  std::vector<std::array<double, 3>> DistractorPositions_W(double now_s) const;
 
  private:
   struct Held {
