@@ -191,8 +191,8 @@ add_test(NAME build.scenarios_layers
                  "$<TARGET_PROPERTY:hpa_tools,INCLUDE_DIRECTORIES>")
 set_tests_properties(build.scenarios_layers PROPERTIES LABELS build)
 
-# Faults reach a separate flight stack as they reach the in-process one: a VIO, an IMU and a
-# rendered-camera fault through hpa-flight give the in-process metrics (docs/faults.md)
+# Faults reach a separate flight stack as they reach the in-process one: a VIO, an IMU and two
+# rendered-camera faults through hpa-flight give the in-process metrics (docs/faults.md)
 add_test(NAME cli.fault_flight_stack
          COMMAND bash ${SCEN}/tests/fault_flight_stack_test.sh ${HPA_BIN} ${CMAKE_SOURCE_DIR}
                  ${HPA_PYTHON3})

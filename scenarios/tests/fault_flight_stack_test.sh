@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
 # Faults reach a separate flight stack as they reach the in-process one (docs/faults.md): a VIO
-# and an IMU-path fault (analytic camera) and a garbage payload camera (rendered frames, the noise
-# written into the frame ring) flown in process and through hpa-flight give the same metrics,
-# recovery metrics included, timings and the stack's name aside.
+# and an IMU-path fault (analytic camera), a garbage payload camera and a distractor in the
+# rendered scene (rendered frames: the noise and the twin in the pixels the stack reads) flown in
+# process and through hpa-flight give the same metrics, recovery metrics included, timings and
+# the stack's name aside.
 # Usage: fault_flight_stack_test.sh HPA_BINARY SOURCE_DIR PYTHON
 set -uo pipefail
 hpa=$1
@@ -12,7 +13,8 @@ source "$src/scenarios/tests/cli_test_lib.sh"
 out=$(mktemp -d)
 trap 'rm -rf "$out"' EXIT
 
-for name in fault_vio_wrong fault_imu_bias fault_payload_camera_garbage; do
+for name in fault_vio_wrong fault_imu_bias fault_payload_camera_garbage \
+    fault_payload_camera_distractor; do
   "$hpa" run "$src/scenarios/ci/$name.yaml" --quiet --out "$out/$name/in" \
     || fail "$name in process failed"
   "$hpa" run "$src/scenarios/ci/$name.yaml" --quiet --out "$out/$name/ex" \
