@@ -2,10 +2,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <sstream>
 #include <stdexcept>
 
 #include "hpa/controller/controller_registry.h"
-#include "hpa/controller/rti_solver.h"
 
 namespace hpa {
 namespace {
@@ -54,32 +54,87 @@ const char* ToString(ControlStatus status) {
   return "unknown";
 }
 
-const ParamTable<ControllerConfig>& ControllerParamTable() {
-  using C = ControllerConfig;
-  static const ParamTable<C> t{
-      "controller",
-      "the high-level controller",
-      {{"perception_weight", "-", 0.0, 1e3,
-        "scale on the tuned L_cam weights (1: as tuned, 0: L_cam off)", &C::perception_weight},
-       {"predict_retaut", "", 0, 0, "hpa_mpc: predict the slack-to-taut guard in the horizon",
-        &C::predict_retaut}}};
-  return t;
+std::string SettingText(const SettingValue& value) {
+  if (const auto* b = std::get_if<bool>(&value)) return *b ? "true" : "false";
+  if (const auto* n = std::get_if<std::string>(&value)) return *n;
+  std::ostringstream text;
+  text << std::get<double>(value);
+  return text.str();
+}
+
+void CheckSetting(const SettingDecl& decl, const SettingValue& value, const std::string& prefix) {
+  const std::string what = prefix + decl.key + ": expected ";
+  if (value.index() != decl.default_value.index()) {
+    static const char* kKinds[] = {"a number", "true or false", "a name"};
+    throw std::invalid_argument(what + kKinds[decl.default_value.index()] + ", got '" +
+                                SettingText(value) + "'");
+  }
+  if (const auto* x = std::get_if<double>(&value)) {
+    if (!(*x >= decl.min && *x <= decl.max)) {
+      throw std::invalid_argument(what + SettingText(decl.min) + " to " + SettingText(decl.max) +
+                                  ", got " + SettingText(value));
+    }
+  } else if (const auto* name = std::get_if<std::string>(&value); name && decl.choices) {
+    const std::vector<std::string> choices = decl.choices();
+    if (std::find(choices.begin(), choices.end(), *name) == choices.end()) {
+      throw std::invalid_argument(what + "one of " + Joined(choices) + ", got '" + *name + "'");
+    }
+  }
+}
+
+const SettingDecl* FindSetting(const std::vector<SettingDecl>& decls, const std::string& key) {
+  for (const SettingDecl& d : decls) {
+    if (d.key == key) return &d;
+  }
+  return nullptr;
+}
+
+const SettingValue& SettingOr(const ControllerSettings& settings, const SettingDecl& decl) {
+  const auto it = settings.find(decl.key);
+  return it == settings.end() ? decl.default_value : it->second;
+}
+
+namespace {
+
+// The value of the flown controller's setting `key`, which must be of kind T.
+template <class T>
+T FlownSetting(const ControllerConfig& config, const std::string& key) {
+  const ControllerRegistration* registration = FindController(config.type);
+  const SettingDecl* decl =
+      registration == nullptr ? nullptr : FindSetting(registration->settings, key);
+  if (decl == nullptr || !std::holds_alternative<T>(decl->default_value)) {
+    throw std::invalid_argument("controller." + key + ": not a setting of " + config.type);
+  }
+  const SettingValue& value = SettingOr(config.settings, *decl);
+  CheckSetting(*decl, value, "controller.");
+  return std::get<T>(value);
+}
+
+}  // namespace
+
+double ControllerConfig::Number(const std::string& key) const {
+  return FlownSetting<double>(*this, key);
+}
+
+bool ControllerConfig::Switch(const std::string& key) const {
+  return FlownSetting<bool>(*this, key);
+}
+
+std::string ControllerConfig::Name(const std::string& key) const {
+  return FlownSetting<std::string>(*this, key);
 }
 
 std::unique_ptr<Controller> MakeController(const ControllerConfig& config, const Params& params,
                                            std::shared_ptr<const Reference> reference) {
   if (!reference) throw std::invalid_argument("MakeController: null reference");
-  CheckParamTable(ControllerParamTable(), "controller.", config);
-  const std::vector<std::string> solvers = OcpSolverNames();
-  if (std::find(solvers.begin(), solvers.end(), config.solver) == solvers.end()) {
-    throw std::invalid_argument("controller.solver: expected one of " + Joined(solvers) +
-                                ", got '" + config.solver + "'");
-  }
-  ParseRtiQpMethod(config.qp_method);  // throws naming the known methods
   const ControllerRegistration* registration = FindController(config.type);
   if (registration == nullptr) {
     throw std::invalid_argument("controller.type: expected one of " + Joined(ControllerNames()) +
                                 ", got '" + config.type + "'");
+  }
+  // the keys this controller reads; a key only another controller declares is that one's
+  for (const SettingDecl& d : registration->settings) {
+    CheckSetting(d, SettingOr(config.settings, d), "controller.");
   }
   return registration->make(config, params, std::move(reference));
 }

@@ -4,6 +4,8 @@
 #include <chrono>
 #include <cmath>
 #include <stdexcept>
+#include "hpa/controller/controller_registry.h"
+#include "hpa/controller/rti_solver.h"
 
 namespace hpa {
 
@@ -201,6 +203,15 @@ ControlOutput HpaMpc::Update(const SystemState& state) {
 }
 
 namespace {
+
+// The settings both MPCs read: which solver, and how RTI solves its QP.
+std::vector<SettingDecl> SolverSettings() {
+  return {{"solver", "", std::string("rti"), 0.0, 0.0, OcpSolverNames,
+           "the OCP solver: a registered solver (hpa schema lists them)"},
+          {"qp_method", "", std::string("structured"), 0.0, 0.0, RtiQpMethodNames,
+           "how the rti solver solves its QP (the other solvers ignore it)"}};
+}
+
 // An MPC controller from its scenario settings: hybrid (hpa_mpc, perception cost and the re-taut
 // prediction as configured) or not (nonhybrid_mpc: always taut, neither).
 std::unique_ptr<Controller> MakeMpcController(const ControllerConfig& config, const Params& params,
@@ -208,13 +219,28 @@ std::unique_ptr<Controller> MakeMpcController(const ControllerConfig& config, co
                                               bool hybrid) {
   MpcSettings settings;
   settings.hybrid = hybrid;
-  settings.perception_weight = config.perception_weight;
-  settings.solver = config.solver;
-  settings.solvers.rti.qp_method = ParseRtiQpMethod(config.qp_method);
-  settings.predict_retaut = hybrid && config.predict_retaut;
+  if (hybrid) {
+    settings.perception_weight = config.Number("perception_weight");
+    settings.predict_retaut = config.Switch("predict_retaut");
+  }
+  settings.solver = config.Name("solver");
+  settings.solvers.rti.qp_method = ParseRtiQpMethod(config.Name("qp_method"));
   return std::make_unique<HpaMpc>(params, std::move(reference), settings);
 }
+
 }  // namespace
+
+std::vector<SettingDecl> HpaMpcSettings() {
+  std::vector<SettingDecl> settings{
+      {"perception_weight", "-", kDefaultPerceptionWeight, 0.0, 1e3, nullptr,
+       "scale on the tuned L_cam weights (1: as tuned, 0: L_cam off)"},
+      {"predict_retaut", "", false, 0.0, 0.0, nullptr,
+       "predict the slack-to-taut guard in the horizon (false: slack held, the paper's form)"}};
+  for (SettingDecl& d : SolverSettings()) settings.push_back(std::move(d));
+  return settings;
+}
+
+std::vector<SettingDecl> NonhybridMpcSettings() { return SolverSettings(); }
 
 std::unique_ptr<Controller> MakeHpaMpcController(const ControllerConfig& config,
                                                  const Params& params,

@@ -87,7 +87,7 @@ TEST(ControllerRegistryTest, UnknownTypeAndSolverNameTheKnownOnes) {
     EXPECT_NE(std::string(e.what()).find("nonhybrid_mpc"), std::string::npos) << e.what();
   }
   config.type = "hpa_mpc";
-  config.solver = "ipopt";
+  config.settings["solver"] = std::string("ipopt");
   EXPECT_THROW(MakeController(config, params, Hover(params)), std::invalid_argument);
 }
 

@@ -192,7 +192,7 @@ TEST(HpaMpcTest, FactoryAndModes) {
   EXPECT_EQ(mpc->BuildProblem(s).mode, CableMode::kTaut);
   EXPECT_EQ(mpc->BuildProblem(s).perception_weight, 0.0);
   config.type = "hpa_mpc";
-  config.perception_weight = 0.5;
+  config.settings["perception_weight"] = 0.5;
   auto h = MakeController(config, params, HoverRef(params));
   EXPECT_EQ(dynamic_cast<HpaMpc*>(h.get())->BuildProblem(s).mode, CableMode::kSlack);
   EXPECT_EQ(dynamic_cast<HpaMpc*>(h.get())->BuildProblem(s).perception_weight, 0.5);
@@ -204,7 +204,7 @@ TEST(HpaMpcTest, FactoryAndModes) {
   config.type = "pid";
   EXPECT_THROW(MakeController(config, params, HoverRef(params)), std::invalid_argument);
   config.type = "hpa_mpc";
-  config.solver = "ipopt";
+  config.settings["solver"] = std::string("ipopt");
   EXPECT_THROW(MakeController(config, params, HoverRef(params)), std::invalid_argument);
   EXPECT_STREQ(ToString(ControlStatus::kQpFailure), "qp_failure");
   EXPECT_STREQ(ToString(ControlStatus::kNonFinite), "non_finite");

@@ -87,7 +87,7 @@ TEST(OcpSolverTest, AToySolverIsOneRegistration) {
   const Params params;
   // the scenario-level factory accepts it, and the MPC flies it: the plan is the warm start
   ControllerConfig config;
-  config.solver = "hold_guess";
+  config.settings["solver"] = std::string("hold_guess");
   std::unique_ptr<Controller> controller = MakeController(config, params, HoverRef(params));
   auto* mpc = dynamic_cast<HpaMpc*>(controller.get());
   ASSERT_NE(mpc, nullptr);

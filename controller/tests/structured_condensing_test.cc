@@ -200,7 +200,7 @@ TEST(StructuredCondensingTest, QpMethodNamesParseAndUnknownOnesAreRefused) {
   EXPECT_EQ(RtiQpMethodNames().size(), 3u);
   for (const std::string& name : RtiQpMethodNames()) EXPECT_NO_THROW(ParseRtiQpMethod(name));
   ControllerConfig config;
-  config.qp_method = "hpipm";
+  config.settings["qp_method"] = std::string("hpipm");
   const Params params;
   try {
     MakeController(config, params, MakeLissajousReference(params, LissajousSpec()));

@@ -7,16 +7,54 @@
 #include <variant>
 #include <vector>
 
+#include "hpa/controller/controller_registry.h"
 #include "hpa/controller/reference_types.h"
 #include "hpa/flight/protocol.h"
 
 namespace hpa::flight {
 namespace {
 
-// The controller block's declared table, as the list the table walkers take.
-const std::vector<ParamTable<ControllerConfig>>& ControllerTables() {
-  static const std::vector<ParamTable<ControllerConfig>> tables{ControllerParamTable()};
-  return tables;
+// The controller block: its type, then every setting the type declares (the value the scenario
+// wrote, or the default) as a number, a boolean or a name.
+nlohmann::json ControllerToJson(const ControllerConfig& c) {
+  nlohmann::json out = {{"type", c.type}};
+  const ControllerRegistration* registration = FindController(c.type);
+  if (registration == nullptr) return out;
+  for (const SettingDecl& d : registration->settings) {
+    std::visit([&](const auto& v) { out[d.key] = v; }, SettingOr(c.settings, d));
+  }
+  return out;
+}
+
+// ControllerToJson's block read back: each setting the type declares, checked against its
+// declaration (absent: its default, as from a stack of an older version); throws ProtocolError
+// naming controller.key.
+ControllerConfig ControllerFromJson(const nlohmann::json& j) {
+  ControllerConfig c;
+  c.type = j.at("type").get<std::string>();
+  const ControllerRegistration* registration = FindController(c.type);
+  if (registration == nullptr) return c;  // MakeController names the unknown type
+  for (const SettingDecl& d : registration->settings) {
+    if (!j.contains(d.key)) continue;
+    const nlohmann::json& v = j.at(d.key);
+    SettingValue value;
+    if (v.is_boolean()) {
+      value = v.get<bool>();
+    } else if (v.is_number()) {
+      value = v.get<double>();
+    } else if (v.is_string()) {
+      value = v.get<std::string>();
+    } else {
+      throw ProtocolError("controller." + d.key + ": expected a number, a boolean or a name");
+    }
+    try {
+      CheckSetting(d, value, "controller.");
+    } catch (const std::invalid_argument& e) {
+      throw ProtocolError(e.what());
+    }
+    c.settings[d.key] = value;
+  }
+  return c;
 }
 
 // A vector as a JSON array of its 3 numbers.
@@ -160,13 +198,8 @@ nlohmann::json ConfigToJson(const FlightConfig& c) {
   reference["samples_t_p_v_a"] = samples;
   // a type that keeps its key values as read (one registered beyond the built-ins) sends them
   if (!r.values.empty()) reference["key_values"] = r.values;
-  // the controller's names, then every key of its declared table
-  nlohmann::json controller = TablesToJson(ControllerTables(), c.controller);
-  controller["type"] = c.controller.type;
-  controller["solver"] = c.controller.solver;
-  controller["qp_method"] = c.controller.qp_method;
   return {{"params", params},
-          {"controller", controller},
+          {"controller", ControllerToJson(c.controller)},
           {"estimator", c.estimator},
           {"slack_tension_cue", c.slack_tension_cue},
           {"reference", reference},
@@ -180,12 +213,7 @@ FlightConfig ConfigFromJson(const nlohmann::json& j) {
   try {
     FlightConfig c;
     TablesFromJson(ParamsTables(), j.at("params"), "params", &c.params);
-    const nlohmann::json& cj = j.at("controller");
-    c.controller.type = cj.at("type").get<std::string>();
-    c.controller.solver = cj.at("solver").get<std::string>();
-    // absent from the first version-1 stacks' configurations: the default
-    c.controller.qp_method = cj.value("qp_method", ControllerConfig{}.qp_method);
-    TablesFromJson(ControllerTables(), cj, "controller", &c.controller);
+    c.controller = ControllerFromJson(j.at("controller"));
     c.estimator = j.at("estimator").get<std::string>();
     c.slack_tension_cue = j.at("slack_tension_cue").get<bool>();
     const nlohmann::json& rj = j.at("reference");

@@ -82,9 +82,9 @@ TEST(ProtocolTest, ConfigRoundTripsThroughJson) {
   FlightConfig c;
   c.params.cable_length_m = 0.7;
   c.params.R_BC(0, 1) = 0.25;
-  c.controller.type = "geometric";
-  c.controller.perception_weight = 0.1 + 0.2;
-  c.controller.qp_method = "riccati";
+  c.controller.type = "hpa_mpc";
+  c.controller.settings["perception_weight"] = 0.1 + 0.2;
+  c.controller.settings["qp_method"] = std::string("riccati");
   c.reference.type = "line";
   c.reference.line_end_W_m = {1.0 / 3.0, 0, 0.7};
   c.estimate_latency_s = 0.002;
@@ -92,9 +92,9 @@ TEST(ProtocolTest, ConfigRoundTripsThroughJson) {
   const FlightConfig back = ConfigFromJson(nlohmann::json::parse(ConfigToJson(c).dump()));
   EXPECT_EQ(back.params.cable_length_m, 0.7);
   EXPECT_EQ(back.params.R_BC, c.params.R_BC);
-  EXPECT_EQ(back.controller.type, "geometric");
-  EXPECT_EQ(back.controller.perception_weight, c.controller.perception_weight);
-  EXPECT_EQ(back.controller.qp_method, "riccati");
+  EXPECT_EQ(back.controller.type, "hpa_mpc");
+  EXPECT_EQ(back.controller.Number("perception_weight"), 0.1 + 0.2);
+  EXPECT_EQ(back.controller.Name("qp_method"), "riccati");
   EXPECT_EQ(back.reference.line_end_W_m, c.reference.line_end_W_m);
   EXPECT_EQ(back.initial_state.p_WQ_W, c.initial_state.p_WQ_W);
   nlohmann::json missing = ConfigToJson(c);

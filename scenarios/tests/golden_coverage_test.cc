@@ -59,18 +59,27 @@ const std::vector<WorldPart>& WorldParts() {
   return parts;
 }
 
+// The flown controller's setting `key` as text, or "" when it declares none.
+std::string SettingOf(const Scenario& s, const std::string& key) {
+  const SettingDecl* d = FindSetting(FindController(s.controller.type)->settings, key);
+  return d == nullptr ? "" : SettingText(SettingOr(s.controller.settings, *d));
+}
+
 // What one scenario flies, as "kind: name" entries.
 std::set<std::string> PathsOf(const Scenario& s) {
   std::set<std::string> paths = {
       "controller: " + s.controller.type,
       "estimator: " + EstimatorOf(s),
-      "solver: " + s.controller.solver,
       "reference: " + s.reference.type,
       "world profile: " + s.world.name,
       "camera: " + std::string(s.estimation.ground_truth ? "ground_truth" : s.estimation.camera),
   };
-  if (s.controller.solver == "rti") paths.insert("qp_method: " + s.controller.qp_method);
-  if (s.controller.predict_retaut) paths.insert("switch: controller.predict_retaut true");
+  const std::string solver = SettingOf(s, "solver");
+  if (!solver.empty()) paths.insert("solver: " + solver);
+  if (solver == "rti") paths.insert("qp_method: " + SettingOf(s, "qp_method"));
+  if (SettingOf(s, "predict_retaut") == "true") {
+    paths.insert("switch: controller.predict_retaut true");
+  }
   if (!s.estimation.slack_tension_cue) paths.insert("switch: estimation.slack_tension_cue false");
   if (s.estimation.camera_randomize) paths.insert("switch: estimation.camera_randomize true");
   for (const EventSpec& e : s.events) {

@@ -51,9 +51,9 @@ TEST(ScenarioInputTest, DuplicateAndComplexKeysAreRefused) {
 TEST(ScenarioInputTest, QpMethodIsOneOfTheRtiMethods) {
   const std::string path = TestTempDir() + "q.yaml";
   std::ofstream(path) << "name: x\nduration: 1\n";
-  EXPECT_EQ(LoadScenario(path).controller.qp_method, "structured");
+  EXPECT_EQ(LoadScenario(path).controller.Name("qp_method"), "structured");
   std::ofstream(path) << "name: x\nduration: 1\ncontroller: {qp_method: riccati}\n";
-  EXPECT_EQ(LoadScenario(path).controller.qp_method, "riccati");
+  EXPECT_EQ(LoadScenario(path).controller.Name("qp_method"), "riccati");
   const std::string error = LoadError("name: x\nduration: 1\ncontroller: {qp_method: hpipm}\n");
   EXPECT_NE(error.find("controller.qp_method"), std::string::npos) << error;
   EXPECT_NE(error.find("dense"), std::string::npos) << error;

@@ -18,7 +18,8 @@ namespace {
 // Hover thrust and zero body rates: enough to hold a hovering vehicle for a second.
 class HoldController : public Controller {
  public:
-  explicit HoldController(const Params& params) : thrust_N_(params.HoverThrustN()) {}
+  explicit HoldController(const Params& params, double thrust_scale = 1.0)
+      : thrust_N_(thrust_scale * params.HoverThrustN()) {}
   ControlOutput Update(const SystemState&) override {
     ControlOutput out;
     out.command.thrust_N = thrust_N_;
@@ -63,6 +64,51 @@ TEST(ToyControllerTest, RegisteredControllerRunsThroughHpaRun) {
       Hpa({"run", dir + "toy.yaml", "--controller", "toy_hold", "--out", dir + "out2", "--quiet"}),
       0);
   EXPECT_EQ(Hpa({"run", dir + "toy.yaml", "--controller", "toy_nope", "--quiet"}), 2);
+}
+
+// A controller's own setting is one declaration in its registration: the scenario's controller
+// block and --set take it, its range is checked naming the key, `hpa schema` lists it, and a key
+// no controller declares is refused naming the declared ones.
+TEST(ToyControllerTest, AControllersOwnSettingIsDeclaredWithIt) {
+  if (FindController("toy_scaled") == nullptr) {
+    RegisterController(
+        {"toy_scaled", "hover thrust times its own setting (test)", "hybrid",
+         [](const ControllerConfig& config, const Params& params,
+            std::shared_ptr<const Reference>) {
+           return std::make_unique<HoldController>(params, config.Number("thrust_scale"));
+         },
+         {{"thrust_scale", "-", 1.0, 0.5, 1.5, nullptr, "times the hover thrust"}}});
+  }
+  const std::string dir = TestTempDir();
+  std::ofstream(dir + "scaled.yaml")
+      << "name: scaled\nduration: 1.0\nworld: {profile: ideal}\n"
+         "controller: {type: toy_scaled, thrust_scale: 1.0}\n"
+         "estimation: {ground_truth: true, camera: analytic}\n"
+         "reference: {type: hover, payload_position: [0, 0, 0.7]}\n";
+  const auto deviation_m = [&](const std::string& out, std::vector<std::string> sets) {
+    std::vector<std::string> args{"run", dir + "scaled.yaml", "--out", dir + out, "--quiet"};
+    for (const std::string& s : sets) args.insert(args.end(), {"--set", s});
+    EXPECT_EQ(Hpa(args), 0) << out;
+    std::ifstream in(dir + out + "/metrics.json");
+    return nlohmann::json::parse(in)["quad_position_deviation_max_m"].get<double>();
+  };
+  // as declared, the vehicle holds; at 1.2 times the hover thrust it climbs away
+  EXPECT_LT(deviation_m("held", {}), 0.05);
+  EXPECT_GT(deviation_m("climbs", {"controller.thrust_scale=1.2"}), 0.5);
+  EXPECT_EQ(Hpa({"run", dir + "scaled.yaml", "--set", "controller.thrust_scale=2", "--quiet"}), 2);
+  std::ofstream(dir + "typo.yaml") << "name: typo\nduration: 1.0\n"
+                                      "controller: {type: toy_scaled, thrust_scael: 1.0}\n";
+  testing::internal::CaptureStderr();
+  EXPECT_EQ(Hpa({"run", dir + "typo.yaml", "--quiet"}), 2);
+  const std::string error = testing::internal::GetCapturedStderr();
+  EXPECT_NE(error.find("thrust_scael"), std::string::npos) << error;
+  EXPECT_NE(error.find("thrust_scale,"), std::string::npos) << error;
+  testing::internal::CaptureStdout();
+  Hpa({"schema", "controller"});
+  const std::string schema = testing::internal::GetCapturedStdout();
+  EXPECT_NE(schema.find("`controller.thrust_scale` | - | 0.5 to 1.5 | 1 | times the hover thrust"),
+            std::string::npos)
+      << schema;
 }
 
 }  // namespace

@@ -6,7 +6,6 @@
 #include <sstream>
 
 #include "hpa/controller/controller_registry.h"
-#include "hpa/controller/rti_solver.h"
 #include "hpa/estimator/estimator_registry.h"
 #include "hpa/models/input_error.h"
 #include "hpa/models/param_yaml.h"
@@ -18,6 +17,27 @@
 
 namespace hpa {
 namespace {
+
+// The settings a controller block writes: every key some registered controller declares, read
+// by the declaration of the block's own type where it has one (a key only another controller
+// declares is that one's: `hpa compare` flies one scenario with several controllers).
+ControllerSettings ReadControllerSettings(const YamlMap& block, const std::string& type) {
+  ControllerSettings settings;
+  for (const std::string& key : ControllerSettingKeys()) {
+    if (!block.Has(key)) continue;
+    const SettingDecl& d = *FindControllerSetting(type, key);
+    if (std::holds_alternative<double>(d.default_value)) {
+      settings[key] = block.Number(key, d.min, d.max);
+    } else if (std::holds_alternative<bool>(d.default_value)) {
+      settings[key] = block.Bool(key, std::get<bool>(d.default_value));
+    } else if (d.choices) {
+      settings[key] = block.Choice(key, d.choices(), std::get<std::string>(d.default_value));
+    } else {
+      settings[key] = block.String(key, std::get<std::string>(d.default_value));
+    }
+  }
+  return settings;
+}
 
 // The run keeps its log in memory (one row per control step): an hour of flight, several
 // battery lifetimes, stays in the hundreds of megabytes.
@@ -188,9 +208,7 @@ Scenario ParseScenario(const YamlMap& root, const std::optional<std::string>& re
   if (root.Has("controller")) {
     const YamlMap c = root.Map("controller");
     s.controller.type = c.Choice("type", ControllerNames(), s.controller.type);
-    s.controller.solver = c.Choice("solver", OcpSolverNames(), s.controller.solver);
-    s.controller.qp_method = c.Choice("qp_method", RtiQpMethodNames(), s.controller.qp_method);
-    ReadParamTable(c, ControllerParamTable(), &s.controller);
+    s.controller.settings = ReadControllerSettings(c, s.controller.type);
     c.RejectUnknownKeys();
   }
   if (root.Has("estimation")) {

@@ -180,15 +180,38 @@ std::string ParamsSection() {
   return md;
 }
 
-// The controller's tuning keys from its declared parameter table.
+// Each registered controller's own settings, from its declarations.
 std::string ControllerSection() {
-  return "## Controller keys (`controller.KEY`)\n\n`type` names a registered controller and "
-         "`solver` a registered OCP solver (above); `qp_method` is how the `rti` solver solves its "
-         "QP: `structured` (default: condensing that skips the model's zero blocks, then a dense "
-         "box QP), `dense` (plain condensing, the reference) or `riccati` (no condensing: an "
-         "active-set box QP whose subproblems are Riccati recursions); all three give the same "
-         "step up to rounding. The others:\n\n" +
-         ParamTableMarkdown(ControllerParamTable(), ControllerConfig{}, "controller.", "default");
+  std::string md =
+      "## Controller settings (`controller.KEY`)\n\n`type` names a registered controller "
+      "(above). Each controller declares the settings it reads; a key another controller "
+      "declares is that one's and is left alone (`hpa compare` flies one scenario with several). "
+      "`qp_method` is how the `rti` solver solves its QP: `structured` (condensing that skips the "
+      "model's zero blocks, then a dense box QP), `dense` (plain condensing, the reference) or "
+      "`riccati` (no condensing: an active-set box QP whose subproblems are Riccati recursions); "
+      "all three give the same step up to rounding.\n";
+  for (const ControllerRegistration& c : Controllers()) {
+    md += "\n### `" + c.name + "`\n\n";
+    if (c.settings.empty()) {
+      md += "No settings.\n";
+      continue;
+    }
+    std::vector<std::vector<std::string>> rows;
+    for (const SettingDecl& d : c.settings) {
+      std::string range;
+      if (std::holds_alternative<double>(d.default_value)) {
+        range = SettingText(d.min) + " to " + SettingText(d.max);
+      } else if (std::holds_alternative<bool>(d.default_value)) {
+        range = "true / false";
+      } else if (d.choices) {
+        for (const std::string& name : d.choices()) range += (range.empty() ? "" : " / ") + name;
+      }
+      rows.push_back({"`controller." + d.key + "`", d.unit, range, SettingText(d.default_value),
+                      d.description});
+    }
+    md += Table({"key", "unit", "range", "default", "meaning"}, rows);
+  }
+  return md;
 }
 
 // The world-profile keys with the flight profile's values.

@@ -5,6 +5,7 @@
 #include <memory>
 #include <string>
 
+#include "hpa/controller/controller_settings.h"
 #include "hpa/controller/reference.h"
 #include "hpa/models/param_table.h"
 #include "hpa/models/params.h"
@@ -33,18 +34,20 @@ struct ControlOutput {
   double cost = 0.0;           // optimal-control cost of the plan (0 if not an MPC)
 };
 
-/// Settings of a controller from the scenario's `controller:` block.
+/// A scenario's `controller:` block: which registered controller flies, and the settings the
+/// scenario wrote for it (each controller declares its own: controller_settings.h).
 struct ControllerConfig {
-  std::string type = "hpa_mpc";          // hpa_mpc | nonhybrid_mpc | geometric
-  double perception_weight = 1.0;        // scale on the tuned Q_cam; 0 turns L_cam off
-  std::string solver = "rti";            // rti | nlopt (fully converged NMPC solve)
-  std::string qp_method = "structured";  // rti's QP: structured | dense | riccati (RtiQpMethod)
-  bool predict_retaut = false;           // hpa_mpc: predict the slack-to-taut guard in the horizon
-};
+  std::string type = "hpa_mpc";  // a registered controller (controller_registry.h)
+  ControllerSettings settings;   // by key; the flown controller reads the keys it declares
 
-/// The declared numeric and boolean keys of ControllerConfig (the `controller:` block); `type`
-/// and `solver` are names from their registries.
-const ParamTable<ControllerConfig>& ControllerParamTable();
+  /// The number `key` the flown controller declares (its default when not written); throws
+  /// std::invalid_argument when `type` declares no number `key`.
+  double Number(const std::string& key) const;
+  /// The switch `key`, as Number.
+  bool Switch(const std::string& key) const;
+  /// The name `key`, as Number.
+  std::string Name(const std::string& key) const;
+};
 
 /// A high-level controller running at its own rate (150 Hz for the MPCs).
 class Controller {

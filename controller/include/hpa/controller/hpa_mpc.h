@@ -16,7 +16,7 @@ namespace hpa {
 /// Settings of an MPC controller.
 struct MpcSettings {
   bool hybrid = true;  // false: nonhybrid_mpc (always taut, no perception cost)
-  double perception_weight = ControllerConfig{}.perception_weight;  // scale on q_cam (hybrid)
+  double perception_weight = kDefaultPerceptionWeight;  // scale on q_cam (hybrid)
   std::string solver = "rti";  // a name from OcpSolvers(): rti | nlopt
   OcpWeights weights = OcpWeights::Tuned();
   OcpSolverSettings solvers;    // settings of the solver named by `solver`

@@ -58,6 +58,10 @@ struct OcpWeights {
   static OcpWeights Tuned();
 };
 
+/// The perception weight (scale on the tuned L_cam) an MPC flies unless its scenario says
+/// otherwise: L_cam as tuned.
+constexpr double kDefaultPerceptionWeight = 1.0;
+
 /// One instance of the optimal control problem: dynamics, references, weights, bounds.
 struct Ocp {
   std::shared_ptr<const HybridModel> model;  // dynamics F and its Jacobians (set by BuildOcp)
@@ -68,7 +72,7 @@ struct Ocp {
   // are taut, and the jump map (HybridModel::ProjectToTaut) is applied to the state entering
   // stage retaut_stage. -1: `mode` is held over the whole horizon (the paper's form).
   int retaut_stage = -1;
-  double perception_weight = ControllerConfig{}.perception_weight;  // scale on q_cam (0: off)
+  double perception_weight = kDefaultPerceptionWeight;  // scale on q_cam (0: off)
   // slack and held up (SystemState::payload_supported): L_cam sees the payload without the free
   // fall the model predicts for it (SeenPayloadOffset)
   bool payload_supported = false;
