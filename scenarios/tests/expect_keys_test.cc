@@ -24,6 +24,14 @@ struct Case {
   std::function<void(Metrics*)> pass, fail;
 };
 
+// A run with one fault event whose recovery `set` fills.
+std::function<void(Metrics*)> OneFault(std::function<void(FaultRecovery*)> set) {
+  return [set](Metrics* m) {
+    m->faults = {FaultRecovery{}};
+    set(&m->faults[0]);
+  };
+}
+
 const std::map<std::string, Case>& Cases() {
   static const std::map<std::string, Case> cases = {
       {"crashed",
@@ -81,44 +89,31 @@ const std::map<std::string, Case>& Cases() {
         [](Metrics* m) { m->payload_quad_min_distance_m = 0.01; },
         [](Metrics* m) { m->payload_quad_min_distance_m = -0.01; }}},
       {"fault_health_flag_max",
-       {{0.5},
-        [](Metrics* m) { m->faults = {FaultRecovery{}}, m->faults[0].health_flag_s = 0.4; },
-        [](Metrics* m) { m->faults = {FaultRecovery{}}; }}},
+       {{0.5}, OneFault([](FaultRecovery* r) { r->health_flag_s = 0.4; }),
+        OneFault([](FaultRecovery*) {})}},
       {"fault_payload_back_in_view_max",
-       {{0.5},
-        [](Metrics* m) { m->faults = {FaultRecovery{}}; },
-        [](Metrics* m) {
-          m->faults = {FaultRecovery{}};
-          m->faults[0].payload_lost = true;
-          m->faults[0].payload_back_in_view_s = 0.6;
-        }}},
+       {{0.5}, OneFault([](FaultRecovery*) {}), OneFault([](FaultRecovery* r) {
+          r->payload_lost = true;
+          r->payload_back_in_view_s = 0.6;
+        })}},
       {"fault_tracking_recovered_max",
-       {{1.0},
-        [](Metrics* m) {
-          m->faults = {FaultRecovery{}};
-          m->faults[0].tracking_left_bound = true;
-          m->faults[0].tracking_recovered_s = 0.9;
-        },
-        [](Metrics* m) {
-          m->faults = {FaultRecovery{}};
-          m->faults[0].tracking_left_bound = true;
-        }}},
+       {{1.0}, OneFault([](FaultRecovery* r) {
+          r->tracking_left_bound = true;
+          r->tracking_recovered_s = 0.9;
+        }),
+        OneFault([](FaultRecovery* r) { r->tracking_left_bound = true; })}},
       {"fault_tracking_error_max",
-       {{0.2},
-        [](Metrics* m) { m->faults = {FaultRecovery{}}, m->faults[0].tracking_error_max_m = 0.1; },
-        [](Metrics* m) { m->faults = {FaultRecovery{}}, m->faults[0].tracking_error_max_m = 0.3; }}},
-      {"fault_estimate_error_max",
-       {{0.2},
-        [](Metrics* m) { m->faults = {FaultRecovery{}}, m->faults[0].estimate_error_max_m = 0.1; },
-        [](Metrics* m) { m->faults = {FaultRecovery{}}, m->faults[0].estimate_error_max_m = 0.3; }}},
-      {"fault_estimate_error_min",
-       {{0.2},
-        [](Metrics* m) { m->faults = {FaultRecovery{}}, m->faults[0].estimate_error_max_m = 0.3; },
-        [](Metrics* m) { m->faults = {FaultRecovery{}}, m->faults[0].estimate_error_max_m = 0.1; }}},
+       {{0.2}, OneFault([](FaultRecovery* r) { r->tracking_error_max_m = 0.1; }),
+        OneFault([](FaultRecovery* r) { r->tracking_error_max_m = 0.3; })}},
       {"fault_tracking_error_min",
-       {{0.2},
-        [](Metrics* m) { m->faults = {FaultRecovery{}}, m->faults[0].tracking_error_max_m = 0.3; },
-        [](Metrics* m) { m->faults = {FaultRecovery{}}, m->faults[0].tracking_error_max_m = 0.1; }}},
+       {{0.2}, OneFault([](FaultRecovery* r) { r->tracking_error_max_m = 0.3; }),
+        OneFault([](FaultRecovery* r) { r->tracking_error_max_m = 0.1; })}},
+      {"fault_estimate_error_max",
+       {{0.2}, OneFault([](FaultRecovery* r) { r->estimate_error_max_m = 0.1; }),
+        OneFault([](FaultRecovery* r) { r->estimate_error_max_m = 0.3; })}},
+      {"fault_estimate_error_min",
+       {{0.2}, OneFault([](FaultRecovery* r) { r->estimate_error_max_m = 0.3; }),
+        OneFault([](FaultRecovery* r) { r->estimate_error_max_m = 0.1; })}},
   };
   return cases;
 }

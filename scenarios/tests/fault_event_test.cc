@@ -55,7 +55,8 @@ TEST(FaultEventTest, EveryDeclaredModeParsesWithItsRequiredKeys) {
 }
 
 TEST(FaultEventTest, BadInputNamesTheKeyAndTheValidValues) {
-  const std::string component = ErrorOf("  - {at: 0.1, type: fault, component: lidar, mode: off}\n");
+  const std::string component =
+      ErrorOf("  - {at: 0.1, type: fault, component: lidar, mode: off}\n");
   EXPECT_NE(component.find("events.0.component"), std::string::npos) << component;
   for (const sim::FaultComponentDecl& c : sim::FaultComponents()) {
     EXPECT_NE(component.find(c.name), std::string::npos) << c.name << ": " << component;
@@ -78,10 +79,10 @@ TEST(FaultEventTest, BadInputNamesTheKeyAndTheValidValues) {
 
 TEST(FaultEventTest, ARunWritesEachFaultsRecoveryWithNullWhereItDoesNotApply) {
   const Params params = LoadParams(std::string(HPA_SOURCE_DIR) + "/models/params.yaml");
-  const Scenario scenario =
-      Load("  - {at: 0.2, type: fault, component: vio, mode: off, duration: 0.2}\n"
-           "  - {at: 0.5, type: fault, component: payload_camera, mode: off}\n",
-           1.0);
+  const Scenario scenario = Load(
+      "  - {at: 0.2, type: fault, component: vio, mode: off, duration: 0.2}\n"
+      "  - {at: 0.5, type: fault, component: payload_camera, mode: off}\n",
+      1.0);
   const RunResult run = RunScenario(scenario, params, RunOptions{});
   const nlohmann::json j = nlohmann::json::parse(MetricsToJson(run.metrics));
   ASSERT_EQ(j["faults"].size(), 2u);

@@ -20,13 +20,14 @@ FaultKeyDecl Number(std::string key, std::string unit, std::string description, 
                     double max, std::optional<double> fallback, double Fault::*field,
                     bool integer = false) {
   return {std::move(key), std::move(unit), std::move(description), min, max, fallback, field,
-          nullptr, integer};
+          nullptr,        integer};
 }
 
 FaultKeyDecl Vector(std::string key, std::string unit, std::string description, double min,
                     double max, std::optional<double> fallback, Eigen::Vector3d Fault::*field) {
-  return {std::move(key), std::move(unit), std::move(description), min, max, fallback, nullptr,
-          field, false};
+  return {
+      std::move(key), std::move(unit), std::move(description), min, max, fallback, nullptr, field,
+      false};
 }
 
 // The modes every sensor stream shares.
@@ -34,8 +35,13 @@ FaultModeDecl Off(const std::string& px4) {
   return {FaultMode::kOff, "off", px4, "no samples at all", {}};
 }
 FaultModeDecl Stuck(const std::string& px4, const std::string& what) {
-  return {FaultMode::kStuck, "stuck", px4, "the first " + what + " of the fault, again and again "
-                                           "(each with its own time stamp)", {}};
+  return {FaultMode::kStuck,
+          "stuck",
+          px4,
+          "the first " + what +
+              " of the fault, again and again "
+              "(each with its own time stamp)",
+          {}};
 }
 FaultModeDecl Delayed(const std::string& px4) {
   return {FaultMode::kDelayed,
@@ -75,14 +81,16 @@ std::vector<FaultComponentDecl> BuildComponents() {
       {FaultComponent::kVio,
        "vio",
        "visual-inertial odometry (the VioSample stream)",
-       {Off("failure vio off"), Stuck("failure vio stuck", "pose"),
+       {Off("failure vio off"),
+        Stuck("failure vio stuck", "pose"),
         {FaultMode::kWrong,
          "wrong",
          "failure vio wrong",
          "position jumped by `offset` while the fault lasts",
          {Vector("offset", "m", "added to the position (world frame)", -100.0, 100.0, std::nullopt,
                  &Fault::offset_W_m)}},
-        Delayed("failure vio delayed"), Slow("failure vio slow"),
+        Delayed("failure vio delayed"),
+        Slow("failure vio slow"),
         Intermittent("failure vio intermittent")}},
       {FaultComponent::kImu,
        "imu",
@@ -92,15 +100,17 @@ std::vector<FaultComponentDecl> BuildComponents() {
          "bias",
          "failure gyro wrong; failure accel wrong",
          "a bias step on the gyro and the accelerometer",
-         {GyroBias(), Vector("accel_bias", "m/s^2", "added to every specific force sample (body "
-                                                    "frame)",
+         {GyroBias(), Vector("accel_bias", "m/s^2",
+                             "added to every specific force sample (body "
+                             "frame)",
                              -100.0, 100.0, 0.0, &Fault::accel_bias_B_mps2)}},
         {FaultMode::kNoise,
          "noise",
          "failure gyro garbage; failure accel garbage",
          "a burst of white noise on the gyro and the accelerometer",
-         {GyroNoise(), Number("accel_noise", "m/s^2", "standard deviation added per sample and "
-                                                      "axis",
+         {GyroNoise(), Number("accel_noise", "m/s^2",
+                              "standard deviation added per sample and "
+                              "axis",
                               0.0, 100.0, 0.0, &Fault::accel_noise_mps2)}}}},
       {FaultComponent::kRateGyro,
        "rate_gyro",
@@ -119,8 +129,8 @@ std::vector<FaultComponentDecl> BuildComponents() {
          "loss",
          "",
          "loss of effectiveness: the rotor gives (1 - `loss`) of its thrust",
-         {motor, Number("loss", "1", "share of thrust lost, 0-1", 0.0, 1.0, std::nullopt,
-                        &Fault::loss)}},
+         {motor,
+          Number("loss", "1", "share of thrust lost, 0-1", 0.0, 1.0, std::nullopt, &Fault::loss)}},
         {FaultMode::kOff, "off", "failure motor off -i N", "the rotor gives no thrust", {motor}}}},
       {FaultComponent::kGripper,
        "gripper",
@@ -134,13 +144,16 @@ std::vector<FaultComponentDecl> BuildComponents() {
       {FaultComponent::kCamera,
        "payload_camera",
        "the payload camera (its detections in process, its frames for a separate stack)",
-       {Off(""), Stuck("", "frame"),
+       {Off(""),
+        Stuck("", "frame"),
         {FaultMode::kGarbage,
          "garbage",
          "",
          "a uniform noise image in place of each frame (detected like any frame)",
          {}},
-        Delayed(""), Slow(""), Intermittent(""),
+        Delayed(""),
+        Slow(""),
+        Intermittent(""),
         {FaultMode::kDistractor,
          "distractor",
          "",
@@ -187,7 +200,9 @@ Eigen::Vector3d Gaussian3(std::mt19937_64* rng, double std_dev) {
   return {x, y, z};
 }
 
-bool InWindow(const Fault& f, double t_s) { return t_s >= f.start_s - 1e-9 && t_s < f.end_s - 1e-9; }
+bool InWindow(const Fault& f, double t_s) {
+  return t_s >= f.start_s - 1e-9 && t_s < f.end_s - 1e-9;
+}
 
 }  // namespace
 
@@ -382,7 +397,8 @@ bool Faults::TakeGripperRelease(double now_s) {
     const Fault& f = a.fault;
     if (f.component != FaultComponent::kGripper || a.released) continue;
     const bool early = f.mode == FaultMode::kEarly && now_s >= f.start_s - 1e-9;
-    const bool late_due = f.mode == FaultMode::kLate && a.release_pending && now_s >= f.end_s - 1e-9;
+    const bool late_due =
+        f.mode == FaultMode::kLate && a.release_pending && now_s >= f.end_s - 1e-9;
     if (early || late_due) {
       a.released = true;
       release = true;

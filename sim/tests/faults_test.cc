@@ -109,7 +109,8 @@ TEST(FaultsTest, SlowKeepsSamplesAtItsRate) {
   faults.Inject(f);
   const std::vector<VioSample> out = Stream(&faults, 0.99);
   ASSERT_EQ(out.size(), 20u);  // 100 Hz in, 20 Hz out
-  for (size_t i = 1; i < out.size(); ++i) EXPECT_NEAR(out[i].time_s - out[i - 1].time_s, 0.05, 1e-9);
+  for (size_t i = 1; i < out.size(); ++i)
+    EXPECT_NEAR(out[i].time_s - out[i - 1].time_s, 0.05, 1e-9);
 }
 
 TEST(FaultsTest, IntermittentDropsItsShareAndRepeatsPerSeed) {
@@ -232,8 +233,8 @@ TEST(FaultsTest, ALateGripperReleasesAtItsEndAndAnEarlyOneAtItsStart) {
   EXPECT_FALSE(world.gripper_active());
 
   world.GripperGrab();
-  world.faults().Inject(MakeFault(FaultComponent::kGripper, FaultMode::kEarly, world.time_s(),
-                                  world.time_s()));
+  world.faults().Inject(
+      MakeFault(FaultComponent::kGripper, FaultMode::kEarly, world.time_s(), world.time_s()));
   world.Step();
   EXPECT_FALSE(world.gripper_active());
 }

@@ -1,14 +1,13 @@
 // A fault of a sensor or an actuator for a while (docs/faults.md): `component` and `mode` from
 // the world's fault declaration (sim::FaultComponents), the mode's keys read from the same table.
 
+#include "scenarios/src/runner/events/fault_event.h"
+
+#include <algorithm>
 #include <limits>
 #include <memory>
 #include <string>
 #include <vector>
-
-#include "scenarios/src/runner/events/fault_event.h"
-
-#include <algorithm>
 
 #include "hpa/models/yaml_reader.h"
 #include "hpa/sim/world.h"
@@ -88,8 +87,9 @@ std::vector<FaultWindow> FaultWindows(const std::vector<EventSpec>& events, doub
     w.tracking_bound_m = fault->tracking_bound_m;
     windows.push_back(w);
   }
-  std::stable_sort(windows.begin(), windows.end(),
-                   [](const FaultWindow& a, const FaultWindow& b) { return a.start_s < b.start_s; });
+  std::stable_sort(windows.begin(), windows.end(), [](const FaultWindow& a, const FaultWindow& b) {
+    return a.start_s < b.start_s;
+  });
   return windows;
 }
 

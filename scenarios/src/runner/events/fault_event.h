@@ -5,7 +5,6 @@
 #include <memory>
 #include <optional>
 #include <string>
-
 #include <vector>
 
 #include "hpa/scenarios/events.h"
@@ -16,10 +15,10 @@ namespace hpa {
 
 /// A fault injected into the world at the event's time, for its duration.
 struct FaultEvent final : EventAction {
-  std::string component, mode;         // as written in the event
-  sim::Fault fault;                    // its window is set when it is applied
-  std::optional<double> duration_s;    // s (none: to the end of the run; 0: an instant)
-  double tracking_bound_m = 0.1;       // the payload error counted as tracking again
+  std::string component, mode;       // as written in the event
+  sim::Fault fault;                  // its window is set when it is applied
+  std::optional<double> duration_s;  // s (none: to the end of the run; 0: an instant)
+  double tracking_bound_m = 0.1;     // the payload error counted as tracking again
   /// Injects the fault from the world's time now for its duration.
   void Apply(sim::World* world) const override;
 };

@@ -46,18 +46,18 @@ enum class FaultMode {
 struct Fault {
   FaultComponent component = FaultComponent::kVio;
   FaultMode mode = FaultMode::kOff;
-  double start_s = 0.0;                                     // simulated time it starts
-  double end_s = std::numeric_limits<double>::infinity();   // and ends (inf: never)
-  Eigen::Vector3d offset_W_m = Eigen::Vector3d::Zero();     // VIO wrong: position jump  (3)
-  double delay_s = 0.0;                                     // delayed: extra latency
-  double rate_hz = 0.0;                                     // slow: the lower rate
-  double drop_fraction = 0.0;                               // intermittent: share dropped
-  Eigen::Vector3d gyro_bias_B_radps = Eigen::Vector3d::Zero();   // bias step  (3)
-  Eigen::Vector3d accel_bias_B_mps2 = Eigen::Vector3d::Zero();   // bias step (IMU)  (3)
-  double gyro_noise_radps = 0.0;    // noise burst: standard deviation per sample
-  double accel_noise_mps2 = 0.0;    // noise burst (IMU): standard deviation per sample
-  double motor = 0.0;               // motor: rotor index 0-3 (PX4's -i, from 0)
-  double loss = 1.0;                // motor: share of thrust lost, 0-1 (off: 1)
+  double start_s = 0.0;                                         // simulated time it starts
+  double end_s = std::numeric_limits<double>::infinity();       // and ends (inf: never)
+  Eigen::Vector3d offset_W_m = Eigen::Vector3d::Zero();         // VIO wrong: position jump  (3)
+  double delay_s = 0.0;                                         // delayed: extra latency
+  double rate_hz = 0.0;                                         // slow: the lower rate
+  double drop_fraction = 0.0;                                   // intermittent: share dropped
+  Eigen::Vector3d gyro_bias_B_radps = Eigen::Vector3d::Zero();  // bias step  (3)
+  Eigen::Vector3d accel_bias_B_mps2 = Eigen::Vector3d::Zero();  // bias step (IMU)  (3)
+  double gyro_noise_radps = 0.0;  // noise burst: standard deviation per sample
+  double accel_noise_mps2 = 0.0;  // noise burst (IMU): standard deviation per sample
+  double motor = 0.0;             // motor: rotor index 0-3 (PX4's -i, from 0)
+  double loss = 1.0;              // motor: share of thrust lost, 0-1 (off: 1)
   Eigen::Vector3d distractor_W_m = Eigen::Vector3d::Zero();             // where it starts  (3)
   Eigen::Vector3d distractor_velocity_W_mps = Eigen::Vector3d::Zero();  // how it moves  (3)
 };
@@ -137,13 +137,13 @@ class Faults {
   };
   struct Active {
     Fault fault;
-    std::mt19937_64 rng;                       // its own stream of the run seed
-    std::optional<SensorMessage> frozen;       // stuck: the sample repeated
-    cv::Mat frozen_whole;                      // stuck camera: the frame repeated
-    double last_kept_s = -1e300;               // slow: capture time of the last sample kept
-    std::deque<Held> held;                     // delayed: messages held back
-    bool release_pending = false;              // gripper late: a release waits
-    bool released = false;                     // gripper: its release has happened
+    std::mt19937_64 rng;                  // its own stream of the run seed
+    std::optional<SensorMessage> frozen;  // stuck: the sample repeated
+    cv::Mat frozen_whole;                 // stuck camera: the frame repeated
+    double last_kept_s = -1e300;          // slow: capture time of the last sample kept
+    std::deque<Held> held;                // delayed: messages held back
+    bool release_pending = false;         // gripper late: a release waits
+    bool released = false;                // gripper: its release has happened
   };
   // the fault's effect on one message; false: dropped or held
   bool Apply(Active* a, double now_s, SensorMessage* m);
