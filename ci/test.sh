@@ -6,19 +6,20 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 ./ci/setup.sh
 
-echo "== dependency rule: flight code (models, estimator, controller, flight) never includes MuJoCo or GL"
+echo "== dependency rule: flight code (models, autopilot, estimator, controller, flight) never includes MuJoCo or GL"
 if grep -rIl -e '#include *<mujoco' -e '#include *<GL/' -e 'OSMesa' \
-     models controller estimator flight --include='*.h' --include='*.cc' | grep -v '/tests/'; then
+     models autopilot controller estimator flight --include='*.h' --include='*.cc' | grep -v '/tests/'; then
   echo "dependency rule broken by the files above" >&2
   exit 1
 fi
-if grep -rIl '#include *<opencv' controller --include='*.h' --include='*.cc' | grep -v '/tests/'; then
-  echo "controller/ must not depend on OpenCV" >&2
+if grep -rIl '#include *<opencv' autopilot controller --include='*.h' --include='*.cc' | grep -v '/tests/'; then
+  echo "autopilot/ and controller/ must not depend on OpenCV" >&2
   exit 1
 fi
 
 echo "== sim/ depends on models only (no flight code)"
-if grep -rIl -e '#include "hpa/estimator' -e '#include "hpa/controller' sim/src sim/include sim/tests; then
+if grep -rIl -e '#include "hpa/estimator' -e '#include "hpa/controller' -e '#include "hpa/autopilot' \
+     sim/src sim/include sim/tests; then
   echo "sim/ depends on models only: the files above include flight code" >&2
   exit 1
 fi

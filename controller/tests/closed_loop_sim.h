@@ -7,7 +7,7 @@
 #include <functional>
 #include <vector>
 
-#include "hpa/controller/body_rate_controller.h"
+#include "hpa/autopilot/body_rate_controller.h"
 #include "hpa/controller/controller.h"
 #include "hpa/controller/ocp.h"
 #include "hpa/models/hybrid_model.h"

@@ -1,7 +1,7 @@
 // The PX4-like rate loop: normalisation, signs, saturation and desaturation priority against
 // closed-form values, the integrator's anti-windup and limit, non-finite input, and a roll-rate
 // step on the analytic plant.
-#include "hpa/controller/px4_rate_controller.h"
+#include "hpa/autopilot/px4_rate_controller.h"
 
 #include <gtest/gtest.h>
 

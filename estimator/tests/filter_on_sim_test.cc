@@ -14,7 +14,7 @@
 #include <memory>
 #include <utility>
 
-#include "hpa/controller/body_rate_controller.h"
+#include "hpa/autopilot/body_rate_controller.h"
 #include "hpa/controller/geometric_controller.h"
 #include "hpa/controller/reference.h"
 #include "hpa/estimator/quad_filter.h"

@@ -228,11 +228,8 @@ RunLoop::RunLoop(const Scenario& scenario, const Params& params, const RunOption
     inputs_.image_model_ms.reserve(frames);
     inputs_.detector_ms.reserve(frames);
   }
-  rate_controller_ = std::make_unique<BodyRateController>(params);
-  // the profile may fly PX4's rate loop instead, on the world's rate gyro
-  if (scenario.rate_loop.px4) {
-    px4_rate_ = std::make_unique<Px4RateController>(params, scenario.rate_loop.params);
-  }
+  // the scenario's autopilot (the profile's rate loop): PX4's runs on the world's rate gyro
+  autopilot_ = MakeAutopilot(params, scenario.rate_loop, rates.imu.rate_hz);
   detector_ = std::make_unique<PayloadDetector>(params);
   camera_readout_ = std::make_unique<FlightCameraReadout>(flight_.get(), detector_.get());
 
@@ -247,9 +244,8 @@ RunLoop::RunLoop(const Scenario& scenario, const Params& params, const RunOption
   end_s_ = std::min(scenario.duration_s, options.stop_at_s.value_or(1e300));
   end_tick_ = static_cast<long>(std::llround(end_s_ / sim::World::kPhysicsDt_s));
   clock_ = std::make_unique<LockstepClock>(rates.physics_hz);
-  rate_loop_ = px4_rate_ ? -1 : clock_->AddLoop("rate", rates.imu.rate_hz);
+  rate_loop_ = autopilot_->RunsOnGyro() ? -1 : clock_->AddLoop("rate", rates.imu.rate_hz);
   video_loop_ = video_rate_hz > 0.0 ? clock_->AddLoop("video", video_rate_hz) : -1;
-  rate_loop_dt_s_ = 1.0 / rates.imu.rate_hz;
   // an implausible event is flown as written, but said once at run start (the world's params,
   // which the event's plausibility depends on, are known only now)
   for (size_t i = 0; i < scenario.events.size(); ++i) {
@@ -428,25 +424,21 @@ ControlOutput RunLoop::AwaitPendingCommand(LogRow* row) {
 // motors keep the world's initial hover command). The estimator is told the thrust the
 // allocation made (a saturated mixer lowers it).
 void RunLoop::RateLoopStep(const SystemState& state, bool rate_due) {
-  if (px4_rate_) {
+  std::optional<Eigen::Vector3d> w_B_radps;
+  if (autopilot_->RunsOnGyro()) {
     if (const std::optional<GyroSample> gyro = std::exchange(rate_gyro_, std::nullopt)) {
-      world_->SetMotorSpeedCommand(px4_rate_->Update(control_.command, gyro->gyro_B_radps));
-      const Px4RateStatus& mixer = px4_rate_->status();
-      pending_.allocation = flight::AllocationReport{mixer.thrust_allocated_N, mixer.saturated};
-      ++inputs_.rate_loop_steps;
-      inputs_.mixer_saturated_steps += mixer.saturated ? 1 : 0;
-      mixer_saturated_ = mixer.saturated;
+      w_B_radps = gyro->gyro_B_radps;
     }
   } else if (rate_due) {
-    const InputVector w_cmd =
-        rate_controller_->Update(control_.command, state.w_B, rate_loop_dt_s_);
-    world_->SetMotorSpeedCommand(w_cmd);
-    const double allocated_N = params_.k_f_N_per_radps2 * w_cmd.squaredNorm();
-    ++inputs_.rate_loop_steps;
-    mixer_saturated_ = allocated_N < control_.command.thrust_N - 1e-6;
-    pending_.allocation = flight::AllocationReport{allocated_N, mixer_saturated_};
-    inputs_.mixer_saturated_steps += mixer_saturated_ ? 1 : 0;
+    w_B_radps = state.w_B;
   }
+  if (!w_B_radps) return;
+  const AutopilotOutput out = autopilot_->Update(control_.command, *w_B_radps);
+  world_->SetMotorSpeedCommand(out.w_cmd_radps);
+  pending_.allocation = flight::AllocationReport{out.thrust_allocated_N, out.saturated};
+  ++inputs_.rate_loop_steps;
+  inputs_.mixer_saturated_steps += out.saturated ? 1 : 0;
+  mixer_saturated_ = out.saturated;
 }
 
 void RunLoop::VideoStep(double t, const sim::Truth& truth, const SystemState& state) {

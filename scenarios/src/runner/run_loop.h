@@ -7,8 +7,7 @@
 #include <opencv2/core.hpp>
 #include <vector>
 
-#include "hpa/controller/body_rate_controller.h"
-#include "hpa/controller/px4_rate_controller.h"
+#include "hpa/autopilot/autopilot.h"
 #include "hpa/estimator/payload_detector.h"
 #include "hpa/models/lockstep.h"
 #include "hpa/models/ring_queue.h"
@@ -124,8 +123,7 @@ class RunLoop {
   std::unique_ptr<sim::World> world_;
   std::shared_ptr<const Reference> reference_;  // for the log and the metrics
   std::unique_ptr<FlightLink> flight_;          // detector, estimator, controller
-  std::unique_ptr<BodyRateController> rate_controller_;
-  std::unique_ptr<Px4RateController> px4_rate_;  // the profile's PX4 loop, if it flies one
+  std::unique_ptr<Autopilot> autopilot_;  // the rate loop between the command and the rotors
   std::unique_ptr<PayloadDetector> detector_;    // in process: detects in the rendered region
   std::unique_ptr<FlightCameraReadout> camera_readout_;
 
@@ -138,7 +136,6 @@ class RunLoop {
   double end_s_ = 0.0;
   std::unique_ptr<LockstepClock> clock_;
   int rate_loop_ = -1, video_loop_ = -1;
-  double rate_loop_dt_s_ = 0.0;
   std::vector<EventSpec> events_;  // by start time
   size_t next_event_ = 0;
 

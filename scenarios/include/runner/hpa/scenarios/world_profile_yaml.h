@@ -1,25 +1,17 @@
 #pragma once
 // The realism profiles of the simulated world (models/profiles/<name>.yaml) and a scenario's
 // `world:` overrides of single numbers in them. Each section is read through its declared
-// ParamTable (sim/world_profile.h; the rate loop's, flight code's, px4_rate_controller.h).
+// ParamTable (sim/world_profile.h; the rate loop's, flight code's, autopilot/px4_rate_controller.h).
 
 #include <string>
 #include <vector>
 
-#include "hpa/controller/px4_rate_controller.h"
+#include "hpa/autopilot/autopilot.h"
 #include "hpa/sim/world_profile.h"
 
 namespace hpa {
 
 class YamlMap;
-
-/// The body-rate loop the flight code flies, from the profile's `rate_loop` section: the
-/// project's own loop on the estimated body rate (px4 false), or PX4's rate controller with
-/// these parameters on the vehicle's rate gyro (px4 true).
-struct RateLoopSpec {
-  bool px4 = false;
-  Px4RateParams params;
-};
 
 /// A profile as a file gives it: the world's parts, and the flight code's rate loop.
 struct WorldProfileSpec {

@@ -1,4 +1,4 @@
-#include "hpa/controller/butterworth_low_pass.h"
+#include "hpa/autopilot/butterworth_low_pass.h"
 
 #include <gtest/gtest.h>
 

@@ -1,4 +1,4 @@
-#include "hpa/controller/px4_rate_controller.h"
+#include "hpa/autopilot/px4_rate_controller.h"
 
 #include <algorithm>
 #include <cmath>

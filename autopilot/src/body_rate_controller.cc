@@ -1,4 +1,4 @@
-#include "hpa/controller/body_rate_controller.h"
+#include "hpa/autopilot/body_rate_controller.h"
 
 #include <algorithm>
 #include <cmath>

@@ -20,7 +20,7 @@
 
 #include <Eigen/Core>
 
-#include "hpa/controller/butterworth_low_pass.h"
+#include "hpa/autopilot/butterworth_low_pass.h"
 #include "hpa/models/param_table.h"
 #include "hpa/models/params.h"
 #include "hpa/models/state.h"
