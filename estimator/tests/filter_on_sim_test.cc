@@ -147,8 +147,8 @@ SimRunResult FlyAndFilter(uint64_t seed) {
     if (recent_truth.size() > 50) recent_truth.pop_front();
 
     // two wind gusts on the quadrotor
-    if (tick == gust_1_tick) world.SetWind(Eigen::Vector3d(1.0, 0.0, 0.0), 1.5);
-    if (tick == gust_2_tick) world.SetWind(Eigen::Vector3d(0.0, -0.8, 0.0), 1.0);
+    if (tick == gust_1_tick) world.disturbances().SetWind(Eigen::Vector3d(1.0, 0.0, 0.0), 1.5);
+    if (tick == gust_2_tick) world.disturbances().SetWind(Eigen::Vector3d(0.0, -0.8, 0.0), 1.0);
 
     // geometric controller at 150 Hz and rate loop at 500 Hz, both on ground truth (runner.cc)
     if (clock.Fires(control_loop)) {

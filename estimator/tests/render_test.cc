@@ -146,7 +146,7 @@ class RenderedDetectorTest : public ::testing::Test {
     s.v_WL_W = Eigen::Vector3d(0.3, 0.4, 0.0);
     world_->SetState(s.ToVector(), InputVector::Constant(params_.HoverMotorSpeedRadps()));
     *truth = world_->GetTruth().state;
-    return world_->RenderPayloadCamera();
+    return world_->renderer().RenderPayloadCamera();
   }
 
   // Renders the payload at p_CL_C (attitude q_WB), detects it, checks a region around the

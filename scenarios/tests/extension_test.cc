@@ -25,7 +25,7 @@ namespace {
 struct SidewaysPush final : EventAction {
   double impulse_Ns = 0.0;
   void Apply(sim::World* world) const override {
-    world->ApplyImpulse(sim::Body::kQuadrotor, Eigen::Vector3d(impulse_Ns, 0, 0));
+    world->disturbances().ApplyImpulse(sim::Body::kQuadrotor, Eigen::Vector3d(impulse_Ns, 0, 0));
   }
 };
 

@@ -26,9 +26,9 @@ double MsSince(std::chrono::steady_clock::time_point start) {
 }
 
 // Adds the world's timing of the frame it rendered last to the capture's.
-void AddRenderTiming(const World& world, CameraCapture* capture) {
-  capture->render_ms += world.last_camera_timing().render_ms;
-  capture->image_model_ms += world.last_camera_timing().image_model_ms;
+void AddRenderTiming(World& world, CameraCapture* capture) {
+  capture->render_ms += world.renderer().last_camera_timing().render_ms;
+  capture->image_model_ms += world.renderer().last_camera_timing().image_model_ms;
 }
 
 }  // namespace
@@ -94,7 +94,7 @@ PayloadDetection PayloadCameraSensor::RenderAndDetect(World& world, double time_
   frame.capture_time_s = time_s;
   frame.region = readout->Region();
   if (frame.region.area() > 0) {
-    world.RenderPayloadCamera(&rendered_, frame.region);
+    world.renderer().RenderPayloadCamera(&rendered_, frame.region);
     AddRenderTiming(world, capture);
     frame.region_bgr = rendered_;
   }
@@ -104,7 +104,7 @@ PayloadDetection PayloadCameraSensor::RenderAndDetect(World& world, double time_
   bool whole_read = false;
   const WholeFrameReader read_whole = [&]() -> const cv::Mat& {
     const auto render_start = std::chrono::steady_clock::now();
-    world.RenderPayloadCamera(&rendered_, cv::Rect());
+    world.renderer().RenderPayloadCamera(&rendered_, cv::Rect());
     AddRenderTiming(world, capture);
     whole_read = true;
     whole_read_ms = MsSince(render_start);
@@ -127,13 +127,13 @@ CameraFrame PayloadCameraSensor::RenderFrames(World& world, double time_s, Camer
   const cv::Rect region = readout->Region();
   if (region.area() > 0) {
     cv::Mat* bgr = readout->NextFrameSlot(&out.region_slot);
-    world.RenderPayloadCamera(bgr, region);
+    world.renderer().RenderPayloadCamera(bgr, region);
     AddRenderTiming(world, capture);
     out.region = region;
     out.region_bgr = *bgr;
   }
   cv::Mat* whole = readout->NextFrameSlot(&out.whole_slot);
-  world.RenderPayloadCamera(whole, cv::Rect());
+  world.renderer().RenderPayloadCamera(whole, cv::Rect());
   AddRenderTiming(world, capture);
   out.whole_bgr = *whole;
   capture->frame = whole;

@@ -1,5 +1,5 @@
-// World: the MuJoCo model and data, the lockstep physics step, motors, state and the IMU,
-// rate-gyro and VIO sample streams.
+// World: the MuJoCo model and data, the lockstep physics step and its order over the components,
+// state and the sensors' delivery.
 
 #include "hpa/sim/world.h"
 
@@ -16,8 +16,6 @@
 #include "hpa/models/params.h"
 #include "hpa/models/rotor_model.h"
 #include "hpa/models/seed_streams.h"
-#include "hpa/sim/camera_image_model.h"
-#include "offscreen_renderer.h"
 #include "world_detail.h"
 
 namespace hpa::sim {
@@ -62,7 +60,8 @@ World::World(const WorldConfig& config)
       world_params_(config.params),
       rng_(config.seed),
       sensors_(MakeSensors(config, &rng_)),
-      faults_(config.seed) {
+      faults_(config.seed),
+      disturbances_(*this, config) {
   // each sensor's output reaches its reader after the latency it declares
   for (size_t i = 0; i < sensors_.size(); ++i) {
     const SensorDeclaration& d = sensors_[i]->declaration();
@@ -78,8 +77,6 @@ World::World(const WorldConfig& config)
   gripper_line_ = static_cast<int>(deliveries_.size());
   deliveries_.emplace_back(gripper_sensor_->declaration().latency_s);
   camera_ = std::make_unique<PayloadCameraSensor>(config);
-  wind_ = std::make_unique<WindModel>(config.profile.wind, config.rates.physics_hz,
-                                      DeriveSeed(config.seed, SeedStream::kWind));
   camera_line_ = static_cast<int>(deliveries_.size());
   deliveries_.emplace_back(camera_->declaration().latency_s);
   InstallWarningHandler();
@@ -91,16 +88,7 @@ World::World(const WorldConfig& config)
   ApplyOverrides();
   data_ = mj_makeData(model_);
   ApplyWorldParams();
-  if (config_.randomize_appearance) RandomizeAppearance();
-  renderer_ = std::make_unique<OffscreenRenderer>(model_, config_.gl_backend);
-  // the rendered camera's shared tables (noise samples, distortion maps) are computed beside the
-  // rest of the start (this world, the flight stack, the GL context); its first frame waits
-  if (config_.camera.kind == CameraKind::kRendered) {
-    camera_tables_ =
-        std::async(std::launch::async, [params = world_params_, profile = config_.profile.camera] {
-          CameraImageModel::PrepareTablesFor(params, profile);
-        });
-  }
+  renderer_ = std::unique_ptr<Renderer>(new Renderer(*this));
 
   // start hovering 1 m up, payload hanging
   SystemState initial;
@@ -191,7 +179,6 @@ void World::ApplyOverrides() {
 
 World::~World() {
   renderer_.reset();
-  if (subframe_data_ != nullptr) mj_deleteData(subframe_data_);
   if (data_ != nullptr) mj_deleteData(data_);
   if (model_ != nullptr) mj_deleteModel(model_);
 }
@@ -204,26 +191,21 @@ void World::Reset(const SystemState& initial) {
   warning_count_.assign(mjNWARNING, 0);
 
   // disturbances, gripper, sensors, crash flag
-  forces_.clear();
-  gripper_moving_ = false;
-  model_->eq_active[ids_.gripper_weld] = 0;
+  disturbances_.ClearForces();
+  gripper_.Reset();
   rng_.seed(config_.seed);
   for (const std::unique_ptr<Sensor>& sensor : sensors_) sensor->Reset();
   camera_->Reset();
   for (DelayLine<SensorMessage>& line : deliveries_) line.Clear();
-  wind_->Reset();
+  disturbances_.ResetWind();
   crash_ = CrashStatus{};
   faults_.Clear();
-  contact_counts_ = ContactCounts{};
-  for (bool& t : touching_) t = false;
 
   // motors at hover speed of the simulated system
   const double w_hover = world_params_.HoverMotorSpeedRadps();
   SetState(initial.ToVector(), InputVector::Constant(w_hover));
-  payload_quad_min_distance_m_ = PayloadQuadDistance();
-  gripper_solid_ = false;
-  gripper_used_ = false;
-  UpdateGripperContact();
+  contacts_.Reset();
+  gripper_.UpdateContact();
 }
 
 void World::SetState(const StateVector& x, const InputVector& motor_speed_radps) {
@@ -246,61 +228,33 @@ void World::SetState(const StateVector& x, const InputVector& motor_speed_radps)
     qpos[ids_.quad_jnt_qpos + 3 + i] = q(i);
     qpos[ids_.payload_jnt_qpos + 3 + i] = (i == 0) ? 1.0 : 0.0;
   }
-  motor_speed_radps_ = motor_speed_radps.cwiseMax(world_params_.motor_speed_min_radps)
-                           .cwiseMin(world_params_.motor_speed_max_radps);
-  motor_command_radps_ = motor_speed_radps_;
-  WriteMotorControls();
-  UpdateGripper();
+  vehicle_.SetSpeed(motor_speed_radps);
+  vehicle_.WriteMotorControls();
+  gripper_.Update();
   mj_forward(model_, data_);
   CheckWarnings();
 }
 
 void World::SetMotorSpeedCommand(const InputVector& w_cmd_radps) {
-  if (!w_cmd_radps.allFinite()) {
-    throw std::invalid_argument("World::SetMotorSpeedCommand: non-finite motor speed command");
-  }
-  motor_command_radps_ = w_cmd_radps.cwiseMax(world_params_.motor_speed_min_radps)
-                             .cwiseMin(world_params_.motor_speed_max_radps);
-}
-
-void World::WriteMotorControls() {
-  // a motor fault scales its rotor's thrust, down to zero (the actuator's lower bound with it)
-  Eigen::Vector4d fault_factor;
-  const bool motor_fault = !faults_.empty() && faults_.MotorThrustFactors(time_s(), &fault_factor);
-  for (int i = 0; i < 4; ++i) {
-    const double w = motor_speed_radps_(i);
-    const int a = ids_.rotor_actuator[i];
-    data_->ctrl[a] = world_params_.k_f_N_per_radps2 * rotor_kf_factor_(i) * w * w;
-    if (!motor_fault) continue;
-    data_->ctrl[a] *= fault_factor(i);
-    const double w_min = world_params_.motor_speed_min_radps;
-    model_->actuator_ctrlrange[2 * a] =
-        world_params_.k_f_N_per_radps2 * rotor_kf_factor_(i) * w_min * w_min * fault_factor(i);
-  }
+  vehicle_.SetCommand(w_cmd_radps);
 }
 
 void World::Step() {
   // state at t_k is current (mj_forward / mj_step1 ran): sample what the sensors need from it
   const SystemState before = GetTruth().state;
 
-  // first-order motor lag, exact for the 1 ms step; thrust to the actuators
-  const double alpha = 1.0 - std::exp(-kPhysicsDt_s / world_params_.motor_time_constant_s);
-  // (with battery sag the speed a command reaches falls with the pack voltage)
-  const InputVector target_radps = config_.profile.actuation.enabled
-                                       ? InputVector(motor_command_radps_ * BatterySpeedFactor())
-                                       : motor_command_radps_;
-  motor_speed_radps_ += alpha * (target_radps - motor_speed_radps_);
+  // first-order motor lag; thrust to the actuators
+  vehicle_.StepMotors();
   if (!faults_.empty() && faults_.TakeGripperRelease(time_s())) {
-    model_->eq_active[ids_.gripper_weld] = 0;  // a gripper fault lets go
-    gripper_moving_ = false;
+    gripper_.Open();  // a gripper fault lets go
   }
-  WriteMotorControls();
-  ApplyDisturbances();
+  vehicle_.WriteMotorControls();
+  disturbances_.Apply();
 
   // dynamics at t_k and integration to t_{k+1}, then kinematics at t_{k+1}
   mj_step2(model_, data_);
   ++step_;
-  UpdateGripper();
+  gripper_.Update();
   mj_step1(model_, data_);
   CheckWarnings();
 
@@ -318,8 +272,8 @@ void World::Step() {
       if (line.size() > kMaxQueued) line.DropOldest();
     }
   }
-  UpdateContacts();
-  UpdateGripperContact();
+  contacts_.Update();
+  gripper_.UpdateContact();
   CheckCrash();
 }
 
@@ -351,8 +305,8 @@ Truth World::GetTruth() const {
                ? CableMode::kTaut
                : CableMode::kSlack;
   s.payload_visible = true;
-  s.payload_supported = gripper_active();
-  t.motor_speed_radps = motor_speed_radps_;
+  s.payload_supported = gripper_.active();
+  t.motor_speed_radps = vehicle_.motor_speed_radps();
   return t;
 }
 
@@ -391,7 +345,7 @@ std::vector<SensorMessage> World::TakeInFlight() {
 
 std::optional<CameraCapture> World::CaptureTickStart(CameraReadout* readout) {
   deliveries_[static_cast<size_t>(gripper_line_)].Push(
-      time_s(), gripper_sensor_->Sample(time_s(), gripper_active()));
+      time_s(), gripper_sensor_->Sample(time_s(), gripper_.active()));
   std::optional<PayloadDetection> detection;
   std::optional<CameraFrame> frames;
   std::optional<CameraCapture> capture =

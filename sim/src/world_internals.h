@@ -16,7 +16,7 @@ struct WorldInternals {
   /// The simulation data (stepping it directly bypasses motors, sensors and events).
   static mjData* Data(World& world) { return world.data_; }
   /// The renderer of the World's cameras.
-  static OffscreenRenderer& Renderer(World& world) { return *world.renderer_; }
+  static OffscreenRenderer& Renderer(World& world) { return *world.renderer_->offscreen_; }
 };
 
 }  // namespace hpa::sim

@@ -48,8 +48,8 @@ TEST(ContactTest, PayloadDroppedOnTheBodyRestsOnItsTop) {
   for (int k = 0; k < 1500; ++k) {
     world.Step();
     const double z = world.GetTruth().state.p_WL_W.z();
-    min_distance_m = std::min(min_distance_m, world.PayloadQuadDistance());
-    if (world.contact_counts().payload_body > 0) touched = true;
+    min_distance_m = std::min(min_distance_m, world.contacts().PayloadQuadDistance());
+    if (world.contacts().counts().payload_body > 0) touched = true;
     if (touched) rebound_max_z_m = std::max(rebound_max_z_m, z);
   }
   const Truth t = world.GetTruth();
@@ -64,8 +64,8 @@ TEST(ContactTest, PayloadDroppedOnTheBodyRestsOnItsTop) {
   // a hard contact: no bounce back up by more than 1 cm
   EXPECT_LT(rebound_max_z_m, rest_z_m + 0.01);
   // the impact and at most one re-contact after a sub-centimetre hop (measured: 2)
-  EXPECT_GE(world.contact_counts().payload_body, 1);
-  EXPECT_LE(world.contact_counts().payload_body, 2);
+  EXPECT_GE(world.contacts().counts().payload_body, 1);
+  EXPECT_LE(world.contacts().counts().payload_body, 2);
   EXPECT_NE(world.Crash().reason, "rotor_strike");
 }
 
@@ -85,8 +85,8 @@ TEST(ContactTest, PayloadDroppedOnTheGroundRestsOnIt) {
   EXPECT_NEAR(t.state.p_WL_W.z(), r, 0.001);
   EXPECT_LT(t.state.v_WL_W.norm(), 0.01);
   // the impact and at most one re-contact after a sub-centimetre hop (measured: 2)
-  EXPECT_GE(world.contact_counts().payload_ground, 1);
-  EXPECT_LE(world.contact_counts().payload_ground, 2);
+  EXPECT_GE(world.contacts().counts().payload_ground, 1);
+  EXPECT_LE(world.contacts().counts().payload_ground, 2);
 }
 
 // The payload shot up at 5 m/s under rotor 0 (beside the body box, under the rotor disk).
@@ -102,7 +102,7 @@ std::unique_ptr<World> ShootIntoRotor(bool contact, double* min_distance_m) {
   *min_distance_m = 1.0;
   for (int k = 0; k < 150 && !world.Crash().crashed; ++k) {
     world.Step();
-    *min_distance_m = std::min(*min_distance_m, world.PayloadQuadDistance());
+    *min_distance_m = std::min(*min_distance_m, world.contacts().PayloadQuadDistance());
   }
   return owned;
 }
@@ -113,9 +113,9 @@ TEST(ContactTest, PayloadReachingARotorDiskIsARotorStrike) {
   const World& world = *owned;
   EXPECT_TRUE(world.Crash().crashed);
   EXPECT_EQ(world.Crash().reason, "rotor_strike");
-  EXPECT_EQ(world.contact_counts().payload_rotor, 1);
+  EXPECT_EQ(world.contacts().counts().payload_rotor, 1);
   // struck within the margin before it overlaps: 5 mm per step against the margin
-  EXPECT_GE(world.payload_quad_min_distance_m(), 0.0);
+  EXPECT_GE(world.contacts().payload_quad_min_distance_m(), 0.0);
 }
 
 TEST(ContactTest, IdealWorldLetsThePayloadPassThroughTheVehicle) {
@@ -123,8 +123,8 @@ TEST(ContactTest, IdealWorldLetsThePayloadPassThroughTheVehicle) {
   const std::unique_ptr<World> owned = ShootIntoRotor(false, &min_distance_m);
   const World& world = *owned;
   EXPECT_FALSE(world.Crash().crashed);
-  EXPECT_EQ(world.contact_counts().payload_rotor, 0);
-  EXPECT_LT(world.payload_quad_min_distance_m(), -0.01);
+  EXPECT_EQ(world.contacts().counts().payload_rotor, 0);
+  EXPECT_LT(world.contacts().payload_quad_min_distance_m(), -0.01);
 }
 
 // The gripper's rod (capsule from 0.045 m to 0.3 m below the gripper's origin, radius 0.02 m):
@@ -137,7 +137,7 @@ std::unique_ptr<World> DropOnGripperRod(bool contact, double* min_z_m) {
   World& world = *owned;
   const double r = world.world_params().payload_radius_m;
   PlaceOnGround(&world, Eigen::Vector3d(0.2, 0, kRodTopSurfaceZ_m + r + 0.1));
-  world.GripperMove(Eigen::Vector3d(0.2, 0, 0.3), 0.001);
+  world.gripper().Move(Eigen::Vector3d(0.2, 0, 0.3), 0.001);
   *min_z_m = 1.0;
   for (int k = 0; k < 300; ++k) {
     world.Step();
@@ -154,7 +154,7 @@ TEST(ContactTest, PayloadFallingOnAFreeGripperStrikesItsRod) {
   // (MuJoCo's soft contact with the payload's 2 ms solref; measured 1.0 mm, two contact
   // episodes: the impact and one re-contact after a hop)
   EXPECT_GT(min_z_m, kRodTopSurfaceZ_m + r - 0.003);
-  EXPECT_GE(world->contact_counts().payload_gripper, 1);
+  EXPECT_GE(world->contacts().counts().payload_gripper, 1);
   // the quadrotor standing on the ground latches its ground crash; the payload's strike is none
   EXPECT_EQ(world->Crash().reason.find("gripper"), std::string::npos) << world->Crash().reason;
 }
@@ -173,7 +173,7 @@ TEST(ContactTest, UnusedGripperIsNotThere) {
   // fell through the rod's place (top surface 0.475 m) until the cable to the grounded
   // quadrotor held it
   EXPECT_LT(min_z_m, 0.3);
-  EXPECT_EQ(world.contact_counts().payload_gripper, 0);
+  EXPECT_EQ(world.contacts().counts().payload_gripper, 0);
 }
 
 TEST(ContactTest, IdealWorldLetsThePayloadPassThroughTheGripper) {
@@ -181,7 +181,7 @@ TEST(ContactTest, IdealWorldLetsThePayloadPassThroughTheGripper) {
   const std::unique_ptr<World> world = DropOnGripperRod(false, &min_z_m);
   // free fall for 0.3 s from 0.415 m: down to the ground, past the rod
   EXPECT_LT(min_z_m, 0.1);
-  EXPECT_EQ(world->contact_counts().payload_gripper, 0);
+  EXPECT_EQ(world->contacts().counts().payload_gripper, 0);
 }
 
 // Grab, lift, hold and release: the payload's path with flight contact equals the ideal world's
@@ -192,14 +192,14 @@ TEST(ContactTest, HeldPayloadAndItsReleaseMeetNoGripperContact) {
   for (int contact = 0; contact < 2; ++contact) {
     World world(ContactConfig(contact == 1));
     PlaceOnGround(&world, Eigen::Vector3d(0.2, 0, 0.3));
-    world.GripperGrab();  // the rod now overlaps the payload's lower half
-    world.GripperMove(Eigen::Vector3d(0.2, 0, 0.35), 0.1);
+    world.gripper().Grab();  // the rod now overlaps the payload's lower half
+    world.gripper().Move(Eigen::Vector3d(0.2, 0, 0.35), 0.1);
     for (int k = 0; k < 400; ++k) {
-      if (k == 200) world.GripperRelease();
+      if (k == 200) world.gripper().Release();
       world.Step();
       path[contact].push_back(world.GetTruth().state.p_WL_W);
     }
-    gripper_contacts[contact] = world.contact_counts().payload_gripper;
+    gripper_contacts[contact] = world.contacts().counts().payload_gripper;
   }
   // 200 ms held, then 200 ms of fall (0.2 m: past the rod's lower end, 0.3 m below the centre,
   // the ground at 0.04 m not yet reached); identical to rounding (1e-12 m)
@@ -240,20 +240,20 @@ TEST(ProfileTest, MismatchIsADrawPerSeedWithinItsTolerance) {
   EXPECT_NEAR(pa.payload_mass_kg, flight.payload_mass_kg, 5 * 0.002);
   EXPECT_NEAR(pa.cable_length_m, flight.cable_length_m, 5 * 0.005);
   // the per-rotor spread is drawn too, and the ideal world has none
-  EXPECT_FALSE(a.rotor_thrust_factor().isApproxToConstant(1.0));
+  EXPECT_FALSE(a.vehicle().rotor_thrust_factor().isApproxToConstant(1.0));
   WorldConfig ideal;
   ideal.params = flight;
   World w(ideal);
-  EXPECT_TRUE(w.rotor_thrust_factor().isApproxToConstant(1.0));
+  EXPECT_TRUE(w.vehicle().rotor_thrust_factor().isApproxToConstant(1.0));
   EXPECT_EQ(w.world_params().payload_mass_kg, flight.payload_mass_kg);
 }
 
 TEST(ProfileTest, BatterySagLowersTheSpeedACommandReaches) {
   World world(MismatchConfig(1));
-  EXPECT_DOUBLE_EQ(world.BatterySpeedFactor(), 1.0);
+  EXPECT_DOUBLE_EQ(world.vehicle().BatterySpeedFactor(), 1.0);
   for (int k = 0; k < 1000; ++k) world.Step();
   // linear voltage drop: 1 - 2.8e-4 / s * 1 s
-  EXPECT_NEAR(world.BatterySpeedFactor(), 1.0 - 2.8e-4, 1e-12);
+  EXPECT_NEAR(world.vehicle().BatterySpeedFactor(), 1.0 - 2.8e-4, 1e-12);
 }
 
 }  // namespace
@@ -288,11 +288,11 @@ TEST(AeroTest, DragOpposesTheAirspeedWithTheClosedFormMagnitude) {
   // rotor drag d_x v plus the body's 0.5 rho Cd A v^2 over its 0.2 x 0.06 m face
   (void)p;
   const double expected_N = 0.39168 * 3.0 + 0.5 * 1.225 * 1.05 * (0.2 * 0.06) * 9.0;
-  EXPECT_NEAR(world.aero_quad_W_N().x(), -expected_N, 1e-9);
-  EXPECT_NEAR(world.aero_quad_W_N().y(), 0.0, 1e-9);
+  EXPECT_NEAR(world.disturbances().aero_quad_W_N().x(), -expected_N, 1e-9);
+  EXPECT_NEAR(world.disturbances().aero_quad_W_N().y(), 0.0, 1e-9);
   // the payload sphere: 0.5 rho Cd pi r^2 v^2
   const double payload_N = 0.5 * 1.225 * 0.47 * M_PI * 0.04 * 0.04 * 9.0;
-  EXPECT_NEAR(world.aero_payload_W_N().x(), -payload_N, 1e-9);
+  EXPECT_NEAR(world.disturbances().aero_payload_W_N().x(), -payload_N, 1e-9);
 }
 
 TEST(AeroTest, NoDragWhenMovingWithTheWindOrWhenOff) {
@@ -301,13 +301,13 @@ TEST(AeroTest, NoDragWhenMovingWithTheWindOrWhenOff) {
   World with_wind(c);
   Moving(&with_wind, Eigen::Vector3d(3.0, 0, 0));
   with_wind.Step();
-  EXPECT_LT(with_wind.aero_quad_W_N().norm(), 1e-9);
-  EXPECT_LT(with_wind.aero_payload_W_N().norm(), 1e-9);
+  EXPECT_LT(with_wind.disturbances().aero_quad_W_N().norm(), 1e-9);
+  EXPECT_LT(with_wind.disturbances().aero_payload_W_N().norm(), 1e-9);
   c.profile.aero.enabled = false;
   World off(c);
   Moving(&off, Eigen::Vector3d(3.0, 0, 0));
   off.Step();
-  EXPECT_EQ(off.aero_quad_W_N().norm(), 0.0);
+  EXPECT_EQ(off.disturbances().aero_quad_W_N().norm(), 0.0);
 }
 
 TEST(WindTest, GustHasItsStationaryStdAndCorrelationTime) {
@@ -319,7 +319,7 @@ TEST(WindTest, GustHasItsStationaryStdAndCorrelationTime) {
   for (int k = 0; k < 60000; ++k) {
     if (k % 100 == 0) Moving(&world, Eigen::Vector3d::Zero());  // keep the vehicle at rest
     world.Step();
-    gust.push_back(world.Wind_W_mps().x());
+    gust.push_back(world.disturbances().Wind_W_mps().x());
   }
   double sum = 0, sq = 0, lag = 0;
   for (double g : gust) sum += g, sq += g * g;

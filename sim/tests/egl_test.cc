@@ -84,7 +84,7 @@ ChildResult RenderPosedFrame(GlBackend backend, const std::string& png) {
     config.gl_backend = backend;
     World world(config);
     PoseWorld(world);
-    const cv::Mat frame = world.RenderPayloadCamera();
+    const cv::Mat frame = world.renderer().RenderPayloadCamera();
     if (!cv::imwrite(png, frame)) throw std::runtime_error("cannot write " + png);
     return WorldInternals::Renderer(world).GlDescription();
   });
@@ -138,11 +138,11 @@ TEST(EglTest, SecondBackEndInOneProcessIsRefused) {
     WorldConfig config;
     config.params = LoadParams(DefaultParamsPath());
     World osmesa_world(config);
-    osmesa_world.RenderPayloadCamera();
+    osmesa_world.renderer().RenderPayloadCamera();
     config.gl_backend = GlBackend::kEgl;
     World egl_world(config);
     try {
-      egl_world.RenderPayloadCamera();
+      egl_world.renderer().RenderPayloadCamera();
     } catch (const std::runtime_error& e) {
       return std::string(e.what());
     }
@@ -160,7 +160,7 @@ TEST(EglTest, NoEglVendorIsAnEglError) {
     config.params = LoadParams(DefaultParamsPath());
     config.gl_backend = GlBackend::kEgl;
     World world(config);
-    world.RenderPayloadCamera();
+    world.renderer().RenderPayloadCamera();
     return std::string("rendered");
   });
   std::printf("[message] %s\n", result.text.c_str());

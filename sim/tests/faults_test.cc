@@ -222,21 +222,21 @@ TEST(FaultsTest, AMotorOffTipsTheVehicle) {
 
 TEST(FaultsTest, ALateGripperReleasesAtItsEndAndAnEarlyOneAtItsStart) {
   World world(DefaultConfig());
-  world.GripperGrab();
+  world.gripper().Grab();
   world.faults().Inject(MakeFault(FaultComponent::kGripper, FaultMode::kLate, 0.0, 0.05));
-  world.GripperRelease();
-  EXPECT_TRUE(world.gripper_active());
+  world.gripper().Release();
+  EXPECT_TRUE(world.gripper().active());
   for (int k = 0; k < 49; ++k) world.Step();
-  EXPECT_TRUE(world.gripper_active());
+  EXPECT_TRUE(world.gripper().active());
   world.Step();
   world.Step();
-  EXPECT_FALSE(world.gripper_active());
+  EXPECT_FALSE(world.gripper().active());
 
-  world.GripperGrab();
+  world.gripper().Grab();
   world.faults().Inject(
       MakeFault(FaultComponent::kGripper, FaultMode::kEarly, world.time_s(), world.time_s()));
   world.Step();
-  EXPECT_FALSE(world.gripper_active());
+  EXPECT_FALSE(world.gripper().active());
 }
 
 }  // namespace

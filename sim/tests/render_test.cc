@@ -37,7 +37,7 @@ TEST(RenderTest, PayloadIsARedBlobWhereTheCameraModelPutsIt) {
   world.SetMotorSpeedCommand(InputVector::Constant(p.HoverMotorSpeedRadps()));
   world.Step();
 
-  const cv::Mat frame = world.RenderPayloadCamera();
+  const cv::Mat frame = world.renderer().RenderPayloadCamera();
   ASSERT_EQ(frame.type(), CV_8UC3);
   ASSERT_EQ(frame.cols, p.camera_width_px);
   ASSERT_EQ(frame.rows, p.camera_height_px);
@@ -95,7 +95,7 @@ TEST(RenderTest, PayloadMovesInTheImageAsTheCameraModelSays) {
   const Params& p = world.world_params();
   const SystemState s = testing_poses::SwungPayload(/*tilted=*/true);
   world.SetState(s.ToVector(), InputVector::Constant(p.HoverMotorSpeedRadps()));
-  const cv::Mat frame = world.RenderPayloadCamera();
+  const cv::Mat frame = world.renderer().RenderPayloadCamera();
   cv::imwrite(testing::TempDir() + "/payload_camera_offset.png", frame);
   const cv::Moments mo = cv::moments(RedMask(frame), true);
   ASSERT_GT(mo.m00, 100);
@@ -127,13 +127,13 @@ TEST(RenderTest, RegionEqualsTheWholeFrameThere) {
   s.v_WL_W = Eigen::Vector3d(0.5, 0.3, 0.0);  // motion blur on
   world.SetState(s.ToVector(), InputVector::Constant(p.HoverMotorSpeedRadps()));
   cv::Mat whole, part;
-  world.RenderPayloadCamera(&whole);
+  world.renderer().RenderPayloadCamera(&whole);
   double max_diff = 0.0, sum_diff = 0.0;
   long values = 0;
   for (const cv::Rect region :
        {cv::Rect(700, 200, 180, 160), cv::Rect(0, 0, 150, 120), cv::Rect(1200, 640, 80, 80)}) {
     part = cv::Mat::zeros(whole.size(), whole.type());
-    world.RenderPayloadCamera(&part, region);
+    world.renderer().RenderPayloadCamera(&part, region);
     cv::Mat diff;
     cv::absdiff(whole(region), part(region), diff);
     double mx = 0.0;
@@ -168,7 +168,7 @@ TEST(RenderTest, FastMotionBlurMatchesSubFrameReference) {
     SystemState s = testing_poses::SwungPayload(/*tilted=*/false);
     s.v_WL_W = Eigen::Vector3d(2.0, -1.0, 0.4);  // 2.3 m/s: a whirl after an impulse
     world.SetState(s.ToVector(), InputVector::Constant(p.HoverMotorSpeedRadps()));
-    return world.RenderPayloadCamera();
+    return world.renderer().RenderPayloadCamera();
   };
   const cv::Mat sharp = render(0, 0.0);
   const cv::Mat fast = render(0, 0.005);
@@ -254,7 +254,7 @@ TEST(RenderTest, RandomizedAppearanceVariesBySeedOnly) {
     config.seed = seed;
     config.randomize_appearance = randomize;
     World world(config);
-    return world.RenderPayloadCamera();
+    return world.renderer().RenderPayloadCamera();
   };
   const auto mean_diff = [](const cv::Mat& a, const cv::Mat& b) {
     cv::Mat d;
@@ -279,12 +279,12 @@ TEST(RenderTest, ChaseCameraRendersRequestedSize) {
   WorldConfig config;
   config.params = LoadParams(DefaultParamsPath());
   World world(config);
-  const cv::Mat frame = world.RenderChaseCamera(640, 360);
+  const cv::Mat frame = world.renderer().RenderChaseCamera(640, 360);
   EXPECT_EQ(frame.cols, 640);
   EXPECT_EQ(frame.rows, 360);
   cv::imwrite(testing::TempDir() + "/chase_camera.png", frame);
   EXPECT_GT(cv::countNonZero(RedMask(frame)), 10) << "payload visible from the chase camera";
-  EXPECT_THROW(world.RenderChaseCamera(4000, 10), std::invalid_argument);
+  EXPECT_THROW(world.renderer().RenderChaseCamera(4000, 10), std::invalid_argument);
 }
 
 // Leaving out the geoms a frame cannot show (the quadrotor's body and rotors behind the camera,
@@ -315,17 +315,17 @@ TEST(RenderTest, CullingHiddenGeomsChangesNoPixel) {
           cv::Rect(c.x - 60, c.y - 60, 120, 120), cv::Rect(0, 0, 200, 150)}) {
       cv::Mat culled = cv::Mat::zeros(720, 1280, CV_8UC3), all = culled.clone();
       renderer.SetCullHiddenGeoms(true);
-      world.RenderPayloadCamera(&culled, region);
+      world.renderer().RenderPayloadCamera(&culled, region);
       culled_max = std::max(culled_max, renderer.last_culled_geoms());
       renderer.SetCullHiddenGeoms(false);
-      world.RenderPayloadCamera(&all, region);
+      world.renderer().RenderPayloadCamera(&all, region);
       EXPECT_EQ(renderer.last_culled_geoms(), 0);
       EXPECT_EQ(cv::norm(culled, all, cv::NORM_INF), 0.0) << region;
     }
     renderer.SetCullHiddenGeoms(true);
-    const cv::Mat chase_culled = world.RenderChaseCamera(320, 180);
+    const cv::Mat chase_culled = world.renderer().RenderChaseCamera(320, 180);
     renderer.SetCullHiddenGeoms(false);
-    EXPECT_EQ(cv::norm(chase_culled, world.RenderChaseCamera(320, 180), cv::NORM_INF), 0.0);
+    EXPECT_EQ(cv::norm(chase_culled, world.renderer().RenderChaseCamera(320, 180), cv::NORM_INF), 0.0);
   }
   std::printf("[measured] at most %d geoms culled from a frame\n", culled_max);
   // measured 42 (the body, rotor discs, sites and most of the catenary); 20 fails if the
@@ -341,7 +341,7 @@ TEST(RenderTest, ReusedContextRendersTheSamePixels) {
   WorldConfig config;
   config.params = LoadParams(DefaultParamsPath());
   config.profile.camera.noise = true;
-  if (!World::PrewarmRendererForFork(config)) {
+  if (!Renderer::PrewarmForFork(config)) {
     GTEST_SKIP() << "this process rendered before (or LP_NUM_THREADS is set): run the test alone, "
                     "as ctest does";
   }
@@ -352,8 +352,8 @@ TEST(RenderTest, ReusedContextRendersTheSamePixels) {
     world->SetState(s.ToVector(),
                     InputVector::Constant(world->world_params().HoverMotorSpeedRadps()));
     cv::Mat payload;
-    world->RenderPayloadCamera(&payload);
-    return std::make_pair(payload, world->RenderChaseCamera(320, 180));
+    world->renderer().RenderPayloadCamera(&payload);
+    return std::make_pair(payload, world->renderer().RenderChaseCamera(320, 180));
   };
   World reused(config);  // its renderer takes the kept state
   World fresh(config);   // that one is taken: this renderer makes its own

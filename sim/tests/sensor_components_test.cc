@@ -135,10 +135,10 @@ TEST(SensorComponentsTest, TheGripperSwitchIsReadAtTheStartOfTheTickThatGrabs) {
   };
   EXPECT_EQ(switch_now(), std::optional<bool>(false));
   world.Step();
-  world.GripperGrab();
+  world.gripper().Grab();
   EXPECT_EQ(switch_now(), std::optional<bool>(true));
   world.Step();
-  world.GripperRelease();
+  world.gripper().Release();
   EXPECT_EQ(switch_now(), std::optional<bool>(false));
 }
 

@@ -42,10 +42,10 @@ BENCHMARK(BM_MjStepBare);
 // One 1280x720 payload camera frame (context created before timing).
 void BM_RenderPayloadCamera(benchmark::State& state) {
   hpa::sim::World world(Config());
-  world.RenderPayloadCamera();
+  world.renderer().RenderPayloadCamera();
   for (auto _ : state) {
     world.Step();
-    benchmark::DoNotOptimize(world.RenderPayloadCamera().data);
+    benchmark::DoNotOptimize(world.renderer().RenderPayloadCamera().data);
   }
 }
 BENCHMARK(BM_RenderPayloadCamera)->Unit(benchmark::kMillisecond)->Iterations(50);
@@ -56,14 +56,14 @@ void BM_RenderPayloadCameraRegion(benchmark::State& state) {
   hpa::sim::World world(Config());
   cv::Mat bgr;
   cv::Rect region;
-  world.PayloadImageMotionPx(&region);  // the payload's image, grown for an off-axis sphere
+  world.renderer().PayloadImageMotionPx(&region);  // the payload's image, grown for an off-axis sphere
   const int margin_px = 48;             // the runner's allowance for motion between frames
   region = cv::Rect(region.x - margin_px, region.y - margin_px, region.width + 2 * margin_px,
                     region.height + 2 * margin_px);
-  world.RenderPayloadCamera(&bgr, region);
+  world.renderer().RenderPayloadCamera(&bgr, region);
   for (auto _ : state) {
     world.Step();
-    world.RenderPayloadCamera(&bgr, region);
+    world.renderer().RenderPayloadCamera(&bgr, region);
     benchmark::DoNotOptimize(bgr.data);
   }
   state.counters["region_px"] = region.area();

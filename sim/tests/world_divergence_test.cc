@@ -17,7 +17,7 @@ TEST(WorldDivergenceTest, AVelocityMujocoCannotIntegrateIsARunErrorNamingTheDive
   World world(c);
   world.Step();
   // past MuJoCo's mjMAXVAL (1e10): mj_checkVel resets the state and warns BADQVEL
-  world.AddVelocity(Body::kPayload, Eigen::Vector3d(1e12, 0, 0));
+  world.disturbances().AddVelocity(Body::kPayload, Eigen::Vector3d(1e12, 0, 0));
   try {
     for (int k = 0; k < 10; ++k) world.Step();
     FAIL() << "a payload at 1e12 m/s stepped on";

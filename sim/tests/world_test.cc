@@ -166,7 +166,7 @@ TEST(WorldTest, ImpulseOnThePayloadChangesItsMomentum) {
   world.SetState(s.ToVector(), InputVector::Constant(std::sqrt(p.quad_mass_kg * p.gravity_mps2 /
                                                                (4 * p.k_f_N_per_radps2))));
   const Eigen::Vector3d impulse_Ns(0.02, -0.01, 0.03);
-  world.ApplyImpulse(Body::kPayload, impulse_Ns, 0.01);
+  world.disturbances().ApplyImpulse(Body::kPayload, impulse_Ns, 0.01);
   for (int k = 0; k < 20; ++k) world.Step();
   const Eigen::Vector3d expected_v =
       impulse_Ns / p.payload_mass_kg + Eigen::Vector3d(0, 0, -p.gravity_mps2 * 0.02);
@@ -180,7 +180,7 @@ TEST(WorldTest, WindPushesTheWholeSystem) {
   const Params& p = world.world_params();
   world.SetMotorSpeedCommand(HoverCommand(world));
   const Eigen::Vector3d force_N(0.3, 0, 0);
-  world.SetWind(force_N, 0.2);
+  world.disturbances().SetWind(force_N, 0.2);
   for (int k = 0; k < 300; ++k) world.Step();
   const Truth t = world.GetTruth();
   const Eigen::Vector3d momentum =
@@ -194,8 +194,8 @@ TEST(WorldTest, GripperHoldsMovesAndReleasesThePayload) {
   World world(DefaultConfig());
   world.SetMotorSpeedCommand(HoverCommand(world));
   const Eigen::Vector3d p0 = world.GetTruth().state.p_WL_W;
-  world.GripperGrab();
-  EXPECT_TRUE(world.gripper_active());
+  world.gripper().Grab();
+  EXPECT_TRUE(world.gripper().active());
   // the quadrotor now carries itself only (the gripper carries the payload)
   const Params& p = world.world_params();
   world.SetMotorSpeedCommand(
@@ -204,13 +204,13 @@ TEST(WorldTest, GripperHoldsMovesAndReleasesThePayload) {
   // held where it was grabbed (weld is soft: 2 mm)
   EXPECT_LT((world.GetTruth().state.p_WL_W - p0).norm(), 2e-3);
   const Eigen::Vector3d target = p0 + Eigen::Vector3d(0.1, 0, 0.2);
-  world.GripperMove(target, 0.5);
+  world.gripper().Move(target, 0.5);
   for (int k = 0; k < 800; ++k) world.Step();
   const Truth held = world.GetTruth();
   EXPECT_LT((held.state.p_WL_W - target).norm(), 5e-3);
   EXPECT_EQ(held.state.mode, CableMode::kSlack);  // pushed 0.2 m up: cable slack
-  world.GripperRelease();
-  EXPECT_FALSE(world.gripper_active());
+  world.gripper().Release();
+  EXPECT_FALSE(world.gripper().active());
   for (int k = 0; k < 100; ++k) world.Step();
   EXPECT_LT(world.GetTruth().state.v_WL_W.z(), -0.5);  // falling after release
 }

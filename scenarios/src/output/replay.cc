@@ -174,8 +174,8 @@ ReplaySummary ReplayRecord(const ReplayOptions& options, const RunRecord& record
     ReplayFrame frame;
     frame.row = &row;
     frame.time_s = t;
-    world.RenderPayloadCamera(&frame.onboard, cv::Rect());
-    frame.chase = world.RenderChaseCamera(960, 540);
+    world.renderer().RenderPayloadCamera(&frame.onboard, cv::Rect());
+    frame.chase = world.renderer().RenderChaseCamera(960, 540);
     on_frame(frame);
     ++summary.frames;
     if (progress) std::fprintf(stderr, "\rreplay: frame %d / %ld", summary.frames, ticks);

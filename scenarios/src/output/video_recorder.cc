@@ -155,10 +155,10 @@ int VideoRecorder::Finish() {
 
 void VideoTickRecorder::OnVideoTick(sim::World& world, const LogRow& now, const cv::Mat& onboard) {
   (void)onboard;
-  world.RenderPayloadCamera(&onboard_, cv::Rect());
+  world.renderer().RenderPayloadCamera(&onboard_, cv::Rect());
   VideoRecorder::Hud hud{now.time_s, now.truth.mode, now.estimate.mode, now.command.thrust_N,
                          now.cable_tension_N};
-  video_.AddFrame(world.RenderChaseCamera(VideoRecorder::kWidthPx, VideoRecorder::kHeightPx),
+  video_.AddFrame(world.renderer().RenderChaseCamera(VideoRecorder::kWidthPx, VideoRecorder::kHeightPx),
                   onboard_, hud);
 }
 

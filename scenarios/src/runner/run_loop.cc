@@ -379,7 +379,7 @@ void RunLoop::ControlStep(double t, const sim::Truth& truth, const SystemState& 
   row.estimate = state;
   row.reference = reference_->At(t);
   row.cable_tension_N = truth.cable_tension_N;
-  row.gripper_active = world_->gripper_active();
+  row.gripper_active = world_->gripper().active();
   row.mixer_saturated = mixer_saturated_;
   if (!ground_truth_) {
     row.estimator_rejected_updates = out.estimator_rejected_updates;
@@ -510,8 +510,8 @@ void RunLoop::Finish(RunResult* result) {
     metrics.run_error = metrics.run_error ? *metrics.run_error + "; " + what : what;
   }
   metrics.sim_time_s = std::min(tick_, end_tick_) * sim::World::kPhysicsDt_s;
-  metrics.payload_quad_min_distance_m = world_->payload_quad_min_distance_m();
-  const sim::ContactCounts& contacts = world_->contact_counts();
+  metrics.payload_quad_min_distance_m = world_->contacts().payload_quad_min_distance_m();
+  const sim::ContactCounts& contacts = world_->contacts().counts();
   metrics.contacts_payload_body = contacts.payload_body;
   metrics.contacts_payload_rotor = contacts.payload_rotor;
   metrics.contacts_payload_ground = contacts.payload_ground;

@@ -508,15 +508,15 @@ int RenderFrameMain(int argc, char** argv) {
     frame_time_s = world.time_s();
     cv::Mat frame;
     if (chase) {
-      // the offscreen buffer bounds a render (World::RenderChaseCamera: at most 1280x720): a
+      // the offscreen buffer bounds a render (Renderer::RenderChaseCamera: at most 1280x720): a
       // larger frame is scaled up from the largest render of its aspect that fits
       constexpr double kMaxRenderWidth_px = 1280.0, kMaxRenderHeight_px = 720.0;
       const double fit =
           std::min({1.0, kMaxRenderWidth_px / width_px, kMaxRenderHeight_px / height_px});
-      frame = world.RenderChaseCamera(std::max(1, static_cast<int>(width_px * fit)),
+      frame = world.renderer().RenderChaseCamera(std::max(1, static_cast<int>(width_px * fit)),
                                       std::max(1, static_cast<int>(height_px * fit)));
     } else {
-      frame = world.RenderPayloadCamera();
+      frame = world.renderer().RenderPayloadCamera();
     }
     if (width_px > 0 && (frame.cols != width_px || frame.rows != height_px)) {
       cv::Mat scaled;

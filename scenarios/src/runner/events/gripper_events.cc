@@ -8,7 +8,7 @@ namespace hpa {
 
 GripperGrabEvent GripperGrabEvent::Parse(const YamlMap&) { return {}; }
 
-void GripperGrabEvent::Apply(sim::World* world) const { world->GripperGrab(); }
+void GripperGrabEvent::Apply(sim::World* world) const { world->gripper().Grab(); }
 
 GripperMoveEvent GripperMoveEvent::Parse(const YamlMap& map) {
   GripperMoveEvent e;
@@ -17,10 +17,10 @@ GripperMoveEvent GripperMoveEvent::Parse(const YamlMap& map) {
   return e;
 }
 
-void GripperMoveEvent::Apply(sim::World* world) const { world->GripperMove(to_W_m, duration_s); }
+void GripperMoveEvent::Apply(sim::World* world) const { world->gripper().Move(to_W_m, duration_s); }
 
 GripperReleaseEvent GripperReleaseEvent::Parse(const YamlMap&) { return {}; }
 
-void GripperReleaseEvent::Apply(sim::World* world) const { world->GripperRelease(); }
+void GripperReleaseEvent::Apply(sim::World* world) const { world->gripper().Release(); }
 
 }  // namespace hpa

@@ -27,7 +27,7 @@ ImpulseEvent ImpulseEvent::Parse(const YamlMap& map) {
 }
 
 void ImpulseEvent::Apply(sim::World* world) const {
-  world->ApplyImpulse(EventBody(on_payload), impulse_W_Ns,
+  world->disturbances().ApplyImpulse(EventBody(on_payload), impulse_W_Ns,
                       duration_s);
 }
 

@@ -24,7 +24,7 @@ VelocityChangeEvent VelocityChangeEvent::Parse(const YamlMap& map) {
 }
 
 void VelocityChangeEvent::Apply(sim::World* world) const {
-  world->AddVelocity(EventBody(on_payload), dv_W_mps);
+  world->disturbances().AddVelocity(EventBody(on_payload), dv_W_mps);
 }
 
 }  // namespace hpa

@@ -19,9 +19,9 @@ WindEvent WindEvent::Parse(const YamlMap& map) {
 
 void WindEvent::Apply(sim::World* world) const {
   if (velocity_W_mps) {
-    world->SetWindVelocity(*velocity_W_mps, duration_s);
+    world->disturbances().SetWindVelocity(*velocity_W_mps, duration_s);
   } else {
-    world->SetWind(force_W_N, duration_s);
+    world->disturbances().SetWind(force_W_N, duration_s);
   }
 }
 

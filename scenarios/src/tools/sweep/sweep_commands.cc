@@ -231,7 +231,7 @@ void FinishSweep(const SweepSpec& spec, const std::string& jsonl, const std::str
 }
 
 // The first rendered run's world renders one frame here, before the workers fork: each of them
-// then starts with a GL context whose shaders are compiled (World::PrewarmRendererForFork).
+// then starts with a GL context whose shaders are compiled (Renderer::PrewarmForFork).
 void PrewarmRenderer(const SweepSpec& spec, const std::vector<SweepRun>& runs, const Params& params,
                      sim::GlBackend gl_backend) {
   // the first runs only (a grid's first cells): building every run of a large analytic sweep
@@ -241,7 +241,7 @@ void PrewarmRenderer(const SweepSpec& spec, const std::vector<SweepRun>& runs, c
     for (size_t i = 0; i < std::min(runs.size(), kRunsLookedAt); ++i) {
       const Scenario scenario = sweep::BuildScenario(spec, runs[i]);
       if (scenario.estimation.camera != "render" || scenario.estimation.ground_truth) continue;
-      sim::World::PrewarmRendererForFork(WorldConfigOf(scenario, params, gl_backend));
+      sim::Renderer::PrewarmForFork(WorldConfigOf(scenario, params, gl_backend));
       return;
     }
   } catch (const std::exception& e) {

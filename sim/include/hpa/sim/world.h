@@ -1,7 +1,9 @@
 #pragma once
-// The simulated world (docs/design.md): MuJoCo physics of the quadrotor, the
-// cable (a length-limited tendon) and the payload at 1 kHz, first-order motors, IMU and VIO
-// models, disturbances, the gripper, crash detection and the rendered cameras.
+// The simulated world (docs/design.md): MuJoCo physics of the quadrotor, the cable (a
+// length-limited tendon) and the payload at 1 kHz, its sensors' delivery and crash detection, and
+// the components it owns and steps, each in its own header: the vehicle's motors (vehicle.h), the
+// gripper (gripper.h), disturbances and wind (disturbances.h), contacts (contacts.h), the rendered
+// cameras (renderer.h) and faults (faults.h). An event or a fault acts on the component it needs.
 // MuJoCo stays inside sim/src (this header only points to its model and data); flight code never
 // sees it.
 
@@ -20,11 +22,16 @@
 #include "hpa/models/params.h"
 #include "hpa/models/sensor_types.h"
 #include "hpa/models/state.h"
+#include "hpa/sim/contacts.h"
+#include "hpa/sim/disturbances.h"
 #include "hpa/sim/faults.h"
 #include "hpa/sim/gl_backend.h"
+#include "hpa/sim/gripper.h"
 #include "hpa/sim/payload_camera.h"
+#include "hpa/sim/renderer.h"
 #include "hpa/sim/sensor_models.h"
 #include "hpa/sim/sensors.h"
+#include "hpa/sim/vehicle.h"
 #include "hpa/sim/wind.h"
 #include "hpa/sim/world_profile.h"
 
@@ -33,9 +40,6 @@ struct mjModel_;
 struct mjData_;
 
 namespace hpa::sim {
-
-class OffscreenRenderer;
-class CameraImageModel;
 
 /// Perturbations of the simulated world only (the flight code keeps Params): model mismatch.
 struct WorldOverrides {
@@ -58,15 +62,6 @@ struct WorldConfig {
   GlBackend gl_backend = GlBackend::kOsMesa;
 };
 
-/// Contact episodes since Reset (a pair counts once each time it starts touching).
-struct ContactCounts {
-  int payload_body = 0;     // payload against the quadrotor's body box
-  int payload_rotor = 0;    // payload against a rotor disk (a crash: rotor_strike)
-  int payload_ground = 0;   // payload against the ground
-  int quad_ground = 0;      // quadrotor against the ground (a crash)
-  int payload_gripper = 0;  // payload against the gripper rod while not held (flight contact)
-};
-
 /// Ground truth at the current time.
 struct Truth {
   SystemState state;             // true state; mode = kTaut iff cable length >= l - 1 mm
@@ -82,15 +77,6 @@ struct CrashStatus {
   std::string reason;  // which condition ("ground contact", "tilt > 90 deg", ...)
 };
 
-/// Wall time of one payload-camera frame, by stage.
-struct CameraFrameTiming {
-  double render_ms = 0.0;       // scene update, rasterisation, pixel read-out (all sub-frames)
-  double image_model_ms = 0.0;  // motion blur, distortion, PSF, noise
-};
-
-/// Body selector for disturbances.
-enum class Body { kQuadrotor, kPayload };
-
 /// The arena the vehicle flies in: |x|, |y| <= kArenaHalfWidth_m and 0 <= z <= kArenaHeight_m
 /// (a 20 x 20 x 10 m hall); leaving it is a crash, and a scenario must fit inside it.
 constexpr double kArenaHalfWidth_m = 10.0;
@@ -105,15 +91,6 @@ class World {
   ~World();
   World(const World&) = delete;
   World& operator=(const World&) = delete;
-
-  /// Renders one payload-camera frame of a world of `config` and keeps its GL context, with the
-  /// shaders llvmpipe compiled for it, for the process's next renderer of the same size: a
-  /// process that forks workers calls it first so that each worker's first frame skips context
-  /// creation and shader compilation. OSMesa only, and only where llvmpipe rasterises on the
-  /// calling thread (LP_NUM_THREADS unset, which this sets to 0, or 0; and no context made in
-  /// the process before): its worker threads do not survive fork. Returns whether the context
-  /// was kept; same pixels either way.
-  static bool PrewarmRendererForFork(const WorldConfig& config);
 
   static constexpr double kPhysicsDt_s = 0.001;  // MuJoCo timestep (s): RateTable::physics_hz
   /// Truth mode threshold: taut when the cable length >= l - kTautLengthTolerance_m.
@@ -155,8 +132,6 @@ class World {
   std::vector<SensorMessage> TakeInFlight();
   /// The payload camera: its declaration and clock.
   const PayloadCameraSensor& payload_camera() const { return *camera_; }
-  /// The wind: its declaration, gust and events.
-  const WindModel& wind() const { return *wind_; }
   /// Captures the sensors that read the world at the start of a tick, before its step (the state
   /// and events the flight stack's tick sees): the gripper's switch, and the payload camera's
   /// frame when one is due, read out through `readout` (rendered frames only; not owned). Each
@@ -164,51 +139,13 @@ class World {
   /// The camera's capture, if it fired.
   std::optional<CameraCapture> CaptureTickStart(CameraReadout* readout);
 
-  /// Applies impulse_W_Ns (N s, world frame) at the body's centre of mass as a constant force
-  /// over duration_s (rounded to whole steps, at least one).
-  void ApplyImpulse(Body body, const Eigen::Vector3d& impulse_W_Ns, double duration_s = 0.01);
-  /// Adds dv_W_mps (m/s, world frame) to the body's linear velocity at once (its free joint's
-  /// qvel; a taut cable or a held gripper then acts on the new velocity from the next step).
-  void AddVelocity(Body body, const Eigen::Vector3d& dv_W_mps);
-  /// Constant force (N, world frame) on the quadrotor's centre of mass for duration_s.
-  void SetWind(const Eigen::Vector3d& force_W_N, double duration_s);
-  /// Adds a wind velocity (m/s, world frame) to the profile's wind for duration_s; it acts
-  /// through the profile's drag (none in a world without aerodynamics).
-  void SetWindVelocity(const Eigen::Vector3d& velocity_W_mps, double duration_s);
-
   /// The world's faults (faults.h): scenario fault events inject into it; every fault's effect
   /// lives there, so a new fault adds no World method.
   Faults& faults() { return faults_; }
 
-  /// Welds the payload to the gripper where it is now (moves the mocap body onto it first).
-  void GripperGrab();
-  /// Moves the gripper (and a held payload) to to_W_m along a minimum-jerk path over duration_s.
-  void GripperMove(const Eigen::Vector3d& to_W_m, double duration_s);
-  /// Lets the payload go.
-  void GripperRelease();
-  /// True while the gripper holds the payload.
-  bool gripper_active() const;
-
   /// Latched: quad body contact with ground/obstacle, tilt > 90 deg, outside the arena
   /// (|x|, |y| <= kArenaHalfWidth_m, 0 <= z <= kArenaHeight_m), non-finite state.
   CrashStatus Crash() const;
-
-  /// Payload camera frame, CV_8UC3 BGR, 1280x720, top row first (first call creates the GL
-  /// context of config.gl_backend):   /// a single-sample pinhole render turned into the sensor's
-  /// image by the profile's camera image model (CameraImageModel: motion blur, distortion, PSF,
-  /// noise).
-  cv::Mat RenderPayloadCamera();
-  /// As above, into `bgr` (reallocated only when its size or type differs). A non-empty
-  /// `region` computes only that part of the image, equal to the whole frame's there (the rest
-  /// of `bgr` is left as it was): what a detector reading only a region needs.
-  void RenderPayloadCamera(cv::Mat* bgr, const cv::Rect& region = cv::Rect());
-  /// Wall time of the last payload frame's render and of its image model.
-  const CameraFrameTiming& last_camera_timing() const { return camera_timing_; }
-  /// Image motion (render pixels) of the payload's centre over one exposure now, and the
-  /// region of the render the payload covers (for the fast motion-blur approximation).
-  Eigen::Vector2d PayloadImageMotionPx(cv::Rect* region) const;
-  /// Chase camera frame for videos, CV_8UC3 BGR, top row first (at most 1280x720).
-  cv::Mat RenderChaseCamera(int width_px, int height_px);
 
   /// For tests: sets qpos/qvel exactly from x and the actual motor speeds (and the command) to
   /// motor_speed_radps, then recomputes kinematics; no lag transient follows.
@@ -218,23 +155,16 @@ class World {
   /// overrides applied).
   const Params& world_params() const { return world_params_; }
 
-  /// Smallest surface-to-surface distance (m) between the payload sphere and the vehicle (body
-  /// box and rotor disks) since Reset; negative: they overlapped by that much.
-  double payload_quad_min_distance_m() const { return payload_quad_min_distance_m_; }
-  /// Surface-to-surface distance (m) between the payload and the vehicle now.
-  double PayloadQuadDistance() const;
-  /// Contact episodes since Reset.
-  const ContactCounts& contact_counts() const { return contact_counts_; }
-  /// Thrust coefficient of each rotor relative to the world's k_f (actuation spread)  (4)
-  const Eigen::Vector4d& rotor_thrust_factor() const { return rotor_kf_factor_; }
-  /// Rotor speed reached per unit command now (battery sag; 1 with a full pack or no sag).
-  double BatterySpeedFactor() const;
-  /// Wind velocity at the vehicle now (m/s, world frame): steady part plus gust  (3)
-  Eigen::Vector3d Wind_W_mps() const;
-  /// Aerodynamic force on the quadrotor in the last step (N, world frame)  (3)
-  const Eigen::Vector3d& aero_quad_W_N() const { return aero_quad_W_N_; }
-  /// Aerodynamic force on the payload in the last step (N, world frame)  (3)
-  const Eigen::Vector3d& aero_payload_W_N() const { return aero_payload_W_N_; }
+  /// The vehicle's motors and rotors (vehicle.h): their spread, battery sag and speeds.
+  const Vehicle& vehicle() const { return vehicle_; }
+  /// The gripper (gripper.h): grab, move and release events act on it.
+  Gripper& gripper() { return gripper_; }
+  /// Forces, impulses, velocity changes and wind (disturbances.h): their events act on it.
+  Disturbances& disturbances() { return disturbances_; }
+  /// Contact episodes and the payload's distance to the vehicle (contacts.h).
+  const Contacts& contacts() const { return contacts_; }
+  /// The payload and chase cameras (renderer.h).
+  Renderer& renderer() { return *renderer_; }
 
  private:
   struct Ids {
@@ -246,11 +176,6 @@ class World {
     int gripper_geom;  // the gripper's rod (-1: the scene has none)
     int rotor_disc_geom[4];
   };
-  struct TimedForce {
-    Body body;
-    Eigen::Vector3d force_W_N;  // (3)
-    int64_t end_step;           // applied while step < end_step
-  };
 
   void LoadScene();
   void ResolveIds();
@@ -258,18 +183,10 @@ class World {
   void ApplyWorldParams();
   void ApplyContactSettings();
   void ApplyCameraPose(const Params& p);
-  void WriteMotorControls();
-  void UpdateGripper();
-  void ApplyDisturbances();
   void UpdateSensors();
   void CheckCrash();
   void CheckWarnings();
   void DrawMismatch();
-  void RandomizeAppearance();
-  void ApplyAerodynamics();
-  void UpdateContacts();
-  void UpdateGripperContact();
-  double PayloadGripperDistance() const;
   void LatchCrash(const std::string& reason);
   // specific force R^T (a + g e3) from qacc (time t_k) in the attitude q_WB of that same time
   Eigen::Vector3d QuadSpecificForce_B(const Eigen::Quaterniond& q_WB) const;
@@ -277,24 +194,18 @@ class World {
   WorldConfig config_;
   Params world_params_;
   friend struct WorldInternals;  // sim/src/world_internals.h: MuJoCo access for sim tests
+  // the components reach the model, the data and the step through their world
+  friend class Vehicle;
+  friend class Gripper;
+  friend class Disturbances;
+  friend class Contacts;
+  friend class Renderer;
   mjModel_* model_ = nullptr;
   mjData_* data_ = nullptr;
   Ids ids_{};
   double t0_s_ = 0.0;
   int64_t step_ = 0;
   std::vector<int> warning_count_;  // per MuJoCo warning kind (mjNWARNING)
-
-  InputVector motor_speed_radps_ = InputVector::Zero();    // actual (4)
-  InputVector motor_command_radps_ = InputVector::Zero();  // commanded, clamped (4)
-
-  std::vector<TimedForce> forces_;
-
-  // gripper motion: min-jerk from start to goal over [start_step, end_step]
-  bool gripper_moving_ = false;
-  Eigen::Vector3d gripper_from_W_m_ = Eigen::Vector3d::Zero();  // (3)
-  Eigen::Vector3d gripper_to_W_m_ = Eigen::Vector3d::Zero();    // (3)
-  int64_t gripper_start_step_ = 0;
-  int64_t gripper_end_step_ = 0;
 
   std::mt19937_64 rng_;  // the IMU's and VIO's noise
   std::vector<std::unique_ptr<Sensor>> sensors_;
@@ -307,24 +218,13 @@ class World {
 
   Faults faults_;  // sensor and actuator faults (empty: every hook skipped)
   CrashStatus crash_;
-  std::unique_ptr<OffscreenRenderer> renderer_;
-  std::unique_ptr<CameraImageModel> camera_image_;  // created with the first payload frame
-  std::future<void> camera_tables_;            // its shared tables, computed from construction on
-  mjData_* subframe_data_ = nullptr;           // kinematics of exposure sub-frames
-  cv::Mat pinhole_, subframe_, subframe_sum_;  // reused frame buffers
-  CameraFrameTiming camera_timing_;
 
-  // realism profile state
-  Eigen::Vector4d rotor_kf_factor_ = Eigen::Vector4d::Ones();  // per-rotor k_f spread  (4)
-  Eigen::Vector4d rotor_km_factor_ = Eigen::Vector4d::Ones();  // per-rotor k_m spread  (4)
-  double payload_quad_min_distance_m_ = 0.0;
-  ContactCounts contact_counts_;
-  std::unique_ptr<WindModel> wind_;                             // mean wind, gust, wind events
-  Eigen::Vector3d aero_quad_W_N_ = Eigen::Vector3d::Zero();     // last drag on the quad  (3)
-  Eigen::Vector3d aero_payload_W_N_ = Eigen::Vector3d::Zero();  // last drag on the payload  (3)
-  bool touching_[5] = {false, false, false, false, false};      // ContactCounts fields, last step
-  bool gripper_solid_ = false;  // the gripper's rod collides (flight contact, not holding, clear)
-  bool gripper_used_ = false;   // an event has grabbed with or moved the gripper in this run
+  // the components, stepped by Step in its order
+  Vehicle vehicle_{*this};
+  Gripper gripper_{*this};
+  Disturbances disturbances_;
+  Contacts contacts_{*this};
+  std::unique_ptr<Renderer> renderer_;  // made once the model is loaded; released first
 };
 
 }  // namespace hpa::sim
