@@ -43,7 +43,8 @@ double Contacts::PayloadQuadDistance() const {
   auto in_geom = [&](int g) {
     const Eigen::Map<const Eigen::Matrix<double, 3, 3, Eigen::RowMajor>> R_WG(w_.data_->geom_xmat +
                                                                               9 * g);
-    return Eigen::Vector3d(R_WG.transpose() * (p_WL_W - Eigen::Vector3d(w_.data_->geom_xpos + 3 * g)));
+    return Eigen::Vector3d(R_WG.transpose() *
+                           (p_WL_W - Eigen::Vector3d(w_.data_->geom_xpos + 3 * g)));
   };
   const int box = w_.ids_.quad_box_geom;
   double d = BoxSignedDistance(in_geom(box), Eigen::Vector3d(w_.model_->geom_size + 3 * box));
@@ -71,9 +72,8 @@ void Contacts::Update() {
     }
   }
   now[1] = rotor_strike;
-  int* counts[5] = {&counts_.payload_body, &counts_.payload_rotor,
-                    &counts_.payload_ground, &counts_.quad_ground,
-                    &counts_.payload_gripper};
+  int* counts[5] = {&counts_.payload_body, &counts_.payload_rotor, &counts_.payload_ground,
+                    &counts_.quad_ground, &counts_.payload_gripper};
   for (int k = 0; k < 5; ++k) {
     if (now[k] && !touching_[k]) ++*counts[k];
     touching_[k] = now[k];

@@ -28,10 +28,10 @@ Renderer::Renderer(World& world) : w_(world) {
   // the rendered camera's shared tables (noise samples, distortion maps) are computed beside the
   // rest of the start (this world, the flight stack, the GL context); its first frame waits
   if (w_.config_.camera.kind == CameraKind::kRendered) {
-    camera_tables_ = std::async(
-        std::launch::async, [params = w_.world_params_, profile = w_.config_.profile.camera] {
-          CameraImageModel::PrepareTablesFor(params, profile);
-        });
+    camera_tables_ = std::async(std::launch::async,
+                                [params = w_.world_params_, profile = w_.config_.profile.camera] {
+                                  CameraImageModel::PrepareTablesFor(params, profile);
+                                });
   }
 }
 
@@ -170,7 +170,8 @@ void Renderer::RenderPayloadCamera(cv::Mat* bgr, const cv::Rect& region) {
       mj_comPos(w_.model_, subframe_data_);
       mj_camlight(w_.model_, subframe_data_);
       mj_tendon(w_.model_, subframe_data_);
-      offscreen_->Render(subframe_data_, w_.ids_.payload_camera, w, h, profile.draw_cable, &subframe_);
+      offscreen_->Render(subframe_data_, w_.ids_.payload_camera, w, h, profile.draw_cable,
+                         &subframe_);
       cv::accumulate(subframe_, subframe_sum_);
     }
     subframe_sum_.convertTo(pinhole_, CV_8UC3, 1.0 / n);
@@ -184,7 +185,7 @@ void Renderer::RenderPayloadCamera(cv::Mat* bgr, const cv::Rect& region) {
     const cv::Rect render_region =
         region.area() > 0 ? camera_image_->RenderRegion(region, blur_px) : cv::Rect();
     offscreen_->Render(w_.data_, w_.ids_.payload_camera, w, h, profile.draw_cable, &pinhole_,
-                      render_region);
+                       render_region);
     const auto t1 = Clock::now();
     render_ms = ms(t0, t1);
     camera_image_->Apply(pinhole_, blur_px, blur_region, frame, bgr, region);
@@ -195,7 +196,8 @@ void Renderer::RenderPayloadCamera(cv::Mat* bgr, const cv::Rect& region) {
 
 cv::Mat Renderer::RenderChaseCamera(int width_px, int height_px) {
   // the gripper (group 3) while it holds the payload
-  offscreen_->SetGeomGroupVisible(kGripperGeomGroup, w_.model_->eq_active[w_.ids_.gripper_weld] != 0);
+  offscreen_->SetGeomGroupVisible(kGripperGeomGroup,
+                                  w_.model_->eq_active[w_.ids_.gripper_weld] != 0);
   if (!w_.faults_.empty()) {
     offscreen_->SetGeomCopies(w_.ids_.payload_geom, w_.faults_.DistractorPositions_W(w_.time_s()));
   }

@@ -119,8 +119,8 @@ void World::DrawMismatch() {
     Params& p = world_params_;
     // a draw that leaves a field's declared range is brought back to it
     const auto draw = [&](double Params::*member, double sigma) {
-      p.*member = ClampToDecl(FindParamDecl(ParamsTables(), member),
-                              p.*member + sigma * normal(rng));
+      p.*member =
+          ClampToDecl(FindParamDecl(ParamsTables(), member), p.*member + sigma * normal(rng));
     };
     draw(&Params::payload_mass_kg, m.payload_mass_sigma_kg);
     draw(&Params::cable_length_m, m.cable_length_sigma_m);

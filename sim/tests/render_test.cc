@@ -325,7 +325,8 @@ TEST(RenderTest, CullingHiddenGeomsChangesNoPixel) {
     renderer.SetCullHiddenGeoms(true);
     const cv::Mat chase_culled = world.renderer().RenderChaseCamera(320, 180);
     renderer.SetCullHiddenGeoms(false);
-    EXPECT_EQ(cv::norm(chase_culled, world.renderer().RenderChaseCamera(320, 180), cv::NORM_INF), 0.0);
+    EXPECT_EQ(cv::norm(chase_culled, world.renderer().RenderChaseCamera(320, 180), cv::NORM_INF),
+              0.0);
   }
   std::printf("[measured] at most %d geoms culled from a frame\n", culled_max);
   // measured 42 (the body, rotor discs, sites and most of the catenary); 20 fails if the
@@ -334,7 +335,7 @@ TEST(RenderTest, CullingHiddenGeomsChangesNoPixel) {
 }
 
 // A world whose renderer takes the GL state another world kept (what every run of a sweep does
-// after PrewarmRendererForFork: the context with its compiled shaders and MuJoCo's GL resources)
+// after Renderer::PrewarmForFork: the context with its compiled shaders and MuJoCo's GL resources)
 // renders the same pixels as one with a state of its own, the payload camera and the chase camera
 // alike; a world of a model that renders differently makes its own resources on the kept context.
 TEST(RenderTest, ReusedContextRendersTheSamePixels) {

@@ -56,8 +56,9 @@ void BM_RenderPayloadCameraRegion(benchmark::State& state) {
   hpa::sim::World world(Config());
   cv::Mat bgr;
   cv::Rect region;
-  world.renderer().PayloadImageMotionPx(&region);  // the payload's image, grown for an off-axis sphere
-  const int margin_px = 48;             // the runner's allowance for motion between frames
+  world.renderer().PayloadImageMotionPx(
+      &region);              // the payload's image, grown for an off-axis sphere
+  const int margin_px = 48;  // the runner's allowance for motion between frames
   region = cv::Rect(region.x - margin_px, region.y - margin_px, region.width + 2 * margin_px,
                     region.height + 2 * margin_px);
   world.renderer().RenderPayloadCamera(&bgr, region);

@@ -34,7 +34,7 @@ class Vehicle {
   // rotor thrust into the actuators, a motor fault's factor applied
   void WriteMotorControls();
 
-  World& w_;  // the world this vehicle flies in
+  World& w_;                                                   // the world this vehicle flies in
   InputVector motor_speed_radps_ = InputVector::Zero();        // actual (4)
   InputVector motor_command_radps_ = InputVector::Zero();      // commanded, clamped (4)
   Eigen::Vector4d rotor_kf_factor_ = Eigen::Vector4d::Ones();  // per-rotor k_f spread  (4)

@@ -183,7 +183,6 @@ class World {
   void ApplyWorldParams();
   void ApplyContactSettings();
   void ApplyCameraPose(const Params& p);
-  void UpdateSensors();
   void CheckCrash();
   void CheckWarnings();
   void DrawMismatch();
