@@ -254,59 +254,56 @@ std::string MessageTypeName(MessageType type) {
   return "unknown type " + std::to_string(static_cast<uint32_t>(type));
 }
 
-std::vector<uint8_t> EncodeTick(const FlightInputs& in) {
+namespace {
+
+// A message body encoded by its codec.
+template <class T>
+std::vector<uint8_t> EncodeBody(const Codec<T>& codec, const T& value) {
   wire::Writer w;
-  TickCodec().Encode(in, w);
+  codec.Encode(value, w);
   return std::move(w.bytes);
 }
 
-FlightInputs DecodeTick(const std::vector<uint8_t>& body) {
-  wire::Reader r(body, "tick");
-  FlightInputs in;
-  TickCodec().Decode(r, in, "");
+// A message body `name` decoded by its codec, every byte of it read.
+template <class T>
+T DecodeBody(const Codec<T>& codec, const std::vector<uint8_t>& body, const char* name) {
+  wire::Reader r(body, name);
+  T value;
+  codec.Decode(r, value, "");
   r.End();
-  return in;
+  return value;
+}
+
+}  // namespace
+
+std::vector<uint8_t> EncodeTick(const FlightInputs& in) { return EncodeBody(TickCodec(), in); }
+
+FlightInputs DecodeTick(const std::vector<uint8_t>& body) {
+  return DecodeBody(TickCodec(), body, "tick");
 }
 
 std::vector<uint8_t> EncodeReply(const FlightOutputs& out) {
-  wire::Writer w;
-  ReplyCodec().Encode(out, w);
-  return std::move(w.bytes);
+  return EncodeBody(ReplyCodec(), out);
 }
 
 FlightOutputs DecodeReply(const std::vector<uint8_t>& body) {
-  wire::Reader r(body, "tick_reply");
-  FlightOutputs out;
-  ReplyCodec().Decode(r, out, "");
-  r.End();
-  return out;
+  return DecodeBody(ReplyCodec(), body, "tick_reply");
 }
 
 std::vector<uint8_t> EncodeDetect(const CameraFrame& frame) {
-  wire::Writer w;
-  FrameCodec().Encode(frame, w);
-  return std::move(w.bytes);
+  return EncodeBody(FrameCodec(), frame);
 }
 
 CameraFrame DecodeDetect(const std::vector<uint8_t>& body) {
-  wire::Reader r(body, "detect");
-  CameraFrame frame;
-  FrameCodec().Decode(r, frame, "");
-  r.End();
-  return frame;
+  return DecodeBody(FrameCodec(), body, "detect");
 }
 
 std::vector<uint8_t> EncodeDetectReply(const DetectReply& reply) {
-  wire::Writer w;
-  DetectReplyCodec().Encode(reply, w);
-  return std::move(w.bytes);
+  return EncodeBody(DetectReplyCodec(), reply);
 }
 
 DetectReply DecodeDetectReply(const std::vector<uint8_t>& body) {
-  wire::Reader r(body, "detect_reply");
-  DetectReply reply;
-  DetectReplyCodec().Decode(r, reply, "");
-  r.End();
+  const DetectReply reply = DecodeBody(DetectReplyCodec(), body, "detect_reply");
   const int set = (reply.has_detection ? 1 : 0) + (reply.region_wanted ? 1 : 0) +
                   (reply.whole_wanted ? 1 : 0);
   if (set != 1) {

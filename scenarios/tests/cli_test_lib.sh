@@ -1,7 +1,18 @@
-# Shared by the CLI test scripts (sourced, after `hpa` holds the binary): a failure counter and
-# the exit-code-and-message check.
+# Shared by the CLI test scripts (sourced; each check needs `hpa` to hold the binary, as
+# cli_test_start sets it): the arguments, a failure counter and the exit-code-and-message check.
 
 failures=0
+
+# cli_test_start HPA_BINARY SOURCE_DIR [PYTHON]: the arguments every CLI test script takes, as
+# hpa, src and python, and out, a temporary folder removed when the script exits
+cli_test_start() {
+  hpa=$1
+  src=$2
+  python=${3:-}
+  out=$(mktemp -d)
+  trap 'rm -rf "$out"' EXIT
+}
+
 # fail MESSAGE...: counts and prints a failed check
 fail() { echo "FAIL: $*"; failures=$((failures + 1)); }
 

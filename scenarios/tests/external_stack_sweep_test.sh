@@ -11,12 +11,8 @@
 # and gives verdicts.
 # Usage: external_stack_sweep_test.sh HPA_BINARY SOURCE_DIR PYTHON
 set -uo pipefail
-hpa=$1
-src=$2
-python=$3
-source "$src/scenarios/tests/cli_test_lib.sh"
-out=$(mktemp -d)
-trap 'rm -rf "$out"' EXIT
+source "$2/scenarios/tests/cli_test_lib.sh"
+cli_test_start "$@"  # hpa, src, python; out: a folder removed at exit
 export PYTHONPATH="$src/python${PYTHONPATH:+:$PYTHONPATH}" PYTHONDONTWRITEBYTECODE=1
 stack="$python $src/examples/python/hover_controller.py"
 start_s=$(date +%s.%N)

@@ -6,12 +6,8 @@
 # the stack's name aside.
 # Usage: fault_flight_stack_test.sh HPA_BINARY SOURCE_DIR PYTHON
 set -uo pipefail
-hpa=$1
-src=$2
-python=$3
-source "$src/scenarios/tests/cli_test_lib.sh"
-out=$(mktemp -d)
-trap 'rm -rf "$out"' EXIT
+source "$2/scenarios/tests/cli_test_lib.sh"
+cli_test_start "$@"  # hpa, src, python; out: a folder removed at exit
 
 for name in fault_vio_wrong fault_imu_bias fault_payload_camera_garbage \
     fault_payload_camera_distractor; do

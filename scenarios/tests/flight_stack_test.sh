@@ -5,12 +5,8 @@
 # happened (exit 3, metrics.json written), never a hung simulator; the Python loaders read
 # what a run writes. Usage: flight_stack_test.sh HPA_BINARY SOURCE_DIR PYTHON
 set -uo pipefail
-hpa=$1
-src=$2
-python=$3
-source "$src/scenarios/tests/cli_test_lib.sh"
-out=$(mktemp -d)
-trap 'rm -rf "$out"' EXIT
+source "$2/scenarios/tests/cli_test_lib.sh"
+cli_test_start "$@"  # hpa, src, python; out: a folder removed at exit
 
 # 1. hpa-flight flies the rendered hover_gripper_pull exactly as the in-process stack does:
 # every metric but the wall-clock timings and what flew (it reads each frame at its capture,

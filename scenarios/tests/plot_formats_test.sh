@@ -4,12 +4,8 @@
 # drawn point); SVG is well-formed XML, PDF a PDF; an unknown format is refused before the run;
 # plots never change the metrics. Usage: plot_formats_test.sh HPA_BINARY SOURCE_DIR PYTHON
 set -uo pipefail
-hpa=$1
-src=$2
-python=$3
-source "$src/scenarios/tests/cli_test_lib.sh"
-out=$(mktemp -d)
-trap 'rm -rf "$out"' EXIT
+source "$2/scenarios/tests/cli_test_lib.sh"
+cli_test_start "$@"  # hpa, src, python; out: a folder removed at exit
 scenario="$src/scenarios/hover.yaml"
 
 "$hpa" run "$scenario" --quiet --out "$out/none" || fail "run without plots"

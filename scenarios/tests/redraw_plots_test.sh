@@ -6,12 +6,8 @@
 # shading per run), and each controller of the sweep keeps one colour in every panel.
 # Usage: redraw_plots_test.sh HPA_BINARY SOURCE_DIR PYTHON
 set -uo pipefail
-hpa=$1
-src=$2
-python=$3
-source "$src/scenarios/tests/cli_test_lib.sh"
-out=$(mktemp -d)
-trap 'rm -rf "$out"' EXIT
+source "$2/scenarios/tests/cli_test_lib.sh"
+cli_test_start "$@"  # hpa, src, python; out: a folder removed at exit
 "$hpa" compare "$src/scenarios/hover.yaml" --controllers geometric,nonhybrid_mpc --quiet \
   --set duration=2.5 --out "$out/cmp" > /dev/null 2>&1 || fail "compare failed"
 "$hpa" run "$src/scenarios/hover.yaml" --quiet --plots --set duration=2.5 --out "$out/run" \
