@@ -66,6 +66,10 @@ bool Stopping() { return StopRequested() != 0; }
 // promptly completes the message in flight and its finish report, a hung one is abandoned.
 constexpr double kStopGraceS = 0.2;
 
+// How long a stack that broke the protocol is given to end (s), so the run error can say how it
+// ended; the wait ends as soon as it has, and one still running after it is killed.
+constexpr double kExitNoteWaitS = 2.0;
+
 // A separate flight stack: its process, the socket it connected to and the frame ring.
 class ExternalFlight final : public FlightLink {
  public:
@@ -456,7 +460,9 @@ class ExternalFlight final : public FlightLink {
     } catch (const ProtocolError& e) {
       failed_ = true;
       std::string what = step + ": " + e.what();
-      Reap(0.2, true);
+      // a stack that closed the connection is usually exiting: its status names why (an
+      // interpreter's shutdown on a loaded machine can take a good part of a second)
+      Reap(kExitNoteWaitS, true);
       if (!exit_note_.empty()) what += " (" + exit_note_ + ")";
       Fail(what);
     }
