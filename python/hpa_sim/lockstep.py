@@ -13,6 +13,10 @@ each reply (lockstep), so a slow controller slows the run, never the simulated v
         def step(self, tick):           # -> Command or None (keep the last command)
             ...
     run(Hover)
+
+A stack that runs the vehicle's rate loop itself passes owns_rate_loop=True and gives its class a
+rate_loop(rate_tick) method returning a RotorCommand (rotor speeds in rad/s): the simulator then
+runs no autopilot of its own (docs/protocol.md, rate_tick and rate_reply).
 """
 
 import json
