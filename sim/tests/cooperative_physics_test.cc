@@ -1,0 +1,261 @@
+// The cooperative model (hpa::CooperativeModel) against MuJoCo on the cooperative scene
+// (hpa::sim::CooperativeSceneXml): both rolled from the same taut state with the rotors' thrusts
+// held, as sim/tests/model_vs_physics_test.cc does for the single vehicle.
+#include <gtest/gtest.h>
+#include <mujoco/mujoco.h>
+
+#include <Eigen/Geometry>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <string>
+
+#include "hpa/models/cooperative_model.h"
+#include "hpa/models/data_dir.h"
+#include "hpa/models/params.h"
+#include "hpa/sim/cooperative_scene.h"
+#include "models/tests/temp_dir.h"
+
+namespace hpa::sim {
+namespace {
+
+using Eigen::Vector3d;
+using Eigen::VectorXd;
+using I = CooperativeStateIndex;
+
+// Largest differences over a rollout, over the payload and every vehicle.
+struct Residual {
+  double payload_pos_m = 0, payload_vel_mps = 0, payload_attitude_rad = 0;
+  double quad_pos_m = 0, quad_vel_mps = 0, quad_attitude_rad = 0, body_rate_radps = 0;
+  bool mujoco_all_taut = true;  // every MuJoCo cable at its length at every step
+};
+
+Eigen::Quaterniond QuaternionAt(const VectorXd& x, int at) {
+  return Eigen::Quaterniond(x(at), x(at + 1), x(at + 2), x(at + 3)).normalized();
+}
+
+// Writes a [p, v, q, w] block of the cooperative state into a free joint's qpos [p, q] and
+// qvel [v, w] (angular velocity in the body frame in both).
+void SetBlock(const mjModel* m, mjData* d, const char* joint, const VectorXd& x, int at) {
+  const int j = mj_name2id(m, mjOBJ_JOINT, joint);
+  ASSERT_GE(j, 0) << joint;
+  const int qa = m->jnt_qposadr[j], va = m->jnt_dofadr[j];
+  for (int k = 0; k < 3; ++k) {
+    d->qpos[qa + k] = x(at + k);
+    d->qvel[va + k] = x(at + 3 + k);
+    d->qvel[va + 3 + k] = x(at + 10 + k);
+  }
+  for (int k = 0; k < 4; ++k) d->qpos[qa + 3 + k] = x(at + 6 + k);
+}
+
+// Reads a free joint back as a [p, v, q, w] block.
+VectorXd GetBlock(const mjModel* m, const mjData* d, const char* joint) {
+  const int j = mj_name2id(m, mjOBJ_JOINT, joint);
+  const int qa = m->jnt_qposadr[j], va = m->jnt_dofadr[j];
+  VectorXd b(I::kBlockSize);
+  for (int k = 0; k < 3; ++k) {
+    b(k) = d->qpos[qa + k];
+    b(3 + k) = d->qvel[va + k];
+    b(10 + k) = d->qvel[va + 3 + k];
+  }
+  for (int k = 0; k < 4; ++k) b(6 + k) = d->qpos[qa + 3 + k];
+  return b;
+}
+
+Residual Rollout(const char* name, const CooperativeTeam& team, const VectorXd& x0,
+                 const VectorXd& u, double duration_s) {
+  const int n = static_cast<int>(team.vehicles.size());
+  const std::string path = TestTempDir() + "cooperative_scene.xml";
+  std::ofstream(path) << CooperativeSceneXml(team, DataPath("models/scene.xml"));
+  char error[1024] = "";
+  mjModel* m = mj_loadXML(path.c_str(), nullptr, error, sizeof(error));
+  EXPECT_NE(m, nullptr) << error;
+  Residual r;
+  if (m == nullptr) return r;
+  EXPECT_EQ(error[0], '\0') << error;
+  mjData* d = mj_makeData(m);
+  const CooperativeModel model(team);
+
+  // same state, rotor thrusts f = k_f w^2 held (no motor lag in either)
+  SetBlock(m, d, "payload_joint", x0, 0);
+  for (int i = 0; i < n; ++i) {
+    SetBlock(m, d, ("quadrotor_" + std::to_string(i) + "_joint").c_str(), x0, I::Vehicle(i));
+    for (int k = 0; k < 4; ++k) {
+      const double w = u(4 * i + k);
+      d->ctrl[mj_name2id(m, mjOBJ_ACTUATOR,
+                         ("rotor_" + std::to_string(i) + "_" + std::to_string(k)).c_str())] =
+          team.vehicles[i].params.k_f_N_per_radps2 * w * w;
+    }
+  }
+  mj_forward(m, d);
+
+  const std::vector<CableMode> modes(n, CableMode::kTaut);
+  VectorXd x = x0;
+  const int steps = static_cast<int>(std::lround(duration_s / m->opt.timestep));
+  for (int s = 0; s < steps; ++s) {
+    mj_step(m, d);
+    // RK4 at the physics step is far finer than MuJoCo's semi-implicit Euler: the residual is
+    // the physics difference (Euler, the soft cable limits)
+    x = model.Step(x, u, modes, m->opt.timestep);
+    const VectorXd xp = GetBlock(m, d, "payload_joint");
+    r.payload_pos_m = std::max(r.payload_pos_m, (xp.head<3>() - x.segment<3>(0)).norm());
+    r.payload_vel_mps = std::max(r.payload_vel_mps, (xp.segment<3>(3) - x.segment<3>(3)).norm());
+    r.payload_attitude_rad =
+        std::max(r.payload_attitude_rad, QuaternionAt(xp, 6).angularDistance(QuaternionAt(x, 6)));
+    for (int i = 0; i < n; ++i) {
+      const int b = I::Vehicle(i);
+      const VectorXd xq = GetBlock(m, d, ("quadrotor_" + std::to_string(i) + "_joint").c_str());
+      r.quad_pos_m = std::max(r.quad_pos_m, (xq.head<3>() - x.segment<3>(b)).norm());
+      r.quad_vel_mps = std::max(r.quad_vel_mps, (xq.segment<3>(3) - x.segment<3>(b + 3)).norm());
+      r.quad_attitude_rad = std::max(r.quad_attitude_rad,
+                                     QuaternionAt(xq, 6).angularDistance(QuaternionAt(x, b + 6)));
+      r.body_rate_radps =
+          std::max(r.body_rate_radps, (xq.segment<3>(10) - x.segment<3>(b + 10)).norm());
+      // taut: within RotorTM's istaut band (1 mm) of the cable's length
+      r.mujoco_all_taut &= d->ten_length[i] > team.vehicles[i].cable_length_m - 1e-3;
+    }
+  }
+  for (int w = 0; w < mjNWARNING; ++w) EXPECT_EQ(d->warning[w].number, 0) << "MuJoCo warning " << w;
+  std::printf(
+      "[measured] %-26s N = %d, %.2f s: payload pos %.2e m, vel %.2e m/s, attitude %.2e rad; "
+      "quad pos %.2e m, vel %.2e m/s, attitude %.2e rad, body rate %.2e rad/s\n",
+      name, n, duration_s, r.payload_pos_m, r.payload_vel_mps, r.payload_attitude_rad, r.quad_pos_m,
+      r.quad_vel_mps, r.quad_attitude_rad, r.body_rate_radps);
+  mj_deleteData(d);
+  mj_deleteModel(m);
+  return r;
+}
+
+// Tolerances: about 10x the largest residual measured over the cases below ("[measured]" lines;
+// docs/cooperative.md records them). The residual is MuJoCo's Euler step and its soft cable
+// limits against RK4 on hard constraints, of the size model_vs_physics_test measures for one
+// vehicle; a wrong attachment, mass, coupling term or sign shows up as centimetres and 0.1 m/s.
+constexpr double kPayloadPosTol_m = 0.005;
+constexpr double kPayloadVelTol_mps = 0.1;
+constexpr double kPayloadAttitudeTol_rad = 0.005;
+constexpr double kQuadPosTol_m = 0.003;
+constexpr double kQuadVelTol_mps = 0.016;
+constexpr double kQuadAttitudeTol_rad = 0.014;
+constexpr double kBodyRateTol_radps = 0.007;
+
+void ExpectAgree(const Residual& r) {
+  EXPECT_TRUE(r.mujoco_all_taut) << "a MuJoCo cable went slack during the rollout";
+  EXPECT_LT(r.payload_pos_m, kPayloadPosTol_m);
+  EXPECT_LT(r.payload_vel_mps, kPayloadVelTol_mps);
+  EXPECT_LT(r.payload_attitude_rad, kPayloadAttitudeTol_rad);
+  EXPECT_LT(r.quad_pos_m, kQuadPosTol_m);
+  EXPECT_LT(r.quad_vel_mps, kQuadVelTol_mps);
+  EXPECT_LT(r.quad_attitude_rad, kQuadAttitudeTol_rad);
+  EXPECT_LT(r.body_rate_radps, kBodyRateTol_radps);
+}
+
+// A team of n params.yaml vehicles on a payload of the given mass and inertia, attachments
+// spread on a circle of radius_m (a bar for n = 2, a triangle for n = 3), cables of lengths
+// 0.5, 0.6, 0.7 m.
+CooperativeTeam Team(int n, double payload_mass_kg, const Vector3d& inertia_kgm2, double radius_m) {
+  const Params p = LoadParams(DefaultParamsPath());
+  CooperativeTeam team;
+  team.payload_mass_kg = payload_mass_kg;
+  team.payload_inertia_P_kgm2 = inertia_kgm2;
+  team.gravity_mps2 = p.gravity_mps2;
+  for (int i = 0; i < n; ++i) {
+    CooperativeVehicle v;
+    v.params = p;
+    v.cable_length_m = 0.5 + 0.1 * i;
+    const double a = 2 * M_PI * i / n;
+    v.p_PA_P_m = radius_m * Vector3d(std::cos(a), std::sin(a), 0);
+    team.vehicles.push_back(v);
+  }
+  return team;
+}
+
+// Rotor speeds giving each vehicle its own weight plus an equal share of the payload's.
+VectorXd ShareOfHover(const CooperativeTeam& team) {
+  const int n = static_cast<int>(team.vehicles.size());
+  VectorXd u(4 * n);
+  for (int i = 0; i < n; ++i) {
+    const Params& p = team.vehicles[i].params;
+    const double f_N = (p.quad_mass_kg + team.payload_mass_kg / n) * p.gravity_mps2 / 4;
+    u.segment<4>(4 * i).setConstant(std::sqrt(f_N / p.k_f_N_per_radps2));
+  }
+  return u;
+}
+
+// Each vehicle leaning its cable outward by lean_rad from its attachment, moving with the
+// payload plus a velocity across its cable; the payload moving and turning.
+VectorXd SpreadMovingState(const CooperativeTeam& team, double lean_rad) {
+  const CooperativeModel model(team);
+  VectorXd x = model.HangingState(Vector3d(0, 0, 1.5));
+  x.segment<3>(I::kPayloadVel) = Vector3d(0.3, -0.2, 0.1);
+  x.segment<3>(I::kPayloadRate) = Vector3d(0.1, -0.2, 0.4);
+  const Eigen::Matrix3d R_WP = Eigen::Matrix3d::Identity();
+  for (int i = 0; i < model.VehicleCount(); ++i) {
+    const CooperativeVehicle& v = team.vehicles[i];
+    const Vector3d out = v.p_PA_P_m.norm() > 0 ? v.p_PA_P_m.normalized() : Vector3d::UnitX();
+    const Vector3d xi = (-std::cos(lean_rad) * Vector3d::UnitZ() - std::sin(lean_rad) * out);
+    const Vector3d p_A = x.segment<3>(I::kPayloadPos) + R_WP * v.p_PA_P_m;
+    const Vector3d v_A =
+        x.segment<3>(I::kPayloadVel) + R_WP * x.segment<3>(I::kPayloadRate).cross(v.p_PA_P_m);
+    const int b = I::Vehicle(i);
+    x.segment<3>(b + I::kVehiclePos) = p_A - v.cable_length_m * xi;
+    x.segment<3>(b + I::kVehicleVel) = v_A + 0.2 * xi.cross(Vector3d::UnitZ()).normalized();
+    x.segment<3>(b + I::kVehicleRate) = Vector3d(0.2, -0.1, 0.3) * (i + 1);
+  }
+  return x;
+}
+
+TEST(CooperativePhysicsTest, TwoVehiclesHangingABarAtHover) {
+  // a 0.2 kg, 0.5 m bar hanging level under two vehicles, each at its share of hover
+  const CooperativeTeam team = Team(2, 0.2, Vector3d(1e-4, 4.2e-3, 4.2e-3), 0.2);
+  const CooperativeModel model(team);
+  ExpectAgree(Rollout("bar hanging", team, model.HangingState(Vector3d(0, 0, 1.5)),
+                      ShareOfHover(team), 0.5));
+}
+
+TEST(CooperativePhysicsTest, TwoVehiclesSpreadAndMovingWithUnequalRotors) {
+  const CooperativeTeam team = Team(2, 0.2, Vector3d(1e-4, 4.2e-3, 4.2e-3), 0.2);
+  const CooperativeModel model(team);
+  const VectorXd x0 = SpreadMovingState(team, 0.35);
+  VectorXd u = ShareOfHover(team);
+  u.segment<4>(0) = u.segment<4>(0).cwiseProduct(Eigen::Vector4d(1.08, 1.02, 1.06, 1.0));
+  u.segment<4>(4) = u.segment<4>(4).cwiseProduct(Eigen::Vector4d(1.0, 1.05, 1.03, 1.07));
+  ASSERT_GT(model.CableTensionsN(x0, u, {CableMode::kTaut, CableMode::kTaut}).minCoeff(), 0.1);
+  ExpectAgree(Rollout("bar spread, moving", team, x0, u, 0.3));
+}
+
+TEST(CooperativePhysicsTest, ThreeVehiclesOnATriangleSpreadAndTurning) {
+  // a 0.3 kg triangular plate, attachments 0.2 m from its centre, cables 0.5, 0.6, 0.7 m
+  const CooperativeTeam team = Team(3, 0.3, Vector3d(3e-3, 3e-3, 6e-3), 0.2);
+  const CooperativeModel model(team);
+  const VectorXd x0 = SpreadMovingState(team, 0.3);
+  VectorXd u = ShareOfHover(team);
+  u.segment<4>(8) *= 1.05;
+  ASSERT_GT(model.CableTensionsN(x0, u, std::vector<CableMode>(3, CableMode::kTaut)).minCoeff(),
+            0.1);
+  ExpectAgree(Rollout("triangle spread, turning", team, x0, u, 0.3));
+}
+
+TEST(CooperativePhysicsTest, OneVehicleIsTheSingleVehicleScene) {
+  // N = 1 with the cable at the payload's centre: model_vs_physics_test's swinging case
+  const Params p = LoadParams(DefaultParamsPath());
+  CooperativeTeam team = CooperativeTeam::SingleVehicle(p);
+  team.payload_inertia_P_kgm2 = Vector3d::Constant(6.4e-5);  // models/scene.xml's sphere
+  const CooperativeModel model(team);
+  VectorXd x0 = model.HangingState(Vector3d(0, 0, 1.5));
+  const double a = 25.0 * M_PI / 180.0;
+  x0.segment<3>(I::kPayloadPos) =
+      x0.segment<3>(I::Vehicle(0)) + p.cable_length_m * Vector3d(std::sin(a), 0, -std::cos(a));
+  ExpectAgree(
+      Rollout("single swinging", team, x0, VectorXd::Constant(4, p.HoverMotorSpeedRadps()), 0.5));
+}
+
+TEST(CooperativePhysicsTest, SceneReadsTheSingleSceneCable) {
+  const CooperativeTeam team = Team(3, 0.3, Vector3d(3e-3, 3e-3, 6e-3), 0.2);
+  const std::string xml = CooperativeSceneXml(team, DataPath("models/scene.xml"));
+  EXPECT_NE(xml.find("solreflimit=\"0.002 10\""), std::string::npos) << xml;
+  EXPECT_NE(xml.find("range=\"0 0.69999999999999996\""), std::string::npos);
+  EXPECT_THROW(CooperativeSceneXml(team, "/nonexistent/scene.xml"), std::runtime_error);
+}
+
+}  // namespace
+}  // namespace hpa::sim
