@@ -170,7 +170,11 @@ std::vector<FaultComponentDecl> BuildComponents() {
           Number("visible_rate", "1",
                  "probability that it is drawn in a frame (each frame a draw from the fault's "
                  "seeded stream; 1: in every frame)",
-                 0.0, 1.0, 1.0, &Fault::distractor_visible_fraction)}}}},
+                 0.0, 1.0, 1.0, &Fault::distractor_visible_fraction),
+          Vector("sign_size", "m",
+                 "draws it as a level box (a red sign) of these full sizes x, y, z (world frame) "
+                 "in the payload's material; any 0: the payload's sphere",
+                 0.0, 2.0, 0.0, &Fault::distractor_sign_size_m)}}}},
   };
 }
 
@@ -457,14 +461,15 @@ void Faults::TallyDistractorFrame(Active* a, double now_s, const SystemState& tr
   if (drawn && to_distractor_rad < to_payload_rad) ++t.detections_on_distractor;
 }
 
-std::vector<std::array<double, 3>> Faults::DistractorPositions_W(double now_s) const {
-  std::vector<std::array<double, 3>> out;
+std::vector<DistractorDraw> Faults::DistractorsDrawn(double now_s) const {
+  std::vector<DistractorDraw> out;
   for (const Active& a : faults_) {
     const Fault& f = a.fault;
     if (f.mode != FaultMode::kDistractor || !InWindow(f, now_s)) continue;
     if (!DistractorDrawn(a, now_s)) continue;
     const Eigen::Vector3d p_W = DistractorPosition_W(f, now_s);
-    out.push_back({p_W.x(), p_W.y(), p_W.z()});
+    const Eigen::Vector3d& size_m = f.distractor_sign_size_m;
+    out.push_back({{p_W.x(), p_W.y(), p_W.z()}, {size_m.x(), size_m.y(), size_m.z()}});
   }
   return out;
 }

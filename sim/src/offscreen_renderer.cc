@@ -250,9 +250,11 @@ cv::Mat OffscreenRenderer::Render(mjData* data, int camera_id, int width_px, int
   return bgr;
 }
 
-void OffscreenRenderer::SetGeomCopies(int geom_id, std::vector<std::array<double, 3>> positions_W) {
+void OffscreenRenderer::SetGeomCopies(int geom_id, std::vector<std::array<double, 3>> positions_W,
+                                      std::vector<std::array<double, 3>> box_sizes_m) {
   copied_geom_ = geom_id;
   copy_positions_W_ = std::move(positions_W);
+  copy_box_sizes_m_ = std::move(box_sizes_m);
 }
 
 // The copies SetGeomCopies asked for, after the scene's own geoms (as many as the scene holds).
@@ -262,12 +264,22 @@ void OffscreenRenderer::AddGeomCopies(mjvScene* scene) const {
   for (int i = 0; i < n; ++i) {
     const mjvGeom& g = scene->geoms[i];
     if (g.objtype != mjOBJ_GEOM || g.objid != copied_geom_) continue;
-    for (const std::array<double, 3>& p_W : copy_positions_W_) {
+    for (size_t c = 0; c < copy_positions_W_.size(); ++c) {
       if (scene->ngeom >= scene->maxgeom) return;
       mjvGeom& copy = scene->geoms[scene->ngeom++];
       copy = g;
-      for (int k = 0; k < 3; ++k) copy.pos[k] = static_cast<float>(p_W[k]);
+      for (int k = 0; k < 3; ++k) copy.pos[k] = static_cast<float>(copy_positions_W_[c][k]);
       copy.segid = scene->ngeom - 1;
+      // a level box of its own size in the geom's material
+      if (c < copy_box_sizes_m_.size()) {
+        const std::array<double, 3>& size_m = copy_box_sizes_m_[c];
+        if (size_m[0] > 0.0 && size_m[1] > 0.0 && size_m[2] > 0.0) {
+          copy.type = mjGEOM_BOX;
+          copy.dataid = -1;
+          for (int k = 0; k < 3; ++k) copy.size[k] = static_cast<float>(0.5 * size_m[k]);
+          for (int k = 0; k < 9; ++k) copy.mat[k] = k % 4 == 0 ? 1.0f : 0.0f;
+        }
+      }
     }
     return;
   }

@@ -49,8 +49,10 @@ class OffscreenRenderer {
 
   /// Draws, in the following Render calls, copies of geom `geom_id` (its shape, size, material
   /// and orientation) centred at each of `positions_W` (m, world frame): a second object of the
-  /// same look (a camera fault's distractor). Empty: none.
-  void SetGeomCopies(int geom_id, std::vector<std::array<double, 3>> positions_W);
+  /// same look (a camera fault's distractor); a copy whose `box_sizes_m` entry (full sizes x, y,
+  /// z) has no zero is a level box of that size in the geom's material. Empty: none.
+  void SetGeomCopies(int geom_id, std::vector<std::array<double, 3>> positions_W,
+                     std::vector<std::array<double, 3>> box_sizes_m = {});
 
   /// Whether Render leaves out the geoms the frame cannot show (scene_culling.h): on by default;
   /// the frame is the same either way, only faster.
@@ -87,6 +89,7 @@ class OffscreenRenderer {
   bool geom_group_visible_[6] = {true, true, true, false, false, false};
   int copied_geom_ = -1;                                   // the geom SetGeomCopies copies
   std::vector<std::array<double, 3>> copy_positions_W_;   // where its copies are (m, world)
+  std::vector<std::array<double, 3>> copy_box_sizes_m_;   // their box sizes (none or a 0: geom's)
 };
 
 }  // namespace hpa::sim

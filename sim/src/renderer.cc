@@ -21,6 +21,21 @@
 #include "world_detail.h"
 
 namespace hpa::sim {
+namespace {
+
+// The distractors `faults` draws at `now_s`: copies of the payload's geom `payload_geom` (a box
+// where a distractor is a sign) in the scenes `offscreen` renders next.
+void SetDistractorCopies(const Faults& faults, int payload_geom, double now_s,
+                         OffscreenRenderer* offscreen) {
+  std::vector<std::array<double, 3>> positions_W, box_sizes_m;
+  for (const DistractorDraw& d : faults.DistractorsDrawn(now_s)) {
+    positions_W.push_back(d.p_W_m);
+    box_sizes_m.push_back(d.sign_size_m);
+  }
+  offscreen->SetGeomCopies(payload_geom, std::move(positions_W), std::move(box_sizes_m));
+}
+
+}  // namespace
 
 Renderer::Renderer(World& world) : w_(world) {
   if (w_.config_.randomize_appearance) RandomizeAppearance();
@@ -148,7 +163,7 @@ void Renderer::RenderPayloadCamera(cv::Mat* bgr, const cv::Rect& region) {
   const int w = w_.model_->vis.global.offwidth, h = w_.model_->vis.global.offheight;
   // a camera fault's distractors drawn at this instant: copies of the payload's sphere
   if (!w_.faults_.empty()) {
-    offscreen_->SetGeomCopies(w_.ids_.payload_geom, w_.faults_.DistractorPositions_W(w_.time_s()));
+    SetDistractorCopies(w_.faults_, w_.ids_.payload_geom, w_.time_s(), offscreen_.get());
   }
   // noise keyed by the physics step: a region and the whole frame of one instant agree
   const uint64_t frame = static_cast<uint64_t>(w_.step_);
@@ -199,7 +214,7 @@ cv::Mat Renderer::RenderChaseCamera(int width_px, int height_px) {
   offscreen_->SetGeomGroupVisible(kGripperGeomGroup,
                                   w_.model_->eq_active[w_.ids_.gripper_weld] != 0);
   if (!w_.faults_.empty()) {
-    offscreen_->SetGeomCopies(w_.ids_.payload_geom, w_.faults_.DistractorPositions_W(w_.time_s()));
+    SetDistractorCopies(w_.faults_, w_.ids_.payload_geom, w_.time_s(), offscreen_.get());
   }
   const cv::Mat frame = offscreen_->Render(w_.data_, w_.ids_.chase_camera, width_px, height_px);
   offscreen_->SetGeomGroupVisible(kGripperGeomGroup, false);

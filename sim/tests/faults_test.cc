@@ -190,17 +190,17 @@ TEST(FaultsTest, MotorFactorsScaleTheFaultyRotorOnlyInItsWindow) {
 
 TEST(FaultsTest, ADistractorMovesAtItsVelocityOnlyInItsWindow) {
   Faults faults(1);
-  EXPECT_TRUE(faults.DistractorPositions_W(0.0).empty());
+  EXPECT_TRUE(faults.DistractorsDrawn(0.0).empty());
   Fault d = MakeFault(FaultComponent::kCamera, FaultMode::kDistractor, 1.0, 3.0);
   d.distractor_W_m = Eigen::Vector3d(0.4, 0, 0.6);
   d.distractor_velocity_W_mps = Eigen::Vector3d(-0.2, 0, 0);
   faults.Inject(d);
-  EXPECT_TRUE(faults.DistractorPositions_W(0.5).empty());
-  const std::vector<std::array<double, 3>> at_2 = faults.DistractorPositions_W(2.0);
+  EXPECT_TRUE(faults.DistractorsDrawn(0.5).empty());
+  const std::vector<DistractorDraw> at_2 = faults.DistractorsDrawn(2.0);
   ASSERT_EQ(at_2.size(), 1u);
-  EXPECT_NEAR(at_2[0][0], 0.2, 1e-12);
-  EXPECT_EQ(at_2[0][2], 0.6);
-  EXPECT_TRUE(faults.DistractorPositions_W(3.0).empty());
+  EXPECT_NEAR(at_2[0].p_W_m[0], 0.2, 1e-12);
+  EXPECT_EQ(at_2[0].p_W_m[2], 0.6);
+  EXPECT_TRUE(faults.DistractorsDrawn(3.0).empty());
 }
 
 // The frames of a camera captured at 30 Hz for `seconds` from t = 0 in which `faults` draws a
@@ -208,7 +208,7 @@ TEST(FaultsTest, ADistractorMovesAtItsVelocityOnlyInItsWindow) {
 std::vector<bool> DrawnFrames(const Faults& faults, double seconds) {
   std::vector<bool> drawn;
   for (int k = 0; k < static_cast<int>(seconds * 30.0); ++k) {
-    drawn.push_back(!faults.DistractorPositions_W(k / 30.0).empty());
+    drawn.push_back(!faults.DistractorsDrawn(k / 30.0).empty());
   }
   return drawn;
 }
@@ -228,7 +228,7 @@ TEST(FaultsTest, AFlickeringDistractorIsDrawnInItsShareOfFramesTheSameForTheSame
   EXPECT_NE(drawn, DrawnFrames(other_seed, 100.0));
   // every render of one instant agrees (a region, the whole frame, the chase camera)
   for (int k = 0; k < 30; ++k) {
-    EXPECT_EQ(faults.DistractorPositions_W(k / 30.0), faults.DistractorPositions_W(k / 30.0));
+    EXPECT_EQ(faults.DistractorsDrawn(k / 30.0).size(), faults.DistractorsDrawn(k / 30.0).size());
   }
   // 1: every frame; 0: none
   for (const double rate : {0.0, 1.0}) {

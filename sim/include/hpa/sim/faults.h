@@ -63,6 +63,15 @@ struct Fault {
   Eigen::Vector3d distractor_W_m = Eigen::Vector3d::Zero();             // where it starts  (3)
   Eigen::Vector3d distractor_velocity_W_mps = Eigen::Vector3d::Zero();  // how it moves  (3)
   double distractor_visible_fraction = 1.0;  // distractor: probability it is drawn in a frame
+  // distractor: drawn as a level box of these full sizes (x, y, z) in the payload's material; a
+  // zero entry: the payload's sphere  (3)
+  Eigen::Vector3d distractor_sign_size_m = Eigen::Vector3d::Zero();
+};
+
+/// A distractor as the rendered scene draws it.
+struct DistractorDraw {
+  std::array<double, 3> p_W_m{};        // its centre (m, world frame)
+  std::array<double, 3> sign_size_m{};  // a level box of these full sizes (m); a 0: a sphere copy
 };
 
 /// What one camera fault's frames showed, counted at capture over its window: how often a
@@ -144,10 +153,10 @@ class Faults {
   bool DefersRelease(double now_s);
   /// True once when the gripper lets go on its own at `now_s` (early, or a late one's end).
   bool TakeGripperRelease(double now_s);
-  /// Where the camera's distractors drawn at `now_s` are (m, world frame): the rendered scene
-  /// draws a copy of the payload at each. Whether a flickering distractor is drawn is a draw
-  /// keyed by `now_s` from its fault's stream, so every render of one instant agrees.
-  std::vector<std::array<double, 3>> DistractorPositions_W(double now_s) const;
+  /// The camera's distractors drawn at `now_s`: where each is and its shape (the payload's sphere
+  /// or a box). Whether a flickering distractor is drawn is a draw keyed by `now_s` from its
+  /// fault's stream, so every render of one instant agrees.
+  std::vector<DistractorDraw> DistractorsDrawn(double now_s) const;
   /// One tally per injected fault, in the order injected (the distractor counts for a
   /// distractor fault, zeros for the others).
   std::vector<FaultFrameTally> FrameTallies() const;
