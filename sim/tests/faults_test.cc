@@ -200,7 +200,14 @@ TEST(FaultsTest, ADistractorMovesAtItsVelocityOnlyInItsWindow) {
   ASSERT_EQ(at_2.size(), 1u);
   EXPECT_NEAR(at_2[0].p_W_m[0], 0.2, 1e-12);
   EXPECT_EQ(at_2[0].p_W_m[2], 0.6);
+  EXPECT_EQ(at_2[0].sign_size_m, (std::array<double, 3>{0, 0, 0}));  // the payload's sphere
   EXPECT_TRUE(faults.DistractorsDrawn(3.0).empty());
+  // a sign: its box size reaches the renderer
+  Faults sign_faults(1);
+  d.distractor_sign_size_m = Eigen::Vector3d(0.2, 0.1, 0.01);
+  sign_faults.Inject(d);
+  EXPECT_EQ(sign_faults.DistractorsDrawn(2.0).at(0).sign_size_m,
+            (std::array<double, 3>{0.2, 0.1, 0.01}));
 }
 
 // The frames of a camera captured at 30 Hz for `seconds` from t = 0 in which `faults` draws a
