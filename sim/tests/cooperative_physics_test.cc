@@ -249,6 +249,92 @@ TEST(CooperativePhysicsTest, OneVehicleIsTheSingleVehicleScene) {
       Rollout("single swinging", team, x0, VectorXd::Constant(4, p.HoverMotorSpeedRadps()), 0.5));
 }
 
+TEST(CooperativePhysicsTest, TwoCablesSnappingTautTogetherAreRotorTmsInelasticCollision) {
+  // zero gravity, rotors at their minimum thrust: a bar at rest, both cables 0.5 % short of their
+  // length, the vehicles flying away along them at 1.0 and 0.6 m/s so that both snap taut at the
+  // fifth step; the model takes RotorTM's multi-cable collision there and flies on taut
+  CooperativeTeam team = Team(2, 0.2, Vector3d(1e-4, 4.2e-3, 4.2e-3), 0.2);
+  team.gravity_mps2 = 0;
+  for (CooperativeVehicle& v : team.vehicles) v.params.gravity_mps2 = 0;
+  const CooperativeModel model(team);
+  VectorXd x0 = model.HangingState(Vector3d(0, 0, 1.5));
+  const double dt_s = 1e-3;
+  const double speed_mps[2] = {1.0, 0.6};
+  for (int i = 0; i < 2; ++i) {
+    const CooperativeVehicle& v = team.vehicles[i];
+    const Vector3d xi = Vector3d(-0.3 * v.p_PA_P_m.normalized().x(), 0.2, -1).normalized();
+    const Vector3d p_A = x0.segment<3>(I::kPayloadPos) + v.p_PA_P_m;
+    const double gap_m = 5 * dt_s * speed_mps[i];
+    x0.segment<3>(I::Vehicle(i) + I::kVehiclePos) = p_A - (v.cable_length_m - gap_m) * xi;
+    x0.segment<3>(I::Vehicle(i) + I::kVehicleVel) = -speed_mps[i] * xi;
+  }
+  const Params& p = team.vehicles[0].params;
+  const VectorXd u = VectorXd::Constant(8, p.motor_speed_min_radps);
+
+  // the model: slack flight, the jump on the cables that reach their length, taut flight
+  std::vector<CableMode> modes(2, CableMode::kSlack);
+  VectorXd x = x0;
+  const int steps = 35;
+  int snap_step = -1;
+  for (int k = 0; k < steps; ++k) {
+    x = model.Step(x, u, modes, dt_s);
+    const std::vector<bool> retauting = model.RetautingCables(x, 1e-5);
+    if (retauting[0] || retauting[1]) {
+      ASSERT_TRUE(retauting[0] && retauting[1]) << "the cables were laid out to snap together";
+      x = model.RetautCollision(x, retauting);
+      modes.assign(2, CableMode::kTaut);
+      snap_step = k;
+    }
+  }
+  ASSERT_GE(snap_step, 3);
+
+  // MuJoCo from the same state
+  const std::string path = TestTempDir() + "cooperative_scene.xml";
+  std::ofstream(path) << CooperativeSceneXml(team, DataPath("models/scene.xml"));
+  char error[1024] = "";
+  mjModel* m = mj_loadXML(path.c_str(), nullptr, error, sizeof(error));
+  ASSERT_NE(m, nullptr) << error;
+  m->opt.gravity[2] = 0;
+  mjData* d = mj_makeData(m);
+  SetBlock(m, d, "payload_joint", x0, 0);
+  for (int i = 0; i < 2; ++i) {
+    SetBlock(m, d, ("quadrotor_" + std::to_string(i) + "_joint").c_str(), x0, I::Vehicle(i));
+    for (int k = 0; k < 4; ++k) {
+      d->ctrl[4 * i + k] = p.k_f_N_per_radps2 * u(4 * i + k) * u(4 * i + k);
+    }
+  }
+  for (int k = 0; k < steps; ++k) mj_step(m, d);
+
+  // velocities after the snap, relative to the jump the collision gives the payload
+  const VectorXd xp = GetBlock(m, d, "payload_joint");
+  const double jump_mps = x.segment<3>(I::kPayloadVel).norm();
+  const double payload_vel_rel =
+      (xp.segment<3>(3) - x.segment<3>(I::kPayloadVel)).norm() / jump_mps;
+  const double payload_rate_radps = (xp.segment<3>(10) - x.segment<3>(I::kPayloadRate)).norm();
+  double quad_vel_rel = 0;
+  for (int i = 0; i < 2; ++i) {
+    const VectorXd xq = GetBlock(m, d, ("quadrotor_" + std::to_string(i) + "_joint").c_str());
+    quad_vel_rel = std::max(
+        quad_vel_rel,
+        (xq.segment<3>(3) - x.segment<3>(I::Vehicle(i) + I::kVehicleVel)).norm() / jump_mps);
+    EXPECT_GT(d->ten_length[i], team.vehicles[i].cable_length_m - 1e-3) << "cable " << i;
+  }
+  std::printf(
+      "[measured] snap of two cables, %d ms after: payload velocity jump %.3f m/s, rate "
+      "%.3f rad/s; MuJoCo - model: payload velocity %.2e, vehicles' velocity %.2e "
+      "(relative to the jump), payload rate %.2e rad/s\n",
+      steps - snap_step - 1, jump_mps, x.segment<3>(I::kPayloadRate).norm(), payload_vel_rel,
+      quad_vel_rel, payload_rate_radps);
+  // bounds about 10x the measured ("[measured]" line, docs/cooperative.md): MuJoCo's soft limit
+  // resolves the snap over about two steps, the model in one jump; the collision without its
+  // angular part misses by 0.3 of the jump and 1 rad/s
+  EXPECT_LT(payload_vel_rel, 1.5e-3);
+  EXPECT_LT(quad_vel_rel, 2.5e-4);
+  EXPECT_LT(payload_rate_radps, 1.5e-3);
+  mj_deleteData(d);
+  mj_deleteModel(m);
+}
+
 TEST(CooperativePhysicsTest, SceneReadsTheSingleSceneCable) {
   const CooperativeTeam team = Team(3, 0.3, Vector3d(3e-3, 3e-3, 6e-3), 0.2);
   const std::string xml = CooperativeSceneXml(team, DataPath("models/scene.xml"));
