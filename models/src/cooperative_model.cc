@@ -48,6 +48,7 @@ struct CableGeometry {
   double span_m = 0;            // |p_A - p_Q|
 };
 
+// Cable i's geometry at x, and its vehicle's thrust vector under u.
 CableGeometry Geometry(const CooperativeVehicle& v, const Eigen::VectorXd& x, int i,
                        const Eigen::VectorXd& u) {
   const Matrix3d R_WP = Rotation(x, I::kPayloadQuat);
@@ -73,9 +74,9 @@ CableGeometry Geometry(const CooperativeVehicle& v, const Eigen::VectorXd& x, in
 // The flow and the tensions it implies (RotorTM, rotor_tm_sim/src/rotor_tm_sim/
 // simulation_base.py, hybrid_cooperative_rigidbody_pl_transportationEOM with
 // rigidbody_payloadEOM_readonly, taut_quadEOM_readonly and slack_quadEOM_readonly).
-Eigen::VectorXd Flow(const CooperativeTeam& team, const Eigen::VectorXd& x,
-                     const Eigen::VectorXd& u, const std::vector<CableMode>& modes,
-                     Eigen::VectorXd* tensions_N) {
+Eigen::VectorXd Flow(const CooperativeTeam& team, const std::vector<HybridModel>& quadrotors,
+                     const Eigen::VectorXd& x, const Eigen::VectorXd& u,
+                     const std::vector<CableMode>& modes, Eigen::VectorXd* tensions_N) {
   const int n = static_cast<int>(team.vehicles.size());
   if (x.size() != I::Size(n) || u.size() != 4 * n || static_cast<int>(modes.size()) != n) {
     throw std::invalid_argument("cooperative model: state, input or modes of the wrong size");
@@ -133,7 +134,7 @@ Eigen::VectorXd Flow(const CooperativeTeam& team, const Eigen::VectorXd& x,
     StateVector x19 = StateVector::Zero();
     x19.segment<I::kBlockSize>(StateIndex::kQuadPos) = x.segment<I::kBlockSize>(b);
     const StateVector x19_dot =
-        HybridModel(v.params).Derivative(x19, u.segment<4>(4 * i), CableMode::kSlack);
+        quadrotors[i].Derivative(x19, u.segment<4>(4 * i), CableMode::kSlack);
     x_dot.segment<I::kBlockSize>(b) = x19_dot.segment<I::kBlockSize>(StateIndex::kQuadPos);
     if (modes[i] != CableMode::kTaut) continue;
     const CableGeometry& g = cables[i];
@@ -177,20 +178,21 @@ CooperativeModel::CooperativeModel(CooperativeTeam team) : team_(std::move(team)
       throw std::invalid_argument("vehicle " + std::to_string(i) +
                                   ": cable length and mass must be positive, attachment finite");
     }
+    quadrotors_.emplace_back(v.params);
   }
 }
 
 Eigen::VectorXd CooperativeModel::Derivative(const Eigen::VectorXd& x, const Eigen::VectorXd& u,
                                              const std::vector<CableMode>& modes) const {
-  return Flow(team_, x, u, modes, nullptr);
+  return Flow(team_, quadrotors_, x, u, modes, nullptr);
 }
 
 Eigen::VectorXd CooperativeModel::Step(const Eigen::VectorXd& x, const Eigen::VectorXd& u,
                                        const std::vector<CableMode>& modes, double dt_s) const {
-  const Eigen::VectorXd k1 = Flow(team_, x, u, modes, nullptr);
-  const Eigen::VectorXd k2 = Flow(team_, x + 0.5 * dt_s * k1, u, modes, nullptr);
-  const Eigen::VectorXd k3 = Flow(team_, x + 0.5 * dt_s * k2, u, modes, nullptr);
-  const Eigen::VectorXd k4 = Flow(team_, x + dt_s * k3, u, modes, nullptr);
+  const Eigen::VectorXd k1 = Flow(team_, quadrotors_, x, u, modes, nullptr);
+  const Eigen::VectorXd k2 = Flow(team_, quadrotors_, x + 0.5 * dt_s * k1, u, modes, nullptr);
+  const Eigen::VectorXd k3 = Flow(team_, quadrotors_, x + 0.5 * dt_s * k2, u, modes, nullptr);
+  const Eigen::VectorXd k4 = Flow(team_, quadrotors_, x + dt_s * k3, u, modes, nullptr);
   Eigen::VectorXd x_next = x + dt_s / 6.0 * (k1 + 2 * k2 + 2 * k3 + k4);
   NormaliseQuaternions(VehicleCount(), &x_next);
   return x_next;
@@ -199,7 +201,7 @@ Eigen::VectorXd CooperativeModel::Step(const Eigen::VectorXd& x, const Eigen::Ve
 Eigen::VectorXd CooperativeModel::CableTensionsN(const Eigen::VectorXd& x, const Eigen::VectorXd& u,
                                                  const std::vector<CableMode>& modes) const {
   Eigen::VectorXd tensions_N;
-  Flow(team_, x, u, modes, &tensions_N);
+  Flow(team_, quadrotors_, x, u, modes, &tensions_N);
   return tensions_N;
 }
 

@@ -6,6 +6,7 @@
 #include <Eigen/Core>
 #include <vector>
 
+#include "hpa/models/hybrid_model.h"
 #include "hpa/models/params.h"
 #include "hpa/models/state.h"
 
@@ -103,6 +104,7 @@ class CooperativeModel {
 
  private:
   CooperativeTeam team_;
+  std::vector<HybridModel> quadrotors_;  // vehicle i's rigid body and rotors (its slack flow)
 };
 
 }  // namespace hpa
