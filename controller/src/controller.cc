@@ -2,10 +2,10 @@
 
 #include <algorithm>
 #include <cmath>
-#include <sstream>
 #include <stdexcept>
 
 #include "hpa/controller/controller_registry.h"
+#include "hpa/models/param_table.h"
 
 namespace hpa {
 namespace {
@@ -55,11 +55,9 @@ const char* ToString(ControlStatus status) {
 }
 
 std::string SettingText(const SettingValue& value) {
-  if (const auto* b = std::get_if<bool>(&value)) return *b ? "true" : "false";
   if (const auto* n = std::get_if<std::string>(&value)) return *n;
-  std::ostringstream text;
-  text << std::get<double>(value);
-  return text.str();
+  if (const auto* b = std::get_if<bool>(&value)) return ParamValueText(*b);
+  return ParamValueText(std::get<double>(value));
 }
 
 void CheckSetting(const SettingDecl& decl, const SettingValue& value, const std::string& prefix) {
