@@ -148,8 +148,10 @@ FlightStack::FlightStack(const FlightConfig& config)
     estimator_config.tension_cue.enabled = config.slack_tension_cue;
     estimator_ =
         MakeEstimator(config.estimator, estimator_config, config.params, config.initial_state);
-    detector_ = std::make_unique<PayloadDetector>(config.params);
   }
+  // with ground truth too: the rendered camera's detections are recorded (no estimator reads
+  // them, so the region stays the whole frame)
+  detector_ = std::make_unique<PayloadDetector>(config.params);
   if (config.control_thread) control_thread_ = std::make_unique<ControlThread>(controller_.get());
 }
 
@@ -179,7 +181,7 @@ int FlightStack::Finish(const FlightInputs& in) {
   Deliver(sensors);
   int found = 0;
   for (const CameraFrame& frame : in.frames) {
-    if (!detector_) break;
+    if (!estimator_) break;  // ground truth: no flight code reads them
     recent_detections_.Push(DetectFrame(*detector_, frame));
     found += recent_detections_.last.found ? 1 : 0;
   }
@@ -245,12 +247,16 @@ cv::Rect FlightStack::CameraRegion() const {
 }
 
 std::optional<PayloadDetection> FlightStack::DetectCaptured(const CameraFrame& frame) const {
-  if (!detector_) throw std::logic_error("FlightStack::DetectCaptured: no detector (ground truth)");
   if (frame.whole_bgr.empty()) {
     if (frame.region.area() <= 0 || frame.region_bgr.empty()) return std::nullopt;
     return detector_->DetectInRegion(frame.region_bgr, frame.region, frame.capture_time_s);
   }
   return DetectFrame(*detector_, frame);
+}
+
+PayloadDetection FlightStack::DetectCaptured(const CameraFrame& frame,
+                                             const WholeFrameReader& read_whole) const {
+  return DetectFrame(*detector_, frame, read_whole);
 }
 
 HealthFields FlightStack::EstimatorHealth() const {

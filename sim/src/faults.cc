@@ -316,67 +316,46 @@ void Faults::TakeHeld(std::vector<SensorMessage>* out) {
   }
 }
 
-void Faults::OnCameraCapture(double now_s, const SystemState& truth, const Params& world_params,
-                             CameraReadout* readout, std::optional<PayloadDetection>* detection,
-                             std::optional<CameraFrame>* frames, CameraCapture* capture) {
+CameraPixelFault Faults::OnCameraPixels(double now_s) {
+  CameraPixelFault pixels;
+  for (Active& a : faults_) {
+    const Fault& f = a.fault;
+    if (f.component != FaultComponent::kCamera || !InWindow(f, now_s)) continue;
+    if (f.mode == FaultMode::kStuck) {
+      pixels.frozen_whole = &a.frozen_whole;
+    } else if (f.mode == FaultMode::kGarbage) {
+      pixels.garbage = true;
+      pixels.noise_seed = a.rng();
+    }
+  }
+  return pixels;
+}
+
+void Faults::OnCameraReading(double now_s, const SystemState& truth, const Params& world_params,
+                             bool from_pixels, std::optional<PayloadDetection>* detection) {
   for (Active& a : faults_) {
     const Fault& f = a.fault;
     if (f.component != FaultComponent::kCamera || !InWindow(f, now_s)) continue;
     if (f.mode == FaultMode::kDistractor) {
       TallyDistractorFrame(&a, now_s, truth, world_params, *detection);
-    } else if (f.mode == FaultMode::kStuck) {
-      // the first frame of the fault (its detection, or its pixels) again
-      if (*detection) {
-        if (!a.frozen) {
-          a.frozen = SensorMessage(**detection);
-        } else {
-          const PayloadDetection& frozen = std::get<PayloadDetection>(*a.frozen);
-          const double t_s = (*detection)->time_s;
-          **detection = frozen;
-          (*detection)->time_s = t_s;
-        }
-        capture->detected = (*detection)->found;
-      }
-      if (*frames) {
-        CameraFrame& frame = **frames;
-        if (a.frozen_whole.empty()) {
-          a.frozen_whole = frame.whole_bgr.clone();
-        } else {
-          a.frozen_whole.copyTo(frame.whole_bgr);
-          if (frame.region.area() > 0) {
-            a.frozen_whole(frame.region).copyTo(frame.region_bgr(frame.region));
-          }
-        }
+      continue;
+    }
+    if (from_pixels || !*detection) continue;
+    PayloadDetection& d = **detection;
+    const double t_s = d.time_s;
+    if (f.mode == FaultMode::kStuck) {
+      // the first detection of the fault again
+      if (!a.frozen) {
+        a.frozen = SensorMessage(d);
+      } else {
+        d = std::get<PayloadDetection>(*a.frozen);
+        d.time_s = t_s;
       }
     } else if (f.mode == FaultMode::kGarbage) {
-      // uniform noise in every pixel, drawn from the fault's stream
-      cv::RNG noise(a.rng());
-      if (*frames) {
-        CameraFrame& frame = **frames;
-        noise.fill(frame.whole_bgr, cv::RNG::UNIFORM, 0, 256);
-        if (frame.region.area() > 0) frame.whole_bgr.copyTo(frame.region_bgr);
-      } else if (*detection) {
-        if (capture->frame != nullptr) {
-          // the rendered in-process frame: its noise detected as the stack would
-          cv::Mat garbage(capture->frame->size(), CV_8UC3);
-          noise.fill(garbage, cv::RNG::UNIFORM, 0, 256);
-          CameraFrame frame;
-          frame.capture_time_s = now_s;
-          frame.region = readout->Region();
-          frame.region_bgr = garbage;
-          const WholeFrameReader whole = [&]() -> const cv::Mat& { return garbage; };
-          const double t_s = (*detection)->time_s;
-          **detection = readout->Detect(frame, whole);
-          (*detection)->time_s = t_s;
-        } else {
-          // the analytic camera has no pixels: nothing found in noise
-          const double t_s = (*detection)->time_s;
-          **detection = PayloadDetection{};
-          (*detection)->time_s = t_s;
-          (*detection)->reason = "camera fault: garbage";
-        }
-        capture->detected = (*detection)->found;
-      }
+      // the analytic camera has no pixels: nothing found in noise
+      d = PayloadDetection{};
+      d.time_s = t_s;
+      d.reason = "camera fault: garbage";
     }
   }
 }

@@ -2,11 +2,11 @@
 
 #include "hpa/sim/payload_camera.h"
 
-#include <chrono>
 #include <cmath>
 
 #include "hpa/models/camera_model.h"
 #include "hpa/models/seed_streams.h"
+#include "hpa/sim/faults.h"
 #include "hpa/sim/world.h"
 
 namespace hpa::sim {
@@ -20,15 +20,10 @@ CameraNoiseModel ScaledNoise(double scale) {
   return noise;
 }
 
-double MsSince(std::chrono::steady_clock::time_point start) {
-  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
-      .count();
-}
-
-// Adds the world's timing of the frame it rendered last to the capture's.
-void AddRenderTiming(World& world, CameraCapture* capture) {
-  capture->render_ms += world.renderer().last_camera_timing().render_ms;
-  capture->image_model_ms += world.renderer().last_camera_timing().image_model_ms;
+// Adds the world's timing of the frame it rendered last to *render_ms and *image_model_ms.
+void AddRenderTiming(World& world, double* render_ms, double* image_model_ms) {
+  *render_ms += world.renderer().last_camera_timing().render_ms;
+  *image_model_ms += world.renderer().last_camera_timing().image_model_ms;
 }
 
 }  // namespace
@@ -51,15 +46,23 @@ void PayloadCameraSensor::Reset() {
   next_frame_ = 0;
 }
 
+// The k-th frame is due at the step nearest k / rate.
+int64_t PayloadCameraSensor::StepOfFrame(int64_t k) const {
+  return static_cast<int64_t>(std::llround(k * physics_hz_ / rate_hz_));
+}
+
+bool PayloadCameraSensor::FrameDue(int64_t step) const {
+  int64_t k = next_frame_;
+  while (StepOfFrame(k) < step) ++k;
+  return StepOfFrame(k) == step;
+}
+
 std::optional<CameraCapture> PayloadCameraSensor::Capture(
-    World& world, int64_t step, double time_s, CameraReadout* readout,
-    std::optional<PayloadDetection>* detection, std::optional<CameraFrame>* frames) {
-  // the k-th frame is due at the step nearest k / rate (a step with no capture call skips it)
-  const auto step_of = [&](int64_t k) {
-    return static_cast<int64_t>(std::llround(k * physics_hz_ / rate_hz_));
-  };
-  while (step_of(next_frame_) < step) ++next_frame_;
-  if (step_of(next_frame_) != step) return std::nullopt;
+    World& world, int64_t step, double time_s, const cv::Rect& region, Faults* faults,
+    std::optional<PayloadDetection>* detection) {
+  // a step with no capture call skips its frame
+  while (StepOfFrame(next_frame_) < step) ++next_frame_;
+  if (StepOfFrame(next_frame_) != step) return std::nullopt;
   ++next_frame_;
 
   const Eigen::Vector3d p_CL_C = PayloadInCamera_C(params_, world.GetTruth().state);
@@ -73,71 +76,60 @@ std::optional<CameraCapture> PayloadCameraSensor::Capture(
       *detection = analytic_.Measure(p_CL_C, time_s, rng_);
       capture.detected = (*detection)->found;
       break;
-    case CameraKind::kRendered:
-      if (readout->SendsFrames()) {
-        *frames = RenderFrames(world, time_s, readout, &capture);
-      } else {
-        *detection = RenderAndDetect(world, time_s, readout, &capture);
-        capture.detected = (*detection)->found;
-      }
+    case CameraKind::kRendered: {
+      const CameraPixelFault fault =
+          faults != nullptr ? faults->OnCameraPixels(time_s) : CameraPixelFault{};
+      capture.exposure.emplace(&world, &rendered_, time_s, region, fault);
       break;
+    }
   }
   return capture;
 }
 
-// The readout's region rendered, the whole frame only when its detector asks for it (when the
-// region cannot decide, or there is none).
-PayloadDetection PayloadCameraSensor::RenderAndDetect(World& world, double time_s,
-                                                      CameraReadout* readout,
-                                                      CameraCapture* capture) {
-  CameraFrame frame;
-  frame.capture_time_s = time_s;
-  frame.region = readout->Region();
-  if (frame.region.area() > 0) {
-    world.renderer().RenderPayloadCamera(&rendered_, frame.region);
-    AddRenderTiming(world, capture);
-    frame.region_bgr = rendered_;
+CameraExposure::CameraExposure(World* world, cv::Mat* buffer, double time_s,
+                               const cv::Rect& region, const CameraPixelFault& fault)
+    : world_(world), buffer_(buffer), fault_(fault) {
+  frame_.capture_time_s = time_s;
+  // a stuck camera's first frame is the whole frame it repeats
+  if (fault_.frozen_whole != nullptr && fault_.frozen_whole->empty()) {
+    world_->renderer().RenderPayloadCamera(fault_.frozen_whole, cv::Rect());
+    AddRenderTiming(*world_, &render_ms_, &image_model_ms_);
   }
-  // the whole frame into the same buffer (the region has been read by then); its render time
-  // is not the detector's
-  double whole_read_ms = 0.0;
-  bool whole_read = false;
-  const WholeFrameReader read_whole = [&]() -> const cv::Mat& {
-    const auto render_start = std::chrono::steady_clock::now();
-    world.renderer().RenderPayloadCamera(&rendered_, cv::Rect());
-    AddRenderTiming(world, capture);
-    whole_read = true;
-    whole_read_ms = MsSince(render_start);
-    return rendered_;
-  };
-  const auto detect_start = std::chrono::steady_clock::now();
-  PayloadDetection detection = readout->Detect(frame, read_whole);
-  capture->detector_ms += MsSince(detect_start) - whole_read_ms;
-  capture->region_only = !whole_read;
-  capture->frame = &rendered_;
-  return detection;
+  if (region.area() > 0) {
+    Read(region);
+    frame_.region = region;
+    frame_.region_bgr = *buffer_;
+  }
 }
 
-// The region of interest the stack asked for last and the whole frame (its fallback), each into
-// a buffer of the readout's (its shared ring); the pixels are those the in-process path renders.
-CameraFrame PayloadCameraSensor::RenderFrames(World& world, double time_s, CameraReadout* readout,
-                                              CameraCapture* capture) {
-  CameraFrame out;
-  out.capture_time_s = time_s;
-  const cv::Rect region = readout->Region();
-  if (region.area() > 0) {
-    cv::Mat* bgr = readout->NextFrameSlot(&out.region_slot);
-    world.renderer().RenderPayloadCamera(bgr, region);
-    AddRenderTiming(world, capture);
-    out.region = region;
-    out.region_bgr = *bgr;
+const cv::Mat& CameraExposure::ReadWhole() {
+  if (!whole_read_) {
+    Read(cv::Rect());
+    whole_read_ = true;
   }
-  cv::Mat* whole = readout->NextFrameSlot(&out.whole_slot);
-  world.renderer().RenderPayloadCamera(whole, cv::Rect());
-  AddRenderTiming(world, capture);
-  out.whole_bgr = *whole;
-  capture->frame = whole;
-  return out;
+  return *buffer_;
+}
+
+void CameraExposure::Read(const cv::Rect& region) {
+  if (fault_.garbage) {
+    // one noise image per capture: its region is the whole image's there
+    cv::Mat& image = *buffer_;
+    image.create(world_->renderer().PayloadCameraSize(), CV_8UC3);
+    cv::RNG noise(fault_.noise_seed);
+    noise.fill(image, cv::RNG::UNIFORM, 0, 256);
+    return;
+  }
+  if (fault_.frozen_whole != nullptr) {
+    if (region.area() > 0) {
+      buffer_->create(fault_.frozen_whole->size(), CV_8UC3);
+      (*fault_.frozen_whole)(region).copyTo((*buffer_)(region));
+    } else {
+      fault_.frozen_whole->copyTo(*buffer_);
+    }
+    return;
+  }
+  world_->renderer().RenderPayloadCamera(buffer_, region);
+  AddRenderTiming(*world_, &render_ms_, &image_model_ms_);
 }
 
 }  // namespace hpa::sim

@@ -145,6 +145,10 @@ Eigen::Vector2d Renderer::PayloadImageMotionPx(cv::Rect* region) const {
   return rate_px * exposure_s;
 }
 
+cv::Size Renderer::PayloadCameraSize() const {
+  return {w_.model_->vis.global.offwidth, w_.model_->vis.global.offheight};
+}
+
 void Renderer::RenderPayloadCamera(cv::Mat* bgr, const cv::Rect& region) {
   using Clock = std::chrono::steady_clock;
   const auto ms = [](Clock::time_point a, Clock::time_point b) {

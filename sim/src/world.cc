@@ -10,6 +10,7 @@
 #include <fstream>
 #include <mutex>
 #include <sstream>
+#include <stdexcept>
 #include <string>
 
 #include "hpa/models/input_error.h"
@@ -343,22 +344,40 @@ std::vector<SensorMessage> World::TakeInFlight() {
   return out;
 }
 
-std::optional<CameraCapture> World::CaptureTickStart(CameraReadout* readout) {
+std::optional<CameraCapture> World::CaptureTickStart(const cv::Rect& region) {
   deliveries_[static_cast<size_t>(gripper_line_)].Push(
       time_s(), gripper_sensor_->Sample(time_s(), gripper_.active()));
   std::optional<PayloadDetection> detection;
-  std::optional<CameraFrame> frames;
-  std::optional<CameraCapture> capture =
-      camera_->Capture(*this, step_, time_s(), readout, &detection, &frames);
-  if (capture && !faults_.empty()) {
-    faults_.OnCameraCapture(time_s(), GetTruth().state, world_params_, readout, &detection, &frames,
-                            &*capture);
+  std::optional<CameraCapture> capture = camera_->Capture(
+      *this, step_, time_s(), region, faults_.empty() ? nullptr : &faults_, &detection);
+  // the analytic camera's detection (or no camera's none) is read here; a rendered exposure's
+  // reading comes back through QueueCameraMessage
+  if (capture && !capture->exposure && !faults_.empty()) {
+    faults_.OnCameraReading(time_s(), GetTruth().state, world_params_, false, &detection);
+    if (detection) capture->detected = detection->found;
   }
-  DelayLine<SensorMessage>& line = deliveries_[static_cast<size_t>(camera_line_)];
-  if (detection) line.Push(detection->time_s, std::move(*detection));
-  if (frames) line.Push(frames->capture_time_s, std::move(*frames));
+  if (detection) {
+    const double capture_time_s = detection->time_s;
+    deliveries_[static_cast<size_t>(camera_line_)].Push(capture_time_s, std::move(*detection));
+  }
   return capture;
 }
 
+void World::QueueCameraMessage(SensorMessage message) {
+  double capture_time_s = 0.0;
+  if (const auto* d = std::get_if<PayloadDetection>(&message)) {
+    capture_time_s = d->time_s;
+  } else if (const auto* f = std::get_if<CameraFrame>(&message)) {
+    capture_time_s = f->capture_time_s;
+  } else {
+    throw std::invalid_argument("World::QueueCameraMessage: not a camera message");
+  }
+  if (!faults_.empty()) {
+    std::optional<PayloadDetection> detection;
+    if (const auto* d = std::get_if<PayloadDetection>(&message)) detection = *d;
+    faults_.OnCameraReading(capture_time_s, GetTruth().state, world_params_, true, &detection);
+  }
+  deliveries_[static_cast<size_t>(camera_line_)].Push(capture_time_s, std::move(message));
+}
 
 }  // namespace hpa::sim

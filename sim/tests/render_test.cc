@@ -12,6 +12,7 @@
 #include "hpa/models/camera_model.h"
 #include "hpa/models/params.h"
 #include "hpa/sim/camera_image_model.h"
+#include "hpa/sim/faults.h"
 #include "hpa/sim/world.h"
 #include "sim/src/world_internals.h"
 #include "swung_payload.h"
@@ -156,6 +157,72 @@ TEST(RenderTest, RegionEqualsTheWholeFrameThere) {
 // The fast motion-blur approximation (the payload's image motion as a line kernel over its
 // region) against the reference (the average of exact renders across the exposure), on a payload
 // swinging fast across the view: the payload's blob and its centroid agree.
+// The camera's exposure: the region the flight stack asked for is read at capture, the whole
+// frame of the same exposure only when asked (equal to the region there); a stuck camera repeats
+// its first whole frame, a garbage one gives one noise image per capture.
+TEST(RenderTest, AnExposureReadsItsRegionFirstAndTheWholeFrameOnlyWhenAsked) {
+  WorldConfig config;
+  config.params = LoadParams(DefaultParamsPath());
+  config.camera.kind = CameraKind::kRendered;
+  World world(config);
+  world.SetMotorSpeedCommand(InputVector::Constant(world.world_params().HoverMotorSpeedRadps()));
+  const cv::Rect region(config.params.camera_width_px / 2 - 100,
+                        config.params.camera_height_px / 2 - 100, 200, 200);
+  ASSERT_TRUE(world.CameraFrameDue());
+  std::optional<CameraCapture> capture = world.CaptureTickStart(region);
+  ASSERT_TRUE(capture.has_value() && capture->exposure.has_value());
+  CameraExposure& exposure = *capture->exposure;
+  EXPECT_EQ(exposure.frame().region, region);
+  EXPECT_FALSE(exposure.whole_read());
+  const cv::Mat region_pixels = exposure.frame().region_bgr(region).clone();
+  ASSERT_GT(cv::countNonZero(RedMask(region_pixels)), 100) << "the payload is in the region";
+  const cv::Mat& whole = exposure.ReadWhole();
+  EXPECT_TRUE(exposure.whole_read());
+  ASSERT_EQ(whole.cols, config.params.camera_width_px);
+  // equal up to the image model's rounding (RegionEqualsTheWholeFrameThere's bound)
+  EXPECT_LE(cv::norm(whole(region), region_pixels, cv::NORM_INF), 2.0);
+
+  // stuck from the next frame: its first whole frame again, though the vehicle has moved
+  const auto next_capture = [&](const cv::Rect& r) {
+    std::optional<CameraCapture> c;
+    while (!(c = world.CaptureTickStart(r))) world.Step();
+    world.Step();
+    return c;
+  };
+  world.SetMotorSpeedCommand(InputVector::Constant(world.world_params().HoverMotorSpeedRadps()) *
+                             1.1);
+  world.Step();
+  Fault stuck;
+  stuck.component = FaultComponent::kCamera;
+  stuck.mode = FaultMode::kStuck;
+  stuck.start_s = world.time_s();
+  stuck.end_s = world.time_s() + 0.2;
+  world.faults().Inject(stuck);
+  std::optional<CameraCapture> first = next_capture(region);
+  const cv::Mat first_whole = first->exposure->ReadWhole().clone();
+  std::optional<CameraCapture> later = next_capture(region);
+  EXPECT_EQ(cv::norm(later->exposure->frame().region_bgr(region), first_whole(region),
+                     cv::NORM_INF),
+            0.0);
+  EXPECT_EQ(cv::norm(later->exposure->ReadWhole(), first_whole, cv::NORM_INF), 0.0);
+  while (world.time_s() < stuck.end_s) world.Step();
+  std::optional<CameraCapture> after = next_capture(region);
+  EXPECT_GT(cv::norm(after->exposure->ReadWhole(), first_whole, cv::NORM_INF), 0.0)
+      << "the camera moves on once the fault ends";
+
+  // garbage: uniform noise (mean level 127.5 in every channel), the region the whole frame's
+  Fault garbage = stuck;
+  garbage.mode = FaultMode::kGarbage;
+  garbage.start_s = world.time_s();
+  garbage.end_s = world.time_s() + 0.2;
+  world.faults().Inject(garbage);
+  std::optional<CameraCapture> noisy = next_capture(region);
+  const cv::Mat noisy_region = noisy->exposure->frame().region_bgr(region).clone();
+  EXPECT_EQ(cv::norm(noisy->exposure->ReadWhole()(region), noisy_region, cv::NORM_INF), 0.0);
+  const cv::Scalar mean_level = cv::mean(noisy_region);
+  for (int c = 0; c < 3; ++c) EXPECT_NEAR(mean_level[c], 127.5, 3.0) << "channel " << c;
+}
+
 TEST(RenderTest, FastMotionBlurMatchesSubFrameReference) {
   const auto render = [](int subframes, double exposure_s) {
     WorldConfig config;

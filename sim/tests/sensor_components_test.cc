@@ -66,26 +66,18 @@ TEST(SensorComponentsTest, AnAddedSensorIsDeliveredAfterItsDeclaredLatency) {
   EXPECT_EQ(delivered, 9);
 }
 
-// Reads out nothing: the analytic and truth-only cameras never call it.
-class NoReadout final : public CameraReadout {
- public:
-  cv::Rect Region() override { return {}; }
-  PayloadDetection Detect(const CameraFrame&, const WholeFrameReader&) override {
-    ADD_FAILURE() << "a camera without pixels asked for a detection";
-    return PayloadDetection();
-  }
-  cv::Mat* NextFrameSlot(int*) override { return nullptr; }
-};
-
 TEST(SensorComponentsTest, TheAnalyticCameraFiresOnItsClockAndDeliversThroughTheDelayLine) {
   WorldConfig c = DefaultConfig();
   c.camera.kind = CameraKind::kAnalytic;
   World world(c);
   world.SetMotorSpeedCommand(InputVector::Constant(world.world_params().HoverMotorSpeedRadps()));
-  NoReadout readout;
   std::vector<double> captured_s, delivered_s;
   for (int k = 0; k <= 200; ++k) {
-    if (const std::optional<CameraCapture> capture = world.CaptureTickStart(&readout)) {
+    const bool due = world.CameraFrameDue();
+    const std::optional<CameraCapture> capture = world.CaptureTickStart();
+    EXPECT_EQ(due, capture.has_value()) << "at step " << k;
+    if (capture) {
+      EXPECT_FALSE(capture->exposure.has_value());  // no pixels for the flight stack to read
       captured_s.push_back(capture->time_s);
       EXPECT_TRUE(capture->payload_in_image);  // hanging below the camera at hover
       EXPECT_TRUE(capture->detected);
@@ -109,8 +101,7 @@ TEST(SensorComponentsTest, TheAnalyticCameraFiresOnItsClockAndDeliversThroughThe
 
 TEST(SensorComponentsTest, ACameraWithoutImagesRecordsTheCaptureAndDeliversNothing) {
   World world(DefaultConfig());  // CameraKind::kNone: the ground-truth switch
-  NoReadout readout;
-  const std::optional<CameraCapture> capture = world.CaptureTickStart(&readout);
+  const std::optional<CameraCapture> capture = world.CaptureTickStart();
   ASSERT_TRUE(capture.has_value());
   EXPECT_TRUE(capture->payload_in_image);
   EXPECT_FALSE(capture->detected);
@@ -123,10 +114,9 @@ TEST(SensorComponentsTest, ACameraWithoutImagesRecordsTheCaptureAndDeliversNothi
 
 TEST(SensorComponentsTest, TheGripperSwitchIsReadAtTheStartOfTheTickThatGrabs) {
   World world(DefaultConfig());
-  NoReadout readout;
   // the switch of the tick: false, then true from the tick whose event grabbed
   const auto switch_now = [&] {
-    world.CaptureTickStart(&readout);
+    world.CaptureTickStart();
     std::optional<bool> active;
     for (const SensorMessage& m : world.TakeDelivered()) {
       if (const auto* g = std::get_if<GripperSample>(&m)) active = g->active;

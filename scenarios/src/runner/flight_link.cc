@@ -34,6 +34,14 @@ class InProcessFlight final : public FlightLink {
  public:
   explicit InProcessFlight(const flight::FlightConfig& config) : stack_(config) {}
   flight::FlightOutputs Step(const flight::FlightInputs& in) override { return stack_.Step(in); }
+  // the stack's detector at capture, in the region around its last detections (with ground
+  // truth the flight code reads no frame: the detections are only recorded, whole frames)
+  bool detects_at_capture() const override { return true; }
+  cv::Rect CaptureRegion() override { return stack_.CameraRegion(); }
+  PayloadDetection DetectCaptured(const CameraFrame& frame,
+                                  const WholeFrameReader& read_whole) override {
+    return stack_.DetectCaptured(frame, read_whole);
+  }
   ControlOutput AwaitCommand() override { return stack_.AwaitCommand(); }
   FlightFinish Finish(const flight::FlightInputs& pending) override {
     FlightFinish f;

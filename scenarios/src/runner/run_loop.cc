@@ -232,8 +232,6 @@ RunLoop::RunLoop(const Scenario& scenario, const Params& params, const RunOption
   // the scenario's autopilot (the profile's rate loop): PX4's runs on the world's rate gyro; a
   // stack that owns the rate loop runs it on its side, on the same schedule and inputs
   autopilot_ = MakeAutopilot(params, scenario.rate_loop, rates.imu.rate_hz);
-  detector_ = std::make_unique<PayloadDetector>(params);
-  camera_readout_ = std::make_unique<FlightCameraReadout>(flight_.get(), detector_.get());
 
   // recorders: the log and metrics inputs, then the caller's (a video among them)
   recorders_.push_back(&log_recorder_);
@@ -312,7 +310,7 @@ bool RunLoop::Tick() {
   const flight::FlightOutputs out = flight_->Step(pending_);
   pending_.Clear();  // the lists keep their storage from tick to tick
   inputs_.detections += out.frames_detected;
-  camera_readout_->SetStackRegion(out.camera_roi);  // the region of its next frame
+  stack_roi_ = out.camera_roi;  // the region of its next frame
   SystemState state = out.estimate;
   state.time_s = t;
   if (out.has_command) {
@@ -336,11 +334,15 @@ void RunLoop::ApplyDueEvents(double t) {
 }
 
 // The payload camera: the world captures it if due (its message delivered after its latency),
-// reading out the region the flight stack asked for last; then the camera's messages delivered
-// by now join this tick's inputs.
+// a rendered frame read out by the flight stack in the region it asked for; then the camera's
+// messages delivered by now join this tick's inputs.
 void RunLoop::CameraStep() {
-  if (const std::optional<sim::CameraCapture> capture =
-          world_->CaptureTickStart(camera_readout_.get())) {
+  cv::Rect region;
+  if (render_camera_ && world_->CameraFrameDue()) {
+    region = flight_->detects_at_capture() ? flight_->CaptureRegion() : stack_roi_;
+  }
+  if (std::optional<sim::CameraCapture> capture = world_->CaptureTickStart(region)) {
+    if (capture->exposure) ReadOutExposure(&*capture);
     for (RunRecorder* r : recorders_) r->OnCameraFrame(*capture);
   }
   // the gripper's switch, and a camera without latency, deliver at their capture tick
@@ -350,6 +352,46 @@ void RunLoop::CameraStep() {
   for (CameraFrame& f : camera_frames_) pending_.frames.push_back(std::move(f));
   camera_detections_.clear();
   camera_frames_.clear();
+}
+
+// The flight stack reads a rendered exposure out: it detects at capture (in its region first,
+// the whole frame only when it asks), or it receives the region and the whole frame in its
+// frame ring; what it made of the frame is the camera's message.
+void RunLoop::ReadOutExposure(sim::CameraCapture* capture) {
+  sim::CameraExposure& exposure = *capture->exposure;
+  if (flight_->detects_at_capture()) {
+    // the whole frame's render time is not the detector's
+    double whole_read_ms = 0.0;
+    const WholeFrameReader read_whole = [&]() -> const cv::Mat& {
+      const Clock::time_point render_start = Clock::now();
+      const cv::Mat& whole = exposure.ReadWhole();
+      whole_read_ms += Ms(render_start, Clock::now());
+      return whole;
+    };
+    const Clock::time_point detect_start = Clock::now();
+    PayloadDetection detection = flight_->DetectCaptured(exposure.frame(), read_whole);
+    capture->detector_ms = Ms(detect_start, Clock::now()) - whole_read_ms;
+    capture->detected = detection.found;
+    world_->QueueCameraMessage(std::move(detection));
+  } else {
+    CameraFrame frames;
+    frames.capture_time_s = exposure.frame().capture_time_s;
+    const cv::Rect& roi = exposure.frame().region;
+    if (roi.area() > 0) {
+      cv::Mat* region = flight_->NextFrameSlot(&frames.region_slot);
+      exposure.frame().region_bgr(roi).copyTo((*region)(roi));
+      frames.region = roi;
+      frames.region_bgr = *region;
+    }
+    cv::Mat* whole = flight_->NextFrameSlot(&frames.whole_slot);
+    exposure.ReadWhole().copyTo(*whole);
+    frames.whole_bgr = *whole;
+    world_->QueueCameraMessage(std::move(frames));
+  }
+  capture->region_only = !exposure.whole_read();
+  capture->frame = &exposure.pixels();
+  capture->render_ms = exposure.render_ms();
+  capture->image_model_ms = exposure.image_model_ms();
 }
 
 // Keeps a delivered camera message for the flight stack's next tick (the gripper's switch for

@@ -8,7 +8,6 @@
 #include <vector>
 
 #include "hpa/autopilot/autopilot.h"
-#include "hpa/estimator/payload_detector.h"
 #include "hpa/models/lockstep.h"
 #include "hpa/models/ring_queue.h"
 #include "hpa/scenarios/runner.h"
@@ -40,35 +39,6 @@ class LogRecorder final : public RunRecorder {
 
  private:
   MetricsInputs* inputs_;
-};
-
-/// The flight stack's side of the payload camera's read-out: the region of interest the stack
-/// asked for with its last reply (around the detections delivered to it); in process, its
-/// detector in that region (the whole frame when the region cannot decide); a separate stack
-/// detects on its side, in the region and the whole frame rendered into its shared-memory ring.
-class FlightCameraReadout final : public sim::CameraReadout {
- public:
-  /// Reads out for `flight` (not owned), detecting in process with `detector` (not owned).
-  FlightCameraReadout(FlightLink* flight, const PayloadDetector* detector)
-      : flight_(flight), detector_(detector) {}
-  cv::Rect Region() override {
-    return flight_->detects_at_capture() ? flight_->CaptureRegion() : stack_roi_;
-  }
-  bool SendsFrames() const override {
-    return flight_->wants_reference() && !flight_->detects_at_capture();
-  }
-  PayloadDetection Detect(const CameraFrame& frame, const WholeFrameReader& read_whole) override {
-    if (flight_->detects_at_capture()) return flight_->DetectCaptured(frame, read_whole);
-    return flight::DetectFrame(*detector_, frame, read_whole);
-  }
-  cv::Mat* NextFrameSlot(int* slot) override { return flight_->NextFrameSlot(slot); }
-  /// The region of interest the stack asked for with its last reply.
-  void SetStackRegion(const cv::Rect& roi) { stack_roi_ = roi; }
-
- private:
-  FlightLink* flight_;
-  const PayloadDetector* detector_;
-  cv::Rect stack_roi_;
 };
 
 /// The flight stack's configuration for `scenario` (flight params, not the world's).
@@ -103,6 +73,7 @@ class RunLoop {
   bool Tick();  // one physics tick; false: the run ends here
   void ApplyDueEvents(double t);
   void CameraStep();
+  void ReadOutExposure(sim::CameraCapture* capture);
   void KeepTickStartMessage(sim::SensorMessage* message);
   void ControlStep(double t, const sim::Truth& truth, const SystemState& state,
                    const flight::FlightOutputs& out);
@@ -124,8 +95,8 @@ class RunLoop {
   std::shared_ptr<const Reference> reference_;  // for the log and the metrics
   std::unique_ptr<FlightLink> flight_;          // detector, estimator, controller
   std::unique_ptr<Autopilot> autopilot_;  // the rate loop between the command and the rotors
-  std::unique_ptr<PayloadDetector> detector_;    // in process: detects in the rendered region
-  std::unique_ptr<FlightCameraReadout> camera_readout_;
+  // the region of interest a stack that receives every frame asked for with its last reply
+  cv::Rect stack_roi_;
 
   MetricsInputs inputs_;
   LogRecorder log_recorder_{&inputs_};

@@ -142,6 +142,10 @@ class FlightStack {
   /// the detection, or nullopt when the region cannot decide and the whole frame is not read
   /// out yet.
   std::optional<PayloadDetection> DetectCaptured(const CameraFrame& frame) const;
+  /// Detects in a frame at its capture (DetectFrame's order): its region first, the whole frame
+  /// of the same exposure, read with `read_whole`, only when the region cannot decide.
+  PayloadDetection DetectCaptured(const CameraFrame& frame,
+                                  const WholeFrameReader& read_whole) const;
   /// The estimator's health counters (empty with ground truth).
   HealthFields EstimatorHealth() const;
   /// The controller's rate (Hz): the flight code declares it.

@@ -138,13 +138,18 @@ class Faults {
   void FilterDelivered(double now_s, std::vector<SensorMessage>* messages);
   /// Appends every message still held back (the end of a run), in order.
   void TakeHeld(std::vector<SensorMessage>* out);
-  /// Applies the camera's pixel faults (stuck, garbage) to a capture at `now_s`: its detection,
-  /// or its frames, replaced; a rendered in-process frame's noise is detected through `readout`.
-  /// `truth` and `world_params` (the true state and camera mount) classify each detection made
-  /// at capture against the distractors drawn in the frame (FrameTallies).
-  void OnCameraCapture(double now_s, const SystemState& truth, const Params& world_params,
-                       CameraReadout* readout, std::optional<PayloadDetection>* detection,
-                       std::optional<CameraFrame>* frames, CameraCapture* capture);
+  /// The camera's pixel fault at a rendered capture at `now_s`: stuck (the fault's first frame,
+  /// which the exposure renders when it is still empty) or garbage (the seed of this capture's
+  /// noise image, drawn from the fault's stream).
+  CameraPixelFault OnCameraPixels(double now_s);
+  /// The camera's reading of a capture at `now_s` (its detection, or none: frames sent to the
+  /// flight stack, or no camera): classified against the distractors drawn in the frame, with
+  /// `truth` and `world_params` (the true state and camera mount; FrameTallies); an analytic
+  /// detection (`from_pixels` false) gets the detection faults too: stuck (the fault's first
+  /// detection again) or garbage (nothing found in noise). A detection made on the exposure's
+  /// pixels already has its pixel faults.
+  void OnCameraReading(double now_s, const SystemState& truth, const Params& world_params,
+                       bool from_pixels, std::optional<PayloadDetection>* detection);
   /// Each rotor's thrust factor at `now_s` (1: healthy) into `factor`; false when no motor fault
   /// was injected (factor untouched).
   bool MotorThrustFactors(double now_s, Eigen::Vector4d* factor) const;

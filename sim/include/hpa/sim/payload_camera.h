@@ -1,10 +1,10 @@
 #pragma once
 // The payload camera as a component of the world: it declares its rate, latency and noise (its
-// row of the rate table), fires on its own clock at the start of a tick (the state the flight
-// stack's tick sees) and produces one message the world delivers through its delay line: a
-// detection (the analytic camera's, or the flight stack's detector run on the rendered pixels at
-// capture), or the rendered frames for a flight stack that detects on its side. Who detects is
-// the caller's CameraReadout: the component never links the detector (flight code).
+// row of the rate table) and fires on its own clock at the start of a tick (the state the flight
+// stack's tick sees). The analytic camera's detection is its message; a rendered frame is an
+// exposure the flight stack reads out (region first, the whole frame if it asks) and detects in
+// on its side, handing back what it made of it (World::QueueCameraMessage). The simulator
+// renders; it never calls the detector (flight code).
 
 #include <cstdint>
 #include <memory>
@@ -20,6 +20,7 @@
 
 namespace hpa::sim {
 
+class Faults;
 class World;
 struct WorldConfig;
 
@@ -27,7 +28,7 @@ struct WorldConfig;
 enum class CameraKind {
   kNone,      // no image reaches the flight code (ground truth): the capture is recorded only
   kAnalytic,  // the detection the detector would return, from the true payload plus its noise
-  kRendered,  // rendered pixels, detected by the caller's readout (or sent to the flight stack)
+  kRendered,  // rendered pixels, read out by the flight stack (which detects in them)
 };
 
 /// The payload camera's part of a WorldConfig.
@@ -36,31 +37,56 @@ struct PayloadCameraConfig {
   double detector_noise_scale = 1.0;  // the analytic camera's noise, times the measured one
 };
 
-/// How the flight stack reads rendered frames out (the runner implements it): the region it
-/// wants first, who detects in the pixels, or where frames sent to it go.
-class CameraReadout {
+/// A pixel fault on the payload camera at one capture (Faults::OnCameraPixels): the frame it
+/// repeats (stuck), or the seed of the noise image it gives (garbage).
+struct CameraPixelFault {
+  cv::Mat* frozen_whole = nullptr;  // stuck: the fault's first whole frame (empty: this is it)
+  bool garbage = false;             // uniform noise in every pixel, drawn from noise_seed
+  uint64_t noise_seed = 0;
+};
+
+/// One rendered exposure of the payload camera, readable until the world steps: the region the
+/// flight stack asked for, rendered at capture, and the whole frame when its reader asks (the
+/// world renders; the flight stack detects). Pixel faults are already in what it reads.
+class CameraExposure {
  public:
-  virtual ~CameraReadout() = default;
-  /// The region of the frame to read first (empty: only the whole frame).
-  virtual cv::Rect Region() = 0;
-  /// True: the frames travel to the flight stack, which detects on its side (Detect is not
-  /// called; the region, if any, and the whole frame are read out into NextFrameSlot buffers).
-  virtual bool SendsFrames() const { return false; }
-  /// Detects in `frame` (its region read out, if it has one), reading the whole frame of the same
-  /// exposure with `read_whole` only when it needs it.
-  virtual PayloadDetection Detect(const CameraFrame& frame, const WholeFrameReader& read_whole) = 0;
-  /// The buffer the next frame sent to the flight stack is rendered into, and its slot.
-  virtual cv::Mat* NextFrameSlot(int* slot) = 0;
+  /// The exposure captured at `time_s` in `world` (not owned), rendered into `buffer` (not
+  /// owned), with `region` read at capture and the pixel fault `fault`.
+  CameraExposure(World* world, cv::Mat* buffer, double time_s, const cv::Rect& region,
+                 const CameraPixelFault& fault);
+  /// Its capture time and the region's pixels (frame().region_bgr; no whole frame).
+  const CameraFrame& frame() const { return frame_; }
+  /// The whole frame of the same exposure (rendered on the first call, into the same buffer:
+  /// the region's pixels are gone after it).
+  const cv::Mat& ReadWhole();
+  /// Whether the whole frame was read.
+  bool whole_read() const { return whole_read_; }
+  /// What was read last: the whole frame, or the region's buffer.
+  const cv::Mat& pixels() const { return *buffer_; }
+  /// Wall time of its renders and of their image model so far (ms).
+  double render_ms() const { return render_ms_; }
+  double image_model_ms() const { return image_model_ms_; }
+
+ private:
+  void Read(const cv::Rect& region);  // renders `region` (empty: whole) with the pixel fault
+
+  World* world_;
+  cv::Mat* buffer_;
+  CameraPixelFault fault_;
+  CameraFrame frame_;
+  bool whole_read_ = false;
+  double render_ms_ = 0.0, image_model_ms_ = 0.0;
 };
 
 /// One capture, as the recorders see it (metrics inputs, the video's HUD).
 struct CameraCapture {
   double time_s = 0.0;             // capture time
   bool payload_in_image = false;   // the true payload inside the image
-  bool detected = false;           // detected at capture (analytic, or the readout's detector)
+  bool detected = false;           // detected at capture (analytic, or the flight stack's)
   const cv::Mat* frame = nullptr;  // the rendered whole frame or region (nullptr: none)
   double render_ms = 0.0, image_model_ms = 0.0, detector_ms = 0.0;  // rendered frames only
-  bool region_only = false;  // rendered and detected in the readout's region alone
+  bool region_only = false;  // rendered and detected in the requested region alone
+  std::optional<CameraExposure> exposure;  // kRendered: what the flight stack reads out
 };
 
 /// The payload camera: its declaration, its clock, the analytic model and the rendered path.
@@ -72,19 +98,18 @@ class PayloadCameraSensor {
   const SensorDeclaration& declaration() const { return declaration_; }
   /// Back to its state at World::Reset (its generator re-seeded, its clock at the first frame).
   void Reset();
+  /// Whether a frame is due at step `step` (Capture would fire there).
+  bool FrameDue(int64_t step) const;
   /// At step `step` of `world` (its time `time_s`): nothing unless a frame is due; else the
-  /// capture of the true payload, with what to deliver in *detection or *frames (neither for
-  /// kNone).
+  /// capture of the true payload: the analytic camera's detection to deliver in *detection, or
+  /// the rendered exposure (`region` read at capture, `faults`' pixel faults in it; faults may be
+  /// null) for the flight stack to read out.
   std::optional<CameraCapture> Capture(World& world, int64_t step, double time_s,
-                                       CameraReadout* readout,
-                                       std::optional<PayloadDetection>* detection,
-                                       std::optional<CameraFrame>* frames);
+                                       const cv::Rect& region, Faults* faults,
+                                       std::optional<PayloadDetection>* detection);
 
  private:
-  PayloadDetection RenderAndDetect(World& world, double time_s, CameraReadout* readout,
-                                   CameraCapture* capture);
-  CameraFrame RenderFrames(World& world, double time_s, CameraReadout* readout,
-                           CameraCapture* capture);
+  int64_t StepOfFrame(int64_t k) const;  // the step the k-th frame is due at
 
   Params params_;  // flight params: the camera's mount and intrinsics as the detector knows them
   PayloadCameraConfig config_;
@@ -93,7 +118,7 @@ class PayloadCameraSensor {
   std::mt19937_64 rng_;  // the analytic camera's noise
   AnalyticCamera analytic_;
   int64_t next_frame_ = 0;  // index k of the next frame (due at the step nearest k / rate)
-  cv::Mat rendered_;        // the in-process frame buffer, reused frame to frame
+  cv::Mat rendered_;        // the exposure's buffer, reused frame to frame
   SensorDeclaration declaration_;
 };
 

@@ -50,6 +50,8 @@ class Renderer {
   /// `region` computes only that part of the image, equal to the whole frame's there (the rest
   /// of `bgr` is left as it was): what a detector reading only a region needs.
   void RenderPayloadCamera(cv::Mat* bgr, const cv::Rect& region = cv::Rect());
+  /// The payload camera's image size (pixels).
+  cv::Size PayloadCameraSize() const;
   /// Wall time of the last payload frame's render and of its image model.
   const CameraFrameTiming& last_camera_timing() const { return camera_timing_; }
   /// Image motion (render pixels) of the payload's centre over one exposure now, and the

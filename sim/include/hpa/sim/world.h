@@ -134,10 +134,17 @@ class World {
   const PayloadCameraSensor& payload_camera() const { return *camera_; }
   /// Captures the sensors that read the world at the start of a tick, before its step (the state
   /// and events the flight stack's tick sees): the gripper's switch, and the payload camera's
-  /// frame when one is due, read out through `readout` (rendered frames only; not owned). Each
-  /// is queued for delivery after its latency like every sensor's message (TakeDelivered).
+  /// frame when one is due. Each message is queued for delivery after its latency like every
+  /// sensor's (TakeDelivered): the analytic camera's detection here; a rendered frame is the
+  /// capture's exposure (`region` read first), which the flight stack reads out before the world
+  /// steps, handing back what it made of it with QueueCameraMessage.
   /// The camera's capture, if it fired.
-  std::optional<CameraCapture> CaptureTickStart(CameraReadout* readout);
+  std::optional<CameraCapture> CaptureTickStart(const cv::Rect& region = cv::Rect());
+  /// Whether the payload camera captures a frame at this tick's CaptureTickStart.
+  bool CameraFrameDue() const { return camera_->FrameDue(step_); }
+  /// Queues the flight stack's reading of a rendered exposure (its detection, or the frames it
+  /// receives) as the camera's message, for delivery after the camera's latency.
+  void QueueCameraMessage(SensorMessage message);
 
   /// The world's faults (faults.h): scenario fault events inject into it; every fault's effect
   /// lives there, so a new fault adds no World method.
