@@ -86,8 +86,8 @@ std::optional<CameraCapture> PayloadCameraSensor::Capture(
   return capture;
 }
 
-CameraExposure::CameraExposure(World* world, cv::Mat* buffer, double time_s,
-                               const cv::Rect& region, const CameraPixelFault& fault)
+CameraExposure::CameraExposure(World* world, cv::Mat* buffer, double time_s, const cv::Rect& region,
+                               const CameraPixelFault& fault)
     : world_(world), buffer_(buffer), fault_(fault) {
   frame_.capture_time_s = time_s;
   // a stuck camera's first frame is the whole frame it repeats

@@ -201,9 +201,9 @@ TEST(RenderTest, AnExposureReadsItsRegionFirstAndTheWholeFrameOnlyWhenAsked) {
   std::optional<CameraCapture> first = next_capture(region);
   const cv::Mat first_whole = first->exposure->ReadWhole().clone();
   std::optional<CameraCapture> later = next_capture(region);
-  EXPECT_EQ(cv::norm(later->exposure->frame().region_bgr(region), first_whole(region),
-                     cv::NORM_INF),
-            0.0);
+  EXPECT_EQ(
+      cv::norm(later->exposure->frame().region_bgr(region), first_whole(region), cv::NORM_INF),
+      0.0);
   EXPECT_EQ(cv::norm(later->exposure->ReadWhole(), first_whole, cv::NORM_INF), 0.0);
   while (world.time_s() < stuck.end_s) world.Step();
   std::optional<CameraCapture> after = next_capture(region);

@@ -85,7 +85,7 @@ struct CameraCapture {
   bool detected = false;           // detected at capture (analytic, or the flight stack's)
   const cv::Mat* frame = nullptr;  // the rendered whole frame or region (nullptr: none)
   double render_ms = 0.0, image_model_ms = 0.0, detector_ms = 0.0;  // rendered frames only
-  bool region_only = false;  // rendered and detected in the requested region alone
+  bool region_only = false;                // rendered and detected in the requested region alone
   std::optional<CameraExposure> exposure;  // kRendered: what the flight stack reads out
 };
 
