@@ -495,28 +495,22 @@ HelloAck ParseHelloAck(const std::vector<uint8_t>& body, double tick_hz) {
                         " (hello_ack's protocol_version must be the integer " +
                         std::to_string(kProtocolVersion) + ")");
   }
+  // the keys and their types as the message table declares them; then what the table cannot say
+  CheckJsonMessage(MessageType::kHelloAck, j);
   HelloAck ack;
   ack.name = NameField(j, what, "name", "external");
   ack.controller = NameField(j, what, "controller", "");
   if (j.contains("control_rate_hz")) {
-    const nlohmann::json& rate = j.at("control_rate_hz");
-    if (!rate.is_number() || !std::isfinite(rate.get<double>()) || rate.get<double>() < 0.0) {
-      throw ProtocolError("hello_ack's control_rate_hz is " + Shown(rate) +
+    const double rate_hz = j.at("control_rate_hz").get<double>();
+    if (!std::isfinite(rate_hz) || rate_hz < 0.0) {
+      throw ProtocolError("hello_ack's control_rate_hz is " + Shown(j.at("control_rate_hz")) +
                           ", expected a finite number >= 0 (Hz)");
     }
-    ack.control_rate_hz = rate.get<double>();
+    ack.control_rate_hz = rate_hz;
   }
-  for (const auto& [key, flag] :
-       {std::pair<const char*, bool*>{"batched_ticks", &ack.batched_ticks},
-        {"detects_at_capture", &ack.detects_at_capture},
-        {"owns_rate_loop", &ack.owns_rate_loop}}) {
-    if (!j.contains(key)) continue;
-    if (!j.at(key).is_boolean()) {
-      throw ProtocolError("hello_ack's " + std::string(key) + " is " + Shown(j.at(key)) +
-                          ", expected true or false");
-    }
-    *flag = j.at(key).get<bool>();
-  }
+  ack.batched_ticks = j.value("batched_ticks", false);
+  ack.detects_at_capture = j.value("detects_at_capture", false);
+  ack.owns_rate_loop = j.value("owns_rate_loop", false);
   if (ack.batched_ticks && !(ack.control_rate_hz > 0.0 && ack.control_rate_hz <= tick_hz)) {
     throw ProtocolError("hello_ack's batched_ticks needs the control rate its ticks follow: "
                         "control_rate_hz is " + Shown(j.value("control_rate_hz", nlohmann::json())) +
@@ -528,11 +522,13 @@ HelloAck ParseHelloAck(const std::vector<uint8_t>& body, double tick_hz) {
 FinishReply ParseFinishReply(const std::vector<uint8_t>& body, size_t frames) {
   const std::string what = "finish_reply";
   const nlohmann::json j = ParseObject(body, what);
+  // the keys and their types as the message table declares them; then what the table cannot say
+  CheckJsonMessage(MessageType::kFinishReply, j);
   FinishReply reply;
   reply.estimator = NameField(j, what, "estimator", "");
   if (j.contains("frames_detected")) {
     const nlohmann::json& found = j.at("frames_detected");
-    if (!found.is_number_integer() || found.get<int64_t>() < 0 || found.get<uint64_t>() > frames) {
+    if (found.get<int64_t>() < 0 || found.get<uint64_t>() > frames) {
       throw ProtocolError("finish_reply's frames_detected is " + Shown(found) +
                           ", expected an integer in [0, " + std::to_string(frames) +
                           "] (the frames the finish carried)");
@@ -540,7 +536,7 @@ FinishReply ParseFinishReply(const std::vector<uint8_t>& body, size_t frames) {
     reply.frames_detected = found.get<int>();
   }
   const nlohmann::json health = j.value("estimator_health", nlohmann::json::array());
-  if (!health.is_array() || health.size() > kMaxHealthEntries) {
+  if (health.size() > kMaxHealthEntries) {
     throw ProtocolError("finish_reply's estimator_health is " + Shown(health) +
                         ", expected a list of at most " + std::to_string(kMaxHealthEntries) +
                         " [name, value] pairs");
