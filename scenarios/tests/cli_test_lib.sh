@@ -13,6 +13,13 @@ cli_test_start() {
   trap 'rm -rf "$out"' EXIT
 }
 
+# same_run A B LABEL [same_run.py options]: the runs in folders A and B are the same run (metrics
+# but the timings and what flew; with --rows N, the log row for row but the solve times)
+same_run() {
+  local a=$1 b=$2 label=$3; shift 3
+  "$python" "$src/scenarios/tests/same_run.py" "$a" "$b" "$@" || fail "$label: the runs differ"
+}
+
 # fail MESSAGE...: counts and prints a failed check
 fail() { echo "FAIL: $*"; failures=$((failures + 1)); }
 

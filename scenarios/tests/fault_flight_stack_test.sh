@@ -15,17 +15,8 @@ for name in fault_vio_wrong fault_imu_bias fault_payload_camera_garbage \
     || fail "$name in process failed"
   "$hpa" run "$src/scenarios/ci/$name.yaml" --quiet --out "$out/$name/ex" \
     --flight-stack hpa-flight || fail "$name through hpa-flight failed"
-  "$python" - "$out/$name/in/metrics.json" "$out/$name/ex/metrics.json" <<'PY' \
-    || fail "$name: metrics differ"
-import json, sys
-a, b = (json.load(open(p)) for p in sys.argv[1:3])
-skip = {"wall_time_s", "mpc_solve_ms", "render_ms", "image_model_ms", "detector_ms",
-        "flight_stack", "camera_region_fraction"}
-assert b["flight_stack"].startswith("hpa-flight"), b["flight_stack"]
-assert a["faults"] and a["faults"] == b["faults"], (a.get("faults"), b.get("faults"))
-bad = [k for k in a if k not in skip and a[k] != b.get(k)]
-assert not bad, "differ: %s" % bad
-PY
+  same_run "$out/$name/in" "$out/$name/ex" "$name" --stack-b hpa-flight --nonempty faults \
+    --skip camera_region_fraction
 done
 echo "fault_flight_stack_test: $failures failure(s)"
 [ "$failures" -eq 0 ]

@@ -15,28 +15,13 @@ cli_test_start "$@"  # hpa, src, python; out: a folder removed at exit
   || fail "in-process run failed"
 "$hpa" run "$src/scenarios/hover_gripper_pull.yaml" --quiet --out "$out/ex" \
   --flight-stack hpa-flight || fail "hpa-flight run failed"
-"$python" - "$out/in/metrics.json" "$out/ex/metrics.json" <<'PY' || fail "metrics differ"
-import json, sys
-a, b = (json.load(open(p)) for p in sys.argv[1:3])
-skip = {"wall_time_s", "mpc_solve_ms", "render_ms", "image_model_ms", "detector_ms",
-        "flight_stack"}
-bad = [k for k in a if k not in skip and a[k] != b.get(k)]
-assert b["flight_stack"].startswith("hpa-flight"), b["flight_stack"]
-assert not bad, "differ: %s" % bad
-print("hpa-flight equals in process on %d metrics" % (len(a) - len(skip)))
-PY
+same_run "$out/in" "$out/ex" "hover_gripper_pull through hpa-flight" --stack-b hpa-flight
 
 # the analytic camera's detections cross too: the file-reference scenario, exactly
 "$hpa" run "$src/scenarios/csv_reference.yaml" --quiet --out "$out/csv_in" || fail "csv in process"
 "$hpa" run "$src/scenarios/csv_reference.yaml" --quiet --out "$out/csv_ex" \
   --flight-stack hpa-flight || fail "csv through hpa-flight"
-"$python" - "$out/csv_in/metrics.json" "$out/csv_ex/metrics.json" <<'PY' || fail "csv metrics differ"
-import json, sys
-a, b = (json.load(open(p)) for p in sys.argv[1:3])
-skip = {"wall_time_s", "mpc_solve_ms", "flight_stack"}
-bad = [k for k in a if k not in skip and a[k] != b.get(k)]
-assert not bad, "differ: %s" % bad
-PY
+same_run "$out/csv_in" "$out/csv_ex" "csv through hpa-flight" --stack-b hpa-flight
 
 # batched ticks (hpa-flight's default) against a reply every tick (--per-tick, the protocol's
 # first behaviour): the same metrics and the same log, solve times aside
@@ -49,30 +34,8 @@ for how in "hpa-flight" "hpa-flight --per-tick"; do
     --out "$out/video_${how##* }" --video "$out/video_${how##* }.mp4" --flight-stack "$how" \
     > /dev/null 2>&1 || fail "csv with a video through $how"
 done
-"$python" - "$out/video_--per-tick" "$out/video_hpa-flight" <<'PY' || fail "batched ticks differ from per-tick with a video"
-import csv, json, sys
-a, b = (json.load(open(p + "/metrics.json")) for p in sys.argv[1:3])
-skip = {"wall_time_s", "mpc_solve_ms"}
-bad = [k for k in a if k not in skip and a[k] != b.get(k)]
-assert not bad, "metrics differ: %s" % bad
-la, lb = (list(csv.reader(open(p + "/log.csv"))) for p in sys.argv[1:3])
-col = la[0].index("solve_ms")
-assert len(la) == len(lb) > 250, (len(la), len(lb))
-bad = [i for i, (x, y) in enumerate(zip(la, lb)) if x[:col] + x[col + 1:] != y[:col] + y[col + 1:]]
-assert not bad, "log rows differ from row %d" % bad[0]
-PY
-"$python" - "$out/csv_tick" "$out/csv_ex" <<'PY' || fail "batched ticks differ from per-tick"
-import csv, json, sys
-a, b = (json.load(open(p + "/metrics.json")) for p in sys.argv[1:3])
-skip = {"wall_time_s", "mpc_solve_ms"}
-bad = [k for k in a if k not in skip and a[k] != b.get(k)]
-assert not bad, "metrics differ: %s" % bad
-la, lb = (list(csv.reader(open(p + "/log.csv"))) for p in sys.argv[1:3])
-assert len(la) == len(lb) > 1000, (len(la), len(lb))
-col = la[0].index("solve_ms")
-bad = [i for i, (x, y) in enumerate(zip(la, lb)) if x[:col] + x[col + 1:] != y[:col] + y[col + 1:]]
-assert not bad, "log rows differ from row %d" % bad[0]
-PY
+same_run "$out/video_--per-tick" "$out/video_hpa-flight" "batched ticks with a video" --rows 250
+same_run "$out/csv_tick" "$out/csv_ex" "batched ticks against per-tick" --rows 1000
 
 # the Python client batches too: the example controller commanding on its declared control
 # rate's ticks (tick.control_due), with and without batched_ticks, flies the same run
@@ -96,16 +59,7 @@ for how in batched per_tick; do
   "$hpa" run "$src/scenarios/csv_reference.yaml" --quiet --out "$out/py_$how" \
     --flight-stack "$python $out/on_the_clock.py $how" > /dev/null 2>&1
 done
-"$python" - "$out/py_per_tick" "$out/py_batched" <<'PY' || fail "the Python client's batched ticks"
-import csv, json, sys
-a, b = (json.load(open(p + "/metrics.json")) for p in sys.argv[1:3])
-assert a["run_error"] is None and b["run_error"] is None, (a["run_error"], b["run_error"])
-skip = {"wall_time_s", "mpc_solve_ms"}
-bad = [k for k in a if k not in skip and a[k] != b.get(k)]
-assert not bad, "metrics differ: %s" % bad
-la, lb = (list(csv.reader(open(p + "/log.csv"))) for p in sys.argv[1:3])
-assert la == lb and len(la) > 900, (len(la), len(lb))
-PY
+same_run "$out/py_per_tick" "$out/py_batched" "the Python client's batched ticks" --rows 900
 
 # 2. the Python example controller flies hover_gripper_pull to its end through the interface;
 # its bound: measured 0.217 m deviation (VIO-only hold, payload not estimated) times 1.5
