@@ -81,6 +81,12 @@ endif()
 add_test(NAME cli.flight_stack
          COMMAND bash ${SCEN}/tests/flight_stack_test.sh ${HPA_BIN} ${CMAKE_SOURCE_DIR} ${HPA_PYTHON3})
 set_tests_properties(cli.flight_stack PROPERTIES LABELS "cli;scenario" TIMEOUT 600)
+# A stack that owns the rate loop: hpa-flight --own-rate-loop equals in process with PX4's loop
+# and the own loop; a non-finite or out-of-range rotor speed is a run error naming it
+add_test(NAME cli.flight_stack_rate_loop
+         COMMAND bash ${SCEN}/tests/flight_stack_rate_loop_test.sh ${HPA_BIN} ${CMAKE_SOURCE_DIR}
+                 ${HPA_PYTHON3})
+set_tests_properties(cli.flight_stack_rate_loop PROPERTIES LABELS "cli;scenario" TIMEOUT 600)
 
 # Plots in PNG, SVG and PDF, each with the CSV of what it draws; plots never change a run
 add_test(NAME cli.plot_formats

@@ -1,7 +1,9 @@
 // hpa-flight: the project's own flight stack (payload detector, estimator, any registered
 // controller) as a separate process speaking the lockstep protocol (docs/protocol.md). The
 // simulator starts it (`hpa run --flight-stack "hpa-flight"`) with HPA_FLIGHT_SOCKET set; it
-// connects, builds the flight stack from the hello and answers every tick until the finish.
+// connects, builds the flight stack from the hello and answers every tick until the finish. With
+// --own-rate-loop it also runs the vehicle's rate loop (the autopilot the hello's rate_loop names)
+// and answers each rate_tick with the rotor speed commands.
 
 #include <fcntl.h>
 #include <sys/mman.h>
@@ -14,6 +16,7 @@
 #include <string>
 #include <utility>
 
+#include "hpa/autopilot/autopilot.h"
 #include "hpa/flight/protocol.h"
 
 namespace {
@@ -96,7 +99,7 @@ hpa::flight::DetectReply AnswerDetect(const hpa::flight::FlightStack& stack,
 }
 
 int Serve(Channel& channel, const std::string& controller, const std::string& estimator,
-          bool per_tick) {
+          bool per_tick, bool own_rate_loop) {
   const std::vector<uint8_t> hello_bytes = channel.Expect(MessageType::kHello, 60.0);
   const nlohmann::json hello = nlohmann::json::parse(hello_bytes.begin(), hello_bytes.end());
   const uint32_t version = hello.at("protocol_version").get<uint32_t>();
@@ -108,15 +111,28 @@ int Serve(Channel& channel, const std::string& controller, const std::string& es
   if (!controller.empty()) config.controller.type = controller;
   if (!estimator.empty()) config.estimator = estimator;
   hpa::flight::FlightStack stack(config);
+  // the rate loop, when this stack owns it: the autopilot the simulator would run, from the
+  // world profile's rate_loop section as the hello carries it
+  std::unique_ptr<hpa::Autopilot> autopilot;
+  if (own_rate_loop) {
+    if (!hello.contains("rate_loop")) {
+      throw ProtocolError("--own-rate-loop: the simulator's hello carries no rate_loop");
+    }
+    const hpa::flight::RateLoopConfig rate_loop =
+        hpa::flight::RateLoopFromJson(hello.at("rate_loop"));
+    autopilot = hpa::MakeAutopilot(config.params, rate_loop.spec, rate_loop.own_rate_hz);
+  }
   FrameRing ring;
   ring.Map(hello.value("camera", nlohmann::json()));
   // named after the controller it flies: metrics.json's controller equals the in-process run's
-  channel.SendJson(MessageType::kHelloAck, {{"protocol_version", hpa::flight::kProtocolVersion},
-                                            {"name", "hpa-flight (" + config.controller.type + ")"},
-                                            {"controller", config.controller.type},
-                                            {"control_rate_hz", stack.control_rate_hz()},
-                                            {"batched_ticks", !per_tick},
-                                            {"detects_at_capture", !per_tick}});
+  nlohmann::json ack = {{"protocol_version", hpa::flight::kProtocolVersion},
+                        {"name", "hpa-flight (" + config.controller.type + ")"},
+                        {"controller", config.controller.type},
+                        {"control_rate_hz", stack.control_rate_hz()},
+                        {"batched_ticks", !per_tick},
+                        {"detects_at_capture", !per_tick}};
+  if (own_rate_loop) ack["owns_rate_loop"] = true;
+  channel.SendJson(MessageType::kHelloAck, ack);
   std::vector<uint8_t> body;
   int frames_found = 0;  // of the ticks answered by no reply yet
   while (true) {
@@ -136,6 +152,10 @@ int Serve(Channel& channel, const std::string& controller, const std::string& es
       ring.AttachCaptured(&frame);
       channel.Send(MessageType::kDetectReply,
                    hpa::flight::EncodeDetectReply(AnswerDetect(stack, frame)));
+    } else if (type == MessageType::kRateTick && autopilot) {
+      const hpa::flight::RateTick tick = hpa::flight::DecodeRateTick(body);
+      channel.Send(MessageType::kRateReply,
+                   hpa::flight::EncodeRateReply(autopilot->Update(tick.command, tick.w_B_radps)));
     } else if (type == MessageType::kFinish) {
       hpa::flight::FlightInputs in = hpa::flight::DecodeTick(body);
       ring.Attach(&in.frames);
@@ -174,6 +194,11 @@ int main(int argc, char** argv) {
   app.add_flag("--per-tick", per_tick,
                "answer every tick and receive whole frames, as a stack that declares neither "
                "batched_ticks nor detects_at_capture (the protocol's first behaviour)");
+  bool own_rate_loop = false;
+  app.add_flag("--own-rate-loop", own_rate_loop,
+               "run the vehicle's rate loop here (the autopilot of the hello's rate_loop: the "
+               "world profile's) and answer rate_tick messages with rotor speed commands, "
+               "declaring owns_rate_loop; the simulator then runs no autopilot");
   CLI11_PARSE(app, argc, argv);
   if (socket_path.empty()) {
     const char* env = std::getenv("HPA_FLIGHT_SOCKET");
@@ -188,7 +213,7 @@ int main(int argc, char** argv) {
   std::unique_ptr<Channel> channel;
   try {
     channel = std::make_unique<Channel>(hpa::flight::ConnectUnix(socket_path));
-    return Serve(*channel, controller, estimator, per_tick);
+    return Serve(*channel, controller, estimator, per_tick, own_rate_loop);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "hpa-flight: %s\n", e.what());
     if (channel) {

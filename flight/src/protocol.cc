@@ -148,6 +148,22 @@ const Codec<DetectReply>& DetectReplyCodec() {
   return codec;
 }
 
+const Codec<RateTick>& RateTickCodec() {
+  static const Codec<RateTick> codec("rate_tick",
+                                     {Bind("time_s", &RateTick::time_s),
+                                      Bind("command", &RateTick::command, BodyRateCommandCodec()),
+                                      Bind("w_B_radps", &RateTick::w_B_radps)});
+  return codec;
+}
+
+const Codec<AutopilotOutput>& RateReplyCodec() {
+  static const Codec<AutopilotOutput> codec(
+      "rate_reply", {Bind("w_cmd_radps", &AutopilotOutput::w_cmd_radps),
+                     Bind("thrust_allocated_N", &AutopilotOutput::thrust_allocated_N),
+                     Bind("saturated", &AutopilotOutput::saturated)});
+  return codec;
+}
+
 // A JSON value as an error message shows it: its text, cut after 60 bytes.
 std::string Shown(const nlohmann::json& j) {
   std::string text = j.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
@@ -250,6 +266,10 @@ std::string MessageTypeName(MessageType type) {
       return "detect";
     case MessageType::kDetectReply:
       return "detect_reply";
+    case MessageType::kRateTick:
+      return "rate_tick";
+    case MessageType::kRateReply:
+      return "rate_reply";
   }
   return "unknown type " + std::to_string(static_cast<uint32_t>(type));
 }
@@ -314,6 +334,35 @@ DetectReply DecodeDetectReply(const std::vector<uint8_t>& body) {
   return reply;
 }
 
+std::vector<uint8_t> EncodeRateTick(const RateTick& tick) {
+  return EncodeBody(RateTickCodec(), tick);
+}
+
+RateTick DecodeRateTick(const std::vector<uint8_t>& body) {
+  return DecodeBody(RateTickCodec(), body, "rate_tick");
+}
+
+std::vector<uint8_t> EncodeRateReply(const AutopilotOutput& out) {
+  return EncodeBody(RateReplyCodec(), out);
+}
+
+AutopilotOutput DecodeRateReply(const std::vector<uint8_t>& body) {
+  return DecodeBody(RateReplyCodec(), body, "rate_reply");
+}
+
+void CheckRateReply(const AutopilotOutput& out, const Params& params) {
+  for (int i = 0; i < out.w_cmd_radps.size(); ++i) {
+    const double w_radps = out.w_cmd_radps[i];
+    if (w_radps >= params.motor_speed_min_radps && w_radps <= params.motor_speed_max_radps) {
+      continue;
+    }
+    throw ProtocolError("rate_reply refused: rotor " + std::to_string(i) + " speed command " +
+                        wire::ShownValue(w_radps) + " rad/s, outside the motors' range [" +
+                        wire::ShownLimit(params.motor_speed_min_radps) + ", " +
+                        wire::ShownLimit(params.motor_speed_max_radps) + "] rad/s");
+  }
+}
+
 namespace {
 
 // Whether `v` is of the table's JSON type `type` (integer, number, string, bool, object, array).
@@ -375,6 +424,8 @@ void CheckMessageBindings() {
   TickCodec();
   ReplyCodec();
   DetectReplyCodec();
+  RateTickCodec();
+  RateReplyCodec();
   // every struct of the table is bound, through the tick's or the reply's codec
   std::set<std::string> bound;
   const auto visit = [&](const auto& self, const wire::Struct& s) -> void {
@@ -386,6 +437,8 @@ void CheckMessageBindings() {
   visit(visit, TickCodec().spec());
   visit(visit, ReplyCodec().spec());
   visit(visit, DetectReplyCodec().spec());
+  visit(visit, RateTickCodec().spec());
+  visit(visit, RateReplyCodec().spec());
   for (const auto& item : MessageTable().at("structs").items()) {
     if (bound.count(item.key()) == 0) {
       throw std::logic_error("messages.json's struct " + item.key() + " is in no message");
@@ -453,8 +506,10 @@ HelloAck ParseHelloAck(const std::vector<uint8_t>& body, double tick_hz) {
     }
     ack.control_rate_hz = rate.get<double>();
   }
-  for (const auto& [key, flag] : {std::pair<const char*, bool*>{"batched_ticks", &ack.batched_ticks},
-                                  {"detects_at_capture", &ack.detects_at_capture}}) {
+  for (const auto& [key, flag] :
+       {std::pair<const char*, bool*>{"batched_ticks", &ack.batched_ticks},
+        {"detects_at_capture", &ack.detects_at_capture},
+        {"owns_rate_loop", &ack.owns_rate_loop}}) {
     if (!j.contains(key)) continue;
     if (!j.at(key).is_boolean()) {
       throw ProtocolError("hello_ack's " + std::string(key) + " is " + Shown(j.at(key)) +

@@ -1,12 +1,14 @@
 // The flight config as JSON (the hello's "config"): what hpa-flight needs to build the flight
 // stack the runner would (params, controller, estimator, reference, initial state).
 
+#include <cmath>
 #include <map>
 #include <optional>
 #include <string>
 #include <variant>
 #include <vector>
 
+#include "hpa/autopilot/px4_rate_controller.h"
 #include "hpa/controller/controller_registry.h"
 #include "hpa/controller/reference_types.h"
 #include "hpa/flight/protocol.h"
@@ -207,6 +209,28 @@ nlohmann::json ConfigToJson(const FlightConfig& c) {
           {"estimate_latency_s", c.estimate_latency_s},
           {"tick_hz", c.tick_hz},
           {"initial_state", StateJson(c.initial_state)}};
+}
+
+nlohmann::json RateLoopToJson(const RateLoopConfig& config) {
+  return {{"px4", config.spec.px4},
+          {"own_rate_hz", config.own_rate_hz},
+          {"params", TablesToJson({Px4RateParamTable()}, config.spec.params)}};
+}
+
+RateLoopConfig RateLoopFromJson(const nlohmann::json& j) {
+  try {
+    RateLoopConfig c;
+    c.spec.px4 = j.at("px4").get<bool>();
+    c.own_rate_hz = j.at("own_rate_hz").get<double>();
+    if (!(std::isfinite(c.own_rate_hz) && c.own_rate_hz > 0.0)) {
+      throw ProtocolError("rate_loop.own_rate_hz: " + std::to_string(c.own_rate_hz) +
+                          ", expected a rate > 0 Hz");
+    }
+    TablesFromJson({Px4RateParamTable()}, j.at("params"), "rate_loop.params", &c.spec.params);
+    return c;
+  } catch (const nlohmann::json::exception& e) {
+    throw ProtocolError(std::string("bad rate_loop in the hello: ") + e.what());
+  }
 }
 
 FlightConfig ConfigFromJson(const nlohmann::json& j) {

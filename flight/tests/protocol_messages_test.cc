@@ -157,7 +157,9 @@ std::vector<Golden> Encodings() {
           {"empty_reply", "tick_reply", EncodeReply(FlightOutputs())},
           {"detect", "detect", EncodeDetect(SampleDetect())},
           {"detect_reply", "detect_reply", EncodeDetectReply(SampleDetectReply())},
-          {"region_wanted_reply", "detect_reply", EncodeDetectReply(SampleRegionWantedReply())}};
+          {"region_wanted_reply", "detect_reply", EncodeDetectReply(SampleRegionWantedReply())},
+          {"rate_tick", "rate_tick", EncodeRateTick(SampleRateTick())},
+          {"rate_reply", "rate_reply", EncodeRateReply(SampleRateReply())}};
 }
 
 // The table binds every field and bit of every binary message, and declares each field's type
@@ -200,6 +202,17 @@ TEST(ProtocolMessagesTest, EveryMessageTypeRoundTrips) {
   for (const DetectReply& r : {SampleDetectReply(), SampleRegionWantedReply()}) {
     ExpectSameDetectReply(DecodeDetectReply(EncodeDetectReply(r)), r);
   }
+  const RateTick rate_tick = DecodeRateTick(EncodeRateTick(SampleRateTick()));
+  EXPECT_EQ(rate_tick.time_s, SampleRateTick().time_s);
+  EXPECT_EQ(rate_tick.command.w_B_radps, SampleRateTick().command.w_B_radps);
+  EXPECT_EQ(rate_tick.command.thrust_N, SampleRateTick().command.thrust_N);
+  EXPECT_EQ(rate_tick.w_B_radps, SampleRateTick().w_B_radps);
+  EXPECT_TRUE(std::signbit(rate_tick.w_B_radps.x()));
+  const AutopilotOutput rate_reply = DecodeRateReply(EncodeRateReply(SampleRateReply()));
+  EXPECT_EQ(rate_reply.w_cmd_radps, SampleRateReply().w_cmd_radps);
+  EXPECT_EQ(rate_reply.thrust_allocated_N, SampleRateReply().thrust_allocated_N);
+  EXPECT_EQ(rate_reply.saturated, SampleRateReply().saturated);
+
   // exactly one of a detect_reply's flags
   DetectReply none;
   EXPECT_THROW(DecodeDetectReply(EncodeDetectReply(none)), ProtocolError);
@@ -212,7 +225,8 @@ TEST(ProtocolMessagesTest, EveryMessageTypeRoundTrips) {
                               {"controller", "pd"},
                               {"control_rate_hz", 125.5},
                               {"batched_ticks", true},
-                              {"detects_at_capture", true}};
+                              {"detects_at_capture", true},
+                              {"owns_rate_loop", true}};
   const std::string ack_text = ack.dump();
   const HelloAck back = ParseHelloAck(std::vector<uint8_t>(ack_text.begin(), ack_text.end()));
   EXPECT_EQ(back.name, "sample stack");
@@ -220,6 +234,7 @@ TEST(ProtocolMessagesTest, EveryMessageTypeRoundTrips) {
   EXPECT_EQ(back.control_rate_hz, 125.5);
   EXPECT_TRUE(back.batched_ticks);
   EXPECT_TRUE(back.detects_at_capture);
+  EXPECT_TRUE(back.owns_rate_loop);
 
   const nlohmann::json finish = {
       {"estimator", "hybrid"},
@@ -324,6 +339,10 @@ TEST(ProtocolMessagesTest, EncodingsEqualTheGoldenFile) {
       EXPECT_EQ(EncodeDetect(DecodeDetect(bytes)), bytes) << g.name;
     } else if (g.message == "detect_reply") {
       EXPECT_EQ(EncodeDetectReply(DecodeDetectReply(bytes)), bytes) << g.name;
+    } else if (g.message == "rate_tick") {
+      EXPECT_EQ(EncodeRateTick(DecodeRateTick(bytes)), bytes) << g.name;
+    } else if (g.message == "rate_reply") {
+      EXPECT_EQ(EncodeRateReply(DecodeRateReply(bytes)), bytes) << g.name;
     } else {
       EXPECT_EQ(EncodeTick(DecodeTick(bytes)), bytes) << g.name;
     }

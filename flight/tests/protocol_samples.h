@@ -146,4 +146,23 @@ inline DetectReply SampleRegionWantedReply() {
   return reply;
 }
 
+/// A rate_tick with every field away from its default.
+inline RateTick SampleRateTick() {
+  RateTick tick;
+  tick.time_s = 3.001;
+  tick.command.w_B_radps = {0.5, -0.25, 0.125};
+  tick.command.thrust_N = 7.75;
+  tick.w_B_radps = {-0.0, 0.0625, -1.5};
+  return tick;
+}
+
+/// A rate_reply with every field away from its default.
+inline AutopilotOutput SampleRateReply() {
+  AutopilotOutput out;
+  out.w_cmd_radps << 1000.5, 1100.25, 950.125, 1830.0;
+  out.thrust_allocated_N = 6.4921875;
+  out.saturated = true;
+  return out;
+}
+
 }  // namespace hpa::flight

@@ -202,6 +202,53 @@ TEST(ProtocolTest, ReplyValuesOutsideTheirDefinitionAreRefused) {
   EXPECT_TRUE(Has(ErrorOf([&] { DecodeReply(EncodeReply(out)); }), "of norm 2,"));
 }
 
+// A stack that owns the rate loop: a non-finite rotor speed or allocated thrust is refused where
+// it is decoded, a speed outside the motors' range by CheckRateReply, each naming the value.
+TEST(ProtocolTest, RateRepliesOutsideTheirDefinitionAreRefused) {
+  const Params params;
+  AutopilotOutput out;
+  out.w_cmd_radps.setConstant(0.5 * (params.motor_speed_min_radps + params.motor_speed_max_radps));
+  out.thrust_allocated_N = 7.0;
+  EXPECT_EQ(ErrorOf([&] { CheckRateReply(DecodeRateReply(EncodeRateReply(out)), params); }), "");
+  AutopilotOutput bad = out;
+  bad.w_cmd_radps[2] = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_TRUE(Has(ErrorOf([&] { DecodeRateReply(EncodeRateReply(bad)); }),
+                  "a non-finite rotor speed command nan rad/s"));
+  bad = out;
+  bad.thrust_allocated_N = -1.0;
+  EXPECT_TRUE(Has(ErrorOf([&] { DecodeRateReply(EncodeRateReply(bad)); }),
+                  "thrust allocated -1 N, expected a finite number >= 0"));
+  bad = out;
+  bad.w_cmd_radps[1] = 5000.0;
+  // params.h's motor range: 100 to 1830 rad/s
+  EXPECT_EQ(ErrorOf([&] { CheckRateReply(bad, params); }),
+            "rate_reply refused: rotor 1 speed command 5000 rad/s, outside the motors' range "
+            "[100, 1830] rad/s");
+  bad.w_cmd_radps[1] = 0.0;
+  EXPECT_TRUE(Has(ErrorOf([&] { CheckRateReply(bad, params); }), "rotor 1 speed command 0 rad/s"));
+}
+
+// The hello's rate_loop carries the world profile's rate loop to a stack that owns it, every bit.
+TEST(ProtocolTest, RateLoopConfigRoundTripsThroughJson) {
+  RateLoopConfig c;
+  c.spec.px4 = true;
+  c.spec.params.p = {0.125, 0.15, 0.2 / 3.0};
+  c.spec.params.gyro_cutoff_hz = 41.5;
+  c.own_rate_hz = 500.0;
+  const RateLoopConfig back = RateLoopFromJson(nlohmann::json::parse(RateLoopToJson(c).dump()));
+  EXPECT_TRUE(back.spec.px4);
+  EXPECT_EQ(back.own_rate_hz, 500.0);
+  EXPECT_EQ(back.spec.params.p, c.spec.params.p);
+  EXPECT_EQ(back.spec.params.gyro_cutoff_hz, 41.5);
+  EXPECT_EQ(back.spec.params.rate_hz, c.spec.params.rate_hz);
+  nlohmann::json j = RateLoopToJson(c);
+  j["own_rate_hz"] = 0.0;
+  EXPECT_TRUE(Has(ErrorOf([&] { RateLoopFromJson(j); }), "rate_loop.own_rate_hz"));
+  j = RateLoopToJson(c);
+  j["params"].erase("gyro_cutoff_hz");
+  EXPECT_TRUE(Has(ErrorOf([&] { RateLoopFromJson(j); }), "bad rate_loop in the hello"));
+}
+
 // Within [0.9, 1.1] a quaternion is renormalised; a unit one (to rounding) keeps every bit, so
 // the separate stack's estimate equals the in-process one.
 TEST(ProtocolTest, NearUnitQuaternionsAreRenormalisedAndUnitOnesKeptExactly) {

@@ -3,6 +3,7 @@ of what a run writes (results). Standard library and numpy only. A file the load
 is an InputError ("PATH:LINE:COLUMN: what was wrong, what was expected"); a message the client
 cannot read is a ProtocolError naming the message."""
 
-from .lockstep import FlightStackClient, Command, Tick, PROTOCOL_VERSION, run  # noqa: F401
+from .lockstep import FlightStackClient, Command, RotorCommand, Tick, PROTOCOL_VERSION  # noqa: F401
+from .lockstep import run  # noqa: F401
 from .lockstep import ProtocolError  # noqa: F401
 from .results import InputError, load_log, load_metrics, load_runs  # noqa: F401

@@ -13,6 +13,10 @@ each reply (lockstep), so a slow controller slows the run, never the simulated v
         def step(self, tick):           # -> Command or None (keep the last command)
             ...
     run(Hover)
+
+A stack that runs the vehicle's rate loop itself passes owns_rate_loop=True and gives its class a
+rate_loop(rate_tick) method returning a RotorCommand (rotor speeds in rad/s): the simulator then
+runs no autopilot of its own (docs/protocol.md, rate_tick and rate_reply).
 """
 
 import json
@@ -42,9 +46,9 @@ PROTOCOL_VERSION = TABLE["protocol_version"]
 MAGIC = TABLE["magic"]  # "HPAF"
 MESSAGE_TYPES = {t["id"]: t["name"] for t in TABLE["message_types"]}
 _TYPE_IDS = {name: kind for kind, name in MESSAGE_TYPES.items()}
-HELLO, HELLO_ACK, TICK, TICK_REPLY, FINISH, FINISH_REPLY, ERROR = (
+HELLO, HELLO_ACK, TICK, TICK_REPLY, FINISH, FINISH_REPLY, ERROR, RATE_TICK, RATE_REPLY = (
     _TYPE_IDS[name] for name in ("hello", "hello_ack", "tick", "tick_reply", "finish",
-                                 "finish_reply", "error"))
+                                 "finish_reply", "error", "rate_tick", "rate_reply"))
 MAX_MESSAGE_BYTES = TABLE["max_message_bytes"]  # the simulator's own limit on a message body
 # the JSON messages' keys, by message name: the table's declarations (name, type, required, doc)
 JSON_KEYS = {t["name"]: t["keys"] for t in TABLE["message_types"] if t["encoding"] == "json"}
@@ -191,6 +195,17 @@ class Command:
         self.status = status
         self.solve_time_ms = float(solve_time_ms)
         self.cost = float(cost)
+
+
+class RotorCommand:
+    """A rate-loop step's output, from a stack that owns the rate loop: rotor speed commands
+    (4, rad/s, inside the motors' range), the collective thrust they make (N) and whether the
+    allocation fell short of the command."""
+
+    def __init__(self, w_cmd_radps, thrust_allocated_N, saturated=False):
+        self.w_cmd_radps = [float(v) for v in w_cmd_radps]
+        self.thrust_allocated_N = float(thrust_allocated_N)
+        self.saturated = bool(saturated)
 
 
 class Tick:
@@ -420,6 +435,20 @@ def decode_tick(data, what="tick"):
     return t
 
 
+def decode_rate_tick(data):
+    """Decodes a rate_tick message body into a dict keyed by the table's names: time_s,
+    command {w_B_radps, thrust_N} (what the rate loop tracks) and w_B_radps (the rate gyro's
+    sample for PX4's loop, the estimated body rate for the own loop)."""
+    return decode(_LAYOUTS["rate_tick"], data, "rate_tick")
+
+
+def encode_rate_reply(rotors):
+    """Encodes a rate_reply from a RotorCommand."""
+    return encode(_LAYOUTS["rate_reply"], {"w_cmd_radps": rotors.w_cmd_radps,
+                                            "thrust_allocated_N": rotors.thrust_allocated_N,
+                                            "saturated": rotors.saturated})
+
+
 def decode_header(header):
     """(type, body length) of a 12-byte message header; ProtocolError on a bad magic, an unknown
     type or a body past MAX_MESSAGE_BYTES."""
@@ -567,9 +596,10 @@ class FlightStackClient:
         """Sends one message."""
         self.sock.sendall(struct.pack("<III", MAGIC, kind, len(body)) + body)
 
-    def hello(self, name, control_rate_hz, batched_ticks=False):
+    def hello(self, name, control_rate_hz, batched_ticks=False, owns_rate_loop=False):
         """Receives the hello (a dict), maps the frame ring, answers with the ack (declaring
-        batched_ticks when asked: docs/protocol.md, Batched ticks)."""
+        batched_ticks and owns_rate_loop when asked: docs/protocol.md, Batched ticks, rate_tick
+        and rate_reply)."""
         kind, body = self.receive()
         if kind != HELLO:
             raise ProtocolError("expected a hello, got a %s message" % MESSAGE_TYPES[kind])
@@ -590,6 +620,8 @@ class FlightStackClient:
                "control_rate_hz": control_rate_hz}
         if batched_ticks:
             ack["batched_ticks"] = True
+        if owns_rate_loop:
+            ack["owns_rate_loop"] = True
         check_json("hello_ack", ack)
         self.send(HELLO_ACK, json.dumps(ack).encode())
         return hello
@@ -637,19 +669,24 @@ class _ControlClock:
         return due
 
 
-def run(controller_class, name=None, control_rate_hz=0.0, batched_ticks=False):
+def run(controller_class, name=None, control_rate_hz=0.0, batched_ticks=False,
+        owns_rate_loop=False):
     """Serves one run: builds controller_class(hello) and calls its step(tick) every tick.
     step returns a Command (a new command), or None (the rate loop keeps the last one); the
     controller may set `estimate` (a state dict) for the simulator's log and rate loop, else the
     latest VIO pose and IMU rate are sent (before the first VIO sample, the hello's initial
     state). With a control_rate_hz, tick.control_due says when a loop at that rate fires;
     batched_ticks=True promises that step commands exactly then (a ProtocolError otherwise),
-    and the simulator answers with fewer round trips (docs/protocol.md, Batched ticks)."""
+    and the simulator answers with fewer round trips (docs/protocol.md, Batched ticks).
+    owns_rate_loop=True declares that the stack runs the vehicle's rate loop: the simulator runs
+    none and at each of the loop's steps (the hello's rate_loop) calls the controller's
+    rate_loop(rate_tick), a dict as decode_rate_tick gives it, which returns a RotorCommand."""
     if batched_ticks and not control_rate_hz > 0:
         raise ValueError("batched_ticks needs the control_rate_hz its commands follow")
     client = FlightStackClient()
     try:
-        hello = client.hello(name or controller_class.__name__, control_rate_hz, batched_ticks)
+        hello = client.hello(name or controller_class.__name__, control_rate_hz, batched_ticks,
+                             owns_rate_loop)
         tick_hz = hello.get("config", {}).get("tick_hz", 1000.0)
         clock = _ControlClock(tick_hz, control_rate_hz) if control_rate_hz > 0 else None
         controller = controller_class(hello)
@@ -660,6 +697,10 @@ def run(controller_class, name=None, control_rate_hz=0.0, batched_ticks=False):
         start = dict(start, q_WB=start.get("q_WB_wxyz", [1.0, 0.0, 0.0, 0.0]))
         while True:
             kind, body = client.receive()
+            if kind == RATE_TICK and owns_rate_loop:
+                client.send(RATE_REPLY, encode_rate_reply(controller.rate_loop(
+                    decode_rate_tick(body))))
+                continue
             if kind not in (TICK, FINISH):
                 raise ProtocolError("expected a tick or finish, got a %s message"
                                     % MESSAGE_TYPES[kind])

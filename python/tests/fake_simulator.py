@@ -23,10 +23,10 @@ def _read(conn, n):
     return data
 
 
-def serve(controller_class, hello, messages):
-    """Runs lockstep.run(controller_class) against a simulator that sends `hello` then each of
-    `messages` ((type, body) pairs), one per reply, and stops after an error message or when
-    the stack closes. Returns run()'s exit code and the replies, a list of (type, body)."""
+def serve(controller_class, hello, messages, **run_options):
+    """Runs lockstep.run(controller_class, **run_options) against a simulator that sends `hello`
+    then each of `messages` ((type, body) pairs), one per reply, and stops after an error message
+    or when the stack closes. Returns run()'s exit code and the replies, a list of (type, body)."""
     with tempfile.TemporaryDirectory() as folder:
         path = os.path.join(folder, "lockstep.sock")
         with socket.socket(socket.AF_UNIX, socket.SOCK_STREAM) as server:
@@ -57,7 +57,7 @@ def serve(controller_class, hello, messages):
             os.environ["HPA_FLIGHT_SOCKET"] = path
             try:
                 with contextlib.redirect_stderr(io.StringIO()):
-                    code = lockstep.run(controller_class, name="test")
+                    code = lockstep.run(controller_class, name="test", **run_options)
             finally:
                 if old is None:
                     del os.environ["HPA_FLIGHT_SOCKET"]

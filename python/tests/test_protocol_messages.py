@@ -134,8 +134,8 @@ class RoundTripTest(unittest.TestCase):
         self.assertIsNone(tick.frames[0]["image"])
 
     def test_a_session_carries_every_message_type(self):
-        """hello, hello_ack, tick, tick_reply, finish, finish_reply and, from a stack that
-        raises, error, through the client's own socket code."""
+        """hello, hello_ack, tick, tick_reply, rate_tick, rate_reply, finish, finish_reply and,
+        from a stack that raises, error, through the client's own socket code."""
         hello = json.dumps({"protocol_version": lockstep.PROTOCOL_VERSION, "scenario": "s",
                             "seed": 3, "config": {}}).encode()
         # without frames: this hello has no camera ring to map them from; the truth (the
@@ -167,6 +167,26 @@ class RoundTripTest(unittest.TestCase):
         self.assertEqual(plain(reply["estimate"]["p_WQ_W"]), value["truth"]["p_WQ_W"])
         finish = json.loads(replies[2][1])
         self.assertEqual(sorted(finish), ["estimator", "estimator_health", "frames_detected"])
+
+        # a stack that owns the rate loop: the rate_tick reaches its rate_loop, the ack says so
+        rate_value = sample(lockstep.STRUCTS["rate_tick"])
+        class OwnsRateLoop(Stack):
+            def rate_loop(self, rate_tick):
+                if plain(rate_tick) != plain(rate_value):  # the rate_tick as it was sent
+                    raise ValueError("rate_tick decoded as %r" % rate_tick)
+                return lockstep.RotorCommand([1000.5, 1100.25, 950.125, 1830.0], 6.5, True)
+
+        code, replies = fake_simulator.serve(
+            OwnsRateLoop, hello, [(lockstep.TICK, tick),
+                                  (lockstep.RATE_TICK, lockstep.encode("rate_tick", rate_value)),
+                                  (lockstep.FINISH, tick)], owns_rate_loop=True)
+        self.assertEqual(code, 0)
+        self.assertEqual([k for k, _ in replies], [lockstep.HELLO_ACK, lockstep.TICK_REPLY,
+                                                   lockstep.RATE_REPLY, lockstep.FINISH_REPLY])
+        self.assertTrue(json.loads(replies[0][1])["owns_rate_loop"])
+        rotors = plain(lockstep.decode("rate_reply", replies[2][1]))
+        self.assertEqual(rotors, {"w_cmd_radps": [1000.5, 1100.25, 950.125, 1830.0],
+                                  "thrust_allocated_N": 6.5, "saturated": True})
 
         class Raises(Stack):
             def step(self, tick):

@@ -114,6 +114,12 @@ const std::map<std::string, Case>& Cases() {
       {"fault_estimate_error_min",
        {{0.2}, OneFault([](FaultRecovery* r) { r->estimate_error_max_m = 0.3; }),
         OneFault([](FaultRecovery* r) { r->estimate_error_max_m = 0.1; })}},
+      {"fault_false_detection_rate_max",
+       {{0.2}, OneFault([](FaultRecovery* r) { r->false_detection_rate = 0.1; }),
+        OneFault([](FaultRecovery* r) { r->false_detection_rate = 0.3; })}},
+      {"fault_false_detection_rate_min",
+       {{0.2}, OneFault([](FaultRecovery* r) { r->false_detection_rate = 0.3; }),
+        OneFault([](FaultRecovery* r) { r->false_detection_rate = 0.1; })}},
   };
   return cases;
 }

@@ -33,6 +33,7 @@ nlohmann::json FlownMetrics() {
   fault.tracking_recovered_s = 0.5;
   fault.tracking_error_max_m = 0.15;
   fault.estimate_error_max_m = 0.05;
+  fault.false_detection_rate = 0.02;
   m.faults = {fault};
   return nlohmann::json::parse(MetricsToJson(m));
 }

@@ -3,11 +3,14 @@
 
 #include "hpa/sim/faults.h"
 
+#include <algorithm>
+#include <cmath>
 #include <opencv2/core.hpp>
 #include <type_traits>
 #include <utility>
 #include <variant>
 
+#include "hpa/models/camera_model.h"
 #include "hpa/models/seed_streams.h"
 
 namespace hpa::sim {
@@ -158,12 +161,16 @@ std::vector<FaultComponentDecl> BuildComponents() {
          "distractor",
          "",
          "a second payload (same sphere, same material) in the rendered scene at `position`, "
-         "moving at `velocity`: clutter the detector sees in real pixels (the analytic camera "
-         "has none)",
+         "moving at `velocity`, drawn in a frame with probability `visible_rate` (a flickering "
+         "red object): clutter the detector sees in real pixels (the analytic camera has none)",
          {Vector("position", "m", "where it is at the fault's start (world frame)", -10.0, 10.0,
                  std::nullopt, &Fault::distractor_W_m),
           Vector("velocity", "m/s", "its constant velocity (world frame)", -10.0, 10.0, 0.0,
-                 &Fault::distractor_velocity_W_mps)}}}},
+                 &Fault::distractor_velocity_W_mps),
+          Number("visible_rate", "1",
+                 "probability that it is drawn in a frame (each frame a draw from the fault's "
+                 "seeded stream; 1: in every frame)",
+                 0.0, 1.0, 1.0, &Fault::distractor_visible_fraction)}}}},
   };
 }
 
@@ -218,7 +225,10 @@ void Faults::Clear() { faults_.clear(); }
 void Faults::Inject(const Fault& fault) {
   Active a;
   a.fault = fault;
-  a.rng.seed(SplitMix64(run_seed_ * 0x9E3779B97F4A7C15ULL + kFaultSalt + faults_.size()));
+  a.stream_seed = SplitMix64(run_seed_ * 0x9E3779B97F4A7C15ULL + kFaultSalt + faults_.size());
+  a.rng.seed(a.stream_seed);
+  a.tally.start_s = fault.start_s;
+  a.tally.distractor = fault.mode == FaultMode::kDistractor;
   faults_.push_back(std::move(a));
 }
 
@@ -302,13 +312,15 @@ void Faults::TakeHeld(std::vector<SensorMessage>* out) {
   }
 }
 
-void Faults::OnCameraCapture(double now_s, CameraReadout* readout,
-                             std::optional<PayloadDetection>* detection,
+void Faults::OnCameraCapture(double now_s, const SystemState& truth, const Params& world_params,
+                             CameraReadout* readout, std::optional<PayloadDetection>* detection,
                              std::optional<CameraFrame>* frames, CameraCapture* capture) {
   for (Active& a : faults_) {
     const Fault& f = a.fault;
     if (f.component != FaultComponent::kCamera || !InWindow(f, now_s)) continue;
-    if (f.mode == FaultMode::kStuck) {
+    if (f.mode == FaultMode::kDistractor) {
+      TallyDistractorFrame(&a, now_s, truth, world_params, *detection);
+    } else if (f.mode == FaultMode::kStuck) {
       // the first frame of the fault (its detection, or its pixels) again
       if (*detection) {
         if (!a.frozen) {
@@ -407,15 +419,59 @@ bool Faults::TakeGripperRelease(double now_s) {
   return release;
 }
 
+Eigen::Vector3d Faults::DistractorPosition_W(const Fault& f, double now_s) {
+  return f.distractor_W_m + f.distractor_velocity_W_mps * (now_s - f.start_s);
+}
+
+bool Faults::DistractorDrawn(const Active& a, double now_s) {
+  const double p = a.fault.distractor_visible_fraction;
+  if (p >= 1.0) return true;
+  if (p <= 0.0) return false;
+  // one uniform draw per instant (microseconds), from the fault's own stream's seed: a region and
+  // the whole frame of one capture, and the chase camera at that instant, see the same
+  const uint64_t key = static_cast<uint64_t>(std::llround(now_s * 1e6));
+  const double u =
+      static_cast<double>(SplitMix64(a.stream_seed ^ SplitMix64(key)) >> 11) * 0x1.0p-53;
+  return u < p;
+}
+
+void Faults::TallyDistractorFrame(Active* a, double now_s, const SystemState& truth,
+                                  const Params& world_params,
+                                  const std::optional<PayloadDetection>& detection) {
+  FaultFrameTally& t = a->tally;
+  ++t.frames;
+  const bool drawn = DistractorDrawn(*a, now_s);
+  // the distractor's centre in the camera frame: the payload's transform at its position
+  SystemState at_distractor = truth;
+  at_distractor.p_WL_W = DistractorPosition_W(a->fault, now_s);
+  const Eigen::Vector3d p_CD_C = PayloadInCamera_C(world_params, at_distractor);
+  t.drawn_frames += drawn ? 1 : 0;
+  t.in_image_frames += drawn && InsideImage(world_params, p_CD_C) ? 1 : 0;
+  if (!detection || !detection->found) return;
+  ++t.detections;
+  // on the distractor: the detection's bearing closer to the distractor's than to the payload's
+  const Eigen::Vector3d p_CL_C = PayloadInCamera_C(world_params, truth);
+  const Eigen::Vector3d b_C = detection->p_CL_C.normalized();
+  const double to_payload_rad = std::acos(std::clamp(b_C.dot(p_CL_C.normalized()), -1.0, 1.0));
+  const double to_distractor_rad = std::acos(std::clamp(b_C.dot(p_CD_C.normalized()), -1.0, 1.0));
+  if (drawn && to_distractor_rad < to_payload_rad) ++t.detections_on_distractor;
+}
+
 std::vector<std::array<double, 3>> Faults::DistractorPositions_W(double now_s) const {
   std::vector<std::array<double, 3>> out;
   for (const Active& a : faults_) {
     const Fault& f = a.fault;
     if (f.mode != FaultMode::kDistractor || !InWindow(f, now_s)) continue;
-    const Eigen::Vector3d p_W =
-        f.distractor_W_m + f.distractor_velocity_W_mps * (now_s - f.start_s);
+    if (!DistractorDrawn(a, now_s)) continue;
+    const Eigen::Vector3d p_W = DistractorPosition_W(f, now_s);
     out.push_back({p_W.x(), p_W.y(), p_W.z()});
   }
+  return out;
+}
+
+std::vector<FaultFrameTally> Faults::FrameTallies() const {
+  std::vector<FaultFrameTally> out;
+  for (const Active& a : faults_) out.push_back(a.tally);
   return out;
 }
 

@@ -146,7 +146,7 @@ void Renderer::RenderPayloadCamera(cv::Mat* bgr, const cv::Rect& region) {
     w_.model_->cam_fovy[w_.ids_.payload_camera] = camera_image_->render_fovy_deg();
   }
   const int w = w_.model_->vis.global.offwidth, h = w_.model_->vis.global.offheight;
-  // a camera fault's distractors: copies of the payload's sphere where the faults put them
+  // a camera fault's distractors drawn at this instant: copies of the payload's sphere
   if (!w_.faults_.empty()) {
     offscreen_->SetGeomCopies(w_.ids_.payload_geom, w_.faults_.DistractorPositions_W(w_.time_s()));
   }

@@ -351,7 +351,8 @@ std::optional<CameraCapture> World::CaptureTickStart(CameraReadout* readout) {
   std::optional<CameraCapture> capture =
       camera_->Capture(*this, step_, time_s(), readout, &detection, &frames);
   if (capture && !faults_.empty()) {
-    faults_.OnCameraCapture(time_s(), readout, &detection, &frames, &*capture);
+    faults_.OnCameraCapture(time_s(), GetTruth().state, world_params_, readout, &detection, &frames,
+                            &*capture);
   }
   DelayLine<SensorMessage>& line = deliveries_[static_cast<size_t>(camera_line_)];
   if (detection) line.Push(detection->time_s, std::move(*detection));

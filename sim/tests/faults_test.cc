@@ -4,9 +4,11 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <set>
 
+#include "hpa/models/camera_model.h"
 #include "hpa/sim/world.h"
 #include "sim/tests/default_world_config.h"
 
@@ -199,6 +201,85 @@ TEST(FaultsTest, ADistractorMovesAtItsVelocityOnlyInItsWindow) {
   EXPECT_NEAR(at_2[0][0], 0.2, 1e-12);
   EXPECT_EQ(at_2[0][2], 0.6);
   EXPECT_TRUE(faults.DistractorPositions_W(3.0).empty());
+}
+
+// The frames of a camera captured at 30 Hz for `seconds` from t = 0 in which `faults` draws a
+// distractor.
+std::vector<bool> DrawnFrames(const Faults& faults, double seconds) {
+  std::vector<bool> drawn;
+  for (int k = 0; k < static_cast<int>(seconds * 30.0); ++k) {
+    drawn.push_back(!faults.DistractorPositions_W(k / 30.0).empty());
+  }
+  return drawn;
+}
+
+TEST(FaultsTest, AFlickeringDistractorIsDrawnInItsShareOfFramesTheSameForTheSameSeed) {
+  Fault d = MakeFault(FaultComponent::kCamera, FaultMode::kDistractor, 0.0, 1e9);
+  d.distractor_visible_fraction = 0.3;
+  Faults faults(7), same_seed(7), other_seed(8);
+  faults.Inject(d);
+  same_seed.Inject(d);
+  other_seed.Inject(d);
+  const std::vector<bool> drawn = DrawnFrames(faults, 100.0);  // 3000 frames
+  const double share = std::count(drawn.begin(), drawn.end(), true) / 3000.0;
+  // binomial: the standard deviation of the share of 3000 draws at 0.3 is 0.0084; 4 of them
+  EXPECT_NEAR(share, 0.3, 0.034);
+  EXPECT_EQ(drawn, DrawnFrames(same_seed, 100.0));
+  EXPECT_NE(drawn, DrawnFrames(other_seed, 100.0));
+  // every render of one instant agrees (a region, the whole frame, the chase camera)
+  for (int k = 0; k < 30; ++k) {
+    EXPECT_EQ(faults.DistractorPositions_W(k / 30.0), faults.DistractorPositions_W(k / 30.0));
+  }
+  // 1: every frame; 0: none
+  for (const double rate : {0.0, 1.0}) {
+    Faults f(7);
+    d.distractor_visible_fraction = rate;
+    f.Inject(d);
+    const std::vector<bool> all = DrawnFrames(f, 10.0);
+    EXPECT_EQ(std::count(all.begin(), all.end(), true), rate == 1.0 ? 300 : 0);
+  }
+}
+
+TEST(FaultsTest, ADetectionOnTheDistractorIsCountedAsFalse) {
+  const Params params = DefaultConfig().params;
+  // hovering: the payload 0.5 m below the vehicle, the distractor 0.15 m beside it
+  SystemState truth;
+  truth.p_WQ_W = Eigen::Vector3d(0, 0, 1.2);
+  truth.p_WL_W = Eigen::Vector3d(0, 0, 1.2 - params.cable_length_m);
+  Fault d = MakeFault(FaultComponent::kCamera, FaultMode::kDistractor, 0.0, 1.0);
+  d.distractor_W_m = truth.p_WL_W + Eigen::Vector3d(0.15, 0, 0);
+  Faults faults(1);
+  faults.Inject(MakeFault(FaultComponent::kVio, FaultMode::kOff, 0.0, 1.0));
+  faults.Inject(d);
+  // a detection at the payload, one at the distractor, none, and one after the window
+  SystemState at_distractor = truth;
+  at_distractor.p_WL_W = d.distractor_W_m;
+  const Eigen::Vector3d on_payload_C = PayloadInCamera_C(params, truth);
+  const Eigen::Vector3d on_distractor_C = PayloadInCamera_C(params, at_distractor);
+  CameraCapture capture;
+  for (const auto& [t_s, p_C] :
+       std::vector<std::pair<double, std::optional<Eigen::Vector3d>>>{{0.0, on_payload_C},
+                                                                      {0.1, on_distractor_C},
+                                                                      {0.2, std::nullopt},
+                                                                      {1.0, on_distractor_C}}) {
+    std::optional<PayloadDetection> detection = PayloadDetection{};
+    detection->time_s = t_s;
+    detection->found = p_C.has_value();
+    if (p_C) detection->p_CL_C = *p_C;
+    std::optional<CameraFrame> frames;
+    faults.OnCameraCapture(t_s, truth, params, nullptr, &detection, &frames, &capture);
+  }
+  const std::vector<FaultFrameTally> tallies = faults.FrameTallies();
+  ASSERT_EQ(tallies.size(), 2u);
+  EXPECT_FALSE(tallies[0].distractor);
+  EXPECT_EQ(tallies[0].frames, 0);
+  const FaultFrameTally& t = tallies[1];
+  EXPECT_TRUE(t.distractor);
+  EXPECT_EQ(t.frames, 3);
+  EXPECT_EQ(t.drawn_frames, 3);
+  EXPECT_EQ(t.in_image_frames, 3);
+  EXPECT_EQ(t.detections, 2);
+  EXPECT_EQ(t.detections_on_distractor, 1);
 }
 
 // The vehicle at hover command for 0.3 s with rotor 0 off from the start: it rolls and falls,

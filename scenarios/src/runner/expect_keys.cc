@@ -102,6 +102,17 @@ double FaultEstimateErrorMax(const Metrics& m) {
   return e;
 }
 
+// the largest false-detection rate of any distractor fault
+double FaultFalseDetectionRate(const Metrics& m) {
+  double rate = NAN;
+  for (const FaultRecovery& r : m.faults) {
+    if (r.false_detection_rate && !(*r.false_detection_rate <= rate)) {
+      rate = *r.false_detection_rate;
+    }
+  }
+  return rate;
+}
+
 std::vector<ExpectKey> BuildTable() {
   std::vector<ExpectKey> t;
   {
@@ -231,6 +242,16 @@ std::vector<ExpectKey> BuildTable() {
                   "a sensor fault must show its effect: the largest position estimate error in a "
                   "fault event's span at least this",
                   0.0, kBig, FaultEstimateErrorMax));
+  t.push_back(Max("fault_false_detection_rate_max", "fault_recovery.false_detection_rate",
+                  "fraction",
+                  "share of a distractor fault's detections that landed on the distractor, at "
+                  "most (the largest over its distractor faults)",
+                  1.0, FaultFalseDetectionRate));
+  t.push_back(Min("fault_false_detection_rate_min", "fault_recovery.false_detection_rate",
+                  "fraction",
+                  "a distractor must fool the detector: the largest share of a distractor "
+                  "fault's detections on the distractor at least this",
+                  0.0, 1.0, FaultFalseDetectionRate));
   return t;
 }
 

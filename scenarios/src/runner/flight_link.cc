@@ -74,7 +74,10 @@ constexpr double kExitNoteWaitS = 2.0;
 class ExternalFlight final : public FlightLink {
  public:
   ExternalFlight(const flight::FlightConfig& config, const ExternalFlightOptions& options)
-      : options_(options), tick_hz_(config.tick_hz), control_clock_(config.tick_hz) {
+      : options_(options),
+        params_(config.params),
+        tick_hz_(config.tick_hz),
+        control_clock_(config.tick_hz) {
     try {
       Start(config);
     } catch (...) {
@@ -108,7 +111,8 @@ class ExternalFlight final : public FlightLink {
                             {"scenario", options.scenario},
                             {"seed", options.seed},
                             {"rates", options.rates},
-                            {"config", flight::ConfigToJson(config)}};
+                            {"config", flight::ConfigToJson(config)},
+                            {"rate_loop", flight::RateLoopToJson(options.rate_loop)}};
     if (ring_) {
       hello["camera"] = {{"ring", ring_->name()},
                          {"slots", options.frames.slots},
@@ -134,6 +138,7 @@ class ExternalFlight final : public FlightLink {
           // camera's captures, so a stack that receives every frame is asked every tick
           batched_ = ack.batched_ticks && (!ring_ || detects_at_capture_);
           if (batched_) control_loop_ = control_clock_.AddLoop("control", ack.control_rate_hz);
+          owns_rate_loop_ = ack.owns_rate_loop;
         },
         "hello");
   }
@@ -281,6 +286,33 @@ class ExternalFlight final : public FlightLink {
         },
         step);
     return reply.detection;
+  }
+
+  bool owns_rate_loop() const override { return owns_rate_loop_; }
+
+  // Sends the rate_tick after the ticks queued before it and reads its rate_reply (the replies
+  // of the ticks before it first).
+  AutopilotOutput RateLoop(const flight::RateTick& tick) override {
+    AutopilotOutput out;
+    Guard(
+        [&] {
+          channel_->Queue(MessageType::kRateTick, flight::EncodeRateTick(tick));
+          channel_->Flush(Limit());
+          std::vector<uint8_t> body;
+          while (true) {
+            const MessageType type = channel_->Receive(&body, Limit());
+            if (type == MessageType::kRateReply) break;
+            if (type != MessageType::kTickReply || awaited_.empty()) {
+              throw ProtocolError("expected a rate_reply message, got " +
+                                  flight::MessageTypeName(type));
+            }
+            ReadReplyBody(body);
+          }
+          out = flight::DecodeRateReply(body);
+          flight::CheckRateReply(out, params_);
+        },
+        "rate loop at t = " + std::to_string(tick.time_s) + " s");
+    return out;
   }
 
   FlightFinish Finish(const flight::FlightInputs& pending) override {
@@ -546,6 +578,7 @@ class ExternalFlight final : public FlightLink {
   }
 
   ExternalFlightOptions options_;
+  Params params_;  // the flight params (the motors' range a rate_reply is checked against)
   std::string dir_, socket_path_, name_ = "external", controller_ = "external", exit_note_;
   double control_rate_hz_ = 0.0;  // from the hello_ack (0: not stated)
   int listen_fd_ = -1;
@@ -558,6 +591,7 @@ class ExternalFlight final : public FlightLink {
   double next_tick_s_ = 0.0;      // time of the tick after the last one stepped
   bool detects_at_capture_ = false;  // the stack reads each rendered frame at its capture
   bool batched_ = false;             // the stack declared batched_ticks (see Start)
+  bool owns_rate_loop_ = false;      // the stack declared owns_rate_loop: it runs the rate loop
   LockstepClock control_clock_;      // the stack's control loop as it declared it (batched)
   int control_loop_ = -1;
   flight::FlightInputs tick_;               // the tick being sent (its storage reused)

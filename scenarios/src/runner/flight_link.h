@@ -58,6 +58,15 @@ class FlightLink {
     (void)read_whole;
     throw std::logic_error("this flight stack does not detect at capture");
   }
+  /// Whether the stack runs the vehicle's rate loop (declared owns_rate_loop in its hello_ack):
+  /// the runner then runs no autopilot and asks RateLoop at each of the loop's steps.
+  virtual bool owns_rate_loop() const { return false; }
+  /// One step of the stack's own rate loop: its rotor speed commands and allocation report,
+  /// checked (finite, inside the motors' range).
+  virtual AutopilotOutput RateLoop(const flight::RateTick& tick) {
+    (void)tick;
+    throw std::logic_error("this flight stack does not own the rate loop");
+  }
   /// Ends the run: hands the stack the inputs still pending and returns its final report.
   virtual FlightFinish Finish(const flight::FlightInputs& pending) = 0;
   /// The next frame-ring slot to render into (its index in *slot); nullptr: frames do not
@@ -91,6 +100,7 @@ struct ExternalFlightOptions {
   nlohmann::json rates;             // the rate table, for the hello
   std::string scenario;             // the scenario's name and seed, for the hello
   unsigned long seed = 0;
+  flight::RateLoopConfig rate_loop;  // the vehicle's rate loop, for a stack that owns it
 };
 
 /// Starts `options.command` and completes the hello; throws flight::ProtocolError naming the

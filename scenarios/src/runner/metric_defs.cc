@@ -76,6 +76,11 @@ const Registry<MetricDef>& TheRegistry() {
            Better::kLower, 0.01, false, false, "",
            "largest quadrotor position estimate error in any fault event's span (null with "
            "ground truth)"},
+          {"fault_false_detection_rate", "fault_recovery.false_detection_rate", R::kNumber,
+           "fraction", Better::kLower, 0.01, false, false, "",
+           "largest share of a distractor fault's detections (made at capture in its window) "
+           "that landed on the distractor rather than the payload (null: no distractor fault, "
+           "or no detection)"},
           {"fault_unrecovered", "fault_recovery.unrecovered", R::kNumber, "events",
            Better::kLower, 1.0, false, false, "",
            "fault events after which the payload stayed lost or out of its tracking bound"},

@@ -238,6 +238,18 @@ void FaultMetrics(const MetricsInputs& in, Metrics* m) {
     r.tracking_recovered_s = back_after(last_out);
     r.estimator_resets = rows[last - 1].estimator_resets - resets0;
     r.rejected_updates = rows[last - 1].estimator_rejected_updates - rejected0;
+    // the health check's resets by cause in the span: the counts at its end less those before it
+    const std::optional<EstimatorHealthResets>& end = rows[last - 1].estimator_health_resets;
+    const std::optional<EstimatorHealthResets> start =
+        first > 0 ? before.estimator_health_resets : EstimatorHealthResets{};
+    if (end && start) {
+      EstimatorHealthResets d;
+      d.quad_non_finite = end->quad_non_finite - start->quad_non_finite;
+      d.payload_non_finite = end->payload_non_finite - start->payload_non_finite;
+      d.payload_speed = end->payload_speed - start->payload_speed;
+      d.cable_length = end->cable_length - start->cable_length;
+      r.health_resets = d;
+    }
     m->faults.push_back(r);
   }
 }
@@ -256,6 +268,34 @@ void ComputeMetrics(const MetricsInputs& in, Metrics* m) {
   SlackMetrics(rows, slack, m);
   CameraAndTimingMetrics(in, m);
   FaultMetrics(in, m);
+}
+
+bool AddFaultFrameTallies(const std::vector<sim::FaultFrameTally>& tallies, Metrics* m) {
+  bool added = false;
+  std::vector<bool> taken(m->faults.size(), false);
+  for (const sim::FaultFrameTally& t : tallies) {
+    if (!t.distractor) continue;
+    for (size_t k = 0; k < m->faults.size(); ++k) {
+      FaultRecovery& r = m->faults[k];
+      if (taken[k] || r.window.mode != "distractor" ||
+          std::fabs(r.window.start_s - t.start_s) > 1e-9) {
+        continue;
+      }
+      taken[k] = true;
+      added = true;
+      if (t.frames > 0) {
+        r.distractor_drawn_fraction = static_cast<double>(t.drawn_frames) / t.frames;
+        r.distractor_in_image_fraction = static_cast<double>(t.in_image_frames) / t.frames;
+      }
+      r.detections = t.detections;
+      r.false_detections = t.detections_on_distractor;
+      if (t.detections > 0) {
+        r.false_detection_rate = static_cast<double>(t.detections_on_distractor) / t.detections;
+      }
+      break;
+    }
+  }
+  return added;
 }
 
 void CheckExpectations(const ExpectSpec& e, Metrics* m) {
@@ -357,7 +397,22 @@ std::string MetricsToJson(const Metrics& m) {
     // one entry per fault event, and the slowest recovery over them (null: none applies)
     Json faults = Json::array();
     std::optional<double> worst_flag_s, worst_view_s, worst_tracking_s, worst_error_m,
-        worst_estimate_m;
+        worst_estimate_m, worst_false_rate;
+    const auto opt_int = [](const std::optional<int>& v) { return v ? Json(*v) : Json(); };
+    // the causes as the estimator's health names them (health_resets_<cause>), each its count
+    const auto health_resets = [](const std::optional<EstimatorHealthResets>& resets) {
+      if (!resets) return Json();
+      EstimatorHealth health;
+      health.health_resets = *resets;
+      const std::string prefix = "health_resets_";
+      Json by_cause = Json::object();
+      for (const auto& [name, value] : health.Fields()) {
+        if (name.rfind(prefix, 0) == 0) {
+          by_cause[name.substr(prefix.size())] = static_cast<int>(value);
+        }
+      }
+      return by_cause;
+    };
     int unrecovered = 0;
     const auto worst = [](std::optional<double>* w, const std::optional<double>& v) {
       if (v && (!*w || *v > **w)) *w = v;
@@ -379,12 +434,19 @@ std::string MetricsToJson(const Metrics& m) {
                         {"tracking_error_max_m", opt_num(r.tracking_error_max_m)},
                         {"estimate_error_max_m", opt_num(r.estimate_error_max_m)},
                         {"estimator_resets", r.estimator_resets},
-                        {"rejected_updates", r.rejected_updates}});
+                        {"rejected_updates", r.rejected_updates},
+                        {"health_resets", health_resets(r.health_resets)},
+                        {"distractor_drawn_fraction", opt_num(r.distractor_drawn_fraction)},
+                        {"distractor_in_image_fraction", opt_num(r.distractor_in_image_fraction)},
+                        {"detections", opt_int(r.detections)},
+                        {"false_detections", opt_int(r.false_detections)},
+                        {"false_detection_rate", opt_num(r.false_detection_rate)}});
       worst(&worst_flag_s, r.health_flag_s);
       worst(&worst_view_s, r.payload_back_in_view_s);
       worst(&worst_tracking_s, r.tracking_recovered_s);
       worst(&worst_error_m, r.tracking_error_max_m);
       worst(&worst_estimate_m, r.estimate_error_max_m);
+      worst(&worst_false_rate, r.false_detection_rate);
       const bool lost_for_good = r.payload_lost && !r.payload_back_in_view_s;
       const bool out_for_good = r.tracking_left_bound && !r.tracking_recovered_s;
       unrecovered += (lost_for_good || out_for_good) ? 1 : 0;
@@ -395,6 +457,7 @@ std::string MetricsToJson(const Metrics& m) {
                            {"tracking_recovered_s", opt_num(worst_tracking_s)},
                            {"tracking_error_max_m", opt_num(worst_error_m)},
                            {"estimate_error_max_m", opt_num(worst_estimate_m)},
+                           {"false_detection_rate", opt_num(worst_false_rate)},
                            {"unrecovered", unrecovered}};
   }
   o["expect"] = {{"passed", m.expect_passed}, {"failed", m.expect_failed}};

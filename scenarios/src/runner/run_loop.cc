@@ -208,6 +208,7 @@ RunLoop::RunLoop(const Scenario& scenario, const Params& params, const RunOption
       rate_rows.push_back({{"name", r.name}, {"rate_hz", r.rate_hz}, {"latency_s", r.latency_s}});
     }
     external.rates = rate_rows;
+    external.rate_loop = {scenario.rate_loop, rates.imu.rate_hz};  // MakeAutopilot's, below
     flight_ = StartExternalFlight(flight_config, external);
   }
   metrics->flight_stack = flight_->name();
@@ -228,7 +229,8 @@ RunLoop::RunLoop(const Scenario& scenario, const Params& params, const RunOption
     inputs_.image_model_ms.reserve(frames);
     inputs_.detector_ms.reserve(frames);
   }
-  // the scenario's autopilot (the profile's rate loop): PX4's runs on the world's rate gyro
+  // the scenario's autopilot (the profile's rate loop): PX4's runs on the world's rate gyro; a
+  // stack that owns the rate loop runs it on its side, on the same schedule and inputs
   autopilot_ = MakeAutopilot(params, scenario.rate_loop, rates.imu.rate_hz);
   detector_ = std::make_unique<PayloadDetector>(params);
   camera_readout_ = std::make_unique<FlightCameraReadout>(flight_.get(), detector_.get());
@@ -421,8 +423,9 @@ ControlOutput RunLoop::AwaitPendingCommand(LogRow* row) {
 }
 
 // The body-rate loop: PX4's runs on each new sample of its gyro (none yet at the first tick: the
-// motors keep the world's initial hover command). The estimator is told the thrust the
-// allocation made (a saturated mixer lowers it).
+// motors keep the world's initial hover command); the scenario's autopilot runs it, or the
+// flight stack when it owns the rate loop. The estimator is told the thrust the allocation made
+// (a saturated mixer lowers it).
 void RunLoop::RateLoopStep(const SystemState& state, bool rate_due) {
   std::optional<Eigen::Vector3d> w_B_radps;
   if (autopilot_->RunsOnGyro()) {
@@ -433,7 +436,10 @@ void RunLoop::RateLoopStep(const SystemState& state, bool rate_due) {
     w_B_radps = state.w_B;
   }
   if (!w_B_radps) return;
-  const AutopilotOutput out = autopilot_->Update(control_.command, *w_B_radps);
+  const AutopilotOutput out =
+      flight_->owns_rate_loop()
+          ? flight_->RateLoop(flight::RateTick{state.time_s, control_.command, *w_B_radps})
+          : autopilot_->Update(control_.command, *w_B_radps);
   world_->SetMotorSpeedCommand(out.w_cmd_radps);
   pending_.allocation = flight::AllocationReport{out.thrust_allocated_N, out.saturated};
   ++inputs_.rate_loop_steps;

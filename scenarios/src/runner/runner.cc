@@ -91,9 +91,17 @@ RunResult RunScenario(const Scenario& scenario, const Params& base_params,
   metrics.seed = scenario.seed;
   metrics.world_profile = scenario.world.name;
   metrics.payload_rmse_from_s = RmseFromS(scenario.reference);
+  // the camera faults' frame tallies, read from the world when the run stops (the metrics of
+  // their fault events)
+  std::vector<sim::FaultFrameTally> tallies;
+  RunOptions run_options = options;
+  run_options.at_stop = [&](sim::World& world) {
+    tallies = world.faults().FrameTallies();
+    if (options.at_stop) options.at_stop(world);
+  };
   std::unique_ptr<runner::RunLoop> loop;
   try {
-    loop = std::make_unique<runner::RunLoop>(scenario, params, options, &metrics);
+    loop = std::make_unique<runner::RunLoop>(scenario, params, run_options, &metrics);
   } catch (const flight::ProtocolError& e) {
     // a separate flight stack that did not start: a run error, nothing flown
     metrics.run_error = e.what();
@@ -107,6 +115,7 @@ RunResult RunScenario(const Scenario& scenario, const Params& base_params,
         std::string(e.what()) + " (at t = " + std::to_string(loop->time_s()) + " s)";
   }
   loop->Finish(&result);
+  if (AddFaultFrameTallies(tallies, &metrics)) CheckExpectations(scenario.expect, &metrics);
   return result;
 }
 

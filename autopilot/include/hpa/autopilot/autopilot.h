@@ -3,8 +3,9 @@
 // its rotors, as a flight controller board runs it beside (or under) a companion computer's
 // flight stack. Two are built in: the project's own body-rate loop on the estimated body rate at
 // the IMU's rate, and PX4's rate loop on each sample of the vehicle's rate gyro. The simulator
-// runs the scenario's autopilot for whichever flight stack flies, in process or external.
-// Flight code: no MuJoCo, no GL.
+// runs the scenario's autopilot for whichever flight stack flies, in process or external, unless
+// an external stack owns the rate loop (docs/protocol.md, rate_tick and rate_reply): then the
+// stack runs it (hpa-flight --own-rate-loop runs this one). Flight code: no MuJoCo, no GL.
 
 #include <Eigen/Core>
 #include <memory>

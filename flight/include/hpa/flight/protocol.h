@@ -17,6 +17,7 @@
 #include <string_view>
 #include <vector>
 
+#include "hpa/autopilot/autopilot.h"
 #include "hpa/flight/flight_stack.h"
 
 namespace hpa::flight {
@@ -39,6 +40,8 @@ enum class MessageType : uint32_t {
   kError = 7,        // either way: UTF-8 text naming what went wrong; the peer stops
   kDetect = 8,       // simulator -> a stack detecting at capture: a frame being captured (binary)
   kDetectReply = 9,  // flight stack -> simulator: its detection, or what to read out (binary)
+  kRateTick = 10,    // simulator -> a stack owning the rate loop: one step of it due (binary)
+  kRateReply = 11,   // flight stack -> simulator: that step's rotor speed commands (binary)
 };
 
 /// A malformed, unexpected or failed message (the text names what was wrong).
@@ -96,6 +99,40 @@ std::vector<uint8_t> EncodeDetectReply(const DetectReply& reply);
 /// message table refuses, or for a reply that does not set exactly one of its flags.
 DetectReply DecodeDetectReply(const std::vector<uint8_t>& body);
 
+/// One step of the vehicle's rate loop, as the simulator hands it to a stack that owns the loop:
+/// what RunLoop would feed its own Autopilot::Update.
+struct RateTick {
+  double time_s = 0.0;      // simulated time of the step
+  BodyRateCommand command;  // the command the loop tracks (after compute + transport latency)
+  Eigen::Vector3d w_B_radps = Eigen::Vector3d::Zero();  // rate-gyro sample or estimated body
+                                                        // rate, body frame  (3)
+};
+
+/// Encodes a rate_tick.
+std::vector<uint8_t> EncodeRateTick(const RateTick& tick);
+/// Decodes a rate_tick; throws ProtocolError as DecodeTick does.
+RateTick DecodeRateTick(const std::vector<uint8_t>& body);
+/// Encodes a rate_reply: the stack's Autopilot output of that step.
+std::vector<uint8_t> EncodeRateReply(const AutopilotOutput& out);
+/// Decodes a rate_reply; throws ProtocolError naming the field and value for a non-finite rotor
+/// speed command or a thrust allocated that is not a finite number >= 0.
+AutopilotOutput DecodeRateReply(const std::vector<uint8_t>& body);
+/// Checks a decoded rate_reply against the vehicle: throws ProtocolError naming the rotor and its
+/// speed for a command outside the motors' range [motor_speed_min_radps, motor_speed_max_radps].
+void CheckRateReply(const AutopilotOutput& out, const Params& params);
+
+/// The rate loop a stack that owns it runs (the hello's rate_loop): the world profile's
+/// rate_loop section and the rate the own loop steps at.
+struct RateLoopConfig {
+  RateLoopSpec spec;         // which loop, and PX4's parameters
+  double own_rate_hz = 0.0;  // the own loop's rate (the IMU's), Hz
+};
+/// RateLoopConfig as the hello's rate_loop (PX4's parameters by their world-profile keys).
+nlohmann::json RateLoopToJson(const RateLoopConfig& config);
+/// RateLoopConfig from the hello's rate_loop; throws ProtocolError naming a missing key or a
+/// value outside its declared range.
+RateLoopConfig RateLoopFromJson(const nlohmann::json& j);
+
 /// The message table (python/hpa_sim/messages.json as compiled in): the framing constants, the
 /// message types and every binary message's structs with their fields' types, units, checks
 /// and docs.
@@ -136,12 +173,15 @@ struct HelloAck {
   bool batched_ticks = false;
   // the stack answers detect messages (reads each rendered frame at its capture, region first)
   bool detects_at_capture = false;
+  // the stack runs the vehicle's rate loop: the simulator runs none and sends it rate_tick
+  bool owns_rate_loop = false;
 };
 
 /// Parses a hello_ack; throws ProtocolError naming the field and value for a protocol_version
 /// that is not the integer kProtocolVersion, a name or controller that is not a string of at most
-/// kMaxNameBytes, a control rate that is not a finite number >= 0, batched_ticks or
-/// detects_at_capture not a bool, or batched_ticks without a control rate in (0, tick_hz].
+/// kMaxNameBytes, a control rate that is not a finite number >= 0, batched_ticks,
+/// detects_at_capture or owns_rate_loop not a bool, or batched_ticks without a control rate in
+/// (0, tick_hz].
 HelloAck ParseHelloAck(const std::vector<uint8_t>& body, double tick_hz = 1000.0);
 
 /// The finish_reply's content.

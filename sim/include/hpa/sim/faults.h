@@ -17,6 +17,8 @@
 #include <string>
 #include <vector>
 
+#include "hpa/models/params.h"
+#include "hpa/models/state.h"
 #include "hpa/sim/payload_camera.h"
 #include "hpa/sim/sensors.h"
 
@@ -60,6 +62,20 @@ struct Fault {
   double loss = 1.0;              // motor: share of thrust lost, 0-1 (off: 1)
   Eigen::Vector3d distractor_W_m = Eigen::Vector3d::Zero();             // where it starts  (3)
   Eigen::Vector3d distractor_velocity_W_mps = Eigen::Vector3d::Zero();  // how it moves  (3)
+  double distractor_visible_fraction = 1.0;  // distractor: probability it is drawn in a frame
+};
+
+/// What one camera fault's frames showed, counted at capture over its window: how often a
+/// distractor was drawn and in the image, and how many detections landed on it (a found
+/// detection whose bearing is closer to a drawn distractor's centre than to the payload's).
+struct FaultFrameTally {
+  double start_s = 0.0;              // the fault's start (which fault it is, with the order)
+  bool distractor = false;           // a distractor fault (the other counts stay 0 otherwise)
+  int frames = 0;                    // captures in its window
+  int drawn_frames = 0;              // of them, with the distractor drawn
+  int in_image_frames = 0;           // with it drawn and its centre inside the image
+  int detections = 0;                // found detections made at capture in its window
+  int detections_on_distractor = 0;  // of them, on the distractor rather than the payload
 };
 
 /// One key a fault mode reads besides at, type, component, mode and duration.
@@ -115,8 +131,10 @@ class Faults {
   void TakeHeld(std::vector<SensorMessage>* out);
   /// Applies the camera's pixel faults (stuck, garbage) to a capture at `now_s`: its detection,
   /// or its frames, replaced; a rendered in-process frame's noise is detected through `readout`.
-  void OnCameraCapture(double now_s, CameraReadout* readout,
-                       std::optional<PayloadDetection>* detection,
+  /// `truth` and `world_params` (the true state and camera mount) classify each detection made
+  /// at capture against the distractors drawn in the frame (FrameTallies).
+  void OnCameraCapture(double now_s, const SystemState& truth, const Params& world_params,
+                       CameraReadout* readout, std::optional<PayloadDetection>* detection,
                        std::optional<CameraFrame>* frames, CameraCapture* capture);
   /// Each rotor's thrust factor at `now_s` (1: healthy) into `factor`; false when no motor fault
   /// was injected (factor untouched).
@@ -126,9 +144,13 @@ class Faults {
   bool DefersRelease(double now_s);
   /// True once when the gripper lets go on its own at `now_s` (early, or a late one's end).
   bool TakeGripperRelease(double now_s);
-  /// Where the camera's distractors are at `now_s` (m, world frame): the rendered scene draws a
-  /// copy of the payload at each.
+  /// Where the camera's distractors drawn at `now_s` are (m, world frame): the rendered scene
+  /// draws a copy of the payload at each. Whether a flickering distractor is drawn is a draw
+  /// keyed by `now_s` from its fault's stream, so every render of one instant agrees.
   std::vector<std::array<double, 3>> DistractorPositions_W(double now_s) const;
+  /// One tally per injected fault, in the order injected (the distractor counts for a
+  /// distractor fault, zeros for the others).
+  std::vector<FaultFrameTally> FrameTallies() const;
 
  private:
   struct Held {
@@ -138,6 +160,8 @@ class Faults {
   struct Active {
     Fault fault;
     std::mt19937_64 rng;                  // its own stream of the run seed
+    uint64_t stream_seed = 0;             // that stream's seed (keyed per-frame draws)
+    FaultFrameTally tally;                // what its frames showed
     std::optional<SensorMessage> frozen;  // stuck: the sample repeated
     cv::Mat frozen_whole;                 // stuck camera: the frame repeated
     double last_kept_s = -1e300;          // slow: capture time of the last sample kept
@@ -147,6 +171,14 @@ class Faults {
   };
   // the fault's effect on one message; false: dropped or held
   bool Apply(Active* a, double now_s, SensorMessage* m);
+  // whether distractor fault `a` is drawn in the frame of `now_s` (inside its window)
+  static bool DistractorDrawn(const Active& a, double now_s);
+  // counts one capture of distractor fault `a` and whether its detection is on the distractor
+  static void TallyDistractorFrame(Active* a, double now_s, const SystemState& truth,
+                                   const Params& world_params,
+                                   const std::optional<PayloadDetection>& detection);
+  // where distractor fault `a` is at `now_s` (m, world frame)
+  static Eigen::Vector3d DistractorPosition_W(const Fault& f, double now_s);
 
   uint64_t run_seed_;
   std::vector<Active> faults_;

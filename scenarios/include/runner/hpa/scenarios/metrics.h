@@ -7,8 +7,10 @@
 
 #include "hpa/controller/controller.h"
 #include "hpa/controller/reference.h"
+#include "hpa/estimator/estimator_health.h"
 #include "hpa/models/state.h"
 #include "hpa/scenarios/scenario.h"
+#include "hpa/sim/faults.h"
 
 namespace hpa {
 
@@ -27,14 +29,17 @@ struct LogRow {
   bool mixer_saturated = false;        // the rate loop's last allocation gave less than demanded
   int estimator_rejected_updates = 0;  // gated-out measurements so far (0 with ground truth)
   int estimator_resets = 0;            // forced accepts after runs of rejections so far
+  // the health check's re-initialisations so far, by cause (none: the flight stack did not
+  // report them per step)
+  std::optional<EstimatorHealthResets> estimator_health_resets;
 };
 
 /// One fault event's window, for its recovery metrics (docs/faults.md).
 struct FaultWindow {
-  int event = 0;                 // its index in the scenario's events
-  std::string component, mode;   // as written in the event
-  double start_s = 0.0;          // when it started
-  std::optional<double> end_s;   // when it ended (none: it lasted to the end of the run)
+  int event = 0;                  // its index in the scenario's events
+  std::string component, mode;    // as written in the event
+  double start_s = 0.0;           // when it started
+  std::optional<double> end_s;    // when it ended (none: it lasted to the end of the run)
   double tracking_bound_m = 0.1;  // payload error counted as tracking again
 };
 
@@ -57,8 +62,18 @@ struct FaultRecovery {
   // largest error of the onboard estimate of the quadrotor's position in the span (null with
   // ground truth)
   std::optional<double> estimate_error_max_m;
-  int estimator_resets = 0;    // the filters' forced accepts in the span
-  int rejected_updates = 0;    // gated-out measurements in the span
+  int estimator_resets = 0;  // the filters' forced accepts in the span
+  int rejected_updates = 0;  // gated-out measurements in the span
+  // the health check's re-initialisations in the span, by cause (null: the log has no per-step
+  // counts by cause, or the span has no control step)
+  std::optional<EstimatorHealthResets> health_resets;
+  // a distractor fault's frames (null for other faults, or when its run ended before the tally
+  // was read): the share of the captures in its window with the distractor drawn, and drawn
+  // with its centre in the image
+  std::optional<double> distractor_drawn_fraction, distractor_in_image_fraction;
+  std::optional<int> detections;               // detections made at capture in its window
+  std::optional<int> false_detections;         // of them, on the distractor rather than the payload
+  std::optional<double> false_detection_rate;  // false_detections / detections (null: none)
   // the span: to the start of the next fault that starts after this one's end, or the run's end
   double span_end_s = 0.0;
 };
@@ -131,14 +146,19 @@ struct MetricsInputs {
   std::vector<double> detector_ms, render_ms, image_model_ms;
   int region_frames = 0;  // rendered frames served by a region around the last detection
   int detections = 0;
-  int rate_loop_steps = 0;        // allocations made by the rate loop
-  int mixer_saturated_steps = 0;  // of which fell short of the demanded thrust or torque
+  int rate_loop_steps = 0;          // allocations made by the rate loop
+  int mixer_saturated_steps = 0;    // of which fell short of the demanded thrust or torque
   std::vector<FaultWindow> faults;  // the fault events applied, in time order
   bool ground_truth = false;        // the flight code flew on the true state (no estimate)
 };
 
 /// Computes every metric from the log (crash fields and timing are filled by the runner).
 void ComputeMetrics(const MetricsInputs& inputs, Metrics* metrics);
+
+/// Adds each distractor fault's frame tally (sim::Faults::FrameTallies, in the order injected) to
+/// the metrics entry of its fault event (the first distractor entry starting at its start);
+/// returns whether any was added.
+bool AddFaultFrameTallies(const std::vector<sim::FaultFrameTally>& tallies, Metrics* metrics);
 
 /// Checks the scenario's expect bounds; fills expect_passed / expect_failed.
 void CheckExpectations(const ExpectSpec& expect, Metrics* metrics);
