@@ -57,7 +57,7 @@ void HpaMpc::BuildProblem(const SystemState& state, const std::vector<InputVecto
   const CableMode mode = settings_.hybrid ? state.mode : CableMode::kTaut;
   // a lost payload (hybrid only: the paper's baseline has no such notion): the quadrotor is
   // held on its reference, as in slack, and no cost looks at the guessed payload; a supported
-  // one lost from view is still looked for where it was last seen
+  // one lost from view is still looked for where the estimator carries it
   const bool lost = settings_.hybrid && state.payload_lost && !state.payload_supported;
   const double perception = settings_.hybrid && !lost ? settings_.perception_weight : 0.0;
   OcpWeights weights = settings_.weights;

@@ -253,9 +253,13 @@ class CableEstimator final : public Estimator {
     }
     tracker_.PredictTo(time_s, p_WL_W, v_WL_W);
     if (support_.supported() && !payload_visible_) {
-      // held up and out of view: where it was last seen (a hand does not let it fall)
-      *p_WL_W = tracker_.state().head<3>();
-      v_WL_W->setZero();
+      // held up and out of view: carried on from where it was last seen at its last horizontal
+      // velocity (a hand does not let it fall, nor stop where the camera lost it)
+      Eigen::Vector3d v_held_WL_W = tracker_.state().tail<3>();
+      v_held_WL_W.z() = 0.0;
+      const double unseen_s = std::max(0.0, time_s - tracker_.time_s());
+      *p_WL_W = tracker_.state().head<3>() + v_held_WL_W * unseen_s;
+      *v_WL_W = v_held_WL_W;
     }
     // the cable cannot stretch: between the true re-taut and its detection, free fall would
     // carry the payload past the sphere |x_L - x_Q| = l; hold it on the sphere instead

@@ -256,6 +256,56 @@ TEST(EstimatorTest, SaysSoWhenItHasLostThePayload) {
   EXPECT_NEAR(lost_at_s, 0.042, 0.002 + 1e-9);
 }
 
+TEST(EstimatorTest, AHeldPayloadCarriedOutOfViewIsCarriedOnAtItsLastVelocity) {
+  // a hand holds the slack payload 0.3 m under the hovering vehicle and carries it sideways at
+  // 0.5 m/s; the camera then stops seeing it while the hand carries it on
+  const Params p;
+  const sim::AnalyticCamera camera(p);
+  std::mt19937_64 rng(4);
+  const Eigen::Vector3d v_hand_W(0.0, 0.5, 0.0);
+  SystemState held;
+  held.p_WQ_W = Eigen::Vector3d(0, 0, 1.5);
+  held.p_WL_W = held.p_WQ_W + Eigen::Vector3d(0, -0.15, -0.3);
+  const Eigen::Vector3d p0_WL_W = held.p_WL_W;
+  std::unique_ptr<Estimator> estimator = MakeEstimator("hybrid", EstimatorConfig{}, p, held);
+  ImuSample imu;
+  imu.accel_B_mps2 = Eigen::Vector3d(0, 0, p.gravity_mps2);
+  double last_frame_s = 0.0;
+  for (int k = 1; k <= 300; ++k) {  // 0.6 s at 500 Hz, frames at 30 Hz
+    imu.time_s = 0.002 * k;
+    estimator->OnImu(imu);
+    if (k % 17 == 0) {
+      held.p_WL_W = p0_WL_W + v_hand_W * imu.time_s;
+      estimator->OnPayloadDetection(camera.Measure(PayloadInCamera_C(p, held), imu.time_s, rng));
+      last_frame_s = imu.time_s;
+    }
+  }
+  const SystemState seen = estimator->Estimate(last_frame_s);
+  ASSERT_EQ(seen.mode, CableMode::kSlack);
+  ASSERT_TRUE(seen.payload_supported);
+  PayloadDetection none;
+  for (int k = 301; k <= 400; ++k) {  // 0.2 s more, no payload in the frames
+    imu.time_s = 0.002 * k;
+    estimator->OnImu(imu);
+    if (k % 17 == 0) {
+      none.time_s = imu.time_s;
+      estimator->OnPayloadDetection(none);
+    }
+  }
+  const double now_s = 0.8;
+  const SystemState unseen = estimator->Estimate(now_s);
+  EXPECT_TRUE(unseen.payload_supported);
+  EXPECT_FALSE(unseen.payload_visible);
+  // carried on from its last estimate at its horizontal velocity, not held where it was seen
+  // (0.1 m behind the hand), and not let fall below the height it was last tracked at
+  const Eigen::Vector3d p_hand_W = p0_WL_W + v_hand_W * now_s;
+  EXPECT_NEAR(unseen.p_WL_W.y(), p_hand_W.y(), 0.03);
+  EXPECT_NEAR(unseen.p_WL_W.x(), p_hand_W.x(), 0.03);
+  EXPECT_NEAR(unseen.p_WL_W.z(), seen.p_WL_W.z(), 1e-9);
+  EXPECT_NEAR(unseen.v_WL_W.y(), v_hand_W.y(), 0.1);
+  EXPECT_EQ(unseen.v_WL_W.z(), 0.0);
+}
+
 TEST(EstimatorTest, NonFiniteInputsDoNotCorruptTheEstimate) {
   const Params p;
   SystemState initial;
