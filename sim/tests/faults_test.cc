@@ -263,7 +263,6 @@ TEST(FaultsTest, ADetectionOnTheDistractorIsCountedAsFalse) {
   at_distractor.p_WL_W = d.distractor_W_m;
   const Eigen::Vector3d on_payload_C = PayloadInCamera_C(params, truth);
   const Eigen::Vector3d on_distractor_C = PayloadInCamera_C(params, at_distractor);
-  CameraCapture capture;
   for (const auto& [t_s, p_C] :
        std::vector<std::pair<double, std::optional<Eigen::Vector3d>>>{{0.0, on_payload_C},
                                                                       {0.1, on_distractor_C},
@@ -273,8 +272,7 @@ TEST(FaultsTest, ADetectionOnTheDistractorIsCountedAsFalse) {
     detection->time_s = t_s;
     detection->found = p_C.has_value();
     if (p_C) detection->p_CL_C = *p_C;
-    std::optional<CameraFrame> frames;
-    faults.OnCameraCapture(t_s, truth, params, nullptr, &detection, &frames, &capture);
+    faults.OnCameraReading(t_s, truth, params, true, &detection);
   }
   const std::vector<FaultFrameTally> tallies = faults.FrameTallies();
   ASSERT_EQ(tallies.size(), 2u);
