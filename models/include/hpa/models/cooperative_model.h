@@ -19,7 +19,9 @@ struct CooperativeVehicle {
   Eigen::Vector3d p_PA_P_m = Eigen::Vector3d::Zero();  // attachment point, payload frame (3)
 };
 
-/// The payload and the vehicles carrying it (params' own payload fields are not read).
+/// The payload and the vehicles carrying it. The vehicles' params' payload mass and cable length
+/// are not read (the payload's and each cable's are here); the MuJoCo scene draws the payload
+/// with the first vehicle's payload_radius_m.
 struct CooperativeTeam {
   double payload_mass_kg = 0.1;
   Eigen::Vector3d payload_inertia_P_kgm2{1e-4, 1e-4, 1e-4};  // diagonal, payload frame (3)
