@@ -184,7 +184,7 @@ quaternion_double short quaternion q_WB of norm 2, expected a unit quaternion
 no_estimate ideal no estimate, but the tick asked for one
 version_fraction short protocol version 1.9, this simulator version 1
 version_wrap short protocol version 4294967297, this simulator version 1
-finish_frames_huge short frames_detected is 1e\+300, expected an integer in \[0, 0\]
+finish_frames_huge short finish_reply's frames_detected is 1e\+300, expected an integer
 finish_frames_negative short frames_detected is -5, expected an integer in \[0, 0\]
 health_variant short entry 0 is named 'variant', a key metrics.json's estimator block reserves
 CASES
