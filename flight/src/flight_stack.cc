@@ -230,6 +230,7 @@ FlightOutputs FlightStack::Step(const FlightInputs& in) {
     const hpa::EstimatorHealth health = estimator_->Health();
     out.estimator_rejected_updates = health.RejectedUpdates();
     out.estimator_resets = health.ForcedAccepts();
+    out.estimator_health_resets = health.health_resets;
   }
   clock_.Advance();
   return out;

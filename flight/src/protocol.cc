@@ -54,6 +54,15 @@ const Codec<AllocationReport>& AllocationCodec() {
   return codec;
 }
 
+const Codec<EstimatorHealthResets>& HealthResetsCodec() {
+  static const Codec<EstimatorHealthResets> codec(
+      "health_resets", {Bind("quad_non_finite", &EstimatorHealthResets::quad_non_finite),
+                        Bind("payload_non_finite", &EstimatorHealthResets::payload_non_finite),
+                        Bind("payload_speed", &EstimatorHealthResets::payload_speed),
+                        Bind("cable_length", &EstimatorHealthResets::cable_length)});
+  return codec;
+}
+
 const Codec<ImuSample>& ImuCodec() {
   static const Codec<ImuSample> codec(
       "imu_sample",
@@ -134,7 +143,8 @@ const Codec<FlightOutputs>& ReplyCodec() {
        Bind("rejected_updates", &FlightOutputs::estimator_rejected_updates),
        Bind("resets", &FlightOutputs::estimator_resets),
        Bind("frames_detected", &FlightOutputs::frames_detected),
-       Bind("camera_roi", &FlightOutputs::camera_roi)});
+       Bind("camera_roi", &FlightOutputs::camera_roi),
+       Bind("health_resets", &FlightOutputs::estimator_health_resets, HealthResetsCodec())});
   return codec;
 }
 

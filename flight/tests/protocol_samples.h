@@ -87,7 +87,8 @@ inline FlightInputs SampleFinish() {
   return in;
 }
 
-/// A reply with a command, its estimate, every counter and a camera region.
+/// A reply with a command, its estimate, every counter (the health resets by cause too) and a
+/// camera region.
 inline FlightOutputs SampleReply() {
   FlightOutputs out;
   out.has_command = true;
@@ -102,6 +103,7 @@ inline FlightOutputs SampleReply() {
   out.estimator_resets = 2;
   out.frames_detected = 1;
   out.camera_roi = cv::Rect(5, 6, 7, 8);
+  out.estimator_health_resets = EstimatorHealthResets{1, 3, 4, 2};
   return out;
 }
 

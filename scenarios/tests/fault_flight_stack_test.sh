@@ -17,6 +17,11 @@ for name in fault_vio_wrong fault_imu_bias fault_payload_camera_garbage \
     --flight-stack hpa-flight || fail "$name through hpa-flight failed"
   same_run "$out/$name/in" "$out/$name/ex" "$name" --stack-b hpa-flight --nonempty faults \
     --skip camera_region_fraction
+  # the resets by cause in each fault's span are counted from both stacks' per-step reports
+  "$python" -c 'import json, sys
+f = json.load(open(sys.argv[1]))["faults"]
+assert all(isinstance(e["health_resets"], dict) for e in f), [e["health_resets"] for e in f]' \
+    "$out/$name/ex/metrics.json" || fail "$name: no per-fault health_resets through hpa-flight"
 done
 echo "fault_flight_stack_test: $failures failure(s)"
 [ "$failures" -eq 0 ]

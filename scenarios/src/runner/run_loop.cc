@@ -428,6 +428,7 @@ void RunLoop::ControlStep(double t, const sim::Truth& truth, const SystemState& 
   if (!ground_truth_) {
     row.estimator_rejected_updates = out.estimator_rejected_updates;
     row.estimator_resets = out.estimator_resets;
+    row.estimator_health_resets = out.estimator_health_resets;
   }
   if (out.command_pending) {
     rows_awaiting_command_.push_back(std::move(row));  // logged when its command is taken
@@ -458,6 +459,7 @@ ControlOutput RunLoop::AwaitPendingCommand(LogRow* row) {
     if (!ground_truth_) {
       row->estimator_rejected_updates = reply.estimator_rejected_updates;
       row->estimator_resets = reply.estimator_resets;
+      row->estimator_health_resets = reply.estimator_health_resets;
     }
   }
   FillCommand(reply.command, row);

@@ -15,6 +15,7 @@
 
 #include "hpa/controller/controller.h"
 #include "hpa/controller/reference_spec.h"
+#include "hpa/estimator/estimator_health.h"
 #include "hpa/estimator/payload_detector.h"
 #include "hpa/models/camera_frame.h"
 #include "hpa/models/lockstep.h"
@@ -104,6 +105,8 @@ struct FlightOutputs {
   SystemState estimate;                // the state the flight code acts on now (has_estimate)
   int estimator_rejected_updates = 0;  // estimator health after this tick (0 with ground truth)
   int estimator_resets = 0;
+  // the health check's re-initialisations so far by cause (none with ground truth)
+  std::optional<EstimatorHealthResets> estimator_health_resets;
   int frames_detected = 0;  // of this tick's frames, those in which the payload was found
   // the region the camera should read out next, around the detections delivered so far (empty:
   // the whole frame)
