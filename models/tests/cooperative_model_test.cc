@@ -423,43 +423,37 @@ constexpr double kRotorTmTolerance = 1e-13;
 
 class CooperativeRotorTmTest : public testing::TestWithParam<int> {};
 
-TEST_P(CooperativeRotorTmTest, TautDerivativeEqualsRotorTmTranscription) {
-  const int n = GetParam();
-  std::mt19937 rng(1000 + n);
+// The model's derivative against RotorTM's on 1000 random teams of `n` vehicles drawn from
+// `seed`, every cable taut or (`mixed_modes`) each taut or slack at random (the slack ones left
+// where the taut layout put them); fails at the first trial beyond kRotorTmTolerance and prints
+// the largest difference as `label`.
+void ExpectDerivativeEqualsRotorTm(int n, unsigned seed, bool mixed_modes, const char* label) {
+  std::mt19937 rng(seed);
   double worst = 0;
   for (int trial = 0; trial < 1000; ++trial) {
     const CooperativeTeam team = RandomTeam(n, &rng);
     const CooperativeModel model(team);
     const VectorXd x = RandomTautState(team, &rng);
     const VectorXd u = RandomRotorSpeeds(n, &rng);
-    const std::vector<CableMode> modes(n, CableMode::kTaut);
+    std::vector<CableMode> modes(n, CableMode::kTaut);
+    if (mixed_modes) {
+      for (int i = 0; i < n; ++i) modes[i] = rng() % 2 ? CableMode::kTaut : CableMode::kSlack;
+    }
     const double diff =
         RelativeDifference(model.Derivative(x, u, modes), RotorTmDerivative(team, x, u, modes));
     worst = std::max(worst, diff);
-    ASSERT_LT(diff, kRotorTmTolerance) << "trial " << trial;
+    ASSERT_LT(diff, kRotorTmTolerance) << label << ", trial " << trial;
   }
-  std::printf("[measured] N = %d taut: largest relative difference to RotorTM %.2e\n", n, worst);
+  std::printf("[measured] N = %d %s: largest relative difference to RotorTM %.2e\n", n, label,
+              worst);
+}
+
+TEST_P(CooperativeRotorTmTest, TautDerivativeEqualsRotorTmTranscription) {
+  ExpectDerivativeEqualsRotorTm(GetParam(), 1000 + GetParam(), false, "taut");
 }
 
 TEST_P(CooperativeRotorTmTest, MixedModesEqualRotorTmTranscription) {
-  // each cable taut or slack at random (the slack ones left where the taut layout put them)
-  const int n = GetParam();
-  std::mt19937 rng(2000 + n);
-  double worst = 0;
-  for (int trial = 0; trial < 1000; ++trial) {
-    const CooperativeTeam team = RandomTeam(n, &rng);
-    const CooperativeModel model(team);
-    const VectorXd x = RandomTautState(team, &rng);
-    const VectorXd u = RandomRotorSpeeds(n, &rng);
-    std::vector<CableMode> modes(n);
-    for (int i = 0; i < n; ++i) modes[i] = rng() % 2 ? CableMode::kTaut : CableMode::kSlack;
-    const double diff =
-        RelativeDifference(model.Derivative(x, u, modes), RotorTmDerivative(team, x, u, modes));
-    worst = std::max(worst, diff);
-    ASSERT_LT(diff, kRotorTmTolerance) << "trial " << trial;
-  }
-  std::printf("[measured] N = %d mixed modes: largest relative difference to RotorTM %.2e\n", n,
-              worst);
+  ExpectDerivativeEqualsRotorTm(GetParam(), 2000 + GetParam(), true, "mixed modes");
 }
 
 TEST_P(CooperativeRotorTmTest, RetautCollisionEqualsRotorTmTranscription) {

@@ -112,11 +112,14 @@ const cv::Mat& CameraExposure::ReadWhole() {
 
 void CameraExposure::Read(const cv::Rect& region) {
   if (fault_.garbage) {
-    // one noise image per capture: its region is the whole image's there
-    cv::Mat& image = *buffer_;
-    image.create(world_->renderer().PayloadCameraSize(), CV_8UC3);
-    cv::RNG noise(fault_.noise_seed);
-    noise.fill(image, cv::RNG::UNIFORM, 0, 256);
+    // one noise image per capture, drawn whole at the first read: its region is the whole
+    // image's there, so a later read finds it drawn
+    if (!noise_drawn_) {
+      buffer_->create(world_->renderer().PayloadCameraSize(), CV_8UC3);
+      cv::RNG noise(fault_.noise_seed);
+      noise.fill(*buffer_, cv::RNG::UNIFORM, 0, 256);
+      noise_drawn_ = true;
+    }
     return;
   }
   if (fault_.frozen_whole != nullptr) {

@@ -75,6 +75,7 @@ class CameraExposure {
   CameraPixelFault fault_;
   CameraFrame frame_;
   bool whole_read_ = false;
+  bool noise_drawn_ = false;  // garbage: the capture's noise image is in the buffer
   double render_ms_ = 0.0, image_model_ms_ = 0.0;
 };
 
