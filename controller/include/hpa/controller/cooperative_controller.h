@@ -1,0 +1,69 @@
+#pragma once
+// RotorTM's cable-suspended cooperative controller (docs/cooperative.md) as one vehicle's
+// TeamController: the payload's PD wrench, its distribution over the cables, and this vehicle's
+// cable-direction tracking, ending in a thrust and body-rate command for its autopilot.
+// Source: arplaboratory/RotorTM commit 069bddf, rotor_tm_control/src/rotor_tm_control/
+// controller.py (cooperative_suspended_payload_controller, cooperative_attitude_controller),
+// rotor_tm_utils/src/rotor_tm_utils/read_params.py (gains, pinv(P)) and
+// rotor_tm_control/src/rotor_tm_control/controller_node.py (qd_odom_callback: xi, xi_dot).
+
+#include <Eigen/Core>
+#include <memory>
+
+#include "hpa/controller/team_controller.h"
+
+namespace hpa {
+
+/// Gains of the cooperative controller, RotorTM's defaults: the payload's from
+/// rotor_tm_config/config/control_params/triangular_payload_cooperative_cable_gains.yaml
+/// (read_payload_control_gains: diagonal Kp, Kd, Kpe, Kde), each vehicle's from
+/// snapdragonfly_control_gains.yaml (read_uav_control_gains: Kxi, Kw, and Kp, Kd for the slack
+/// position hold), the vehicle named by every cable mechanism file of the sample teams.
+struct CooperativeGains {
+  Eigen::Vector3d k_payload_position_per_s2{3.08, 3.08, 6.25};  // payload Kp ("pos")  (3)
+  Eigen::Vector3d k_payload_velocity_per_s{2.15, 2.15, 3.42};   // payload Kd ("vel")  (3)
+  Eigen::Vector3d k_payload_attitude_Nm{0.55, 0.50, 0.16};      // payload Kpe ("rot"), N m/rad (3)
+  Eigen::Vector3d k_payload_rate_Nms{0.162, 0.162, 0.068};      // payload Kde ("ang"), N m s/rad (3)
+  Eigen::Vector3d k_cable_direction_per_s2{16.0, 16.0, 16.0};   // vehicle Kxi ("xi")  (3)
+  Eigen::Vector3d k_cable_rate_per_s{6.7, 6.7, 3.1};            // vehicle Kw ("omg")  (3)
+  Eigen::Vector3d k_hold_position_per_s2{6.0, 6.0, 10.0};       // vehicle Kp ("pos"), slack  (3)
+  Eigen::Vector3d k_hold_velocity_per_s{3.0, 3.0, 6.0};         // vehicle Kd ("vel"), slack  (3)
+  // ours: the autopilot cascade's attitude loop (GeometricGains' defaults) toward Rot_des
+  Eigen::Vector3d k_attitude_per_s{7.0, 7.0, 3.0};  // attitude error -> body rate  (3)
+  double max_rate_radps = 6.0;                      // commanded body-rate limit
+  double slack_band_m = 0.01;  // a cable shorter than its length by this is slack
+  double rate_hz = 100.0;      // RotorTM's controller rate (one update per 100 Hz sim step)
+};
+
+/// Vehicle `vehicle`'s share of RotorTM's cooperative controller. Every vehicle runs the same
+/// payload controller on the same payload state and team geometry, so each computes the whole
+/// distribution and keeps its own cable's force.
+class CooperativeController : public TeamController {
+ public:
+  /// Throws std::invalid_argument for an empty team, a vehicle out of range or a null reference.
+  CooperativeController(const CooperativeTeam& team, int vehicle,
+                        std::shared_ptr<const Reference> payload_reference,
+                        const CooperativeGains& gains = CooperativeGains());
+
+  /// Taut: RotorTM's cable-direction tracking to the distributed cable force; slack: a position
+  /// hold above the attachment point at the cable's length along the desired direction.
+  ControlOutput Update(const TeamView& view) override;
+  /// The last Update's reading: distance to the attachment >= cable length - slack_band_m.
+  bool CableTaut() const override { return taut_; }
+  /// CooperativeGains::rate_hz.
+  double RateHz() const override { return gains_.rate_hz; }
+
+  /// The cable forces on the payload (world, 3N, vehicle by vehicle) for the payload's state and
+  /// reference at view.time_s, negative vertical components clamped to 0 (RotorTM's mu).
+  Eigen::VectorXd CableForcesN(const TeamView& view) const;
+
+ private:
+  CooperativeTeam team_;
+  int vehicle_;
+  std::shared_ptr<const Reference> reference_;
+  CooperativeGains gains_;
+  Eigen::MatrixXd pinv_P_;  // pinv([I I ...; rho_1^ rho_2^ ...])  (3N x 6)
+  bool taut_ = true;
+};
+
+}  // namespace hpa
