@@ -1,0 +1,112 @@
+#pragma once
+// The simulated world of a team (docs/cooperative.md): N quadrotors on their own cables carrying
+// one rigid-body payload, in MuJoCo (the scene of CooperativeSceneXml), at the single-vehicle
+// world's 1 kHz. Each vehicle has its own first-order motors, its own rate gyro, and the team's
+// motion-capture system reports every body's pose and velocity at its declared rate, latency and
+// noise (RotorTM's experiments fly on one). MuJoCo stays inside sim/src; flight code never sees it.
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "hpa/models/cooperative_model.h"
+#include "hpa/models/data_dir.h"
+#include "hpa/models/state.h"
+#include "hpa/sim/world.h"
+
+namespace hpa::sim {
+
+/// The team's motion-capture system: every body's pose and velocity, sampled at rate_hz and
+/// delivered latency_s later with white noise of the given standard deviations.
+struct MocapConfig {
+  double rate_hz = 100.0;
+  double latency_s = 0.01;
+  double position_noise_m = 0.001;      // per axis
+  double velocity_noise_mps = 0.01;     // per axis
+  double attitude_noise_rad = 0.005;    // per axis, a small rotation applied to the true one
+  double rate_gyro_noise_radps = 0.01;  // each vehicle's gyro, sampled every physics step
+  double body_rate_noise_radps = 0.01;  // per axis, the body rate in a motion-capture reading
+};
+
+/// Everything a TeamWorld is built from.
+struct TeamWorldConfig {
+  CooperativeTeam team;                                   // payload and N vehicles
+  std::string scene_path = DataPath("models/scene.xml");  // single-vehicle scene it is built from
+  uint64_t seed = 1;                                      // the one generator for all its noise
+  MocapConfig mocap;
+};
+
+/// One body's pose and velocity as the motion-capture system saw it.
+struct BodyReading {
+  int body = -1;               // -1: the payload; 0 .. N-1: that vehicle
+  double capture_time_s = 0.0;  // when it was sampled (delivered latency_s later)
+  Eigen::Vector3d p_W_m = Eigen::Vector3d::Zero();                  // position, world (3)
+  Eigen::Vector3d v_W_mps = Eigen::Vector3d::Zero();                // velocity, world (3)
+  Eigen::Quaterniond q_W = Eigen::Quaterniond::Identity();          // attitude in world
+  Eigen::Vector3d w_body_radps = Eigen::Vector3d::Zero();           // body rate, body frame (3)
+};
+
+/// Ground truth of a team now.
+struct TeamTruth {
+  double time_s = 0.0;
+  Eigen::VectorXd x;                  // CooperativeStateIndex layout, 13 (N + 1)
+  std::vector<double> cable_length_m;  // each vehicle's cable, |p_A_i - p_Q_i|  (N)
+  std::vector<double> cable_tension_N; // each cable's tendon limit force  (N)
+  std::vector<CableMode> modes;        // taut iff the cable is within 1 mm of its length  (N)
+  Eigen::VectorXd motor_speed_radps;   // actual rotor speeds, vehicle by vehicle  (4N)
+};
+
+/// The team's world, stepped by the team runner in lockstep with each vehicle's flight code.
+class TeamWorld {
+ public:
+  /// Builds the MJCF of config.team from config.scene_path; throws hpa::InputError naming the
+  /// scene for one that cannot be built or loaded, or a team that is empty or larger than 3.
+  explicit TeamWorld(const TeamWorldConfig& config);
+  ~TeamWorld();
+  TeamWorld(const TeamWorld&) = delete;
+  TeamWorld& operator=(const TeamWorld&) = delete;
+
+  /// Number of vehicles N.
+  int VehicleCount() const;
+  /// Places every body at x0 (CooperativeStateIndex layout, velocities and rates as given),
+  /// each vehicle's motors (and command) at the speed that holds its own weight and its cable's
+  /// share of the payload's (slack cable: its own weight only), time = 0; clears the delivery
+  /// queues and the crash flag and re-seeds the noise, so a Reset world replays the same noise.
+  void Reset(const Eigen::VectorXd& x0);
+  /// Vehicle's new rotor speed command (rad/s), clamped to its motor bounds; non-finite entries
+  /// throw std::invalid_argument.
+  void SetMotorSpeedCommand(int vehicle, const InputVector& w_cmd_radps);
+  /// An instantaneous push: the body's velocity changes by impulse / mass (body -1: payload).
+  void ApplyImpulse(int body, const Eigen::Vector3d& impulse_W_Ns);
+  /// Advances 1 ms: motors, mj_step, sensors, crash check.
+  void Step();
+  /// Simulated time (s), a multiple of World::kPhysicsDt_s.
+  double time_s() const;
+
+  /// Ground truth now.
+  TeamTruth GetTruth() const;
+  /// Every motion-capture reading whose latency has passed, in capture order (payload first,
+  /// then vehicle 0, 1, ... within one capture).
+  std::vector<BodyReading> TakeDelivered();
+  /// Vehicle's rate-gyro sample of this step (body frame, rad/s, with noise).
+  Eigen::Vector3d GyroSample_B(int vehicle) const;
+
+  /// Latched: a vehicle's contact with the ground, the payload or another vehicle (the latter
+  /// named "vehicle 0 and vehicle 1 collide"), a vehicle's tilt > 90 deg, any body leaving the
+  /// arena (kArenaHalfWidth_m, kArenaHeight_m), non-finite state. The reason names the vehicle.
+  CrashStatus Crash() const;
+  /// Smallest distance between two vehicles' centres now (m; infinity for one vehicle).
+  double MinVehicleSeparation_m() const;
+
+  /// The team the world simulates.
+  const CooperativeTeam& team() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace hpa::sim
