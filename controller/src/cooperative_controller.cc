@@ -37,7 +37,7 @@ Eigen::Matrix3d Hat(const Eigen::Vector3d& v) {
   return m;
 }
 
-// vee of the skew part of m: 1/2 vee(m - m^T) for m = A^T B - B^T A written by the caller.
+// The vector of a skew-symmetric matrix (the inverse of Hat).
 Eigen::Vector3d Vee(const Eigen::Matrix3d& m) { return Eigen::Vector3d(m(2, 1), m(0, 2), m(1, 0)); }
 
 // RotorTM's desired attitude: b3 along the force, x_B = (e2 rotated by yaw) x b3, yaw 0.

@@ -7,6 +7,8 @@
 
 #include <cmath>
 #include <memory>
+#include <string>
+#include <utility>
 #include <vector>
 
 #include "hpa/autopilot/autopilot.h"
@@ -23,9 +25,11 @@ class TeamPlant {
   /// Plant and rate-loop step (s): the rate loops' 500 Hz.
   static constexpr double kDtS = 0.002;
 
-  /// Starts from x0 (CooperativeStateIndex layout) with every cable taut.
-  TeamPlant(const CooperativeTeam& team, const Eigen::VectorXd& x0)
-      : model_(team), x_(x0), modes_(team.vehicles.size(), CableMode::kTaut) {
+  /// Starts from x0 (CooperativeStateIndex layout) with the cables in `modes` (empty: all taut).
+  TeamPlant(const CooperativeTeam& team, const Eigen::VectorXd& x0,
+            std::vector<CableMode> modes = {})
+      : model_(team), x_(x0), modes_(std::move(modes)) {
+    if (modes_.empty()) modes_.assign(team.vehicles.size(), CableMode::kTaut);
     for (const CooperativeVehicle& v : team.vehicles) {
       autopilots_.push_back(MakeAutopilot(v.params, RateLoopSpec{}, 1.0 / kDtS));
     }
@@ -85,8 +89,11 @@ class TeamPlant {
     return v;
   }
 
+  /// The cooperative state now.
   const Eigen::VectorXd& x() const { return x_; }
+  /// Each cable's mode now.
   const std::vector<CableMode>& modes() const { return modes_; }
+  /// The plant's model.
   const CooperativeModel& model() const { return model_; }
 
  private:
