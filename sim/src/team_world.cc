@@ -57,9 +57,9 @@ void ValidateConfig(const TeamWorldConfig& config) {
   const CooperativeTeam& team = config.team;
   const int n = static_cast<int>(team.vehicles.size());
   if (n < 1 || n > kMaxVehicles) {
-    throw InputError("", "team.vehicles",
-                     "a team has 1 to " + std::to_string(kMaxVehicles) + " vehicles, got " +
-                         std::to_string(n));
+    throw InputError(
+        "", "team.vehicles",
+        "a team has 1 to " + std::to_string(kMaxVehicles) + " vehicles, got " + std::to_string(n));
   }
   RequirePositive(team.payload_mass_kg, "team.payload_mass_kg");
   for (int k = 0; k < 3; ++k) {
@@ -87,9 +87,9 @@ void ValidateConfig(const TeamWorldConfig& config) {
   const double steps_per_sample = 1.0 / (m.rate_hz * World::kPhysicsDt_s);
   if (std::abs(steps_per_sample - std::round(steps_per_sample)) > 1e-9 ||
       std::round(steps_per_sample) < 1.0) {
-    throw InputError("", "mocap.rate_hz",
-                     "must divide the 1000 Hz physics rate into whole steps, got " +
-                         NumberText(m.rate_hz));
+    throw InputError(
+        "", "mocap.rate_hz",
+        "must divide the 1000 Hz physics rate into whole steps, got " + NumberText(m.rate_hz));
   }
   RequireNonNegative(m.latency_s, "mocap.latency_s");
   RequireNonNegative(m.position_noise_m, "mocap.position_noise_m");
@@ -172,19 +172,19 @@ struct TeamWorld::Impl {
   mjData* d = nullptr;
 
   FreeBody payload;
-  std::vector<FreeBody> vehicles;                      // (n)
-  std::vector<std::array<int, 4>> rotor_actuator;      // each vehicle's rotors' actuators (n)
-  std::vector<int> box_geom;                           // each vehicle's collision box (n)
-  std::vector<int> tension_adr;                        // each cable's tension sensor (n)
+  std::vector<FreeBody> vehicles;                  // (n)
+  std::vector<std::array<int, 4>> rotor_actuator;  // each vehicle's rotors' actuators (n)
+  std::vector<int> box_geom;                       // each vehicle's collision box (n)
+  std::vector<int> tension_adr;                    // each cable's tension sensor (n)
   int payload_geom = -1, ground_geom = -1;
 
   int64_t step = 0;
-  std::mt19937_64 rng;                             // all of the world's noise
+  std::mt19937_64 rng;  // all of the world's noise
   std::normal_distribution<double> normal{0.0, 1.0};
-  std::vector<InputVector> motor_speed_radps;       // actual, per vehicle (n x 4)
-  std::vector<InputVector> motor_command_radps;     // commanded, clamped (n x 4)
-  std::vector<Eigen::Vector3d> gyro_B_radps;        // this step's gyro samples (n x 3)
-  DelayLine<BodyReading> mocap_line{0.0};           // readings waiting for their latency
+  std::vector<InputVector> motor_speed_radps;    // actual, per vehicle (n x 4)
+  std::vector<InputVector> motor_command_radps;  // commanded, clamped (n x 4)
+  std::vector<Eigen::Vector3d> gyro_B_radps;     // this step's gyro samples (n x 3)
+  DelayLine<BodyReading> mocap_line{0.0};        // readings waiting for their latency
   CrashStatus crash;
   std::vector<int> warning_count;  // per MuJoCo warning kind (mjNWARNING)
 
@@ -238,8 +238,8 @@ struct TeamWorld::Impl {
   }
 
   bool Taut(int i) const {
-    return CableLength_m(i) >= config.team.vehicles[i].cable_length_m -
-                                   World::kTautLengthTolerance_m;
+    return CableLength_m(i) >=
+           config.team.vehicles[i].cable_length_m - World::kTautLengthTolerance_m;
   }
 
   // Each vehicle's rotor speeds holding its weight and its taut cable's static share of the
@@ -328,12 +328,11 @@ struct TeamWorld::Impl {
       warning_count[k] = count;
       const std::string text = TakeWarnings();
       if (k == mjWARN_BADQPOS || k == mjWARN_BADQVEL || k == mjWARN_BADQACC) {
-        throw std::runtime_error("the team's physics diverged at t = " +
-                                 std::to_string(time_s()) + " s (MuJoCo: " + text +
+        throw std::runtime_error("the team's physics diverged at t = " + std::to_string(time_s()) +
+                                 " s (MuJoCo: " + text +
                                  "): the parameters cannot be simulated; a run error, not a crash");
       }
-      throw std::runtime_error("MuJoCo warning at t = " + std::to_string(time_s()) +
-                               " s: " + text);
+      throw std::runtime_error("MuJoCo warning at t = " + std::to_string(time_s()) + " s: " + text);
     }
   }
 
@@ -431,8 +430,8 @@ TeamWorld::TeamWorld(const TeamWorldConfig& config) : impl_(std::make_unique<Imp
   if (!load_warnings.empty() || error[0] != '\0') {
     mj_deleteModel(w.m);
     w.m = nullptr;
-    throw InputError(file, "", "MuJoCo warning while loading the team's scene: " +
-                                   load_warnings + error);
+    throw InputError(file, "",
+                     "MuJoCo warning while loading the team's scene: " + load_warnings + error);
   }
   if (std::abs(w.m->opt.timestep - World::kPhysicsDt_s) > 1e-12) {
     mj_deleteModel(w.m);
@@ -459,12 +458,11 @@ TeamWorld::TeamWorld(const TeamWorldConfig& config) : impl_(std::make_unique<Imp
     w.box_geom.push_back(RequireId(w.m, mjOBJ_GEOM, q + "_box"));
     std::array<int, 4> rotors{};
     for (int k = 0; k < 4; ++k) {
-      rotors[k] = RequireId(w.m, mjOBJ_ACTUATOR,
-                            "rotor_" + std::to_string(i) + "_" + std::to_string(k));
+      rotors[k] =
+          RequireId(w.m, mjOBJ_ACTUATOR, "rotor_" + std::to_string(i) + "_" + std::to_string(k));
     }
     w.rotor_actuator.push_back(rotors);
-    const int sensor =
-        RequireId(w.m, mjOBJ_SENSOR, "cable_" + std::to_string(i) + "_tension");
+    const int sensor = RequireId(w.m, mjOBJ_SENSOR, "cable_" + std::to_string(i) + "_tension");
     w.tension_adr.push_back(w.m->sensor_adr[sensor]);
   }
   w.motor_speed_radps.assign(w.n, InputVector::Zero());
@@ -545,8 +543,7 @@ void TeamWorld::Step() {
   Impl& w = *impl_;
   // first-order motor lag, exact for the 1 ms step; thrust to the actuators
   for (int i = 0; i < w.n; ++i) {
-    const double alpha =
-        1.0 - std::exp(-World::kPhysicsDt_s / w.params(i).motor_time_constant_s);
+    const double alpha = 1.0 - std::exp(-World::kPhysicsDt_s / w.params(i).motor_time_constant_s);
     w.motor_speed_radps[i] += alpha * (w.motor_command_radps[i] - w.motor_speed_radps[i]);
   }
   w.WriteMotorControls();
@@ -611,8 +608,8 @@ double TeamWorld::MinVehicleSeparation_m() const {
   double min_m = std::numeric_limits<double>::infinity();
   for (int i = 0; i < w.n; ++i) {
     for (int j = i + 1; j < w.n; ++j) {
-      min_m = std::min(min_m, (w.Block(w.vehicles[i]).head<3>() -
-                               w.Block(w.vehicles[j]).head<3>()).norm());
+      min_m = std::min(
+          min_m, (w.Block(w.vehicles[i]).head<3>() - w.Block(w.vehicles[j]).head<3>()).norm());
     }
   }
   return min_m;
