@@ -55,6 +55,7 @@ struct TeamTruth {
   Eigen::VectorXd x;                  // CooperativeStateIndex layout, 13 (N + 1)
   std::vector<double> cable_length_m;  // each vehicle's cable, |p_A_i - p_Q_i|  (N)
   std::vector<double> cable_tension_N; // each cable's tendon limit force  (N)
+                                       // (>= 0, a pull; the force of the last step, as Truth's)
   std::vector<CableMode> modes;        // taut iff the cable is within 1 mm of its length  (N)
   Eigen::VectorXd motor_speed_radps;   // actual rotor speeds, vehicle by vehicle  (4N)
 };
@@ -64,6 +65,12 @@ class TeamWorld {
  public:
   /// Builds the MJCF of config.team from config.scene_path; throws hpa::InputError naming the
   /// scene for one that cannot be built or loaded, or a team that is empty or larger than 3.
+  /// Also hpa::InputError naming the field ("team.vehicles[1].cable_length_m",
+  /// "team.payload_mass_kg", "mocap.rate_hz", ...) for a non-positive length, mass, inertia or
+  /// rotor constant, a rate that is not a whole number of physics steps, or a negative latency or
+  /// noise. The vehicles collide with each other and with the payload (contact pairs added to
+  /// CooperativeSceneXml's scene), and with the ground. Starts Reset to the team's
+  /// CooperativeModel::HangingState with the payload 1 m up.
   explicit TeamWorld(const TeamWorldConfig& config);
   ~TeamWorld();
   TeamWorld(const TeamWorld&) = delete;
@@ -75,11 +82,18 @@ class TeamWorld {
   /// each vehicle's motors (and command) at the speed that holds its own weight and its cable's
   /// share of the payload's (slack cable: its own weight only), time = 0; clears the delivery
   /// queues and the crash flag and re-seeds the noise, so a Reset world replays the same noise.
+  /// A cable is taut when its vehicle is within World::kTautLengthTolerance_m of its length
+  /// from its attachment point; the taut cables' shares are the tensions along them that hold
+  /// the payload's weight with no net moment about its centre (least squares, minimum norm).
+  /// Takes the gyros' and the first motion capture's samples (t = 0). A state of the wrong size
+  /// or with non-finite entries throws std::invalid_argument.
   void Reset(const Eigen::VectorXd& x0);
   /// Vehicle's new rotor speed command (rad/s), clamped to its motor bounds; non-finite entries
-  /// throw std::invalid_argument.
+  /// throw std::invalid_argument, a vehicle outside 0 .. N-1 std::out_of_range.
   void SetMotorSpeedCommand(int vehicle, const InputVector& w_cmd_radps);
   /// An instantaneous push: the body's velocity changes by impulse / mass (body -1: payload).
+  /// A body outside -1 .. N-1 throws std::out_of_range, a non-finite impulse
+  /// std::invalid_argument.
   void ApplyImpulse(int body, const Eigen::Vector3d& impulse_W_Ns);
   /// Advances 1 ms: motors, mj_step, sensors, crash check.
   void Step();
@@ -90,13 +104,23 @@ class TeamWorld {
   TeamTruth GetTruth() const;
   /// Every motion-capture reading whose latency has passed, in capture order (payload first,
   /// then vehicle 0, 1, ... within one capture).
+  /// A capture is taken at Reset and after every Step that reaches a multiple of 1 / rate_hz,
+  /// of the state at that time; it is delivered once time_s() >= capture + latency_s (1 ns
+  /// rounding margin). The attitude noise is a rotation in the body frame: q_W = q_true *
+  /// exp(n), n ~ N(0, attitude_noise_rad^2) per axis.
   std::vector<BodyReading> TakeDelivered();
   /// Vehicle's rate-gyro sample of this step (body frame, rad/s, with noise).
+  /// The true body rate at time_s() plus N(0, rate_gyro_noise_radps^2) per axis, drawn at Reset
+  /// and after every Step. A vehicle outside 0 .. N-1 throws std::out_of_range.
   Eigen::Vector3d GyroSample_B(int vehicle) const;
 
   /// Latched: a vehicle's contact with the ground, the payload or another vehicle (the latter
   /// named "vehicle 0 and vehicle 1 collide"), a vehicle's tilt > 90 deg, any body leaving the
   /// arena (kArenaHalfWidth_m, kArenaHeight_m), non-finite state. The reason names the vehicle.
+  /// Reasons: "vehicle 0 and vehicle 1 collide", "vehicle 1 contact with ground", "vehicle 1
+  /// contact with payload", "vehicle 2 tilt > 90 deg", "vehicle 0 left the 20x20x10 m arena",
+  /// "payload left the 20x20x10 m arena", "payload non-finite state". The payload on the ground
+  /// is not a crash. Checked after every Step (not at Reset).
   CrashStatus Crash() const;
   /// Smallest distance between two vehicles' centres now (m; infinity for one vehicle).
   double MinVehicleSeparation_m() const;
