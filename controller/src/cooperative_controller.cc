@@ -75,7 +75,11 @@ CooperativeController::CooperativeController(const CooperativeTeam& team, int ve
 }
 
 Eigen::VectorXd CooperativeController::CableForcesN(const TeamView& view) const {
-  const ReferencePoint ref = reference_->At(view.time_s);
+  return Demand(view, reference_->At(view.time_s)).mu_N;
+}
+
+CooperativeController::PayloadDemand CooperativeController::Demand(
+    const TeamView& view, const ReferencePoint& ref) const {
   const Eigen::Matrix3d r_wp = view.q_WP.normalized().toRotationMatrix();
   const double m_l = team_.payload_mass_kg;
   const Eigen::Vector3d g_e3(0, 0, team_.gravity_mps2);
@@ -101,7 +105,7 @@ Eigen::VectorXd CooperativeController::CableForcesN(const TeamView& view) const 
     mu_i.z() = std::max(mu_i.z(), 0.0);
     mu.segment<3>(3 * i) = mu_i;
   }
-  return mu;
+  return {mu, acc_des};
 }
 
 ControlOutput CooperativeController::Update(const TeamView& view) {
@@ -122,21 +126,17 @@ ControlOutput CooperativeController::Update(const TeamView& view) {
   const ReferencePoint ref = reference_->At(view.time_s);
 
   // the cable force this vehicle owes the payload and the desired cable direction
-  const Eigen::VectorXd mu = CableForcesN(view);
-  const Eigen::Vector3d mu_i = mu.segment<3>(3 * vehicle_);
+  const PayloadDemand demand = Demand(view, ref);
+  const Eigen::Vector3d mu_i = demand.mu_N.segment<3>(3 * vehicle_);
   const Eigen::Vector3d xi_des =
       mu_i.norm() > 1e-9 ? Eigen::Vector3d(-mu_i.normalized()) : Eigen::Vector3d(0, 0, -1);
 
   // attachment point, its velocity, and the commanded acceleration plus gravity (att_acc_c)
   const Eigen::Vector3d p_WA_W = view.p_WL_W + r_wp * rho;
   const Eigen::Vector3d v_WA_W = view.v_WL_W + r_wp * view.w_P.cross(rho);
-  const Eigen::Vector3d e_p = ref.p_WL_W - view.p_WL_W;
-  const Eigen::Vector3d e_v = ref.v_WL_W - view.v_WL_W;
-  const Eigen::Vector3d acc_des = ref.a_WL_W + gains_.k_payload_position_per_s2.cwiseProduct(e_p) +
-                                  gains_.k_payload_velocity_per_s.cwiseProduct(e_v);
   const Eigen::Matrix3d w_hat = Hat(view.w_P);
-  const Eigen::Vector3d a_att_W = acc_des + Eigen::Vector3d(0, 0, team_.gravity_mps2) +
-                                  r_wp * w_hat * w_hat * rho;
+  const Eigen::Vector3d a_att_W =
+      demand.acc_des_mps2 + Eigen::Vector3d(0, 0, team_.gravity_mps2) + r_wp * w_hat * w_hat * rho;
 
   // cable direction xi (vehicle to attachment, RotorTM's) and the cable's reading
   const Eigen::Vector3d r_QA_W = p_WA_W - view.p_WQ_W;

@@ -92,8 +92,8 @@ class TeamHpaMpc : public TeamController {
 };
 
 // The registry: one line per team controller; TeamControllerNames and MakeTeamController read it.
-using TeamControllerMaker = std::unique_ptr<TeamController> (*)(
-    const CooperativeTeam&, int, std::shared_ptr<const Reference>);
+using TeamControllerMaker = std::unique_ptr<TeamController> (*)(const CooperativeTeam&, int,
+                                                                std::shared_ptr<const Reference>);
 struct TeamControllerRegistration {
   std::string name;
   TeamControllerMaker make;
@@ -101,13 +101,13 @@ struct TeamControllerRegistration {
 const std::vector<TeamControllerRegistration>& Registry() {
   static const std::vector<TeamControllerRegistration> registry = {
       {"cooperative",
-       [](const CooperativeTeam& team, int vehicle, std::shared_ptr<const Reference> reference)
-           -> std::unique_ptr<TeamController> {
+       [](const CooperativeTeam& team, int vehicle,
+          std::shared_ptr<const Reference> reference) -> std::unique_ptr<TeamController> {
          return std::make_unique<CooperativeController>(team, vehicle, std::move(reference));
        }},
       {"hpa_mpc",
-       [](const CooperativeTeam& team, int vehicle, std::shared_ptr<const Reference> reference)
-           -> std::unique_ptr<TeamController> {
+       [](const CooperativeTeam& team, int vehicle,
+          std::shared_ptr<const Reference> reference) -> std::unique_ptr<TeamController> {
          return std::make_unique<TeamHpaMpc>(team, vehicle, std::move(reference));
        }},
   };
@@ -129,8 +129,7 @@ std::shared_ptr<const Reference> MakeOffsetReference(
   if (!(cable_length_m > 0.0)) {
     throw std::invalid_argument("offset reference: cable length must be positive");
   }
-  return std::make_shared<OffsetReference>(std::move(payload_reference), p_LA_W_m,
-                                           cable_length_m);
+  return std::make_shared<OffsetReference>(std::move(payload_reference), p_LA_W_m, cable_length_m);
 }
 
 const std::vector<std::string>& TeamControllerNames() {
@@ -156,8 +155,8 @@ std::unique_ptr<TeamController> MakeTeamController(
   }
   std::string names;
   for (const std::string& name : TeamControllerNames()) names += (names.empty() ? "" : ", ") + name;
-  throw std::invalid_argument("team controller type: expected one of " + names + ", got '" +
-                              type + "'");
+  throw std::invalid_argument("team controller type: expected one of " + names + ", got '" + type +
+                              "'");
 }
 
 }  // namespace hpa

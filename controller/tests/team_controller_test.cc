@@ -49,9 +49,8 @@ CooperativeTeam TriangleTeam() {
   CooperativeTeam team;
   team.payload_mass_kg = 0.278;
   team.payload_inertia_P_kgm2 = Eigen::Vector3d(0.00625019392, 0.00625019392, 0.01245978846);
-  const Eigen::Vector3d corners[3] = {{-0.1540, -0.267, 0.01125},
-                                      {0.3083, 0.0, 0.01125},
-                                      {-0.1540, 0.267, 0.01125}};
+  const Eigen::Vector3d corners[3] = {
+      {-0.1540, -0.267, 0.01125}, {0.3083, 0.0, 0.01125}, {-0.1540, 0.267, 0.01125}};
   for (const Eigen::Vector3d& p_PA_P_m : corners) {
     CooperativeVehicle v;
     v.params = DefaultParams();
@@ -90,25 +89,24 @@ TeamRunLog Fly(const std::string& type, const CooperativeTeam& team,
 // Every update succeeded (an MPC may stop at its iteration limit: still a plan).
 void ExpectUsableStatuses(const TeamRunLog& log) {
   for (ControlStatus s : log.statuses) {
-    EXPECT_TRUE(s == ControlStatus::kSuccess || s == ControlStatus::kMaxIterations)
-        << ToString(s);
+    EXPECT_TRUE(s == ControlStatus::kSuccess || s == ControlStatus::kMaxIterations) << ToString(s);
   }
 }
 
-const Eigen::Vector3d kStart(0.0, 0.0, 1.0);  // payload's start and hover position, world (3)
-const Eigen::Vector3d kEnd(2.0, 0.0, 1.0);    // the line's end, 2 m along x, world (3)
+const Eigen::Vector3d kStart(0.0, 0.0, 1.0);     // payload's start and hover position, world (3)
+const Eigen::Vector3d kEnd(2.0, 0.0, 1.0);       // the line's end, 2 m along x, world (3)
 const Eigen::Vector3d kOffset(0.2, -0.2, -0.1);  // offset start's distance from kStart (3)
-constexpr double kLineS = 4.0;                // the line's duration
-constexpr double kLineRunS = 6.0;             // the line plus 2 s to settle
-constexpr double kHoverS = 5.0;               // hover hold
+constexpr double kLineS = 4.0;                   // the line's duration
+constexpr double kLineRunS = 6.0;                // the line plus 2 s to settle
+constexpr double kHoverS = 5.0;                  // hover hold
 
 // One flight case: a controller type on a named team, and the bounds its flights must meet.
 struct Case {
   std::string type;
   std::string team_name;
-  double hover_max_error_m;    // bound on the hover hold's largest payload error
-  double offset_settled_m;     // bound on the largest error over the offset start's last second
-  double line_rmse_m;          // bound on the line's payload RMSE
+  double hover_max_error_m;  // bound on the hover hold's largest payload error
+  double offset_settled_m;   // bound on the largest error over the offset start's last second
+  double line_rmse_m;        // bound on the line's payload RMSE
 };
 
 // The team of a case: "bar", "triangle" or "single".
@@ -147,12 +145,14 @@ TEST_P(TeamFlightTest, HoverFromOffset) {
   ExpectUsableStatuses(log);
   double settled_m = 0.0;
   for (size_t k = 0; k < log.t_s.size(); ++k) {
-    if (log.t_s[k] >= kHoverS - 1.0) settled_m = std::max(settled_m, (log.p_WL_W[k] - kStart).norm());
+    if (log.t_s[k] >= kHoverS - 1.0)
+      settled_m = std::max(settled_m, (log.p_WL_W[k] - kStart).norm());
   }
-  std::printf("%s %s offset start: payload error over the last second %.4g m, RMSE %.4g m, "
-              "max tilt %.4g rad, slack steps %d\n",
-              c.type.c_str(), c.team_name.c_str(), settled_m, PayloadRmseM(log, *reference),
-              PayloadMaxTiltRad(log), log.slack_plant_steps);
+  std::printf(
+      "%s %s offset start: payload error over the last second %.4g m, RMSE %.4g m, "
+      "max tilt %.4g rad, slack steps %d\n",
+      c.type.c_str(), c.team_name.c_str(), settled_m, PayloadRmseM(log, *reference),
+      PayloadMaxTiltRad(log), log.slack_plant_steps);
   EXPECT_LT(settled_m, c.offset_settled_m);
 }
 
@@ -165,10 +165,11 @@ TEST_P(TeamFlightTest, Line) {
   ASSERT_TRUE(log.finite);
   ExpectUsableStatuses(log);
   const double rmse_m = PayloadRmseM(log, *reference);
-  std::printf("%s %s line: payload RMSE %.4g m, max error %.4g m, final error %.4g m, "
-              "max tilt %.4g rad, slack steps %d\n",
-              c.type.c_str(), c.team_name.c_str(), rmse_m, PayloadMaxErrorM(log, *reference),
-              (log.p_WL_W.back() - kEnd).norm(), PayloadMaxTiltRad(log), log.slack_plant_steps);
+  std::printf(
+      "%s %s line: payload RMSE %.4g m, max error %.4g m, final error %.4g m, "
+      "max tilt %.4g rad, slack steps %d\n",
+      c.type.c_str(), c.team_name.c_str(), rmse_m, PayloadMaxErrorM(log, *reference),
+      (log.p_WL_W.back() - kEnd).norm(), PayloadMaxTiltRad(log), log.slack_plant_steps);
   EXPECT_LT(rmse_m, c.line_rmse_m);
 }
 
@@ -176,17 +177,16 @@ TEST_P(TeamFlightTest, Line) {
 // starts at its controller's exact equilibrium (the hanging layout, cable forces straight up
 // from pinv(P)), so its bound is rounding's; the MPC's hover bound is its measured drift (its
 // perception term and the solver's tolerance) with that margin.
-INSTANTIATE_TEST_SUITE_P(
-    Teams, TeamFlightTest,
-    testing::Values(Case{"cooperative", "bar", 1e-12, 0.026, 0.09},
-                    Case{"cooperative", "triangle", 1e-12, 0.010, 0.092},
-                    Case{"cooperative", "single", 1e-12, 0.010, 0.092},
-                    Case{"hpa_mpc", "bar", 6.8e-5, 1.25e-3, 0.0093},
-                    Case{"hpa_mpc", "triangle", 1.7e-4, 1.0e-3, 0.0087},
-                    Case{"hpa_mpc", "single", 2.1e-4, 1.0e-3, 0.0086}),
-    [](const testing::TestParamInfo<Case>& info) {
-      return info.param.type + "_" + info.param.team_name;
-    });
+INSTANTIATE_TEST_SUITE_P(Teams, TeamFlightTest,
+                         testing::Values(Case{"cooperative", "bar", 1e-12, 0.026, 0.09},
+                                         Case{"cooperative", "triangle", 1e-12, 0.010, 0.092},
+                                         Case{"cooperative", "single", 1e-12, 0.010, 0.092},
+                                         Case{"hpa_mpc", "bar", 6.8e-5, 1.25e-3, 0.0093},
+                                         Case{"hpa_mpc", "triangle", 1.7e-4, 1.0e-3, 0.0087},
+                                         Case{"hpa_mpc", "single", 2.1e-4, 1.0e-3, 0.0086}),
+                         [](const testing::TestParamInfo<Case>& info) {
+                           return info.param.type + "_" + info.param.team_name;
+                         });
 
 // (d): a non-finite view gives kNonFinite and a finite, level-out command.
 TEST(TeamControllerTest, NonFiniteViewGivesSafeCommand) {
@@ -276,9 +276,10 @@ TEST(TeamControllerTest, SlackVehicleClimbsToTaut) {
     for (TeamController* c : raw) EXPECT_TRUE(c->CableTaut()) << type;
     for (CableMode m : plant.modes()) EXPECT_EQ(m, CableMode::kTaut) << type;
     const double final_error_m = (log.p_WL_W.back() - kStart).norm();
-    std::printf("%s triangle slack start: final payload error %.4g m, max error %.4g m, "
-                "slack readings %d\n",
-                type.c_str(), final_error_m, PayloadMaxErrorM(log, *reference), log.slack_readings);
+    std::printf(
+        "%s triangle slack start: final payload error %.4g m, max error %.4g m, "
+        "slack readings %d\n",
+        type.c_str(), final_error_m, PayloadMaxErrorM(log, *reference), log.slack_readings);
     EXPECT_LT(final_error_m, type == "cooperative" ? 1.8e-4 : 1.6e-4) << type;
   }
 }
@@ -295,7 +296,8 @@ TEST(TeamControllerTest, OffsetReferenceRescalesFlatOutput) {
   longer.cable_length_m = l_m;
   for (const double t_s : {0.0, 1.0, 2.0, 3.3}) {
     const ReferencePoint a = shifted->At(t_s);
-    const ReferencePoint b = MakeLineReference(longer, kStart + offset, kEnd + offset, kLineS)->At(t_s);
+    const ReferencePoint b =
+        MakeLineReference(longer, kStart + offset, kEnd + offset, kLineS)->At(t_s);
     // the same flat output as a reference built for the longer cable at the attachment, up to
     // rounding of the rescaling
     EXPECT_LT((a.p_WL_W - b.p_WL_W).norm(), 1e-12);

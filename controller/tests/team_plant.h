@@ -98,20 +98,20 @@ class TeamPlant {
 
  private:
   CooperativeModel model_;
-  Eigen::VectorXd x_;                                  // cooperative state  (13 (N + 1))
-  std::vector<CableMode> modes_;                       // one per cable
+  Eigen::VectorXd x_;                                   // cooperative state  (13 (N + 1))
+  std::vector<CableMode> modes_;                        // one per cable
   std::vector<std::unique_ptr<Autopilot>> autopilots_;  // one per vehicle
 };
 
 /// What a team run produced, sampled at every plant step.
 struct TeamRunLog {
-  std::vector<double> t_s;                // plant step times
-  std::vector<Eigen::Vector3d> p_WL_W;    // payload position at each step  (3)
-  std::vector<Eigen::Quaterniond> q_WP;   // payload attitude at each step
-  std::vector<ControlStatus> statuses;    // every controller update's status
-  int slack_readings = 0;                 // updates where a controller read its cable slack
-  int slack_plant_steps = 0;              // plant steps with some cable slack
-  bool finite = true;                     // plant stayed finite
+  std::vector<double> t_s;               // plant step times
+  std::vector<Eigen::Vector3d> p_WL_W;   // payload position at each step  (3)
+  std::vector<Eigen::Quaterniond> q_WP;  // payload attitude at each step
+  std::vector<ControlStatus> statuses;   // every controller update's status
+  int slack_readings = 0;                // updates where a controller read its cable slack
+  int slack_plant_steps = 0;             // plant steps with some cable slack
+  bool finite = true;                    // plant stayed finite
 };
 
 /// Flies the team for duration_s: each controller at its RateHz (fires on the first tick at or

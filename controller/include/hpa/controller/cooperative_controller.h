@@ -18,21 +18,26 @@ namespace hpa {
 /// rotor_tm_config/config/control_params/triangular_payload_cooperative_cable_gains.yaml
 /// (read_payload_control_gains: diagonal Kp, Kd, Kpe, Kde), each vehicle's from
 /// snapdragonfly_control_gains.yaml (read_uav_control_gains: Kxi, Kw, and Kp, Kd for the slack
-/// position hold), the vehicle named by every cable mechanism file of the sample teams.
+/// position hold), the robot_list vehicle of RotorTM's 0.5 m cable teams
+/// (attach_mechanism/cable/2_robots_long_bar_payload_0-5m.yaml,
+/// 3_robots_triangular_payload_0-5m.yaml).
 struct CooperativeGains {
   Eigen::Vector3d k_payload_position_per_s2{3.08, 3.08, 6.25};  // payload Kp ("pos")  (3)
   Eigen::Vector3d k_payload_velocity_per_s{2.15, 2.15, 3.42};   // payload Kd ("vel")  (3)
   Eigen::Vector3d k_payload_attitude_Nm{0.55, 0.50, 0.16};      // payload Kpe ("rot"), N m/rad (3)
-  Eigen::Vector3d k_payload_rate_Nms{0.162, 0.162, 0.068};      // payload Kde ("ang"), N m s/rad (3)
-  Eigen::Vector3d k_cable_direction_per_s2{16.0, 16.0, 16.0};   // vehicle Kxi ("xi")  (3)
-  Eigen::Vector3d k_cable_rate_per_s{6.7, 6.7, 3.1};            // vehicle Kw ("omg")  (3)
-  Eigen::Vector3d k_hold_position_per_s2{6.0, 6.0, 10.0};       // vehicle Kp ("pos"), slack  (3)
-  Eigen::Vector3d k_hold_velocity_per_s{3.0, 3.0, 6.0};         // vehicle Kd ("vel"), slack  (3)
+  Eigen::Vector3d k_payload_rate_Nms{0.162, 0.162, 0.068};     // payload Kde ("ang"), N m s/rad (3)
+  Eigen::Vector3d k_cable_direction_per_s2{16.0, 16.0, 16.0};  // vehicle Kxi ("xi")  (3)
+  Eigen::Vector3d k_cable_rate_per_s{6.7, 6.7, 3.1};           // vehicle Kw ("omg")  (3)
+  Eigen::Vector3d k_hold_position_per_s2{6.0, 6.0, 10.0};      // vehicle Kp ("pos"), slack  (3)
+  Eigen::Vector3d k_hold_velocity_per_s{3.0, 3.0, 6.0};        // vehicle Kd ("vel"), slack  (3)
   // ours: the autopilot cascade's attitude loop (GeometricGains' defaults) toward Rot_des
   Eigen::Vector3d k_attitude_per_s{7.0, 7.0, 3.0};  // attitude error -> body rate  (3)
   double max_rate_radps = 6.0;                      // commanded body-rate limit
   double slack_band_m = 0.01;  // a cable shorter than its length by this is slack
-  double rate_hz = 100.0;      // RotorTM's controller rate (one update per 100 Hz sim step)
+  // RotorTM's controller rate: controller_node.py runs the controller on every desired-trajectory
+  // message (desired_traj_callback -> sim_subscriber), which traj_node.py publishes at
+  // rospy.Rate(100), the rate simulation_base.py steps the plant at (self.rate = 100)
+  double rate_hz = 100.0;
 };
 
 /// Vehicle `vehicle`'s share of RotorTM's cooperative controller. Every vehicle runs the same
@@ -58,6 +63,14 @@ class CooperativeController : public TeamController {
   Eigen::VectorXd CableForcesN(const TeamView& view) const;
 
  private:
+  // The payload controller's outputs: the cable forces (world, 3N) and the payload's commanded
+  // acceleration (acceleration_des, world).
+  struct PayloadDemand {
+    Eigen::VectorXd mu_N;
+    Eigen::Vector3d acc_des_mps2;
+  };
+  PayloadDemand Demand(const TeamView& view, const ReferencePoint& ref) const;
+
   CooperativeTeam team_;
   int vehicle_;
   std::shared_ptr<const Reference> reference_;
