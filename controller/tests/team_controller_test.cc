@@ -193,7 +193,7 @@ TEST(TeamControllerTest, NonFiniteViewGivesSafeCommand) {
   const CooperativeTeam team = TriangleTeam();
   const auto reference = MakeHoverReference(team.vehicles[0].params, kStart);
   for (const std::string& type : TeamControllerNames()) {
-    for (int field = 0; field < 3; ++field) {
+    for (int field = 0; field < 4; ++field) {
       auto controller = MakeTeamController(type, team, 1, reference);
       TeamPlant plant(team, CooperativeModel(team).HangingState(kStart));
       TeamView view = plant.View(1, 0.0);
@@ -201,12 +201,13 @@ TEST(TeamControllerTest, NonFiniteViewGivesSafeCommand) {
       if (field == 0) view.p_WL_W.x() = nan;
       if (field == 1) view.w_P.z() = std::numeric_limits<double>::infinity();
       if (field == 2) view.time_s = nan;
+      if (field == 3) view.q_WB.w() = nan;
       const ControlOutput out = controller->Update(view);
       EXPECT_EQ(out.status, ControlStatus::kNonFinite) << type << " field " << field;
       EXPECT_TRUE(out.command.w_B_radps.allFinite()) << type;
       EXPECT_TRUE(std::isfinite(out.command.thrust_N)) << type;
       EXPECT_GT(out.command.thrust_N, 0.0) << type;
-      // the vehicle is level: the level-out commands no body rate
+      // the vehicle is level (or its attitude unknown): the level-out commands no body rate
       EXPECT_LT(out.command.w_B_radps.norm(), 1e-12) << type;
     }
   }
@@ -252,9 +253,12 @@ TEST(TeamControllerTest, CooperativeHoverDistributesWeight) {
   const ControlOutput out = controller.Update(view);
   EXPECT_TRUE(controller.CableTaut());
   EXPECT_EQ(out.status, ControlStatus::kSuccess);
-  // the thrust carries the vehicle and its cable's share: weight/3 plus its own, within the
-  // horizontal share the min-norm distribution gives the off-centre corner
-  EXPECT_GT(out.command.thrust_N, team.vehicles[0].params.quad_mass_kg * 9.81);
+  // the cable hangs straight down: the thrust is the vehicle's weight plus its cable's vertical
+  // force (the projection xi xi^T mu drops the horizontal part), level, no body rate; up to
+  // rounding
+  const Params& params = team.vehicles[0].params;
+  EXPECT_NEAR(out.command.thrust_N, params.quad_mass_kg * params.gravity_mps2 + mu(2), 1e-12);
+  EXPECT_LT(out.command.w_B_radps.norm(), 1e-12);
 }
 
 // A vehicle below its cable's length (its cable slack) reads it slack and climbs back to its
