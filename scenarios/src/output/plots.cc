@@ -1,6 +1,10 @@
 #include "hpa/scenarios/plots.h"
 
+#include <algorithm>
+#include <cmath>
 #include <opencv2/imgcodecs.hpp>
+
+#include "hpa/models/cooperative_model.h"
 
 #include "hpa/models/input_error.h"
 #include "hpa/scenarios/plot_canvas.h"
@@ -10,6 +14,7 @@ namespace hpa {
 constexpr const char* kTrackingStem = "tracking";
 constexpr const char* kXyPathStem = "xy_path";
 constexpr const char* kRetautStem = "retaut";
+constexpr const char* kTeamCablesStem = "team_cables";
 
 namespace {
 
@@ -136,10 +141,91 @@ std::string WriteRetautPlot(const std::vector<LogRow>& rows, const std::vector<d
   return fig.Write(dir + "/" + kRetautStem, format);
 }
 
+// A column of a team's log as a vector.
+template <typename F>
+std::vector<double> TeamColumn(const std::vector<TeamLogRow>& rows, F f) {
+  std::vector<double> out;
+  out.reserve(rows.size());
+  for (const TeamLogRow& r : rows) out.push_back(f(r));
+  return out;
+}
+
+// A team's payload x, y and z against the reference, the time any cable was slack shaded.
+std::string WriteTeamTrackingPlot(const std::vector<TeamLogRow>& rows,
+                                  const std::vector<double>& t, const std::string& title_suffix,
+                                  const std::string& dir, PlotFormat format) {
+  Figure fig(1200, 900);
+  static const char* kAxis[3] = {"x", "y", "z"};
+  std::vector<CableMode> any_slack;
+  for (const TeamLogRow& r : rows) {
+    bool slack = false;
+    for (const TeamLogRow::Vehicle& v : r.vehicles) slack = slack || v.mode == CableMode::kSlack;
+    any_slack.push_back(slack ? CableMode::kSlack : CableMode::kTaut);
+  }
+  for (int i = 0; i < 3; ++i) {
+    PlotPanel p(&fig, cv::Rect(0, i * 300, 1200, 300),
+                std::string("payload ") + kAxis[i] + (i == 0 ? title_suffix : ""), "t [s]",
+                std::string(kAxis[i]) + "_L [m]");
+    const auto actual = TeamColumn(rows, [i](const TeamLogRow& r) {
+      return r.x_true(CooperativeStateIndex::kPayloadPos + i);
+    });
+    const auto ref = TeamColumn(rows, [i](const TeamLogRow& r) { return r.reference.p_WL_W(i); });
+    p.FitRange({t}, {actual, ref});
+    for (const auto& [a, b] : SlackIntervals(t, any_slack)) {
+      p.ShadeX(a, b, kSlackShade, "a cable slack");
+    }
+    p.DrawAxes();
+    p.Line(t, ref, kReference, 2, true);
+    p.Line(t, actual, SeriesColour(0), 2);
+    if (i == 0) {
+      p.Legend({{"true", SeriesColour(0)},
+                {"reference", kReference},
+                {"a cable slack (shaded)", kSlackShade}});
+    }
+  }
+  return fig.Write(dir + "/" + kTrackingStem, format);
+}
+
+// Each vehicle's cable tension and tilt: how the team shares the load, and which cable went
+// slack when.
+std::string WriteTeamCablesPlot(const std::vector<TeamLogRow>& rows, const std::vector<double>& t,
+                                const std::string& title_suffix, const std::string& dir,
+                                PlotFormat format) {
+  Figure fig(1200, 600);
+  const int n = static_cast<int>(rows.front().vehicles.size());
+  PlotPanel p0(&fig, cv::Rect(0, 0, 1200, 300), "cable tension" + title_suffix, "t [s]", "[N]");
+  PlotPanel p1(&fig, cv::Rect(0, 300, 1200, 300), "vehicle tilt", "t [s]", "[deg]");
+  std::vector<std::vector<double>> tension, tilt;
+  for (int i = 0; i < n; ++i) {
+    tension.push_back(TeamColumn(rows, [i](const TeamLogRow& r) {
+      return r.vehicles[static_cast<size_t>(i)].cable_tension_N;
+    }));
+    tilt.push_back(TeamColumn(rows, [i](const TeamLogRow& r) {
+      const Eigen::Vector4d q =
+          r.x_true.segment<4>(CooperativeStateIndex::Vehicle(i) + CooperativeStateIndex::kVehicleQuat);
+      const double c = Eigen::Quaterniond(q(0), q(1), q(2), q(3)).normalized().toRotationMatrix()(2, 2);
+      return std::acos(std::clamp(c, -1.0, 1.0)) * 180.0 / M_PI;
+    }));
+  }
+  p0.FitRange({t}, tension);
+  p0.DrawAxes();
+  p1.FitRange({t}, tilt);
+  p1.DrawAxes();
+  std::vector<std::pair<std::string, cv::Scalar>> legend;
+  for (int i = 0; i < n; ++i) {
+    p0.Line(t, tension[static_cast<size_t>(i)], SeriesColour(i), 2);
+    p1.Line(t, tilt[static_cast<size_t>(i)], SeriesColour(i), 2);
+    legend.emplace_back("vehicle " + std::to_string(i), SeriesColour(i));
+  }
+  p0.Legend(legend);
+  return fig.Write(dir + "/" + kTeamCablesStem, format);
+}
+
 }  // namespace
 
 const std::vector<std::string>& RunPlotStems() {
-  static const std::vector<std::string> stems{kTrackingStem, kXyPathStem, kRetautStem};
+  static const std::vector<std::string> stems{kTrackingStem, kXyPathStem, kRetautStem,
+                                              kTeamCablesStem};
   return stems;
 }
 
@@ -147,6 +233,14 @@ std::vector<std::string> WriteRunPlots(const RunResult& result, const Params& pa
                                        const std::string& dir, PlotFormat format) {
   const auto& rows = result.rows;
   std::vector<std::string> written;
+  if (!result.team_rows.empty()) {
+    const auto t = TeamColumn(result.team_rows, [](const TeamLogRow& r) { return r.time_s; });
+    const std::string title_suffix =
+        " - " + result.metrics.scenario + " (" + result.metrics.controller + ")";
+    written.push_back(WriteTeamTrackingPlot(result.team_rows, t, title_suffix, dir, format));
+    written.push_back(WriteTeamCablesPlot(result.team_rows, t, title_suffix, dir, format));
+    return written;
+  }
   if (rows.empty()) return written;
   const auto t = Column(rows, [](const LogRow& r) { return r.time_s; });
   const std::string title_suffix =

@@ -1,5 +1,6 @@
 #include "hpa/scenarios/expect_keys.h"
 
+#include <algorithm>
 #include <cmath>
 #include <sstream>
 #include <stdexcept>
@@ -211,6 +212,35 @@ std::vector<ExpectKey> BuildTable() {
   t.push_back(Min("payload_quad_min_distance_min", "payload_quad_min_distance_m", "m",
                   "smallest payload-to-vehicle surface distance, at least (< 0: overlap)", -kBig,
                   kBig, [](const Metrics& m) { return m.payload_quad_min_distance_m; }));
+  // a team run's (NaN, not measured, in a single-vehicle run)
+  const auto over_vehicles = [](const Metrics& m, double VehicleMetrics::*field) {
+    if (!m.team || m.team->vehicles.empty()) return static_cast<double>(NAN);
+    double worst = -INFINITY;
+    for (const VehicleMetrics& v : m.team->vehicles) worst = std::max(worst, v.*field);
+    return worst;
+  };
+  t.push_back(Min("team_separation_min", "team.min_vehicle_separation_m", "m",
+                  "smallest distance between two vehicles' centres, at least", 0.0, kBig,
+                  [](const Metrics& m) {
+                    return m.team ? m.team->min_vehicle_separation_m : static_cast<double>(NAN);
+                  }));
+  t.push_back(Max("team_tilt_max", "team.vehicles.tilt_max_deg", "deg",
+                  "every vehicle's largest tilt, at most", 180.0, [over_vehicles](const Metrics& m) {
+                    return over_vehicles(m, &VehicleMetrics::tilt_max_deg);
+                  }));
+  t.push_back(Max("team_payload_tilt_max", "team.payload_tilt_max_deg", "deg",
+                  "the payload's largest tilt, at most", 180.0, [](const Metrics& m) {
+                    return m.team ? m.team->payload_tilt_max_deg : static_cast<double>(NAN);
+                  }));
+  t.push_back(Max("team_slack_time_max", "team.vehicles.slack_time_s", "s",
+                  "every cable's slack time, at most", kBig, [over_vehicles](const Metrics& m) {
+                    return over_vehicles(m, &VehicleMetrics::slack_time_s);
+                  }));
+  t.push_back(Min("team_slack_time_min", "team.vehicles.slack_time_s", "s",
+                  "the slackest cable's slack time, at least (a push that slackens a cable)", 0.0,
+                  kBig, [over_vehicles](const Metrics& m) {
+                    return over_vehicles(m, &VehicleMetrics::slack_time_s);
+                  }));
   t.push_back(FaultRecoveryMax(
       "fault_health_flag_max", "fault_recovery.health_flag_s",
       "the estimator's health flags every fault event within this (never: fails)",

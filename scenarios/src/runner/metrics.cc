@@ -13,6 +13,7 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 
+#include "hpa/models/cooperative_model.h"
 #include "hpa/models/file_io.h"
 #include "hpa/models/input_error.h"
 #include "hpa/scenarios/expect_keys.h"
@@ -46,20 +47,33 @@ Quantiles ComputeQuantiles(std::vector<double> values) {
   return q;
 }
 
-std::vector<std::pair<double, double>> TrueSlackIntervals(const std::vector<LogRow>& rows) {
+std::vector<std::pair<double, double>> SlackIntervals(const std::vector<double>& times_s,
+                                                      const std::vector<CableMode>& modes) {
   std::vector<std::pair<double, double>> intervals;
-  for (size_t i = 0; i < rows.size();) {
-    if (rows[i].truth.mode != CableMode::kSlack) {
+  for (size_t i = 0; i < modes.size();) {
+    if (modes[i] != CableMode::kSlack) {
       ++i;
       continue;
     }
     size_t j = i;
-    while (j < rows.size() && rows[j].truth.mode == CableMode::kSlack) ++j;
-    const double end = j < rows.size() ? rows[j].time_s : rows.back().time_s;
-    if (end - rows[i].time_s >= kMinSlackInterval_s) intervals.emplace_back(rows[i].time_s, end);
+    while (j < modes.size() && modes[j] == CableMode::kSlack) ++j;
+    const double end = j < modes.size() ? times_s[j] : times_s.back();
+    if (end - times_s[i] >= kMinSlackInterval_s) intervals.emplace_back(times_s[i], end);
     i = j;
   }
   return intervals;
+}
+
+std::vector<std::pair<double, double>> TrueSlackIntervals(const std::vector<LogRow>& rows) {
+  std::vector<double> times_s;
+  std::vector<CableMode> modes;
+  times_s.reserve(rows.size());
+  modes.reserve(rows.size());
+  for (const LogRow& r : rows) {
+    times_s.push_back(r.time_s);
+    modes.push_back(r.truth.mode);
+  }
+  return SlackIntervals(times_s, modes);
 }
 
 namespace {
@@ -460,6 +474,33 @@ std::string MetricsToJson(const Metrics& m) {
                            {"false_detection_rate", opt_num(worst_false_rate)},
                            {"unrecovered", unrecovered}};
   }
+  if (m.team) {
+    // a team run measured none of the single vehicle's quadrotor, estimator, camera or contact
+    // metrics: null, never a perfect-looking value
+    for (const char* key : {"payload_rmse_est_m", "quad_rmse_m", "quad_position_deviation_max_m",
+                            "mode_accuracy", "payload_in_fov_fraction", "payload_lost_time_s",
+                            "closed_loop_cost", "payload_quad_min_distance_m", "contacts",
+                            "slack_detection_latency_s"}) {
+      o[key] = Json();
+    }
+    o["retaut"]["quad_vz_min_mps"] = Json();
+    o["retaut"]["peak_body_rate_radps"] = Json();
+    Json vehicles = Json::array();
+    for (const VehicleMetrics& v : m.team->vehicles) {
+      vehicles.push_back({{"slack_time_s", num(v.slack_time_s)},
+                          {"slack_events", v.slack_events},
+                          {"retaut_count", v.retaut_count},
+                          {"tilt_max_deg", measured(num(v.tilt_max_deg))},
+                          {"cable_tension_max_N", measured(num(v.cable_tension_max_N))},
+                          {"mixer_saturated_fraction", measured(num(v.mixer_saturated_fraction))},
+                          {"control_failures", v.control_failures},
+                          {"solve_ms", quantiles(v.solve_ms)}});
+    }
+    o["team"] = {{"vehicle_count", m.team->vehicles.size()},
+                 {"min_vehicle_separation_m", measured(num(m.team->min_vehicle_separation_m))},
+                 {"payload_tilt_max_deg", measured(num(m.team->payload_tilt_max_deg))},
+                 {"vehicles", vehicles}};
+  }
   o["expect"] = {{"passed", m.expect_passed}, {"failed", m.expect_failed}};
   return o.dump(2) + "\n";
 }
@@ -475,6 +516,47 @@ void MakeOutputDir(const std::string& dir) {
     throw OutputError(dir, "cannot create the output folder (--out)");
   }
 }
+
+namespace {
+
+// One CSV row formatted into one buffer: std::to_chars with precision 7 writes what
+// `out << std::setprecision(7) << value` (printf's %.7g) writes, without the stream's locale and
+// formatting machinery on every value.
+struct CsvLine {
+  std::string line;
+  // the value, no separator before it
+  void Number(double value) {
+    char buf[32];
+    const std::to_chars_result r =
+        std::to_chars(buf, buf + sizeof buf, value, std::chars_format::general, 7);
+    line.append(buf, r.ptr);
+  }
+  // a separator, then the value
+  void Add(double value) {
+    line.push_back(',');
+    Number(value);
+  }
+  // a separator, then the integer
+  void AddInt(long value) {
+    line.push_back(',');
+    line += std::to_string(value);
+  }
+};
+
+// Flushes a log written under PartialPath and renames it into place when whole (CommitPartial):
+// a reader never sees half a log; a failed write removes the partial file.
+void CloseLog(const std::string& path, std::ofstream* out) {
+  out->flush();
+  if (!*out) {
+    out->close();
+    std::remove(PartialPath(path).c_str());
+    throw OutputError(path, "disk full?");
+  }
+  out->close();
+  CommitPartial(path);
+}
+
+}  // namespace
 
 void WriteLogCsv(const std::string& path, const std::vector<LogRow>& rows) {
   // written under PartialPath and renamed when whole (CommitPartial): a reader never sees half
@@ -496,24 +578,11 @@ void WriteLogCsv(const std::string& path, const std::vector<LogRow>& rows) {
       << ",cmd_w_x,cmd_w_y,cmd_w_z,cmd_thrust_N,status,solve_ms,cost,tension_N,gripper"
       << ",est_rejected_updates,est_resets,mixer_saturated,est_payload_lost,est_payload_"
          "supported\n";
-  // each row formatted into one buffer: std::to_chars with precision 7 writes what
-  // `out << std::setprecision(7) << value` (printf's %.7g) writes, without the stream's locale
-  // and formatting machinery on every value
-  std::string line;
-  const auto number = [&line](double value) {
-    char buf[32];
-    const std::to_chars_result r =
-        std::to_chars(buf, buf + sizeof buf, value, std::chars_format::general, 7);
-    line.append(buf, r.ptr);
-  };
-  const auto add = [&line, &number](double value) {
-    line.push_back(',');
-    number(value);
-  };
-  const auto add_int = [&line](long value) {
-    line.push_back(',');
-    line += std::to_string(value);
-  };
+  CsvLine csv;
+  std::string& line = csv.line;
+  const auto number = [&csv](double value) { csv.Number(value); };
+  const auto add = [&csv](double value) { csv.Add(value); };
+  const auto add_int = [&csv](long value) { csv.AddInt(value); };
   for (const LogRow& r : rows) {
     line.clear();
     number(r.time_s);
@@ -541,14 +610,50 @@ void WriteLogCsv(const std::string& path, const std::vector<LogRow>& rows) {
     line.push_back('\n');
     out << line;
   }
-  out.flush();
-  if (!out) {
-    out.close();
-    std::remove(PartialPath(path).c_str());
-    throw OutputError(path, "disk full?");
+  CloseLog(path, &out);
+}
+
+void WriteTeamLogCsv(const std::string& path, const std::vector<TeamLogRow>& rows, int vehicles) {
+  using I = CooperativeStateIndex;
+  std::ofstream out(PartialPath(path));
+  if (!out) throw OutputError(path, std::strerror(errno));
+  const int n = vehicles;
+  out << "time_s,true_pL_x,true_pL_y,true_pL_z,true_vL_x,true_vL_y,true_vL_z,true_qP_w,true_qP_x,"
+         "true_qP_y,true_qP_z,true_wP_x,true_wP_y,true_wP_z,ref_pL_x,ref_pL_y,ref_pL_z";
+  for (int i = 0; i < n; ++i) {
+    const std::string v = "v" + std::to_string(i) + "_";
+    for (const char* c :
+         {"pQ_x", "pQ_y", "pQ_z", "vQ_x", "vQ_y", "vQ_z", "q_w", "q_x", "q_y", "q_z", "w_x", "w_y",
+          "w_z", "cable_length_m", "tension_N", "mode", "taut_seen", "cmd_w_x", "cmd_w_y",
+          "cmd_w_z", "cmd_thrust_N", "status", "solve_ms", "mixer_saturated"}) {
+      out << "," << v << c;
+    }
   }
-  out.close();
-  CommitPartial(path);
+  out << "\n";
+  CsvLine csv;
+  for (const TeamLogRow& r : rows) {
+    csv.line.clear();
+    csv.Number(r.time_s);
+    for (int k = 0; k < I::kBlockSize; ++k) csv.Add(r.x_true(k));
+    for (int k = 0; k < 3; ++k) csv.Add(r.reference.p_WL_W(k));
+    for (int i = 0; i < n; ++i) {
+      const TeamLogRow::Vehicle& v = r.vehicles[static_cast<size_t>(i)];
+      for (int k = 0; k < I::kBlockSize; ++k) csv.Add(r.x_true(I::Vehicle(i) + k));
+      csv.Add(v.cable_length_m);
+      csv.Add(v.cable_tension_N);
+      csv.AddInt(v.mode == CableMode::kTaut ? 1 : 0);
+      csv.AddInt(v.taut_seen ? 1 : 0);
+      for (int k = 0; k < 3; ++k) csv.Add(v.command.w_B_radps(k));
+      csv.Add(v.command.thrust_N);
+      csv.line.push_back(',');
+      csv.line += ToString(v.status);
+      csv.Add(v.solve_time_ms);
+      csv.AddInt(v.mixer_saturated ? 1 : 0);
+    }
+    csv.line.push_back('\n');
+    out << csv.line;
+  }
+  CloseLog(path, &out);
 }
 
 }  // namespace hpa

@@ -11,6 +11,8 @@
 #include <sstream>
 #include <thread>
 
+#include "hpa/controller/team_controller.h"
+#include "hpa/sim/team_world.h"
 #include "hpa/sim/world.h"
 #include "scenarios/src/runner/run_loop.h"
 
@@ -33,7 +35,49 @@ RateTable ScenarioRates(const Scenario& scenario) {
   return rates;
 }
 
+namespace {
+
+// A team's loops and streams (RunTeamScenario): physics, the motion-capture system and each
+// vehicle's gyro, rate loop and controller.
+std::vector<RateRow> TeamRateTable(const Scenario& scenario, const Params& params) {
+  const sim::MocapConfig mocap;
+  CooperativeTeam team;
+  for (const VehicleSpec& v : scenario.team.vehicles) {
+    team.vehicles.push_back({params, v.cable_length_m, v.p_PA_P_m});
+  }
+  const std::unique_ptr<TeamController> controller = MakeTeamController(
+      scenario.controller.type, team, 0, MakeReference(scenario, params));
+  const auto number = [](double value) {
+    char text[32];
+    std::snprintf(text, sizeof text, "%g", value);
+    return std::string(text);
+  };
+  std::vector<RateRow> rows = {
+      {"physics", 1.0 / sim::World::kPhysicsDt_s, 0.0,
+       "MuJoCo timestep (sim::World::kPhysicsDt_s)", ""}};
+  if (scenario.estimation.ground_truth) {
+    rows.push_back({"ground truth (every body)", 1.0 / sim::World::kPhysicsDt_s, 0.0,
+                    "estimation.ground_truth", ""});
+  } else {
+    rows.push_back({"motion capture (every body)", mocap.rate_hz, mocap.latency_s,
+                    "sim::MocapConfig",
+                    "position " + number(mocap.position_noise_m) + " m, velocity " +
+                        number(mocap.velocity_noise_mps) + " m/s, attitude " +
+                        number(mocap.attitude_noise_rad) + " rad"});
+    rows.push_back({"rate gyro (each vehicle)", 1.0 / sim::World::kPhysicsDt_s, 0.0,
+                    "sim::MocapConfig", number(mocap.rate_gyro_noise_radps) + " rad/s"});
+  }
+  rows.push_back({"rate loop (body-rate P, each vehicle)", RateTable().imu.rate_hz, 0.0,
+                  "RateTable::imu", ""});
+  rows.push_back({"control (" + scenario.controller.type + ", each vehicle)", controller->RateHz(),
+                  0.0, "the team controller's RateHz()", ""});
+  return rows;
+}
+
+}  // namespace
+
 std::vector<RateRow> ScenarioRateTable(const Scenario& scenario, const Params& params) {
+  if (scenario.team.IsTeam()) return TeamRateTable(scenario, params);
   const sim::LatencyProfile& latency = scenario.world.latency;
   const std::unique_ptr<Controller> controller =
       MakeController(scenario.controller, params, MakeReference(scenario, params));
@@ -68,6 +112,14 @@ std::vector<RateRow> ScenarioRateTable(const Scenario& scenario, const Params& p
   return rows;
 }
 
+void WriteRunLogCsv(const std::string& path, const RunResult& result) {
+  if (result.metrics.team) {
+    WriteTeamLogCsv(path, result.team_rows, static_cast<int>(result.metrics.team->vehicles.size()));
+  } else {
+    WriteLogCsv(path, result.rows);
+  }
+}
+
 Params WorldParams(const Scenario& scenario, const Params& params) {
   Params p = params;
   if (scenario.world_payload_mass_kg) p.payload_mass_kg = *scenario.world_payload_mass_kg;
@@ -77,6 +129,7 @@ Params WorldParams(const Scenario& scenario, const Params& params) {
 
 RunResult RunScenario(const Scenario& scenario, const Params& base_params,
                       const RunOptions& options) {
+  if (scenario.team.IsTeam()) return RunTeamScenario(scenario, base_params, options);
   // the scenario's params: block changes the flight code's model and the world alike
   const Params params = ScenarioParams(scenario, base_params);
   RunResult result;

@@ -1,11 +1,13 @@
 #include "hpa/scenarios/scenario.h"
 
+#include <algorithm>
 #include <cctype>
 #include <cmath>
 #include <cstdlib>
 #include <sstream>
 
 #include "hpa/controller/controller_registry.h"
+#include "hpa/controller/team_controller.h"
 #include "hpa/estimator/estimator_registry.h"
 #include "hpa/models/input_error.h"
 #include "hpa/models/param_yaml.h"
@@ -147,6 +149,75 @@ void SetDottedPath(YAML::Node root, const std::string& path, const std::string& 
   }
 }
 
+// Most vehicles a team scenario may fly: the cooperative scenes are written for up to three
+// (sim::TeamWorld).
+constexpr int kMaxTeamVehicles = 3;
+
+// The `payload:` and `vehicles:` blocks of a team scenario; each number within the range
+// params.yaml declares for the single vehicle's field it stands for.
+TeamSpec ParseTeam(const YamlMap& root) {
+  TeamSpec team;
+  const ParamDecl<Params>& mass = FindParamDecl(ParamsTables(), &Params::payload_mass_kg);
+  const ParamDecl<Params>& length = FindParamDecl(ParamsTables(), &Params::cable_length_m);
+  if (root.Has("payload")) {
+    const YamlMap p = root.Map("payload");
+    team.payload_mass_kg = p.Number("mass_kg", mass.min, mass.max, team.payload_mass_kg);
+    if (p.Has("inertia_kgm2")) team.payload_inertia_P_kgm2 = p.Vector("inertia_kgm2", 3, 1e-7, 10.0);
+    team.payload_on_ground = p.Bool("on_ground", false);
+    p.RejectUnknownKeys();
+  }
+  const YAML::Node list = root.Node("vehicles");
+  if (!list.IsSequence() || list.size() < 1 || list.size() > kMaxTeamVehicles) {
+    root.Fail("vehicles", "expected a list of 1 to " + std::to_string(kMaxTeamVehicles) +
+                              " vehicles (each: cable_length_m, attach_m, start_slack_m)");
+  }
+  for (size_t i = 0; i < list.size(); ++i) {
+    const std::string path = root.KeyPath("vehicles") + "." + std::to_string(i);
+    if (!list[i].IsMap()) throw InputError(root.file(), path, "expected a vehicle map");
+    const YamlMap v(list[i], root.file(), path);
+    VehicleSpec spec;
+    spec.cable_length_m = v.Number("cable_length_m", length.min, length.max, spec.cable_length_m);
+    // an attachment point on the payload's body: within a metre of its centre
+    if (v.Has("attach_m")) spec.p_PA_P_m = v.Vector("attach_m", 3, -1.0, 1.0);
+    spec.start_slack_m = v.Number("start_slack_m", 0.0, spec.cable_length_m, 0.0);
+    v.RejectUnknownKeys();
+    team.vehicles.push_back(spec);
+  }
+  return team;
+}
+
+// What a team scenario can say and a single-vehicle one cannot, and the other way round: a team
+// flies the ideal world (the realism profile's parts are the single vehicle's) and takes pushes
+// only (on the payload or a vehicle named by `vehicle`); one vehicle is vehicle 0.
+void CheckTeamScenario(const YamlMap& root, const Scenario& s) {
+  const int vehicles = static_cast<int>(s.team.vehicles.size());
+  if (s.team.IsTeam() && s.world.name != "ideal") {
+    root.Fail("world", "a team scenario flies the ideal world (world: {profile: ideal}); the '" +
+                           s.world.name + "' profile's parts are the single vehicle's");
+  }
+  if (s.team.IsTeam() && s.estimation.estimator) {
+    root.Fail("estimation", "a team's vehicles fly on the motion-capture system; no estimator");
+  }
+  for (size_t i = 0; i < s.events.size(); ++i) {
+    const EventAction* action = s.events[i].action.get();
+    const auto* impulse = dynamic_cast<const ImpulseEvent*>(action);
+    const auto* velocity = dynamic_cast<const VelocityChangeEvent*>(action);
+    const std::string path = root.KeyPath("events") + "." + std::to_string(i);
+    if (s.team.IsTeam() && impulse == nullptr && velocity == nullptr) {
+      throw InputError(root.file(), path,
+                       "a team scenario takes impulse and velocity_change events only, not '" +
+                           s.events[i].type + "'");
+    }
+    const int vehicle = impulse ? impulse->vehicle : velocity ? velocity->vehicle : 0;
+    if (vehicle >= std::max(vehicles, 1)) {
+      throw InputError(root.file(), path + ".vehicle",
+                       "vehicle " + std::to_string(vehicle) + " is not in the scenario (" +
+                           std::to_string(std::max(vehicles, 1)) + " vehicle" +
+                           (vehicles > 1 ? "s" : "") + ", counted from 0)");
+    }
+  }
+}
+
 }  // namespace
 
 // A scenario name becomes out/<name>: no separators, no leading dot, nothing a shell mangles.
@@ -205,10 +276,21 @@ Scenario ParseScenario(const YamlMap& root, const std::optional<std::string>& re
     s.params_yaml = YAML::Dump(block);
   }
   s.rate_loop = profile.rate_loop;
+  if (root.Has("vehicles")) {
+    s.team = ParseTeam(root);
+    s.controller.type = TeamControllerNames().front();
+  } else if (root.Has("payload")) {
+    root.Fail("payload", "a payload block belongs to a team scenario: add a vehicles list");
+  }
   if (root.Has("controller")) {
     const YamlMap c = root.Map("controller");
-    s.controller.type = c.Choice("type", ControllerNames(), s.controller.type);
-    s.controller.settings = ReadControllerSettings(c, s.controller.type);
+    if (s.team.IsTeam()) {
+      // a team's vehicles each fly one of the team controllers, which take no settings
+      s.controller.type = c.Choice("type", TeamControllerNames(), s.controller.type);
+    } else {
+      s.controller.type = c.Choice("type", ControllerNames(), s.controller.type);
+      s.controller.settings = ReadControllerSettings(c, s.controller.type);
+    }
     c.RejectUnknownKeys();
   }
   if (root.Has("estimation")) {
@@ -240,6 +322,7 @@ Scenario ParseScenario(const YamlMap& root, const std::optional<std::string>& re
   }
   if (root.Has("expect")) s.expect = ParseExpect(root.Map("expect"));
   root.RejectUnknownKeys();
+  CheckTeamScenario(root, s);
   return s;
 }
 
@@ -249,10 +332,12 @@ std::string EstimatorOf(const Scenario& scenario) {
   return controller != nullptr ? controller->estimator : "hybrid";
 }
 
-void CheckControllerType(const std::string& type, const std::string& file, const std::string& key) {
-  if (FindController(type) != nullptr) return;
+void CheckControllerType(const std::string& type, const std::string& file, const std::string& key,
+                         bool team) {
+  const std::vector<std::string>& known = team ? TeamControllerNames() : ControllerNames();
+  if (std::find(known.begin(), known.end(), type) != known.end()) return;
   std::string names;
-  for (const std::string& name : ControllerNames()) names += (names.empty() ? "" : " | ") + name;
+  for (const std::string& name : known) names += (names.empty() ? "" : " | ") + name;
   throw InputError(file, key, "unknown controller '" + type + "', expected one of: " + names);
 }
 

@@ -180,6 +180,23 @@ void PrintSummary(const Metrics& m, const std::string& out_dir) {
   std::printf("%s [%s, %s, seed %lu]: %.2f s simulated in %.2f s wall (%.2f sim s per wall s)\n",
               m.scenario.c_str(), m.controller.c_str(), m.camera.c_str(), m.seed, m.sim_time_s,
               m.wall_time_s, m.sim_time_s / std::max(m.wall_time_s, 1e-9));
+  if (m.team) {
+    // a team: the payload's tracking, then each vehicle's cable and tilt
+    std::printf("  crashed %s%s  payload RMSE [%.3f %.3f %.3f] m  vehicles at least %.3f m apart\n",
+                m.crashed ? "YES: " : "no", m.crashed ? m.crash_reason->c_str() : "",
+                m.payload_rmse_m.x(), m.payload_rmse_m.y(), m.payload_rmse_m.z(),
+                m.team->min_vehicle_separation_m);
+    for (size_t i = 0; i < m.team->vehicles.size(); ++i) {
+      const VehicleMetrics& v = m.team->vehicles[i];
+      std::printf("  vehicle %zu: slack %.2f s (%d events, %d re-taut), tilt max %.1f deg, "
+                  "tension max %.2f N, solve median %.3f ms, failures %d\n",
+                  i, v.slack_time_s, v.slack_events, v.retaut_count, v.tilt_max_deg,
+                  v.cable_tension_max_N, v.solve_ms.median, v.control_failures);
+    }
+    for (const auto& f : m.expect_failed) std::printf("  EXPECT FAILED %s\n", f.c_str());
+    std::printf("  wrote %s/metrics.json, %s/log.csv\n", out_dir.c_str(), out_dir.c_str());
+    return;
+  }
   std::printf(
       "  crashed %s%s  payload RMSE [%.3f %.3f %.3f] m (estimate vs reference [%.3f %.3f %.3f] m)"
       "  quad dev max %.3f m\n",
@@ -199,7 +216,7 @@ void PrintSummary(const Metrics& m, const std::string& out_dir) {
 // metrics last, so that a complete metrics.json means a finished run.
 void WriteRunOutputs(const RunResult& result, const Scenario& scenario, const Params& params,
                      const std::string& out_dir, bool plots, PlotFormat format, bool quiet) {
-  WriteLogCsv(out_dir + "/log.csv", result.rows);
+  WriteRunLogCsv(out_dir + "/log.csv", result);
   WriteText(out_dir + "/metrics.json", MetricsToJson(result.metrics));
   if (!plots) return;
   for (const std::string& png :
@@ -330,7 +347,7 @@ int RunMain(int argc, char** argv) {
   const Params params = LoadParamsOf(o);
   Scenario scenario = LoadScenarioOf(o);
   if (!controller.empty()) {
-    CheckControllerType(controller, "", "--controller");
+    CheckControllerType(controller, "", "--controller", scenario.team.IsTeam());
     scenario.controller.type = controller;
   }
   if (out_dir.empty()) out_dir = "out/" + scenario.name;
@@ -424,7 +441,7 @@ int CompareMain(int argc, char** argv) {
     results.push_back(RunScenario(s, params, options));
     if (recorder) recorder->Finish();
     WriteText(dir + "/metrics.json", MetricsToJson(results.back().metrics));
-    WriteLogCsv(dir + "/log.csv", results.back().rows);
+    WriteRunLogCsv(dir + "/log.csv", results.back());
     all_passed = all_passed && results.back().metrics.expect_passed;
     if (results.back().metrics.run_error) {
       std::fprintf(stderr, "hpa: internal error during the %s run (its results are written): %s\n",

@@ -21,6 +21,7 @@ constexpr double kPlausibleImpulseSpeed_mps = 10.0;
 ImpulseEvent ImpulseEvent::Parse(const YamlMap& map) {
   ImpulseEvent e;
   e.on_payload = EventActsOnPayload(map);
+  e.vehicle = EventVehicle(map);
   e.impulse_W_Ns = map.Vector("impulse", 3, -1e3, 1e3);
   e.duration_s = map.Number("duration", 1e-3, 1.0, 0.01);
   return e;

@@ -19,6 +19,7 @@ constexpr double kMaxVelocityChange_mps = 20.0;
 VelocityChangeEvent VelocityChangeEvent::Parse(const YamlMap& map) {
   VelocityChangeEvent e;
   e.on_payload = EventActsOnPayload(map);
+  e.vehicle = EventVehicle(map);
   e.dv_W_mps = map.Vector("dv", 3, -kMaxVelocityChange_mps, kMaxVelocityChange_mps);
   return e;
 }

@@ -82,7 +82,7 @@ void KeepWorstLogs(const SweepSpec& spec, const std::vector<Record>& records,
     const RunResult result = RunScenario(BuildScenario(spec, *run), params, options);
     const std::string dir = out_dir + "/logs/run_" + std::to_string(run->index);
     MakeOutputDir(dir);
-    WriteLogCsv(dir + "/log.csv", result.rows);
+    WriteRunLogCsv(dir + "/log.csv", result);
     // what it ran, for hpa replay: the base's snapshot and the run's values and seed
     RunRecord record;
     record.scenario_file = spec.base_path;

@@ -34,6 +34,26 @@ struct LogRow {
   std::optional<EstimatorHealthResets> estimator_health_resets;
 };
 
+/// One row per control step of a team run: log.csv's columns, the payload's, then each
+/// vehicle's (docs/cooperative.md).
+struct TeamLogRow {
+  /// One vehicle's columns.
+  struct Vehicle {
+    double cable_length_m = 0.0;        // true |p_A - p_Q|
+    double cable_tension_N = 0.0;       // true tension (MuJoCo tendon-limit force)
+    CableMode mode = CableMode::kTaut;  // true cable mode
+    bool taut_seen = true;              // its controller's reading of its cable
+    BodyRateCommand command;            // its controller's output
+    ControlStatus status = ControlStatus::kSuccess;
+    double solve_time_ms = 0.0;
+    bool mixer_saturated = false;  // its rate loop's last allocation fell short
+  };
+  double time_s = 0.0;
+  Eigen::VectorXd x_true;    // true team state (CooperativeStateIndex layout)
+  ReferencePoint reference;  // the payload's reference
+  std::vector<Vehicle> vehicles;
+};
+
 /// One fault event's window, for its recovery metrics (docs/faults.md).
 struct FaultWindow {
   int event = 0;                  // its index in the scenario's events
@@ -81,6 +101,25 @@ struct FaultRecovery {
 /// Summary statistics of a sample: median, 99th percentile, max.
 struct Quantiles {
   double median = 0.0, p99 = 0.0, max = 0.0;
+};
+
+/// One vehicle's metrics in a team run (metrics.json `team.vehicles`).
+struct VehicleMetrics {
+  double slack_time_s = 0.0;         // its cable slack (true)
+  int slack_events = 0;              // slack intervals of its cable (chatter under 30 ms ignored)
+  int retaut_count = 0;              // slack to taut
+  double tilt_max_deg = 0.0;         // largest angle between its body z axis and the world's
+  double cable_tension_max_N = 0.0;  // largest true tension of its cable
+  double mixer_saturated_fraction = 0.0;  // share of its rate loop's allocations that fell short
+  int control_failures = 0;               // updates that were not a plan or a recovery
+  Quantiles solve_ms;                     // its controller's update wall time
+};
+
+/// The team's metrics of a team run (metrics.json `team`; docs/cooperative.md).
+struct TeamMetrics {
+  std::vector<VehicleMetrics> vehicles;  // one per vehicle, in the scenario's order
+  double min_vehicle_separation_m = 0.0;  // smallest distance between two vehicles' centres
+  double payload_tilt_max_deg = 0.0;      // largest angle between the payload's z axis and up
 };
 
 /// The metrics.json contract (docs/design.md section 8) plus extensions.
@@ -137,6 +176,9 @@ struct Metrics {
   std::vector<FaultRecovery> faults;  // one per fault event applied (metrics.json `faults`)
   bool expect_passed = true;
   std::vector<std::string> expect_failed;  // "payload_rmse_max.x: 0.071 > 0.06"
+  // a team run's team metrics (none: one vehicle); the single vehicle's quadrotor, camera and
+  // estimator metrics are then null
+  std::optional<TeamMetrics> team;
 };
 
 /// Inputs the metrics need besides the log.
@@ -174,7 +216,12 @@ double Quantile(std::vector<double> values, double q);
 /// Median, 99th percentile and max of a sample by Quantile (empty sample -> zeros).
 Quantiles ComputeQuantiles(std::vector<double> values);
 
-/// Slack intervals [start, end) of the true mode in the log, chatter shorter than 30 ms ignored.
+/// Slack intervals [start, end) of a cable's modes sampled at times_s (same length), chatter
+/// shorter than 30 ms ignored.
+std::vector<std::pair<double, double>> SlackIntervals(const std::vector<double>& times_s,
+                                                      const std::vector<CableMode>& modes);
+
+/// Slack intervals of the true mode in the log (SlackIntervals of its rows).
 std::vector<std::pair<double, double>> TrueSlackIntervals(const std::vector<LogRow>& rows);
 
 /// Creates an output directory and its parents; throws InputError (key --out) if it cannot.
@@ -182,5 +229,9 @@ void MakeOutputDir(const std::string& dir);
 
 /// Writes log.csv (one row per control step).
 void WriteLogCsv(const std::string& path, const std::vector<LogRow>& rows);
+
+/// Writes a team run's log.csv for `vehicles` vehicles (one row per control step; columns in
+/// docs/cooperative.md).
+void WriteTeamLogCsv(const std::string& path, const std::vector<TeamLogRow>& rows, int vehicles);
 
 }  // namespace hpa

@@ -77,8 +77,12 @@ std::vector<RateRow> ScenarioRateTable(const Scenario& scenario, const Params& p
 /// Everything a run produced.
 struct RunResult {
   Metrics metrics;
-  std::vector<LogRow> rows;
+  std::vector<LogRow> rows;           // a single vehicle's log
+  std::vector<TeamLogRow> team_rows;  // a team's log (docs/cooperative.md)
 };
+
+/// Writes the run's log.csv: the team's log for a team run, else the single vehicle's.
+void WriteRunLogCsv(const std::string& path, const RunResult& result);
 
 /// Async-signal-safe: the running scenario stops at its next physics tick and returns what it
 /// has computed, with run_error naming the signal (SIGTERM / SIGINT handlers call this).
@@ -91,8 +95,16 @@ int StopRequested();
 bool ControlThreadPays();
 
 /// Runs a scenario to its end (or to a crash, or stop_at_s) and computes its metrics and the
-/// expect check. Throws InputError for bad input found while setting up (MJCF, params).
+/// expect check; a team scenario runs RunTeamScenario. Throws InputError for bad input found
+/// while setting up (MJCF, params).
 RunResult RunScenario(const Scenario& scenario, const Params& params, const RunOptions& options);
+
+/// Runs a team scenario (scenario.team: N vehicles on their cables, docs/cooperative.md): the
+/// team's world, each vehicle's controller and autopilot, the motion-capture system on one
+/// lockstep clock. Options that need the single vehicle's world (a separate flight stack, a
+/// video, the control thread, at_stop) are refused with InputError.
+RunResult RunTeamScenario(const Scenario& scenario, const Params& params,
+                          const RunOptions& options);
 
 /// The simulated world of a run of `scenario` with `params` (the flight params: the world adds
 /// the scenario's world-only overrides and its profile's mismatch draw).

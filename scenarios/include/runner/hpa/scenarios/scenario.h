@@ -38,6 +38,29 @@ struct EstimationSpec {
   std::optional<std::string> estimator;
 };
 
+/// One vehicle of a team scenario (the `vehicles:` list): its cable, where the cable holds the
+/// payload, and where it starts.
+struct VehicleSpec {
+  double cable_length_m = 0.5;
+  Eigen::Vector3d p_PA_P_m = Eigen::Vector3d::Zero();  // attachment point, payload frame (3)
+  // how much closer than its cable's length the vehicle starts above its attachment point (0:
+  // taut; a lift starts its cables slack)
+  double start_slack_m = 0.0;
+};
+
+/// A team scenario's payload and vehicles (docs/cooperative.md). No vehicles: the single-vehicle
+/// world of every other scenario.
+struct TeamSpec {
+  std::vector<VehicleSpec> vehicles;  // 1 to 3 when set
+  double payload_mass_kg = 0.2;
+  Eigen::Vector3d payload_inertia_P_kgm2{1e-3, 1e-3, 1e-3};  // diagonal, payload frame (3)
+  // the payload starts resting on the ground below the reference's start (a lift) instead of at
+  // it
+  bool payload_on_ground = false;
+  /// Whether the scenario flies a team.
+  bool IsTeam() const { return !vehicles.empty(); }
+};
+
 /// A whole scenario file.
 struct Scenario {
   std::string file;  // where it was loaded from ("" if built in code)
@@ -58,15 +81,17 @@ struct Scenario {
   ReferenceSpec reference;
   std::vector<EventSpec> events;
   ExpectSpec expect;
+  TeamSpec team;  // `payload:` and `vehicles:` (empty: one vehicle)
 };
 
 /// The estimator variant a scenario flies with: estimation.estimator, else the default of the
 /// controller's registration.
 std::string EstimatorOf(const Scenario& scenario);
 
-/// Checks a controller type against the registry; throws InputError (file, key) listing the
-/// registered names.
-void CheckControllerType(const std::string& type, const std::string& file, const std::string& key);
+/// Checks a controller type against the registry (a team scenario's: TeamControllerNames());
+/// throws InputError (file, key) listing the names it may be.
+void CheckControllerType(const std::string& type, const std::string& file, const std::string& key,
+                         bool team = false);
 
 /// One change to a scenario file before it is validated: a dotted key path (e.g.
 /// events.1.impulse.2) and the value's YAML text (e.g. 0.5, [0, 0, 1], hpa_mpc).

@@ -1,0 +1,351 @@
+// The team runner (RunTeamScenario, docs/cooperative.md): N vehicles on their own cables carrying
+// one payload. The team's world, each vehicle's controller and autopilot and the motion-capture
+// system run on one lockstep clock at the physics rate; each vehicle's controller sees its own
+// state and the payload's as the motion-capture system delivered them (or the truth, with the
+// scenario's ground-truth switch), never another vehicle's.
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <optional>
+#include <stdexcept>
+
+#include "hpa/autopilot/autopilot.h"
+#include "hpa/controller/team_controller.h"
+#include "hpa/models/cooperative_model.h"
+#include "hpa/models/input_error.h"
+#include "hpa/models/lockstep.h"
+#include "hpa/models/rotor_model.h"
+#include "hpa/scenarios/runner.h"
+#include "hpa/sim/team_world.h"
+
+namespace hpa {
+namespace {
+
+using Index = CooperativeStateIndex;
+using Clock = std::chrono::steady_clock;
+
+// The team of a scenario: its payload, and each vehicle the scenario's params on its own cable.
+CooperativeTeam TeamOf(const Scenario& scenario, const Params& params) {
+  CooperativeTeam team;
+  team.payload_mass_kg = scenario.team.payload_mass_kg;
+  team.payload_inertia_P_kgm2 = scenario.team.payload_inertia_P_kgm2;
+  team.gravity_mps2 = params.gravity_mps2;
+  for (const VehicleSpec& spec : scenario.team.vehicles) {
+    CooperativeVehicle vehicle;
+    vehicle.params = params;
+    vehicle.cable_length_m = spec.cable_length_m;
+    vehicle.p_PA_P_m = spec.p_PA_P_m;
+    team.vehicles.push_back(vehicle);
+  }
+  return team;
+}
+
+// Where a team run starts, at rest: the payload level at the reference's start (resting on the
+// ground below it for a lift), each vehicle straight above its attachment point at its cable's
+// length less its start slack.
+Eigen::VectorXd StartState(const Scenario& scenario, const CooperativeModel& model,
+                           const Eigen::Vector3d& p_start_W_m, double payload_radius_m) {
+  Eigen::Vector3d p_WL_W = p_start_W_m;
+  if (scenario.team.payload_on_ground) p_WL_W.z() = payload_radius_m;
+  Eigen::VectorXd x = model.HangingState(p_WL_W);
+  for (size_t i = 0; i < scenario.team.vehicles.size(); ++i) {
+    x(Index::Vehicle(static_cast<int>(i)) + Index::kVehiclePos + 2) -=
+        scenario.team.vehicles[i].start_slack_m;
+  }
+  return x;
+}
+
+// A body's pose and velocity from the team state (body -1: the payload).
+sim::BodyReading ReadingFromState(const Eigen::VectorXd& x, int body, double time_s) {
+  const int start = body < 0 ? 0 : Index::Vehicle(body);
+  sim::BodyReading r;
+  r.body = body;
+  r.capture_time_s = time_s;
+  r.p_W_m = x.segment<3>(start + Index::kVehiclePos);
+  r.v_W_mps = x.segment<3>(start + Index::kVehicleVel);
+  const Eigen::Vector4d q = x.segment<4>(start + Index::kVehicleQuat);
+  r.q_W = Eigen::Quaterniond(q(0), q(1), q(2), q(3));
+  r.w_body_radps = x.segment<3>(start + Index::kVehicleRate);
+  return r;
+}
+
+// Angle between a body's z axis and the world's (deg).
+double TiltDeg(const Eigen::Vector4d& q_wxyz) {
+  const Eigen::Quaterniond q(q_wxyz(0), q_wxyz(1), q_wxyz(2), q_wxyz(3));
+  const double cos_tilt = std::clamp(q.normalized().toRotationMatrix()(2, 2), -1.0, 1.0);
+  return std::acos(cos_tilt) * 180.0 / M_PI;
+}
+
+// Whether a status is a failed update (as the single vehicle's mpc_failures counts them).
+bool IsFailure(ControlStatus status) {
+  return status == ControlStatus::kQpFailure || status == ControlStatus::kNonFinite ||
+         status == ControlStatus::kFallback;
+}
+
+// The payload's tracking and the team's metrics from the log (crash, timing and separation are
+// the runner's).
+void ComputeTeamMetrics(const std::vector<TeamLogRow>& rows, int vehicles,
+                        const std::vector<int>& rate_steps, const std::vector<int>& saturated,
+                        Metrics* m) {
+  TeamMetrics& team = *m->team;
+  m->control_steps = static_cast<int>(rows.size());
+  // the single vehicle's quadrotor, estimator and camera metrics: not measured
+  m->quad_rmse_m.setConstant(NAN);
+  m->payload_rmse_est_m.setConstant(NAN);
+  m->quad_position_deviation_max_m = NAN;
+  m->mode_accuracy = NAN;
+  m->payload_lost_time_s = NAN;
+  m->payload_quad_min_distance_m = NAN;
+  m->closed_loop_cost = NAN;
+  if (rows.empty()) return;
+  // payload RMSE over the whole run from the reference's ramp end
+  Eigen::Vector3d sum_sq = Eigen::Vector3d::Zero();
+  int samples = 0;
+  std::vector<double> times_s, all_solve_ms;
+  std::vector<CableMode> any_slack;
+  std::vector<std::vector<CableMode>> modes(static_cast<size_t>(vehicles));
+  std::vector<std::vector<double>> solve_ms(static_cast<size_t>(vehicles));
+  for (const TeamLogRow& r : rows) {
+    const Eigen::Vector3d p_WL_W = r.x_true.segment<3>(Index::kPayloadPos);
+    if (r.time_s >= m->payload_rmse_from_s) {
+      sum_sq += (p_WL_W - r.reference.p_WL_W).cwiseAbs2();
+      ++samples;
+    }
+    m->payload_max_speed_mps =
+        std::max(m->payload_max_speed_mps, r.x_true.segment<3>(Index::kPayloadVel).norm());
+    team.payload_tilt_max_deg =
+        std::max(team.payload_tilt_max_deg, TiltDeg(r.x_true.segment<4>(Index::kPayloadQuat)));
+    times_s.push_back(r.time_s);
+    bool slack = false;
+    for (int i = 0; i < vehicles; ++i) {
+      const TeamLogRow::Vehicle& v = r.vehicles[static_cast<size_t>(i)];
+      VehicleMetrics& vm = team.vehicles[static_cast<size_t>(i)];
+      vm.tilt_max_deg = std::max(
+          vm.tilt_max_deg, TiltDeg(r.x_true.segment<4>(Index::Vehicle(i) + Index::kVehicleQuat)));
+      vm.cable_tension_max_N = std::max(vm.cable_tension_max_N, v.cable_tension_N);
+      vm.control_failures += IsFailure(v.status) ? 1 : 0;
+      modes[static_cast<size_t>(i)].push_back(v.mode);
+      solve_ms[static_cast<size_t>(i)].push_back(v.solve_time_ms);
+      all_solve_ms.push_back(v.solve_time_ms);
+      slack = slack || v.mode == CableMode::kSlack;
+    }
+    any_slack.push_back(slack ? CableMode::kSlack : CableMode::kTaut);
+  }
+  m->payload_rmse_m = samples > 0 ? Eigen::Vector3d((sum_sq / samples).cwiseSqrt())
+                                  : Eigen::Vector3d::Constant(NAN);
+  const double end_s = rows.back().time_s;
+  int retauts = 0, failures = 0;
+  for (int i = 0; i < vehicles; ++i) {
+    VehicleMetrics& vm = team.vehicles[static_cast<size_t>(i)];
+    for (const auto& [start, end] : SlackIntervals(times_s, modes[static_cast<size_t>(i)])) {
+      vm.slack_time_s += end - start;
+      ++vm.slack_events;
+      vm.retaut_count += end < end_s ? 1 : 0;  // slack to the end never came taut again
+    }
+    vm.solve_ms = ComputeQuantiles(solve_ms[static_cast<size_t>(i)]);
+    vm.mixer_saturated_fraction =
+        rate_steps[static_cast<size_t>(i)] > 0
+            ? static_cast<double>(saturated[static_cast<size_t>(i)]) / rate_steps[static_cast<size_t>(i)]
+            : 0.0;
+    retauts += vm.retaut_count;
+    failures += vm.control_failures;
+  }
+  // the team's slack: time with at least one cable slack
+  m->slack_time_s = 0.0;
+  m->slack_events = 0;
+  for (const auto& [start, end] : SlackIntervals(times_s, any_slack)) {
+    m->slack_time_s += end - start;
+    ++m->slack_events;
+  }
+  m->retaut_count = retauts;
+  m->mpc_failures = failures;
+  m->mpc_solve_ms = ComputeQuantiles(all_solve_ms);
+  int all_steps = 0, all_saturated = 0;
+  for (int i = 0; i < vehicles; ++i) {
+    all_steps += rate_steps[static_cast<size_t>(i)];
+    all_saturated += saturated[static_cast<size_t>(i)];
+  }
+  m->mixer_saturated_fraction =
+      all_steps > 0 ? static_cast<double>(all_saturated) / all_steps : 0.0;
+}
+
+}  // namespace
+
+RunResult RunTeamScenario(const Scenario& scenario, const Params& base_params,
+                          const RunOptions& options) {
+  // the team's controllers run on the simulation's thread (options.control_thread is the single
+  // vehicle's); what needs the single vehicle's world is refused
+  if (!options.flight_stack.empty() || !options.recorders.empty() || options.stop_at_s ||
+      options.at_stop) {
+    throw InputError(scenario.file, "vehicles",
+                     "a team scenario runs in process only: no separate flight stack, video or "
+                     "render-frame yet (docs/cooperative.md)");
+  }
+  const Params params = ScenarioParams(scenario, base_params);
+  const Clock::time_point wall_start = Clock::now();
+  RunResult result;
+  Metrics& metrics = result.metrics;
+  metrics.scenario = scenario.name;
+  metrics.controller = scenario.controller.type;
+  metrics.camera = scenario.estimation.ground_truth ? "ground_truth" : "mocap";
+  metrics.seed = scenario.seed;
+  metrics.world_profile = scenario.world.name;
+  metrics.payload_rmse_from_s = RmseFromS(scenario.reference);
+  const int n = static_cast<int>(scenario.team.vehicles.size());
+  metrics.team = TeamMetrics();
+  metrics.team->vehicles.resize(static_cast<size_t>(n));
+
+  const CooperativeTeam team = TeamOf(scenario, params);
+  const CooperativeModel model(team);
+  const std::shared_ptr<const Reference> reference = MakeReference(scenario, params);
+  sim::TeamWorldConfig world_config;
+  world_config.team = team;
+  world_config.seed = scenario.seed;
+  sim::TeamWorld world(world_config);
+  world.Reset(StartState(scenario, model, reference->At(0.0).p_WL_W, params.payload_radius_m));
+
+  std::vector<std::unique_ptr<TeamController>> controllers;
+  std::vector<std::unique_ptr<Autopilot>> autopilots;
+  const double rate_loop_hz = RateTable().imu.rate_hz;
+  for (int i = 0; i < n; ++i) {
+    controllers.push_back(MakeTeamController(scenario.controller.type, team, i, reference));
+    autopilots.push_back(MakeAutopilot(params, scenario.rate_loop, rate_loop_hz));
+  }
+  LockstepClock clock(1.0 / sim::World::kPhysicsDt_s);
+  const int control_loop = clock.AddLoop("control", controllers.front()->RateHz());
+  const int rate_loop = clock.AddLoop("rate loop", rate_loop_hz);
+
+  // what each vehicle's flight code holds: the latest reading of each body (payload first)
+  std::vector<std::optional<sim::BodyReading>> latest(static_cast<size_t>(n + 1));
+  std::vector<std::optional<BodyRateCommand>> command(static_cast<size_t>(n));
+  std::vector<TeamLogRow::Vehicle> last(static_cast<size_t>(n));
+  std::vector<int> rate_steps(static_cast<size_t>(n), 0), saturated(static_cast<size_t>(n), 0);
+  double min_separation_m = world.MinVehicleSeparation_m();
+  size_t next_event = 0;
+  const long end_tick = std::lround(scenario.duration_s / sim::World::kPhysicsDt_s);
+  const bool show_progress = options.progress && isatty(STDERR_FILENO);
+  int last_pct = -1;
+  try {
+    for (long tick = 0; tick <= end_tick; ++tick, clock.Advance()) {
+      const double t = clock.time_s();
+      if (StopRequested() != 0) {
+        throw std::runtime_error("stopped by signal " + std::to_string(StopRequested()));
+      }
+      while (next_event < scenario.events.size() && scenario.events[next_event].at_s <= t + 1e-9) {
+        const EventAction* action = scenario.events[next_event++].action.get();
+        if (const auto* e = dynamic_cast<const ImpulseEvent*>(action)) {
+          world.ApplyImpulse(e->on_payload ? -1 : e->vehicle, e->impulse_W_Ns);
+        } else if (const auto* v = dynamic_cast<const VelocityChangeEvent*>(action)) {
+          const double mass_kg = v->on_payload ? team.payload_mass_kg
+                                               : team.vehicles[static_cast<size_t>(v->vehicle)]
+                                                     .params.quad_mass_kg;
+          world.ApplyImpulse(v->on_payload ? -1 : v->vehicle, mass_kg * v->dv_W_mps);
+        }
+      }
+      const sim::TeamTruth truth = world.GetTruth();
+      if (scenario.estimation.ground_truth) {
+        for (int body = -1; body < n; ++body) {
+          latest[static_cast<size_t>(body + 1)] = ReadingFromState(truth.x, body, t);
+        }
+      } else {
+        for (sim::BodyReading& r : world.TakeDelivered()) {
+          latest[static_cast<size_t>(r.body + 1)] = r;
+        }
+      }
+      clock.BeginTick();
+      if (clock.Fires(control_loop)) {
+        TeamLogRow row;
+        row.time_s = t;
+        row.x_true = truth.x;
+        row.reference = reference->At(t);
+        for (int i = 0; i < n; ++i) {
+          const size_t k = static_cast<size_t>(i);
+          const std::optional<sim::BodyReading>& own = latest[k + 1];
+          const std::optional<sim::BodyReading>& payload = latest[0];
+          TeamLogRow::Vehicle& v = last[k];
+          if (own && payload) {
+            TeamView view;
+            view.time_s = t;
+            view.p_WQ_W = own->p_W_m;
+            view.v_WQ_W = own->v_W_mps;
+            view.q_WB = own->q_W;
+            view.w_B = scenario.estimation.ground_truth ? own->w_body_radps
+                                                        : world.GyroSample_B(i);
+            view.p_WL_W = payload->p_W_m;
+            view.v_WL_W = payload->v_W_mps;
+            view.q_WP = payload->q_W;
+            view.w_P = payload->w_body_radps;
+            // the update's wall time as the runner measures it, the same way for every team
+            // controller (one that does not time itself would otherwise report zero)
+            const Clock::time_point update_start = Clock::now();
+            const ControlOutput out = controllers[k]->Update(view);
+            v.solve_time_ms =
+                std::chrono::duration<double, std::milli>(Clock::now() - update_start).count();
+            command[k] = out.command;
+            v.command = out.command;
+            v.status = out.status;
+            v.taut_seen = controllers[k]->CableTaut();
+          }
+          v.cable_length_m = truth.cable_length_m[k];
+          v.cable_tension_N = truth.cable_tension_N[k];
+          v.mode = truth.modes[k];
+        }
+        // a row once every vehicle has flown a command (the first readings take the
+        // motion-capture latency to arrive; until then the motors hold the start's hover)
+        if (std::all_of(command.begin(), command.end(), [](const auto& c) { return c.has_value(); })) {
+          row.vehicles = last;
+          result.team_rows.push_back(std::move(row));
+        }
+      }
+      if (clock.Fires(rate_loop)) {
+        for (int i = 0; i < n; ++i) {
+          const size_t k = static_cast<size_t>(i);
+          if (!command[k]) continue;
+          const AutopilotOutput out = autopilots[k]->Update(*command[k], world.GyroSample_B(i));
+          world.SetMotorSpeedCommand(i, out.w_cmd_radps);
+          last[k].mixer_saturated = out.saturated;
+          ++rate_steps[k];
+          saturated[k] += out.saturated ? 1 : 0;
+        }
+      }
+      if (tick == end_tick) break;
+      world.Step();
+      min_separation_m = std::min(min_separation_m, world.MinVehicleSeparation_m());
+      if (world.Crash().crashed) break;
+      if (show_progress) {
+        const int pct = static_cast<int>(100.0 * tick / std::max(end_tick, 1L));
+        if (pct != last_pct) {
+          last_pct = pct;
+          const double wall_s =
+              std::chrono::duration<double>(Clock::now() - wall_start).count();
+          std::fprintf(stderr, "\r%s: %3d%%  t = %6.2f / %.2f s  (%.2f sim s per wall s)",
+                       scenario.name.c_str(), pct, t, scenario.duration_s,
+                       t / std::max(wall_s, 1e-9));
+        }
+      }
+    }
+  } catch (const std::exception& e) {
+    // keep what was computed: the metrics of the run so far, with the error named
+    metrics.run_error = std::string(e.what()) + " (at t = " + std::to_string(world.time_s()) + " s)";
+  }
+  if (show_progress) std::fprintf(stderr, "\n");
+  const sim::CrashStatus crash = world.Crash();
+  metrics.crashed = crash.crashed;
+  if (crash.crashed) {
+    metrics.crash_time_s = crash.time_s;
+    metrics.crash_reason = crash.reason;
+  }
+  metrics.sim_time_s = world.time_s();
+  metrics.team->min_vehicle_separation_m = min_separation_m;
+  ComputeTeamMetrics(result.team_rows, n, rate_steps, saturated, &metrics);
+  metrics.wall_time_s = std::chrono::duration<double>(Clock::now() - wall_start).count();
+  CheckExpectations(scenario.expect, &metrics);
+  return result;
+}
+
+}  // namespace hpa
