@@ -62,8 +62,15 @@ def run_seeds(hpa, scenario, seeds, out, jobs):
 
 
 def read(metrics, path):
+    """The metric at a dotted path; through a list (a team's vehicles), the largest of its
+    entries' values, as the expect key checks it."""
     v = metrics
-    for part in path.split("."):
+    parts = path.split(".")
+    for i, part in enumerate(parts):
+        if isinstance(v, list):
+            values = [read(entry, ".".join(parts[i:])) for entry in v]
+            values = [x for x in values if x is not None]
+            return max(values) if values else None
         v = v.get(part) if isinstance(v, dict) else None
     return v
 

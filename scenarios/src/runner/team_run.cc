@@ -22,6 +22,7 @@
 #include "hpa/models/rotor_model.h"
 #include "hpa/scenarios/runner.h"
 #include "hpa/sim/team_world.h"
+#include "scenarios/src/runner/team_flight_link.h"
 
 namespace hpa {
 namespace {
@@ -191,7 +192,6 @@ RunResult RunTeamScenario(const Scenario& scenario, const Params& base_params,
   RunResult result;
   Metrics& metrics = result.metrics;
   metrics.scenario = scenario.name;
-  metrics.controller = scenario.controller.type;
   metrics.camera = scenario.estimation.ground_truth ? "ground_truth" : "mocap";
   metrics.seed = scenario.seed;
   metrics.world_profile = scenario.world.name;
@@ -209,15 +209,17 @@ RunResult RunTeamScenario(const Scenario& scenario, const Params& base_params,
   sim::TeamWorld world(world_config);
   world.Reset(StartState(scenario, model, reference->At(0.0).p_WL_W, params.payload_radius_m));
 
-  std::vector<std::unique_ptr<TeamController>> controllers;
+  const std::unique_ptr<runner::TeamFlightLink> flight =
+      runner::MakeInProcessTeamFlight(scenario.controller.type, team, reference);
+  metrics.flight_stack = flight->name();
+  metrics.controller = flight->controller();
   std::vector<std::unique_ptr<Autopilot>> autopilots;
   const double rate_loop_hz = RateTable().imu.rate_hz;
   for (int i = 0; i < n; ++i) {
-    controllers.push_back(MakeTeamController(scenario.controller.type, team, i, reference));
     autopilots.push_back(MakeAutopilot(params, scenario.rate_loop, rate_loop_hz));
   }
   LockstepClock clock(1.0 / sim::World::kPhysicsDt_s);
-  const int control_loop = clock.AddLoop("control", controllers.front()->RateHz());
+  const int control_loop = clock.AddLoop("control", flight->RateHz());
   const int rate_loop = clock.AddLoop("rate loop", rate_loop_hz);
 
   // what each vehicle's flight code holds: the latest reading of each body (payload first)
@@ -263,33 +265,33 @@ RunResult RunTeamScenario(const Scenario& scenario, const Params& base_params,
         row.time_s = t;
         row.x_true = truth.x;
         row.reference = reference->At(t);
+        // each vehicle's view: its own readings and the payload's, nothing of another vehicle's
+        std::vector<std::optional<TeamView>> views(static_cast<size_t>(n));
+        for (int i = 0; i < n; ++i) {
+          const std::optional<sim::BodyReading>& own = latest[static_cast<size_t>(i) + 1];
+          const std::optional<sim::BodyReading>& payload = latest[0];
+          if (!own || !payload) continue;
+          TeamView& view = views[static_cast<size_t>(i)].emplace();
+          view.time_s = t;
+          view.p_WQ_W = own->p_W_m;
+          view.v_WQ_W = own->v_W_mps;
+          view.q_WB = own->q_W;
+          view.w_B = scenario.estimation.ground_truth ? own->w_body_radps : world.GyroSample_B(i);
+          view.p_WL_W = payload->p_W_m;
+          view.v_WL_W = payload->v_W_mps;
+          view.q_WP = payload->q_W;
+          view.w_P = payload->w_body_radps;
+        }
+        const std::vector<std::optional<runner::TeamReply>> replies = flight->Step(views);
         for (int i = 0; i < n; ++i) {
           const size_t k = static_cast<size_t>(i);
-          const std::optional<sim::BodyReading>& own = latest[k + 1];
-          const std::optional<sim::BodyReading>& payload = latest[0];
           TeamLogRow::Vehicle& v = last[k];
-          if (own && payload) {
-            TeamView view;
-            view.time_s = t;
-            view.p_WQ_W = own->p_W_m;
-            view.v_WQ_W = own->v_W_mps;
-            view.q_WB = own->q_W;
-            view.w_B = scenario.estimation.ground_truth ? own->w_body_radps
-                                                        : world.GyroSample_B(i);
-            view.p_WL_W = payload->p_W_m;
-            view.v_WL_W = payload->v_W_mps;
-            view.q_WP = payload->q_W;
-            view.w_P = payload->w_body_radps;
-            // the update's wall time as the runner measures it, the same way for every team
-            // controller (one that does not time itself would otherwise report zero)
-            const Clock::time_point update_start = Clock::now();
-            const ControlOutput out = controllers[k]->Update(view);
-            v.solve_time_ms =
-                std::chrono::duration<double, std::milli>(Clock::now() - update_start).count();
-            command[k] = out.command;
-            v.command = out.command;
-            v.status = out.status;
-            v.taut_seen = controllers[k]->CableTaut();
+          if (replies[k]) {
+            command[k] = replies[k]->output.command;
+            v.command = replies[k]->output.command;
+            v.status = replies[k]->output.status;
+            v.solve_time_ms = replies[k]->output.solve_time_ms;
+            v.taut_seen = replies[k]->cable_taut;
           }
           v.cable_length_m = truth.cable_length_m[k];
           v.cable_tension_N = truth.cable_tension_N[k];
@@ -329,6 +331,7 @@ RunResult RunTeamScenario(const Scenario& scenario, const Params& base_params,
         }
       }
     }
+    flight->Finish();
   } catch (const std::exception& e) {
     // keep what was computed: the metrics of the run so far, with the error named
     metrics.run_error = std::string(e.what()) + " (at t = " + std::to_string(world.time_s()) + " s)";

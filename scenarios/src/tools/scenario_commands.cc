@@ -189,7 +189,7 @@ void PrintSummary(const Metrics& m, const std::string& out_dir) {
     for (size_t i = 0; i < m.team->vehicles.size(); ++i) {
       const VehicleMetrics& v = m.team->vehicles[i];
       std::printf("  vehicle %zu: slack %.2f s (%d events, %d re-taut), tilt max %.1f deg, "
-                  "tension max %.2f N, solve median %.3f ms, failures %d\n",
+                  "tension max %.2f N, update median %.4f ms, failures %d\n",
                   i, v.slack_time_s, v.slack_events, v.retaut_count, v.tilt_max_deg,
                   v.cable_tension_max_N, v.solve_ms.median, v.control_failures);
     }
