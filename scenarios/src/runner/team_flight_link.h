@@ -39,6 +39,23 @@ class TeamFlightLink {
   virtual void Finish() {}
 };
 
+/// Settings of a team's separate flight stack(s).
+struct ExternalTeamFlightOptions {
+  std::string command;           // shell command line that starts a stack
+  bool per_vehicle = true;       // one process per vehicle (HPA_VEHICLE set), else one for all
+  double step_timeout_s = 10.0;  // longest wait for one reply
+  std::string scenario;          // the scenario's name and seed, for the hello
+  unsigned long seed = 0;
+  std::string controller;        // the scenario's team controller, for the hello
+};
+
+/// Starts the team's separate stack(s) and completes their hello; throws flight::ProtocolError
+/// naming the command for one that does not start, connect or speak the protocol, and
+/// flight::WaitInterrupted when a stop (StopRequested) ends a wait. Every reply is checked at this
+/// boundary: a stack's bad value ends the run with a run error naming it.
+std::unique_ptr<TeamFlightLink> StartExternalTeamFlight(const CooperativeTeam& team,
+                                                        const ExternalTeamFlightOptions& options);
+
 /// Every vehicle's controller of `type` in this process (MakeTeamController).
 std::unique_ptr<TeamFlightLink> MakeInProcessTeamFlight(
     const std::string& type, const CooperativeTeam& team,

@@ -181,11 +181,9 @@ RunResult RunTeamScenario(const Scenario& scenario, const Params& base_params,
                           const RunOptions& options) {
   // the team's controllers run on the simulation's thread (options.control_thread is the single
   // vehicle's); what needs the single vehicle's world is refused
-  if (!options.flight_stack.empty() || !options.recorders.empty() || options.stop_at_s ||
-      options.at_stop) {
+  if (options.stop_at_s || options.at_stop) {
     throw InputError(scenario.file, "vehicles",
-                     "a team scenario runs in process only: no separate flight stack, video or "
-                     "render-frame yet (docs/cooperative.md)");
+                     "a team scenario has no render-frame yet (docs/cooperative.md)");
   }
   const Params params = ScenarioParams(scenario, base_params);
   const Clock::time_point wall_start = Clock::now();
@@ -209,8 +207,27 @@ RunResult RunTeamScenario(const Scenario& scenario, const Params& base_params,
   sim::TeamWorld world(world_config);
   world.Reset(StartState(scenario, model, reference->At(0.0).p_WL_W, params.payload_radius_m));
 
-  const std::unique_ptr<runner::TeamFlightLink> flight =
-      runner::MakeInProcessTeamFlight(scenario.controller.type, team, reference);
+  std::unique_ptr<runner::TeamFlightLink> flight;
+  if (options.flight_stack.empty()) {
+    flight = runner::MakeInProcessTeamFlight(scenario.controller.type, team, reference);
+  } else {
+    runner::ExternalTeamFlightOptions external;
+    external.command = options.flight_stack;
+    external.per_vehicle = options.team_stack_per_vehicle;
+    external.step_timeout_s = options.flight_step_timeout_s;
+    external.scenario = scenario.name;
+    external.seed = scenario.seed;
+    external.controller = scenario.controller.type;
+    try {
+      flight = runner::StartExternalTeamFlight(team, external);
+    } catch (const std::exception& e) {
+      // a separate flight stack that did not start: a run error, nothing flown
+      metrics.flight_stack = "external";
+      metrics.controller = "external";
+      metrics.run_error = e.what();
+      return result;
+    }
+  }
   metrics.flight_stack = flight->name();
   metrics.controller = flight->controller();
   std::vector<std::unique_ptr<Autopilot>> autopilots;
@@ -221,6 +238,9 @@ RunResult RunTeamScenario(const Scenario& scenario, const Params& base_params,
   LockstepClock clock(1.0 / sim::World::kPhysicsDt_s);
   const int control_loop = clock.AddLoop("control", flight->RateHz());
   const int rate_loop = clock.AddLoop("rate loop", rate_loop_hz);
+  double video_rate_hz = 0.0;
+  for (const RunRecorder* r : options.recorders) video_rate_hz = std::max(video_rate_hz, r->video_rate_hz());
+  const int video_loop = video_rate_hz > 0.0 ? clock.AddLoop("video", video_rate_hz) : -1;
 
   // what each vehicle's flight code holds: the latest reading of each body (payload first)
   std::vector<std::optional<sim::BodyReading>> latest(static_cast<size_t>(n + 1));
@@ -314,6 +334,10 @@ RunResult RunTeamScenario(const Scenario& scenario, const Params& base_params,
           ++rate_steps[k];
           saturated[k] += out.saturated ? 1 : 0;
         }
+      }
+      if (video_loop >= 0 && clock.Fires(video_loop)) {
+        const TeamLogRow* latest_row = result.team_rows.empty() ? nullptr : &result.team_rows.back();
+        for (RunRecorder* r : options.recorders) r->OnTeamVideoTick(world, latest_row);
       }
       if (tick == end_tick) break;
       world.Step();

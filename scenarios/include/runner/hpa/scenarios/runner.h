@@ -15,6 +15,7 @@
 #include "hpa/scenarios/scenario.h"
 #include "hpa/sim/gl_backend.h"
 #include "hpa/sim/payload_camera.h"
+#include "hpa/sim/team_world.h"
 #include "hpa/sim/world.h"
 
 namespace hpa {
@@ -35,6 +36,11 @@ class RunRecorder {
   virtual void OnVideoTick(sim::World& world, const LogRow& latest, const cv::Mat& onboard) {
     (void)world, (void)latest, (void)onboard;
   }
+  /// At each video tick of a team run, with the team's world to draw from and the latest log row
+  /// (none before the first control step).
+  virtual void OnTeamVideoTick(sim::TeamWorld& world, const TeamLogRow* latest) {
+    (void)world, (void)latest;
+  }
   /// The rate (Hz) of video ticks this recorder wants (0: none); the run ticks at the highest
   /// rate any recorder asks for.
   virtual double video_rate_hz() const { return 0.0; }
@@ -51,6 +57,8 @@ struct RunOptions {
   // this process); it speaks the lockstep protocol (docs/protocol.md)
   std::string flight_stack;
   double flight_step_timeout_s = 10.0;  // longest wait for its reply to one tick
+  // a team run's separate flight stack: one process per vehicle (true) or one for the team
+  bool team_stack_per_vehicle = true;
   // the in-process controller's update on a thread of its own, beside the simulation (the same
   // commands and metrics; a run uses a second core): its log row reaches OnControlStep when its
   // command reaches the rate loop, compute + transport later, rows still in order; a controller
@@ -101,8 +109,9 @@ RunResult RunScenario(const Scenario& scenario, const Params& params, const RunO
 
 /// Runs a team scenario (scenario.team: N vehicles on their cables, docs/cooperative.md): the
 /// team's world, each vehicle's controller and autopilot, the motion-capture system on one
-/// lockstep clock. Options that need the single vehicle's world (a separate flight stack, a
-/// video, the control thread, at_stop) are refused with InputError.
+/// lockstep clock; recorders get OnTeamVideoTick, a separate flight stack the team's messages
+/// (docs/protocol.md, "Teams"). Options that need the single vehicle's world (stop_at_s,
+/// at_stop) are refused with InputError; the control thread is the single vehicle's.
 RunResult RunTeamScenario(const Scenario& scenario, const Params& params,
                           const RunOptions& options);
 
