@@ -30,8 +30,10 @@ struct CooperativeGains {
   Eigen::Vector3d k_cable_rate_per_s{6.7, 6.7, 3.1};           // vehicle Kw ("omg")  (3)
   Eigen::Vector3d k_hold_position_per_s2{6.0, 6.0, 10.0};      // vehicle Kp ("pos"), slack  (3)
   Eigen::Vector3d k_hold_velocity_per_s{3.0, 3.0, 6.0};        // vehicle Kd ("vel"), slack  (3)
-  // ours: the autopilot cascade's attitude loop (GeometricGains' defaults) toward Rot_des
-  Eigen::Vector3d k_attitude_per_s{7.0, 7.0, 3.0};  // attitude error -> body rate  (3)
+  // the autopilot cascade's attitude loop toward Rot_des: RotorTM's attitude PD of the vehicle
+  // (snapdragonfly "rot" Kpe over "ang" Kde, M = -Kpe e_R - Kde e_w) as the body rate that
+  // zeroes its moment, w = -(Kpe / Kde) e_R, for a rate loop faster than the attitude loop
+  Eigen::Vector3d k_attitude_per_s{10.0, 10.0, 16.0};  // attitude error -> body rate  (3)
   double max_rate_radps = 6.0;                      // commanded body-rate limit
   double slack_band_m = 0.01;  // a cable shorter than its length by this is slack
   // RotorTM's controller rate: controller_node.py runs the controller on every desired-trajectory
