@@ -87,6 +87,11 @@ add_test(NAME cli.flight_stack_rate_loop
          COMMAND bash ${SCEN}/tests/flight_stack_rate_loop_test.sh ${HPA_BIN} ${CMAKE_SOURCE_DIR}
                  ${HPA_PYTHON3})
 set_tests_properties(cli.flight_stack_rate_loop PROPERTIES LABELS "cli;scenario" TIMEOUT 600)
+# Team runs (docs/cooperative.md): bad input named by key, determinism, per-vehicle log columns,
+# plots, the rate table, a push slackening the named vehicle's cable, the baseline
+add_test(NAME cli.team
+         COMMAND bash ${SCEN}/tests/team_cli_test.sh ${HPA_BIN} ${CMAKE_SOURCE_DIR} ${HPA_PYTHON3})
+set_tests_properties(cli.team PROPERTIES LABELS "cli;scenario" TIMEOUT 600)
 
 # Plots in PNG, SVG and PDF, each with the CSV of what it draws; plots never change a run
 add_test(NAME cli.plot_formats

@@ -96,16 +96,21 @@ using TeamControllerMaker = std::unique_ptr<TeamController> (*)(const Cooperativ
                                                                 std::shared_ptr<const Reference>);
 struct TeamControllerRegistration {
   std::string name;
+  std::string description;  // one line for `hpa schema controllers`
   TeamControllerMaker make;
 };
 const std::vector<TeamControllerRegistration>& Registry() {
   static const std::vector<TeamControllerRegistration> registry = {
       {"cooperative",
+       "RotorTM's cable-suspended cooperative controller: payload wrench, cable-force "
+       "distribution, each vehicle steering its cable (100 Hz)",
        [](const CooperativeTeam& team, int vehicle,
           std::shared_ptr<const Reference> reference) -> std::unique_ptr<TeamController> {
          return std::make_unique<CooperativeController>(team, vehicle, std::move(reference));
        }},
       {"hpa_mpc",
+       "the single-vehicle HPA-MPC on each vehicle, its share of the payload at its attachment "
+       "point, the others disturbances (the baseline)",
        [](const CooperativeTeam& team, int vehicle,
           std::shared_ptr<const Reference> reference) -> std::unique_ptr<TeamController> {
          return std::make_unique<TeamHpaMpc>(team, vehicle, std::move(reference));
@@ -130,6 +135,13 @@ std::shared_ptr<const Reference> MakeOffsetReference(
     throw std::invalid_argument("offset reference: cable length must be positive");
   }
   return std::make_shared<OffsetReference>(std::move(payload_reference), p_LA_W_m, cable_length_m);
+}
+
+std::string TeamControllerDescription(const std::string& name) {
+  for (const TeamControllerRegistration& r : Registry()) {
+    if (r.name == name) return r.description;
+  }
+  return {};
 }
 
 const std::vector<std::string>& TeamControllerNames() {

@@ -9,9 +9,20 @@ import csv
 import json
 import sys
 
-# metrics that measure the machine, not the run; and what flew
-TIMING_KEYS = {"wall_time_s", "mpc_solve_ms", "render_ms", "image_model_ms", "detector_ms"}
+# metrics that measure the machine, not the run (at any depth: a team's vehicles have their own
+# solve_ms); and what flew
+TIMING_KEYS = {"wall_time_s", "mpc_solve_ms", "render_ms", "image_model_ms", "detector_ms",
+               "solve_ms"}
 NOT_COMPARED = TIMING_KEYS | {"flight_stack"}
+
+
+def without_timings(value):
+    """A metric with every timing key inside it removed."""
+    if isinstance(value, dict):
+        return {k: without_timings(v) for k, v in value.items() if k not in TIMING_KEYS}
+    if isinstance(value, list):
+        return [without_timings(v) for v in value]
+    return value
 
 
 def main():
@@ -31,16 +42,18 @@ def main():
     for key in args.nonempty:
         assert a.get(key), "A has no %s" % key
     skip = NOT_COMPARED | set(args.skip)
-    bad = [k for k in a if k not in skip and a[k] != b.get(k)]
+    bad = [k for k in a if k not in skip and without_timings(a[k]) != without_timings(b.get(k))]
     assert not bad, "metrics differ: %s" % ", ".join("%s %r != %r" % (k, a[k], b.get(k))
                                                      for k in bad)
     rows = 0
     if args.rows is not None:
         la, lb = (list(csv.reader(open(p + "/log.csv"))) for p in (args.a, args.b))
         assert len(la) == len(lb) > args.rows, "log rows: %d and %d" % (len(la), len(lb))
-        col = la[0].index("solve_ms")
-        bad = [i for i, (x, y) in enumerate(zip(la, lb))
-               if x[:col] + x[col + 1:] != y[:col] + y[col + 1:]]
+        # every solve-time column (a team's log has one per vehicle: vi_solve_ms)
+        cols = {i for i, name in enumerate(la[0]) if name.endswith("solve_ms")}
+        assert cols, "log has no solve_ms column"
+        strip = lambda row: [x for i, x in enumerate(row) if i not in cols]
+        bad = [i for i, (x, y) in enumerate(zip(la, lb)) if strip(x) != strip(y)]
         assert not bad, "log rows differ from row %d" % bad[0]
         rows = len(la) - 1
     print("%s = %s: %d metrics, %d log rows" % (args.a, args.b, len(a) - len(skip), rows))

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "hpa/controller/controller_registry.h"
+#include "hpa/controller/team_controller.h"
 #include "hpa/controller/ocp_solver.h"
 #include "hpa/estimator/estimator_registry.h"
 #include "hpa/models/input_error.h"
@@ -65,8 +66,14 @@ std::string ControllersSection() {
   for (const ControllerRegistration& c : Controllers()) {
     rows.push_back({"`" + c.name + "`", c.estimator, c.description});
   }
+  std::vector<std::vector<std::string>> team_rows;
+  for (const std::string& name : TeamControllerNames()) {
+    team_rows.push_back({"`" + name + "`", TeamControllerDescription(name)});
+  }
   return "## Controllers (`controller.type`, `--controller`)\n\n" +
-         Table({"name", "estimator", "what it is"}, rows);
+         Table({"name", "estimator", "what it is"}, rows) +
+         "\nA team scenario's (`vehicles:`, docs/cooperative.md), one instance per vehicle:\n\n" +
+         Table({"name", "what it is"}, team_rows);
 }
 
 // The registered estimator variants.

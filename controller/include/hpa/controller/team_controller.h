@@ -49,6 +49,9 @@ class TeamController {
 /// its share of the payload at its attachment point, the others treated as disturbances).
 const std::vector<std::string>& TeamControllerNames();
 
+/// One line saying what the team controller `name` is ("" for an unknown name).
+std::string TeamControllerDescription(const std::string& name);
+
 /// Vehicle `vehicle`'s controller of type `type` for `team`, tracking the payload reference
 /// `payload_reference` (the payload's centre; the payload held level, yaw 0). Throws
 /// std::invalid_argument for an unknown type or vehicle.

@@ -1,0 +1,71 @@
+#!/usr/bin/env bash
+# Team runs through the real `hpa` (docs/cooperative.md): a team scenario's bad input named by
+# key, the same run twice the same (metrics and log row for row), log.csv's per-vehicle columns,
+# the team plots, the rate table, a push that slackens the named vehicle's cable, and the
+# baseline flying the same scenario.
+# usage: team_cli_test.sh HPA_BIN SOURCE_DIR PYTHON
+source "$(dirname "$0")/cli_test_lib.sh"
+cli_test_start "$@"
+base=$src/scenarios/ci/team2_cable_slack.yaml
+
+# bad input: each refused with exit 2, naming the key and what was wrong
+expect_exit 2 "a payload block belongs to a team scenario" run "$src/scenarios/hover.yaml" \
+  --set payload.mass_kg=0.2 --out "$out/bad"
+expect_exit 2 "vehicles.*1 to 3 vehicles" run "$base" --set 'vehicles=[{}, {}, {}, {}]' \
+  --out "$out/bad"
+expect_exit 2 "vehicles.*1 to 3 vehicles" run "$base" --set 'vehicles=[]' --out "$out/bad"
+expect_exit 2 "vehicles.0.cable_length_m" run "$base" --set vehicles.0.cable_length_m=-1 \
+  --out "$out/bad"
+expect_exit 2 "vehicles.1.start_slack_m" run "$base" --set vehicles.1.start_slack_m=0.6 \
+  --out "$out/bad"
+expect_exit 2 "vehicles.0.*attach_m" run "$base" --set 'vehicles.0.attach_m=[0, 0]' \
+  --out "$out/bad"
+expect_exit 2 "vehicles.0.*wheels" run "$base" --set vehicles.0.wheels=4 --out "$out/bad"
+expect_exit 2 "team scenario flies the ideal world" run "$base" --set world.profile=flight \
+  --out "$out/bad"
+expect_exit 2 "controller.type.*cooperative" run "$base" --set controller.type=nonhybrid_mpc \
+  --out "$out/bad"
+expect_exit 2 "--controller.*unknown controller 'geometric'" run "$base" --controller geometric \
+  --out "$out/bad"
+expect_exit 2 "events.0.vehicle.*vehicle 2 is not in the scenario \(2 vehicles" run "$base" \
+  --set events.0.vehicle=2 --out "$out/bad"
+expect_exit 2 "events.0.vehicle.*vehicle 1 is not in the scenario \(1 vehicle," run \
+  "$src/scenarios/line_impulse.yaml" --set events.0.vehicle=1 --out "$out/bad"
+expect_exit 2 "events.0.*impulse and velocity_change events only, not 'wind'" run "$base" \
+  --set 'events.0={at: 1.0, type: wind, force: [1, 0, 0], duration: 1.0}' --out "$out/bad"
+expect_exit 2 "payload.mass_kg" run "$base" --set payload.mass_kg=0 --out "$out/bad"
+
+# the same run twice is the same run; its log has every vehicle's columns and its plots are
+# written
+"$hpa" run "$base" --out "$out/a" --plots --quiet || fail "team run a exited $?"
+"$hpa" run "$base" --out "$out/b" --quiet || fail "team run b exited $?"
+same_run "$out/a" "$out/b" "a team run twice" --rows 500
+head -1 "$out/a/log.csv" | grep -q "v1_tension_N,v1_mode,v1_taut_seen" ||
+  fail "log.csv lacks vehicle 1's columns: $(head -1 "$out/a/log.csv")"
+for plot in tracking team_cables; do
+  [ -s "$out/a/$plot.png" ] || fail "no $plot.png"
+done
+"$python" - "$out/a/metrics.json" << 'PY' || fail "team metrics"
+import json, sys
+m = json.load(open(sys.argv[1]))
+t = m["team"]
+assert t["vehicle_count"] == 2 and len(t["vehicles"]) == 2, t
+# the push on vehicle 1 slackens its cable and not vehicle 0's
+assert t["vehicles"][1]["slack_events"] >= 1 and t["vehicles"][1]["retaut_count"] >= 1, t
+assert t["vehicles"][0]["slack_time_s"] == 0.0, t
+# what a team run does not measure is null, not a perfect-looking value
+for key in ("quad_rmse_m", "mode_accuracy", "payload_in_fov_fraction", "contacts"):
+    assert m[key] is None, (key, m[key])
+assert m["camera"] == "mocap" and m["controller"] == "cooperative", m
+PY
+
+# the rate table lists the motion capture and each vehicle's loops
+"$hpa" schema rates "$base" > "$out/rates.md" || fail "schema rates exited $?"
+grep -q "motion capture" "$out/rates.md" || fail "rate table lacks the motion capture"
+
+# the baseline flies the same scenario
+"$hpa" run "$base" --controller hpa_mpc --out "$out/mpc" --quiet || fail "hpa_mpc team run"
+grep -q '"controller": "hpa_mpc"' "$out/mpc/metrics.json" || fail "baseline not named"
+
+[ "$failures" -eq 0 ] && echo "team CLI: all checks passed"
+exit "$failures"
