@@ -170,6 +170,8 @@ struct TeamWorld::Impl {
   int mocap_period_steps = 1;  // physics steps between two motion-capture samples
   mjModel* m = nullptr;
   mjData* d = nullptr;
+  std::string scene_xml;                   // the MJCF m was compiled from
+  std::unique_ptr<TeamRenderer> renderer;  // the video's cameras, made on first use
 
   FreeBody payload;
   std::vector<FreeBody> vehicles;                  // (n)
@@ -439,6 +441,7 @@ TeamWorld::TeamWorld(const TeamWorldConfig& config) : impl_(std::make_unique<Imp
     throw InputError(file, "option.timestep", "must be 0.001 s (World::kPhysicsDt_s)");
   }
   w.d = mj_makeData(w.m);
+  w.scene_xml = xml;
 
   // the elements the world drives
   const auto free_body = [&](const std::string& body, const std::string& joint) {
@@ -474,6 +477,7 @@ TeamWorld::TeamWorld(const TeamWorldConfig& config) : impl_(std::make_unique<Imp
 }
 
 TeamWorld::~TeamWorld() {
+  impl_->renderer.reset();  // it reads the model and data below
   if (impl_->d != nullptr) mj_deleteData(impl_->d);
   if (impl_->m != nullptr) mj_deleteModel(impl_->m);
 }
@@ -616,5 +620,18 @@ double TeamWorld::MinVehicleSeparation_m() const {
 }
 
 const CooperativeTeam& TeamWorld::team() const { return impl_->config.team; }
+
+TeamRenderer& TeamWorld::renderer() {
+  if (impl_->renderer == nullptr) impl_->renderer = std::make_unique<TeamRenderer>(*this);
+  return *impl_->renderer;
+}
+
+const mjModel_* TeamWorld::model() const { return impl_->m; }
+
+const mjData_* TeamWorld::data() const { return impl_->d; }
+
+const std::string& TeamWorld::scene_xml() const { return impl_->scene_xml; }
+
+GlBackend TeamWorld::gl_backend() const { return impl_->config.gl_backend; }
 
 }  // namespace hpa::sim

@@ -9,6 +9,8 @@
 
 #include "hpa/models/file_io.h"
 #include "hpa/models/input_error.h"
+#include "hpa/scenarios/metrics.h"
+#include "hpa/sim/team_world.h"
 #include "hpa/sim/world.h"
 #include "media.h"
 
@@ -108,22 +110,88 @@ cv::Mat VideoRecorder::Compose(const cv::Mat& chase_bgr, const cv::Mat& onboard_
 }
 
 void VideoRecorder::AddFrame(const cv::Mat& chase_bgr, const cv::Mat& onboard_bgr, const Hud& hud) {
-  cv::Mat frame = Compose(chase_bgr, onboard_bgr, hud);
+  Keep(Compose(chase_bgr, onboard_bgr, hud), hud.time_s, hud.true_mode == CableMode::kSlack);
+}
+
+cv::Mat VideoRecorder::ComposeTeam(const cv::Mat& chase_bgr,
+                                   const std::vector<cv::Mat>& onboard_bgr,
+                                   const std::vector<cv::Scalar>& inset_colors_bgr,
+                                   const TeamHud& hud) const {
+  constexpr int kBarPx = 56;  // two heads-up lines
+  cv::Mat frame;
+  cv::resize(chase_bgr, frame, cv::Size(kWidthPx, kHeightPx));
+  // onboard insets down the right side, a quarter of the width each, framed in the vehicle's
+  // colour and labelled with its index
+  const int w = kWidthPx / 4;
+  int top = 8;
+  for (size_t i = 0; i < onboard_bgr.size(); ++i) {
+    if (onboard_bgr[i].empty()) continue;
+    const int h = w * onboard_bgr[i].rows / onboard_bgr[i].cols;
+    if (top + h > kHeightPx - kBarPx) break;
+    cv::Mat inset;
+    cv::resize(onboard_bgr[i], inset, cv::Size(w, h), 0, 0, cv::INTER_AREA);
+    const cv::Rect roi(kWidthPx - w - 8, top, w, h);
+    inset.copyTo(frame(roi));
+    const cv::Scalar colour =
+        i < inset_colors_bgr.size() ? inset_colors_bgr[i] : cv::Scalar(255, 255, 255);
+    cv::rectangle(frame, roi, colour, 2);
+    cv::putText(frame, std::to_string(i), cv::Point(roi.x + 6, roi.y + 20),
+                cv::FONT_HERSHEY_SIMPLEX, 0.6, colour, 2, cv::LINE_AA);
+    top += h + 8;
+  }
+  // heads-up lines; the whole bar turns orange while any cable is truly slack
+  bool slack = false;
+  for (const TeamHud::Cable& c : hud.cables) slack = slack || c.true_mode == CableMode::kSlack;
+  cv::rectangle(frame, cv::Rect(0, kHeightPx - kBarPx, kWidthPx, kBarPx),
+                slack ? cv::Scalar(0, 140, 255) : cv::Scalar(40, 40, 40), cv::FILLED);
+  char text[200];
+  if (hud.payload_error_m) {
+    std::snprintf(text, sizeof(text), "t %6.2f s   payload error %6.3f m", hud.time_s,
+                  *hud.payload_error_m);
+  } else {
+    std::snprintf(text, sizeof(text), "t %6.2f s   payload error --", hud.time_s);
+  }
+  cv::putText(frame, text, cv::Point(10, kHeightPx - 34), cv::FONT_HERSHEY_SIMPLEX, 0.6,
+              cv::Scalar(255, 255, 255), 1, cv::LINE_AA);
+  std::string cables;
+  for (size_t i = 0; i < hud.cables.size(); ++i) {
+    const TeamHud::Cable& c = hud.cables[i];
+    // the controller's reading only where it differs from the truth
+    const bool seen_differs = c.taut_seen && *c.taut_seen != (c.true_mode == CableMode::kTaut);
+    std::snprintf(text, sizeof(text), "%scable %zu %-5s T %6.2f N%s", i ? "   " : "", i,
+                  ToString(c.true_mode), c.tension_N,
+                  seen_differs ? (*c.taut_seen ? " (seen taut)" : " (seen slack)") : "");
+    cables += text;
+  }
+  cv::putText(frame, cables, cv::Point(10, kHeightPx - 10), cv::FONT_HERSHEY_SIMPLEX, 0.6,
+              cv::Scalar(255, 255, 255), 1, cv::LINE_AA);
+  return frame;
+}
+
+void VideoRecorder::AddTeamFrame(const cv::Mat& chase_bgr, const std::vector<cv::Mat>& onboard_bgr,
+                                 const std::vector<cv::Scalar>& inset_colors_bgr,
+                                 const TeamHud& hud) {
+  bool slack = false;
+  for (const TeamHud::Cable& c : hud.cables) slack = slack || c.true_mode == CableMode::kSlack;
+  Keep(ComposeTeam(chase_bgr, onboard_bgr, inset_colors_bgr, hud), hud.time_s, slack);
+}
+
+void VideoRecorder::Keep(const cv::Mat& frame, double time_s, bool slack) {
   if (!slack_events_only_) {
     writer_->Write(frame);
     ++frames_written_;
     return;
   }
-  if (hud.true_mode == CableMode::kSlack) {
+  if (slack) {
     // flush what led up to the event, then keep a window after it ends
     for (const cv::Mat& f : pre_buffer_) {
       writer_->Write(f);
       ++frames_written_;
     }
     pre_buffer_.clear();
-    keep_until_s_ = hud.time_s + kSlackWindow_s;
+    keep_until_s_ = time_s + kSlackWindow_s;
   }
-  if (hud.time_s <= keep_until_s_) {
+  if (time_s <= keep_until_s_) {
     writer_->Write(frame);
     ++frames_written_;
     return;
@@ -158,8 +226,41 @@ void VideoTickRecorder::OnVideoTick(sim::World& world, const LogRow& now, const 
   world.renderer().RenderPayloadCamera(&onboard_, cv::Rect());
   VideoRecorder::Hud hud{now.time_s, now.truth.mode, now.estimate.mode, now.command.thrust_N,
                          now.cable_tension_N};
-  video_.AddFrame(world.renderer().RenderChaseCamera(VideoRecorder::kWidthPx, VideoRecorder::kHeightPx),
-                  onboard_, hud);
+  video_.AddFrame(
+      world.renderer().RenderChaseCamera(VideoRecorder::kWidthPx, VideoRecorder::kHeightPx),
+      onboard_, hud);
+}
+
+void VideoTickRecorder::OnTeamVideoTick(sim::TeamWorld& world, const TeamLogRow* latest) {
+  sim::TeamRenderer& renderer = world.renderer();
+  const int n = world.VehicleCount();
+  renderer.RenderChaseCamera(VideoRecorder::kWidthPx, VideoRecorder::kHeightPx, &chase_);
+  team_onboard_.resize(static_cast<size_t>(n));
+  std::vector<cv::Scalar> colours;
+  for (int i = 0; i < n; ++i) {
+    renderer.RenderOnboardCamera(i, sim::TeamRenderer::kOnboardWidthPx,
+                                 sim::TeamRenderer::kOnboardHeightPx,
+                                 &team_onboard_[static_cast<size_t>(i)]);
+    colours.push_back(renderer.VehicleColorBgr(i));
+  }
+  // the cables as they are now; the payload error and the controllers' readings of the latest
+  // control step
+  const sim::TeamTruth truth = world.GetTruth();
+  VideoRecorder::TeamHud hud;
+  hud.time_s = truth.time_s;
+  if (latest != nullptr) {
+    hud.payload_error_m = (latest->x_true.head<3>() - latest->reference.p_WL_W).norm();
+  }
+  for (int i = 0; i < n; ++i) {
+    const size_t k = static_cast<size_t>(i);
+    VideoRecorder::TeamHud::Cable c;
+    c.tension_N = truth.cable_tension_N[k];
+    c.true_mode = truth.modes[k];
+    if (latest != nullptr && k < latest->vehicles.size())
+      c.taut_seen = latest->vehicles[k].taut_seen;
+    hud.cables.push_back(c);
+  }
+  video_.AddTeamFrame(chase_, team_onboard_, colours, hud);
 }
 
 }  // namespace hpa

@@ -15,6 +15,8 @@
 #include "hpa/models/cooperative_model.h"
 #include "hpa/models/data_dir.h"
 #include "hpa/models/state.h"
+#include "hpa/sim/gl_backend.h"
+#include "hpa/sim/team_renderer.h"
 #include "hpa/sim/world.h"
 
 namespace hpa::sim {
@@ -37,6 +39,7 @@ struct TeamWorldConfig {
   std::string scene_path = DataPath("models/scene.xml");  // single-vehicle scene it is built from
   uint64_t seed = 1;                                      // the one generator for all its noise
   MocapConfig mocap;
+  GlBackend gl_backend = GlBackend::kOsMesa;  // GL context of the video's cameras (renderer())
 };
 
 /// One body's pose and velocity as the motion-capture system saw it.
@@ -128,7 +131,18 @@ class TeamWorld {
   /// The team the world simulates.
   const CooperativeTeam& team() const;
 
+  /// The team's video cameras (team_renderer.h), made on first use so a run that never renders
+  /// pays nothing; they only read the world's state.
+  TeamRenderer& renderer();
+
  private:
+  friend class TeamRenderer;
+  // what the renderer reads: the physics model and data (read only) and the scene's MJCF text
+  const mjModel_* model() const;
+  const mjData_* data() const;
+  const std::string& scene_xml() const;
+  GlBackend gl_backend() const;
+
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };

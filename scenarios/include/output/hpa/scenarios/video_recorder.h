@@ -4,7 +4,9 @@
 #include <deque>
 #include <memory>
 #include <opencv2/core.hpp>
+#include <optional>
 #include <string>
+#include <vector>
 
 #include "hpa/models/state.h"
 #include "hpa/scenarios/runner.h"
@@ -37,6 +39,19 @@ class VideoRecorder {
     double tension_N;
   };
 
+  /// What a team's heads-up lines show (docs/cooperative.md).
+  struct TeamHud {
+    /// One vehicle's cable.
+    struct Cable {
+      double tension_N = 0.0;                  // true tension
+      CableMode true_mode = CableMode::kTaut;  // true mode
+      std::optional<bool> taut_seen;           // its controller's reading (none before its first)
+    };
+    double time_s = 0.0;
+    std::optional<double> payload_error_m;  // |payload - reference| (none before the first row)
+    std::vector<Cable> cables;              // (N)
+  };
+
   /// Checks `path` (CheckVideoPath, naming `option`) and opens its partial file; throws
   /// InputError or OutputError as CheckVideoPath does, OutputError if no writer opens it.
   VideoRecorder(const std::string& path, double rate_hz, bool slack_events_only,
@@ -46,6 +61,12 @@ class VideoRecorder {
 
   /// Adds one frame (chase view kWidthPx x kHeightPx, onboard frame any size, BGR).
   void AddFrame(const cv::Mat& chase_bgr, const cv::Mat& onboard_bgr, const Hud& hud);
+
+  /// Adds one frame of a team (chase view kWidthPx x kHeightPx; each vehicle's onboard frame,
+  /// any size, as an inset down the right side framed in `inset_colors_bgr`'s colour). A
+  /// slack-events video keeps the frames around any cable's slack event.
+  void AddTeamFrame(const cv::Mat& chase_bgr, const std::vector<cv::Mat>& onboard_bgr,
+                    const std::vector<cv::Scalar>& inset_colors_bgr, const TeamHud& hud);
 
   /// Flushes, closes and renames the partial file onto the path; returns the number of frames
   /// written. A slack-events video with no frame is not written (and a previous one at the path
@@ -60,6 +81,10 @@ class VideoRecorder {
 
  private:
   cv::Mat Compose(const cv::Mat& chase_bgr, const cv::Mat& onboard_bgr, const Hud& hud) const;
+  cv::Mat ComposeTeam(const cv::Mat& chase_bgr, const std::vector<cv::Mat>& onboard_bgr,
+                      const std::vector<cv::Scalar>& inset_colors_bgr, const TeamHud& hud) const;
+  // writes a composed frame, or (slack_events_only) keeps it for a slack event's window
+  void Keep(const cv::Mat& frame, double time_s, bool slack);
 
   // closes the writer and removes the partial file (Abandon and the destructor)
   void RemovePartial();
@@ -85,6 +110,10 @@ class VideoTickRecorder final : public RunRecorder {
   VideoTickRecorder(const std::string& path, double rate_hz, bool slack_events_only)
       : video_(path, rate_hz, slack_events_only), rate_hz_(rate_hz) {}
   void OnVideoTick(sim::World& world, const LogRow& now, const cv::Mat& onboard) override;
+  /// A team's frame: its chase camera with every vehicle's onboard camera as an inset and the
+  /// heads-up lines (time, payload error, each cable's tension and mode) from the world's truth
+  /// now and the latest log row.
+  void OnTeamVideoTick(sim::TeamWorld& world, const TeamLogRow* latest) override;
   double video_rate_hz() const override { return rate_hz_; }
   /// Flushes and closes the file (VideoRecorder::Finish).
   int Finish() { return video_.Finish(); }
@@ -92,7 +121,9 @@ class VideoTickRecorder final : public RunRecorder {
  private:
   VideoRecorder video_;
   double rate_hz_;
-  cv::Mat onboard_;  // the whole onboard frame of the latest video tick
+  cv::Mat onboard_;                    // the whole onboard frame of the latest video tick
+  cv::Mat chase_;                      // a team's chase frame of the latest video tick
+  std::vector<cv::Mat> team_onboard_;  // each vehicle's onboard frame of the latest tick (N)
 };
 
 }  // namespace hpa
