@@ -208,3 +208,10 @@ add_test(NAME cli.fault_flight_stack
          COMMAND bash ${SCEN}/tests/fault_flight_stack_test.sh ${HPA_BIN} ${CMAKE_SOURCE_DIR}
                  ${HPA_PYTHON3})
 set_tests_properties(cli.fault_flight_stack PROPERTIES LABELS "cli;scenario" TIMEOUT 600)
+
+# A team run's video: --video writes one 960x540 frame per video tick of team2_cable_slack,
+# --video-slack-events the frames around its cable's slack event, and neither changes the run
+add_test(NAME cli.team_video
+         COMMAND bash ${SCEN}/tests/team_video_test.sh ${HPA_BIN} ${CMAKE_SOURCE_DIR}
+                 ${HPA_PYTHON3})
+set_tests_properties(cli.team_video PROPERTIES LABELS "cli;scenario" TIMEOUT 300)
