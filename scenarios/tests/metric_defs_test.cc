@@ -38,10 +38,24 @@ nlohmann::json FlownMetrics() {
   return nlohmann::json::parse(MetricsToJson(m));
 }
 
+// The metrics.json of a flown team run of two vehicles (the team metrics measured).
+nlohmann::json FlownTeamMetrics() {
+  Metrics m;
+  m.control_steps = 100;
+  m.team = TeamMetrics();
+  m.team->vehicles.resize(2);
+  m.team->min_vehicle_separation_m = 0.7;
+  return nlohmann::json::parse(MetricsToJson(m));
+}
+
 TEST(MetricDefsTest, EveryMetricIsReadFromTheMetricsJsonTheRunnerWrites) {
   const nlohmann::json j = FlownMetrics();
+  const nlohmann::json team = FlownTeamMetrics();
   for (const MetricDef& def : MetricDefs()) {
-    EXPECT_TRUE(ReadMetric(def, j).has_value()) << def.name << " at " << def.json_path;
+    // a team's metrics from a team run, every other from the single vehicle's
+    const bool of_team = def.json_path.rfind("team.", 0) == 0;
+    EXPECT_TRUE(ReadMetric(def, of_team ? team : j).has_value())
+        << def.name << " at " << def.json_path;
     EXPECT_FALSE(def.unit.empty()) << def.name;
     EXPECT_FALSE(def.description.empty()) << def.name;
     if (def.compared) {
@@ -68,6 +82,26 @@ TEST(MetricDefsTest, WhatARunDidNotMeasureIsNotRead) {
   // without a re-taut the re-taut figures are null in metrics.json, not a perfect-looking 0
   EXPECT_TRUE(j["retaut"]["quad_vz_min_mps"].is_null());
   EXPECT_TRUE(j["retaut"]["peak_body_rate_radps"].is_null());
+}
+
+TEST(MetricDefsTest, ATeamMetricIsTheWorstVehicles) {
+  Metrics m;
+  m.control_steps = 10;
+  m.team = TeamMetrics();
+  m.team->vehicles.resize(3);
+  m.team->vehicles[0].tilt_max_deg = 4.0;
+  m.team->vehicles[1].tilt_max_deg = 9.0;
+  m.team->vehicles[2].tilt_max_deg = 2.0;
+  m.team->vehicles[2].slack_time_s = 0.3;
+  const nlohmann::json j = nlohmann::json::parse(MetricsToJson(m));
+  EXPECT_EQ(ReadMetric("team_vehicle_tilt_max_deg", j), 9.0);
+  EXPECT_EQ(ReadMetric("team_cable_slack_time_max_s", j), 0.3);
+  // a single vehicle's run has no team: not measured
+  Metrics single;
+  single.control_steps = 10;
+  const nlohmann::json k = nlohmann::json::parse(MetricsToJson(single));
+  EXPECT_FALSE(ReadMetric("team_vehicle_tilt_max_deg", k));
+  EXPECT_FALSE(ReadMetric("team_min_vehicle_separation_m", k));
 }
 
 TEST(MetricDefsTest, EveryExpectKeyBoundsADeclaredMetric) {

@@ -21,6 +21,7 @@ enum class MetricRead {
   kNorm,        // the Euclidean norm of the 3-vector there
   kFlag,        // a boolean: 1 true, 0 false
   kIfRetauted,  // the number there, only when the run had a re-taut (retaut.count > 0)
+  kLargest,     // through a list on the path (a team's vehicles), the largest of its entries'
 };
 
 /// One scalar metric.
@@ -54,6 +55,18 @@ template <typename Json>
 std::optional<double> ReadMetric(const MetricDef& def, const Json& metrics) {
   const Json* node = &metrics;
   for (size_t start = 0; start <= def.json_path.size();) {
+    if (def.read == MetricRead::kLargest && node->is_array()) {
+      // the rest of the path in every entry of the list, the largest value measured
+      MetricDef rest = def;
+      rest.json_path = def.json_path.substr(start);
+      rest.read = MetricRead::kNumber;
+      std::optional<double> largest;
+      for (const auto& entry : *node) {
+        const std::optional<double> v = ReadMetric(rest, entry);
+        if (v && (!largest || *v > *largest)) largest = v;
+      }
+      return largest;
+    }
     const size_t dot = std::min(def.json_path.find('.', start), def.json_path.size());
     const std::string key = def.json_path.substr(start, dot - start);
     if (!node->is_object() || !node->contains(key)) return std::nullopt;
@@ -62,6 +75,7 @@ std::optional<double> ReadMetric(const MetricDef& def, const Json& metrics) {
   }
   switch (def.read) {
     case MetricRead::kNumber:
+    case MetricRead::kLargest:  // no list on the path: the number there
       break;
     case MetricRead::kNorm: {
       if (!node->is_array() || node->size() != 3) return std::nullopt;
