@@ -1,6 +1,6 @@
 // hpa::sim::TeamRenderer: the team video's cameras (OSMesa). The chase camera sees the payload and
-// every vehicle, an onboard camera sees the payload hanging below it, and rendering never changes
-// the world it draws.
+// every vehicle, an onboard camera sees the payload hanging below it, a slack cable is drawn
+// orange, and rendering never changes the world it draws.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -103,6 +103,20 @@ TEST(TeamRenderTest, OnboardCameraSeesThePayloadBelowIt) {
   EXPECT_NEAR(payload.v_px, 0.5 * onboard.rows, 20.0);
   EXPECT_THROW(world.renderer().RenderOnboardCamera(1), std::out_of_range);
   EXPECT_THROW(world.renderer().RenderOnboardCamera(-1), std::out_of_range);
+}
+
+TEST(TeamRenderTest, ASlackCableIsDrawnOrange) {
+  // two vehicles (blue and green discs: no colour near the cable's orange) on a bar; vehicle 1
+  // pushed down slackens its cable
+  CooperativeTeam team = Triangle();
+  team.vehicles.pop_back();
+  TeamWorld world(Config(team));
+  const auto orange = [](int b, int g, int r) { return r > 200 && g > 90 && g < 180 && b < 60; };
+  EXPECT_EQ(Find(world.renderer().RenderChaseCamera(960, 540), orange).pixels, 0);
+  world.ApplyImpulse(1, Vector3d(0, 0, -1.0));
+  for (int k = 0; k < 30 && world.GetTruth().modes[1] == CableMode::kTaut; ++k) world.Step();
+  ASSERT_EQ(world.GetTruth().modes[1], CableMode::kSlack);
+  EXPECT_GT(Find(world.renderer().RenderChaseCamera(960, 540), orange).pixels, 20);
 }
 
 TEST(TeamRenderTest, RenderingNeverChangesTheWorld) {
