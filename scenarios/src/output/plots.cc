@@ -251,9 +251,66 @@ std::vector<std::string> WriteRunPlots(const RunResult& result, const Params& pa
   return written;
 }
 
+namespace {
+
+// A team comparison: each run's payload x, y and z against the reference (dotted) and its worst
+// vehicle's tilt, one colour per run.
+std::string WriteTeamComparisonPlot(const std::vector<RunResult>& results,
+                                    const std::string& stem, PlotFormat format,
+                                    const std::vector<std::string>& labels) {
+  Figure fig(1400, 1000);
+  const std::string name = results.front().metrics.scenario;
+  static const char* kTitles[4] = {"payload x (dotted: reference)", "payload y (dotted: reference)",
+                                   "payload z (dotted: reference)", "largest vehicle tilt"};
+  static const char* kUnits[4] = {"x_L [m]", "y_L [m]", "z_L [m]", "[deg]"};
+  for (int k = 0; k < 4; ++k) {
+    PlotPanel p(&fig, cv::Rect(0, k * 250, 1400, 250),
+                std::string(kTitles[k]) + (k == 0 ? " - " + name : ""), "t [s]", kUnits[k]);
+    std::vector<std::vector<double>> ts, ys;
+    for (const RunResult& r : results) {
+      ts.push_back(TeamColumn(r.team_rows, [](const TeamLogRow& row) { return row.time_s; }));
+      ys.push_back(TeamColumn(r.team_rows, [k](const TeamLogRow& row) {
+        if (k < 3) return row.x_true(CooperativeStateIndex::kPayloadPos + k);
+        double tilt_deg = 0.0;
+        for (size_t i = 0; i < row.vehicles.size(); ++i) {
+          const Eigen::Vector4d q = row.x_true.segment<4>(
+              CooperativeStateIndex::Vehicle(static_cast<int>(i)) +
+              CooperativeStateIndex::kVehicleQuat);
+          const double c =
+              Eigen::Quaterniond(q(0), q(1), q(2), q(3)).normalized().toRotationMatrix()(2, 2);
+          tilt_deg = std::max(tilt_deg, std::acos(std::clamp(c, -1.0, 1.0)) * 180.0 / M_PI);
+        }
+        return tilt_deg;
+      }));
+    }
+    p.FitRange(ts, ys);
+    p.DrawAxes();
+    std::vector<std::pair<std::string, cv::Scalar>> legend;
+    for (size_t i = 0; i < results.size(); ++i) {
+      if (k < 3) {
+        const auto ref = TeamColumn(results[i].team_rows,
+                                    [k](const TeamLogRow& r) { return r.reference.p_WL_W(k); });
+        p.Line(ts[i], ref, SeriesColour(static_cast<int>(i)), 1, true);
+      }
+      p.Line(ts[i], ys[i], SeriesColour(static_cast<int>(i)), 2);
+      const Metrics& m = results[i].metrics;
+      const std::string& label = i < labels.size() ? labels[i] : m.controller;
+      legend.emplace_back(label + (m.crashed ? " (CRASHED)" : ""),
+                          SeriesColour(static_cast<int>(i)));
+    }
+    p.Legend(legend);
+  }
+  return fig.Write(stem, format);
+}
+
+}  // namespace
+
 std::string WriteComparisonPlot(const std::vector<RunResult>& results, const Params& params,
                                 const std::string& stem, PlotFormat format,
                                 const std::vector<std::string>& labels) {
+  if (!results.empty() && results.front().metrics.team) {
+    return WriteTeamComparisonPlot(results, stem, format, labels);
+  }
   Figure fig(1400, 1000);
   const std::string name = results.empty() ? "" : results.front().metrics.scenario;
   struct Panel {

@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "hpa/controller/controller_registry.h"
+#include "hpa/controller/team_controller.h"
 #include "hpa/models/file_io.h"
 #include "hpa/models/input_error.h"
 #include "hpa/models/params.h"
@@ -128,15 +129,16 @@ struct CompareEntry {
 // The entries of `hpa compare`: the --controllers types, then each --flight-stack NAME=CMD, every
 // one checked before the first run (a NAME is a safe folder name, no registered controller's
 // and no other entry's; a CMD is a command FlightStackCommandError accepts).
-std::vector<CompareEntry> CompareEntries(std::string list, const std::vector<std::string>& stacks) {
+std::vector<CompareEntry> CompareEntries(std::string list, const std::vector<std::string>& stacks,
+                                         bool team) {
   std::vector<CompareEntry> entries;
   list += ",";
   for (size_t p = 0; (p = list.find(',')) != std::string::npos; list.erase(0, p + 1)) {
     if (p > 0) entries.push_back({list.substr(0, p), ""});
   }
   if (entries.empty()) throw InputError("", "--controllers", "expected a list such as A,B");
-  for (const CompareEntry& e : entries) CheckControllerType(e.name, "", "--controllers");
-  const std::vector<std::string> registered = ControllerNames();
+  for (const CompareEntry& e : entries) CheckControllerType(e.name, "", "--controllers", team);
+  const std::vector<std::string> registered = team ? TeamControllerNames() : ControllerNames();
   for (const std::string& text : stacks) {
     const size_t eq = text.find('=');
     const std::string name = text.substr(0, eq);
@@ -342,6 +344,13 @@ int RunMain(int argc, char** argv) {
                "compute the in-process controller's commands on the simulation's thread (the "
                "same run; by default they are computed on a second core while the simulation "
                "steps on, until the command is due)");
+  std::string team_stack = "per_vehicle";
+  app.add_option("--team-stack", team_stack,
+                 "with --flight-stack and a team scenario: per_vehicle starts one stack process "
+                 "per vehicle (HPA_VEHICLE set to its index), one starts a single process that "
+                 "flies the whole team (docs/protocol.md, Teams)")
+      ->check(CLI::IsMember({"per_vehicle", "one"}))
+      ->default_str("per_vehicle");
   if (const auto code = ParseCommandLine(app, argc, argv)) return *code;
   const PlotFormat format = ParsePlotFormat(plot_format);
   const Params params = LoadParamsOf(o);
@@ -360,6 +369,7 @@ int RunMain(int argc, char** argv) {
   options.gl_backend = ParseGlOption(o.gl);
   options.flight_stack = flight_stack;
   options.flight_step_timeout_s = flight_timeout_s;
+  options.team_stack_per_vehicle = team_stack == "per_vehicle";
   options.control_thread = !no_control_thread && ControlThreadPays();
   if (slack_events && video.empty()) video = out_dir + "/slack_events.mp4";
   std::unique_ptr<VideoTickRecorder> recorder;
@@ -412,7 +422,7 @@ int CompareMain(int argc, char** argv) {
   const Params params = LoadParamsOf(o);
   const Scenario base = LoadScenarioOf(o);
   // every name and command checked before the first run
-  std::vector<CompareEntry> entries = CompareEntries(list, stacks);
+  std::vector<CompareEntry> entries = CompareEntries(list, stacks, base.team.IsTeam());
   std::vector<std::string> names;
   for (const CompareEntry& e : entries) names.push_back(e.name);
   RemoveStaleComparison(out_dir, names);
