@@ -67,5 +67,21 @@ grep -q "motion capture" "$out/rates.md" || fail "rate table lacks the motion ca
 "$hpa" run "$base" --controller hpa_mpc --out "$out/mpc" --quiet || fail "hpa_mpc team run"
 grep -q '"controller": "hpa_mpc"' "$out/mpc/metrics.json" || fail "baseline not named"
 
+# the shipped team sweeps run (a fifth of each: every 5th run, which walks through all six grid
+# cells, both controllers among them)
+for sweep in team_cables team_attachment; do
+  "$hpa" sweep "$src/scenarios/sweeps/$sweep.yaml" --shard 1/5 --jobs 2 --out "$out/$sweep" \
+    > /dev/null 2>&1 || fail "sweep $sweep exited $?"
+  "$python" - "$out/$sweep/runs.jsonl" << 'PY' || fail "sweep $sweep records"
+import json, sys
+runs = [json.loads(line) for line in open(sys.argv[1])]
+assert len(runs) == 12, len(runs)
+bad = [r["run"] for r in runs if r["status"] != "ok" or not r["metrics"]["team"]]
+assert not bad, "runs without team metrics: %s" % bad
+flown = {r["controller"] for r in runs}
+assert flown == {"cooperative", "hpa_mpc"}, flown
+PY
+done
+
 [ "$failures" -eq 0 ] && echo "team CLI: all checks passed"
 exit "$failures"
