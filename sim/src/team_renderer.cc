@@ -26,7 +26,8 @@ namespace {
 
 constexpr double kChaseFovy_deg = 50.0;
 constexpr double kChaseElevation_rad = 25.0 * M_PI / 180.0;  // looking down at the team's centre
-// turned from straight behind (-y), so that vehicles side by side along y do not hide each other
+// turned from straight behind (-y) towards +x, so that vehicles side by side along y do not hide
+// each other, nor does a triangle's vehicle at -x -y hide the payload
 constexpr double kChaseAzimuth_rad = 25.0 * M_PI / 180.0;
 // room around the hanging team for its motion (a swing, a slack cable, a manoeuvre) (m)
 constexpr double kChaseMargin_m = 0.4;
@@ -168,7 +169,7 @@ struct TeamRenderer::Impl {
     }
     centre_W /= n + 1;
     if (!centre_W.allFinite()) centre_W.setZero();
-    const Eigen::Vector3d back_W(-std::sin(kChaseAzimuth_rad) * std::cos(kChaseElevation_rad),
+    const Eigen::Vector3d back_W(std::sin(kChaseAzimuth_rad) * std::cos(kChaseElevation_rad),
                                  -std::cos(kChaseAzimuth_rad) * std::cos(kChaseElevation_rad),
                                  std::sin(kChaseElevation_rad));
     const Eigen::Vector3d p_WC_W = centre_W + chase_distance_m * back_W;
