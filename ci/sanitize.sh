@@ -1,9 +1,9 @@
 #!/usr/bin/env bash
 # AddressSanitizer + UndefinedBehaviorSanitizer build (clang) of everything: runs the unit
-# tests, one short `hpa run` with the analytic camera and one with the rendered camera, and the
-# libFuzzer target of the scenario and sweep YAML loaders for a bounded time. Any sanitizer
-# report, fuzzer crash or hang fails. Leaks inside Mesa and MuJoCo are suppressed (ci/lsan.supp
-# says why each entry is there).
+# tests, one short `hpa run` with the analytic camera, one with the rendered camera and one of a
+# team, and the libFuzzer target of the scenario and sweep YAML loaders for a bounded time. Any
+# sanitizer report, fuzzer crash or hang fails. Leaks inside Mesa and MuJoCo are suppressed
+# (ci/lsan.supp says why each entry is there).
 # usage: ci/sanitize.sh [fuzz seconds, default 60]
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -26,7 +26,7 @@ ctest --test-dir build-asan --output-on-failure -j "$(nproc)" -LE "scenario|cli"
   -E 'ClosedLoopTest\.(RtiCostCloseToNlopt|RetautFromNearHorizontalCableDoesNotDiverge)'
 
 
-echo "== two short runs under the sanitizers (analytic and rendered camera)"
+echo "== three short runs under the sanitizers (analytic camera, rendered camera, a team)"
 out=$(mktemp -d)
 trap 'rm -rf "$out"' EXIT
 # exit 1 (an expect bound of the full-length scenario) is fine here; 2 and 3 are not
@@ -35,6 +35,9 @@ build-asan/bin/hpa run scenarios/ci/hover_hpa_mpc_truth.yaml --set duration=4 \
   || [ $? -eq 1 ]
 build-asan/bin/hpa run scenarios/ci/line_impulse_nonhybrid.yaml --set duration=4 \
   --out "$out/render" --quiet || [ $? -eq 1 ]
+# and a team: two vehicles, a push slackening one cable (every team code path of a run)
+build-asan/bin/hpa run scenarios/ci/team2_cable_slack.yaml --set duration=4 \
+  --out "$out/team" --quiet || [ $? -eq 1 ]
 
 echo "== fuzzing the YAML loaders for $fuzz_s s"
 mkdir -p "$out/corpus"
