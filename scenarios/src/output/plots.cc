@@ -141,6 +141,21 @@ std::string WriteRetautPlot(const std::vector<LogRow>& rows, const std::vector<d
   return fig.Write(dir + "/" + kRetautStem, format);
 }
 
+// The legend entry of one run of a comparison: its label (the controller's name unless given),
+// marked when it crashed.
+std::pair<std::string, cv::Scalar> RunLegend(const std::vector<RunResult>& results,
+                                             const std::vector<std::string>& labels, size_t i) {
+  const Metrics& m = results[i].metrics;
+  const std::string& label = i < labels.size() ? labels[i] : m.controller;
+  return {label + (m.crashed ? " (CRASHED)" : ""), SeriesColour(static_cast<int>(i))};
+}
+
+// A vehicle's tilt (deg) in a team's log row.
+double VehicleTiltDeg(const TeamLogRow& row, int vehicle) {
+  return TiltDeg(row.x_true.segment<4>(CooperativeStateIndex::Vehicle(vehicle) +
+                                       CooperativeStateIndex::kVehicleQuat));
+}
+
 // A column of a team's log as a vector.
 template <typename F>
 std::vector<double> TeamColumn(const std::vector<TeamLogRow>& rows, F f) {
@@ -200,12 +215,7 @@ std::string WriteTeamCablesPlot(const std::vector<TeamLogRow>& rows, const std::
     tension.push_back(TeamColumn(rows, [i](const TeamLogRow& r) {
       return r.vehicles[static_cast<size_t>(i)].cable_tension_N;
     }));
-    tilt.push_back(TeamColumn(rows, [i](const TeamLogRow& r) {
-      const Eigen::Vector4d q =
-          r.x_true.segment<4>(CooperativeStateIndex::Vehicle(i) + CooperativeStateIndex::kVehicleQuat);
-      const double c = Eigen::Quaterniond(q(0), q(1), q(2), q(3)).normalized().toRotationMatrix()(2, 2);
-      return std::acos(std::clamp(c, -1.0, 1.0)) * 180.0 / M_PI;
-    }));
+    tilt.push_back(TeamColumn(rows, [i](const TeamLogRow& r) { return VehicleTiltDeg(r, i); }));
   }
   p0.FitRange({t}, tension);
   p0.DrawAxes();
@@ -273,12 +283,7 @@ std::string WriteTeamComparisonPlot(const std::vector<RunResult>& results,
         if (k < 3) return row.x_true(CooperativeStateIndex::kPayloadPos + k);
         double tilt_deg = 0.0;
         for (size_t i = 0; i < row.vehicles.size(); ++i) {
-          const Eigen::Vector4d q = row.x_true.segment<4>(
-              CooperativeStateIndex::Vehicle(static_cast<int>(i)) +
-              CooperativeStateIndex::kVehicleQuat);
-          const double c =
-              Eigen::Quaterniond(q(0), q(1), q(2), q(3)).normalized().toRotationMatrix()(2, 2);
-          tilt_deg = std::max(tilt_deg, std::acos(std::clamp(c, -1.0, 1.0)) * 180.0 / M_PI);
+          tilt_deg = std::max(tilt_deg, VehicleTiltDeg(row, static_cast<int>(i)));
         }
         return tilt_deg;
       }));
@@ -293,10 +298,7 @@ std::string WriteTeamComparisonPlot(const std::vector<RunResult>& results,
         p.Line(ts[i], ref, SeriesColour(static_cast<int>(i)), 1, true);
       }
       p.Line(ts[i], ys[i], SeriesColour(static_cast<int>(i)), 2);
-      const Metrics& m = results[i].metrics;
-      const std::string& label = i < labels.size() ? labels[i] : m.controller;
-      legend.emplace_back(label + (m.crashed ? " (CRASHED)" : ""),
-                          SeriesColour(static_cast<int>(i)));
+      legend.push_back(RunLegend(results, labels, i));
     }
     p.Legend(legend);
   }
@@ -353,10 +355,7 @@ std::string WriteComparisonPlot(const std::vector<RunResult>& results, const Par
         p.Line(ts[i], ref, SeriesColour(static_cast<int>(i)), 1, true);
       }
       p.Line(ts[i], ys[i], SeriesColour(static_cast<int>(i)), 2);
-      const Metrics& m = results[i].metrics;
-      const std::string& label = i < labels.size() ? labels[i] : m.controller;
-      legend.emplace_back(label + (m.crashed ? " (CRASHED)" : ""),
-                          SeriesColour(static_cast<int>(i)));
+      legend.push_back(RunLegend(results, labels, i));
     }
     if (k == 0) legend.emplace_back("slack (shaded per run)", cv::Scalar(0, 200, 255));
     p.Legend(legend);

@@ -2,6 +2,7 @@
 
 #include <sys/stat.h>
 
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <cerrno>
 #include <charconv>
@@ -45,6 +46,12 @@ Quantiles ComputeQuantiles(std::vector<double> values) {
   q.p99 = Quantile(values, 0.99);
   q.max = Quantile(values, 1.0);
   return q;
+}
+
+double TiltDeg(const Eigen::Vector4d& q_wxyz) {
+  const Eigen::Quaterniond q(q_wxyz(0), q_wxyz(1), q_wxyz(2), q_wxyz(3));
+  const double cos_tilt = std::clamp(q.normalized().toRotationMatrix()(2, 2), -1.0, 1.0);
+  return std::acos(cos_tilt) * 180.0 / M_PI;
 }
 
 std::vector<std::pair<double, double>> SlackIntervals(const std::vector<double>& times_s,

@@ -75,13 +75,6 @@ sim::BodyReading ReadingFromState(const Eigen::VectorXd& x, int body, double tim
   return r;
 }
 
-// Angle between a body's z axis and the world's (deg).
-double TiltDeg(const Eigen::Vector4d& q_wxyz) {
-  const Eigen::Quaterniond q(q_wxyz(0), q_wxyz(1), q_wxyz(2), q_wxyz(3));
-  const double cos_tilt = std::clamp(q.normalized().toRotationMatrix()(2, 2), -1.0, 1.0);
-  return std::acos(cos_tilt) * 180.0 / M_PI;
-}
-
 // Whether a status is a failed update (as the single vehicle's mpc_failures counts them).
 bool IsFailure(ControlStatus status) {
   return status == ControlStatus::kQpFailure || status == ControlStatus::kNonFinite ||

@@ -216,6 +216,9 @@ double Quantile(std::vector<double> values, double q);
 /// Median, 99th percentile and max of a sample by Quantile (empty sample -> zeros).
 Quantiles ComputeQuantiles(std::vector<double> values);
 
+/// Angle between a body's z axis and the world's (deg), from its attitude quaternion (w, x, y, z).
+double TiltDeg(const Eigen::Vector4d& q_wxyz);
+
 /// Slack intervals [start, end) of a cable's modes sampled at times_s (same length), chatter
 /// shorter than 30 ms ignored.
 std::vector<std::pair<double, double>> SlackIntervals(const std::vector<double>& times_s,
