@@ -19,8 +19,8 @@ class TeamRenderer {
  public:
   static constexpr int kOnboardWidthPx = 320;   // onboard camera's default image width
   static constexpr int kOnboardHeightPx = 180;  // onboard camera's default image height
-  static constexpr int kMaxWidthPx = 1280;      // largest image either camera renders
-  static constexpr int kMaxHeightPx = 720;
+  static constexpr int kMaxWidthPx = 1280;      // widest image either camera renders
+  static constexpr int kMaxHeightPx = 720;      // tallest image either camera renders
 
   /// Compiles the render-only scene of `world` (which must outlive the renderer); no GL yet.
   /// Throws std::runtime_error if MuJoCo cannot compile it.

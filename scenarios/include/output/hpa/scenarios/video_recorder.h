@@ -47,7 +47,7 @@ class VideoRecorder {
       CableMode true_mode = CableMode::kTaut;  // true mode
       std::optional<bool> taut_seen;           // its controller's reading (none before its first)
     };
-    double time_s = 0.0;
+    double time_s = 0.0;                    // the video tick's simulated time
     std::optional<double> payload_error_m;  // |payload - reference| (none before the first row)
     std::vector<Cable> cables;              // (N)
   };
