@@ -27,6 +27,8 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "hpa/controller/geometric_controller.h"
+
 namespace hpa {
 namespace {
 
@@ -171,13 +173,8 @@ ControlOutput CooperativeController::Update(const TeamView& view) {
   force_W_N.z() = std::max(force_W_N.z(), 0.2 * m * params.gravity_mps2);
 
   // thrust F = Force . R e3; body rate toward Rot_des (our autopilot cascade)
-  const Eigen::Matrix3d r = view.q_WB.normalized().toRotationMatrix();
-  const Eigen::Matrix3d r_des = AttitudeFromForce(force_W_N);
-  const Eigen::Vector3d e_r = 0.5 * Vee(r_des.transpose() * r - r.transpose() * r_des);
-  Eigen::Vector3d w_cmd = -gains_.k_attitude_per_s.cwiseProduct(e_r);
-  w_cmd = w_cmd.cwiseMax(-gains_.max_rate_radps).cwiseMin(gains_.max_rate_radps);
-  out.command.w_B_radps = w_cmd;
-  out.command.thrust_N = std::max(0.0, force_W_N.dot(r.col(2)));
+  out.command = AttitudeCascadeCommand(force_W_N, AttitudeFromForce(force_W_N), view.q_WB,
+                                       gains_.k_attitude_per_s, gains_.max_rate_radps);
   out.status = ControlStatus::kSuccess;
   out.solve_time_ms =
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();

@@ -51,20 +51,26 @@ ControlOutput GeometricController::Update(const SystemState& state) {
   const Eigen::Vector3d b1 = b2.cross(b3);
   Eigen::Matrix3d r_des;
   r_des << b1, b2, b3;
-  const Eigen::Matrix3d r = state.q_WB.normalized().toRotationMatrix();
-
-  // attitude error e_R = 1/2 vee(R_d^T R - R^T R_d); rates = -K_R e_R
-  const Eigen::Matrix3d e = 0.5 * (r_des.transpose() * r - r.transpose() * r_des);
-  const Eigen::Vector3d e_r(e(2, 1), e(0, 2), e(1, 0));
-  Eigen::Vector3d w_cmd = -gains_.k_attitude_per_s.cwiseProduct(e_r);
-  w_cmd = w_cmd.cwiseMax(-gains_.max_rate_radps).cwiseMin(gains_.max_rate_radps);
-
-  out.command.w_B_radps = w_cmd;
-  out.command.thrust_N = std::max(0.0, f_des_N.dot(r.col(2)));
+  out.command = AttitudeCascadeCommand(f_des_N, r_des, state.q_WB, gains_.k_attitude_per_s,
+                                       gains_.max_rate_radps);
   out.status = ControlStatus::kSuccess;
   out.solve_time_ms =
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
   return out;
+}
+
+BodyRateCommand AttitudeCascadeCommand(const Eigen::Vector3d& force_W_N, const Eigen::Matrix3d& r_des,
+                                       const Eigen::Quaterniond& q_WB,
+                                       const Eigen::Vector3d& k_attitude_per_s,
+                                       double max_rate_radps) {
+  const Eigen::Matrix3d r = q_WB.normalized().toRotationMatrix();
+  const Eigen::Matrix3d e = 0.5 * (r_des.transpose() * r - r.transpose() * r_des);
+  const Eigen::Vector3d e_r(e(2, 1), e(0, 2), e(1, 0));
+  BodyRateCommand command;
+  command.w_B_radps =
+      (-k_attitude_per_s.cwiseProduct(e_r)).cwiseMax(-max_rate_radps).cwiseMin(max_rate_radps);
+  command.thrust_N = std::max(0.0, force_W_N.dot(r.col(2)));
+  return command;
 }
 
 std::unique_ptr<Controller> MakeGeometricController(const ControllerConfig& config,

@@ -197,6 +197,7 @@ RunResult RunTeamScenario(const Scenario& scenario, const Params& base_params,
   sim::TeamWorldConfig world_config;
   world_config.team = team;
   world_config.seed = scenario.seed;
+  world_config.gl_backend = options.gl_backend;  // the video's cameras (the physics never renders)
   sim::TeamWorld world(world_config);
   world.Reset(StartState(scenario, model, reference->At(0.0).p_WL_W, params.payload_radius_m));
 

@@ -4,6 +4,7 @@
 // as PX4) plus collective thrust for the body-rate controller. 150 Hz.
 
 #include <Eigen/Core>
+#include <Eigen/Geometry>
 #include <memory>
 
 #include "hpa/controller/controller.h"
@@ -18,6 +19,14 @@ struct GeometricGains {
   double max_tilt_rad = 0.6;                         // commanded tilt limit (34 deg)
   double max_rate_radps = 6.0;                       // commanded body-rate limit
 };
+
+/// The cascade's last step, shared by the geometric and the team controllers: the collective
+/// thrust F . R e3 of a desired force and the body rate -K_R e_R toward the attitude r_des, with
+/// e_R = 1/2 vee(R_d^T R - R^T R_d) (Lee et al.), each rate clamped to +-max_rate_radps.
+BodyRateCommand AttitudeCascadeCommand(const Eigen::Vector3d& force_W_N, const Eigen::Matrix3d& r_des,
+                                       const Eigen::Quaterniond& q_WB,
+                                       const Eigen::Vector3d& k_attitude_per_s,
+                                       double max_rate_radps);
 
 /// Lee-style SE(3) controller on the quadrotor with a payload feed-forward.
 class GeometricController : public Controller {
