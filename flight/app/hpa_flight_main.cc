@@ -3,21 +3,28 @@
 // simulator starts it (`hpa run --flight-stack "hpa-flight"`) with HPA_FLIGHT_SOCKET set; it
 // connects, builds the flight stack from the hello and answers every tick until the finish. With
 // --own-rate-loop it also runs the vehicle's rate loop (the autopilot the hello's rate_loop names)
-// and answers each rate_tick with the rotor speed commands.
+// and answers each rate_tick with the rotor speed commands. Greeted by a team_hello, it flies the
+// vehicles of a team it names (docs/protocol.md, "Teams").
 
 #include <fcntl.h>
 #include <sys/mman.h>
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
+#include <chrono>
 #include <cstdio>
 #include <cstdlib>
+#include <map>
+#include <memory>
 #include <optional>
 #include <string>
 #include <utility>
 
 #include "hpa/autopilot/autopilot.h"
+#include "hpa/controller/reference_spec.h"
+#include "hpa/controller/team_controller.h"
 #include "hpa/flight/protocol.h"
+#include "hpa/flight/team_protocol.h"
 
 namespace {
 
@@ -98,9 +105,78 @@ hpa::flight::DetectReply AnswerDetect(const hpa::flight::FlightStack& stack,
   return reply;
 }
 
+// A team's stack (docs/protocol.md, "Teams"): each vehicle of the team_hello flies its team
+// controller (the hello's, or `controller`) on the payload reference the hello describes, and
+// each team_tick's views are answered in their order, each update timed as in process.
+int ServeTeam(Channel& channel, const std::vector<uint8_t>& hello_bytes,
+              const std::string& controller) {
+  const hpa::flight::TeamHello hello = hpa::flight::ParseTeamHello(hello_bytes);
+  // a stack started for one vehicle (HPA_VEHICLE) flies that one
+  const char* env = std::getenv("HPA_VEHICLE");
+  if (env != nullptr && *env != '\0' &&
+      hello.vehicles != std::vector<int>{std::atoi(env)}) {
+    throw ProtocolError(std::string("started with HPA_VEHICLE=") + env +
+                        ", but the team_hello asks for " + std::to_string(hello.vehicles.size()) +
+                        " vehicle(s) from " + std::to_string(hello.vehicles.front()));
+  }
+  const std::string type = controller.empty() ? hello.controller : controller;
+  const std::shared_ptr<const hpa::Reference> reference =
+      hpa::MakeReference(hello.reference, hello.team.vehicles.front().params);
+  std::map<int, std::unique_ptr<hpa::TeamController>> controllers;  // by vehicle
+  for (const int i : hello.vehicles) {
+    try {
+      controllers[i] = hpa::MakeTeamController(type, hello.team, i, reference);
+    } catch (const std::invalid_argument& e) {
+      throw ProtocolError(std::string("team controller: ") + e.what());
+    }
+  }
+  channel.SendJson(MessageType::kTeamHelloAck,
+                   {{"protocol_version", hpa::flight::kProtocolVersion},
+                    {"name", "hpa-flight (" + type + ")"},
+                    {"controller", type},
+                    {"control_rate_hz", controllers.begin()->second->RateHz()},
+                    {"vehicles", hello.vehicles}});
+  std::vector<uint8_t> body;
+  std::vector<hpa::flight::TeamVehicleReply> replies;
+  while (true) {
+    const MessageType type_in = channel.Receive(&body, 0.0);
+    if (type_in == MessageType::kTeamTick) {
+      const hpa::flight::TeamTick tick = hpa::flight::DecodeTeamTick(body);
+      replies.clear();
+      for (const hpa::flight::TeamVehicleView& v : tick.views) {
+        const auto it = controllers.find(v.vehicle);
+        if (it == controllers.end()) {
+          throw ProtocolError("a team_tick view of vehicle " + std::to_string(v.vehicle) +
+                              ", which this stack does not fly");
+        }
+        // the update's wall time, measured as the in-process team link measures it
+        using Clock = std::chrono::steady_clock;
+        const Clock::time_point start = Clock::now();
+        hpa::flight::TeamVehicleReply& reply = replies.emplace_back();
+        reply.vehicle = v.vehicle;
+        reply.output = it->second->Update(v.view);
+        reply.output.solve_time_ms =
+            std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+        reply.cable_taut = it->second->CableTaut();
+      }
+      channel.Send(MessageType::kTeamTickReply, hpa::flight::EncodeTeamTickReply(replies));
+    } else if (type_in == MessageType::kFinish) {
+      channel.SendJson(MessageType::kFinishReply, nlohmann::json::object());
+      return 0;
+    } else {
+      throw ProtocolError("unexpected " + hpa::flight::MessageTypeName(type_in) + " message");
+    }
+  }
+}
+
 int Serve(Channel& channel, const std::string& controller, const std::string& estimator,
           bool per_tick, bool own_rate_loop) {
-  const std::vector<uint8_t> hello_bytes = channel.Expect(MessageType::kHello, 60.0);
+  std::vector<uint8_t> hello_bytes;
+  const MessageType first = channel.Receive(&hello_bytes, 60.0);
+  if (first == MessageType::kTeamHello) return ServeTeam(channel, hello_bytes, controller);
+  if (first != MessageType::kHello) {
+    throw ProtocolError("expected a hello message, got " + hpa::flight::MessageTypeName(first));
+  }
   const nlohmann::json hello = nlohmann::json::parse(hello_bytes.begin(), hello_bytes.end());
   const uint32_t version = hello.at("protocol_version").get<uint32_t>();
   if (version != hpa::flight::kProtocolVersion) {

@@ -15,6 +15,7 @@
 #include <optional>
 #include <set>
 
+#include "hpa/flight/team_protocol.h"
 #include "message_table.h"
 
 namespace hpa::flight {
@@ -280,6 +281,14 @@ std::string MessageTypeName(MessageType type) {
       return "rate_tick";
     case MessageType::kRateReply:
       return "rate_reply";
+    case MessageType::kTeamHello:
+      return "team_hello";
+    case MessageType::kTeamHelloAck:
+      return "team_hello_ack";
+    case MessageType::kTeamTick:
+      return "team_tick";
+    case MessageType::kTeamTickReply:
+      return "team_tick_reply";
   }
   return "unknown type " + std::to_string(static_cast<uint32_t>(type));
 }
@@ -436,7 +445,9 @@ void CheckMessageBindings() {
   DetectReplyCodec();
   RateTickCodec();
   RateReplyCodec();
-  // every struct of the table is bound, through the tick's or the reply's codec
+  CheckTeamMessageBindings();
+  // every struct of the table is bound, through the tick's or the reply's codec (a team
+  // message's, team_protocol.cc's)
   std::set<std::string> bound;
   const auto visit = [&](const auto& self, const wire::Struct& s) -> void {
     bound.insert(s.name);
@@ -449,6 +460,7 @@ void CheckMessageBindings() {
   visit(visit, DetectReplyCodec().spec());
   visit(visit, RateTickCodec().spec());
   visit(visit, RateReplyCodec().spec());
+  for (const char* team : {"team_tick", "team_tick_reply"}) visit(visit, wire::Table::Get().Find(team));
   for (const auto& item : MessageTable().at("structs").items()) {
     if (bound.count(item.key()) == 0) {
       throw std::logic_error("messages.json's struct " + item.key() + " is in no message");

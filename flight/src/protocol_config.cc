@@ -170,9 +170,21 @@ void TablesFromJson(const std::vector<ParamTable<C>>& tables, const nlohmann::js
 
 }  // namespace
 
-nlohmann::json ConfigToJson(const FlightConfig& c) {
-  const nlohmann::json params = TablesToJson(ParamsTables(), c.params);
-  const ReferenceSpec& r = c.reference;
+nlohmann::json ParamsToJson(const Params& params) {
+  return TablesToJson(ParamsTables(), params);
+}
+
+Params ParamsFromJson(const nlohmann::json& j, const std::string& section) {
+  try {
+    Params params;
+    TablesFromJson(ParamsTables(), j, section, &params);
+    return params;
+  } catch (const nlohmann::json::exception& e) {
+    throw ProtocolError("bad " + section + ": " + e.what());
+  }
+}
+
+nlohmann::json ReferenceToJson(const ReferenceSpec& r) {
   const LissajousSpec& l = r.lissajous;
   nlohmann::json reference = {{"type", r.type},
                               {"payload_position_W_m", Vec3(r.payload_position_W_m)},
@@ -200,11 +212,15 @@ nlohmann::json ConfigToJson(const FlightConfig& c) {
   reference["samples_t_p_v_a"] = samples;
   // a type that keeps its key values as read (one registered beyond the built-ins) sends them
   if (!r.values.empty()) reference["key_values"] = r.values;
-  return {{"params", params},
+  return reference;
+}
+
+nlohmann::json ConfigToJson(const FlightConfig& c) {
+  return {{"params", ParamsToJson(c.params)},
           {"controller", ControllerToJson(c.controller)},
           {"estimator", c.estimator},
           {"slack_tension_cue", c.slack_tension_cue},
-          {"reference", reference},
+          {"reference", ReferenceToJson(c.reference)},
           {"ground_truth", c.ground_truth},
           {"estimate_latency_s", c.estimate_latency_s},
           {"tick_hz", c.tick_hz},
@@ -233,6 +249,57 @@ RateLoopConfig RateLoopFromJson(const nlohmann::json& j) {
   }
 }
 
+namespace {
+
+// The reference spec of ReferenceToJson's JSON; throws nlohmann::json::exception for a missing
+// key or a value of another type, ProtocolError for one outside its declaration.
+ReferenceSpec ReadReference(const nlohmann::json& rj) {
+  ReferenceSpec r;
+  r.type = rj.at("type").get<std::string>();
+  r.payload_position_W_m = ReadVec3(rj, "payload_position_W_m");
+  const nlohmann::json& lj = rj.at("lissajous");
+  LissajousSpec& l = r.lissajous;
+  l.a = lj.at("a").get<double>(), l.b = lj.at("b").get<double>(), l.c = lj.at("c").get<double>();
+  l.n = lj.at("n").get<double>(), l.m = lj.at("m").get<double>();
+  l.phi = lj.at("phi").get<double>(), l.psi = lj.at("psi").get<double>();
+  l.period_s = lj.at("period_s").get<double>(), l.ramp_s = lj.at("ramp_s").get<double>();
+  l.centre = ReadVec3(lj, "centre");
+  r.line_start_W_m = ReadVec3(rj, "line_start_W_m");
+  r.line_end_W_m = ReadVec3(rj, "line_end_W_m");
+  r.line_duration_s = rj.at("line_duration_s").get<double>();
+  r.line_start_time_s = rj.at("line_start_time_s").get<double>();
+  r.file = rj.value("file", "");
+  for (const nlohmann::json& row : rj.value("samples_t_p_v_a", nlohmann::json::array())) {
+    if (!row.is_array() || row.size() != 10) {
+      throw ProtocolError("reference samples: expected rows of 10 numbers");
+    }
+    TrajectorySample s;
+    s.t_s = row[0].get<double>();
+    s.p_WL_W = {row[1].get<double>(), row[2].get<double>(), row[3].get<double>()};
+    s.v_WL_W = {row[4].get<double>(), row[5].get<double>(), row[6].get<double>()};
+    s.a_WL_W = {row[7].get<double>(), row[8].get<double>(), row[9].get<double>()};
+    r.samples.push_back(s);
+  }
+  if (rj.contains("key_values")) {
+    r.values = rj.at("key_values").get<std::map<std::string, std::vector<double>>>();
+  }
+  // the type is one this stack has, its key values within the ranges it declares
+  if (const std::optional<std::string> error = ReferenceValuesError(r)) {
+    throw ProtocolError("reference: " + *error);
+  }
+  return r;
+}
+
+}  // namespace
+
+ReferenceSpec ReferenceFromJson(const nlohmann::json& j) {
+  try {
+    return ReadReference(j);
+  } catch (const nlohmann::json::exception& e) {
+    throw ProtocolError(std::string("bad reference: ") + e.what());
+  }
+}
+
 FlightConfig ConfigFromJson(const nlohmann::json& j) {
   try {
     FlightConfig c;
@@ -240,40 +307,7 @@ FlightConfig ConfigFromJson(const nlohmann::json& j) {
     c.controller = ControllerFromJson(j.at("controller"));
     c.estimator = j.at("estimator").get<std::string>();
     c.slack_tension_cue = j.at("slack_tension_cue").get<bool>();
-    const nlohmann::json& rj = j.at("reference");
-    ReferenceSpec& r = c.reference;
-    r.type = rj.at("type").get<std::string>();
-    r.payload_position_W_m = ReadVec3(rj, "payload_position_W_m");
-    const nlohmann::json& lj = rj.at("lissajous");
-    LissajousSpec& l = r.lissajous;
-    l.a = lj.at("a").get<double>(), l.b = lj.at("b").get<double>(), l.c = lj.at("c").get<double>();
-    l.n = lj.at("n").get<double>(), l.m = lj.at("m").get<double>();
-    l.phi = lj.at("phi").get<double>(), l.psi = lj.at("psi").get<double>();
-    l.period_s = lj.at("period_s").get<double>(), l.ramp_s = lj.at("ramp_s").get<double>();
-    l.centre = ReadVec3(lj, "centre");
-    r.line_start_W_m = ReadVec3(rj, "line_start_W_m");
-    r.line_end_W_m = ReadVec3(rj, "line_end_W_m");
-    r.line_duration_s = rj.at("line_duration_s").get<double>();
-    r.line_start_time_s = rj.at("line_start_time_s").get<double>();
-    r.file = rj.value("file", "");
-    for (const nlohmann::json& row : rj.value("samples_t_p_v_a", nlohmann::json::array())) {
-      if (!row.is_array() || row.size() != 10) {
-        throw ProtocolError("reference samples: expected rows of 10 numbers");
-      }
-      TrajectorySample s;
-      s.t_s = row[0].get<double>();
-      s.p_WL_W = {row[1].get<double>(), row[2].get<double>(), row[3].get<double>()};
-      s.v_WL_W = {row[4].get<double>(), row[5].get<double>(), row[6].get<double>()};
-      s.a_WL_W = {row[7].get<double>(), row[8].get<double>(), row[9].get<double>()};
-      r.samples.push_back(s);
-    }
-    if (rj.contains("key_values")) {
-      r.values = rj.at("key_values").get<std::map<std::string, std::vector<double>>>();
-    }
-    // the type is one this stack has, its key values within the ranges it declares
-    if (const std::optional<std::string> error = ReferenceValuesError(r)) {
-      throw ProtocolError("reference: " + *error);
-    }
+    c.reference = ReadReference(j.at("reference"));
     c.ground_truth = j.at("ground_truth").get<bool>();
     c.estimate_latency_s = j.at("estimate_latency_s").get<double>();
     c.tick_hz = j.at("tick_hz").get<double>();

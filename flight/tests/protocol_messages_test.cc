@@ -159,7 +159,9 @@ std::vector<Golden> Encodings() {
           {"detect_reply", "detect_reply", EncodeDetectReply(SampleDetectReply())},
           {"region_wanted_reply", "detect_reply", EncodeDetectReply(SampleRegionWantedReply())},
           {"rate_tick", "rate_tick", EncodeRateTick(SampleRateTick())},
-          {"rate_reply", "rate_reply", EncodeRateReply(SampleRateReply())}};
+          {"rate_reply", "rate_reply", EncodeRateReply(SampleRateReply())},
+          {"team_tick", "team_tick", EncodeTeamTick(SampleTeamTick())},
+          {"team_tick_reply", "team_tick_reply", EncodeTeamTickReply(SampleTeamTickReply())}};
 }
 
 // The table binds every field and bit of every binary message, and declares each field's type
@@ -343,6 +345,10 @@ TEST(ProtocolMessagesTest, EncodingsEqualTheGoldenFile) {
       EXPECT_EQ(EncodeRateTick(DecodeRateTick(bytes)), bytes) << g.name;
     } else if (g.message == "rate_reply") {
       EXPECT_EQ(EncodeRateReply(DecodeRateReply(bytes)), bytes) << g.name;
+    } else if (g.message == "team_tick") {
+      EXPECT_EQ(EncodeTeamTick(DecodeTeamTick(bytes)), bytes) << g.name;
+    } else if (g.message == "team_tick_reply") {
+      EXPECT_EQ(EncodeTeamTickReply(DecodeTeamTickReply(bytes)), bytes) << g.name;
     } else {
       EXPECT_EQ(EncodeTick(DecodeTick(bytes)), bytes) << g.name;
     }

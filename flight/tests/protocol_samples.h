@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "hpa/flight/protocol.h"
+#include "hpa/flight/team_protocol.h"
 
 namespace hpa::flight {
 
@@ -165,6 +166,43 @@ inline AutopilotOutput SampleRateReply() {
   out.thrust_allocated_N = 6.4921875;
   out.saturated = true;
   return out;
+}
+
+/// A team_tick of two vehicles' views, every field away from its default (a negative zero among
+/// them).
+inline TeamTick SampleTeamTick() {
+  TeamTick tick;
+  tick.time_s = 2.01;
+  for (const int vehicle : {0, 2}) {
+    TeamVehicleView& v = tick.views.emplace_back();
+    v.vehicle = vehicle;
+    v.view.time_s = tick.time_s;
+    v.view.p_WQ_W = {0.25 + vehicle, -0.5, 1.5};
+    v.view.v_WQ_W = {0.125, -0.0, 1.0 / 3.0};
+    v.view.q_WB = Eigen::Quaterniond(0.3, -0.5, 0.7, 0.1).normalized();
+    v.view.w_B = {0.01, -0.02, M_PI};
+    v.view.p_WL_W = {0.1, -0.2, 0.75};
+    v.view.v_WL_W = {1e-17, 2.0, -3.0 - vehicle};
+    v.view.q_WP = Eigen::Quaterniond(0.9, 0.1, -0.3, 0.2).normalized();
+    v.view.w_P = {-0.125, 0.0625, 0.5};
+  }
+  return tick;
+}
+
+/// A team_tick_reply of two vehicles' replies, every field away from its default.
+inline std::vector<TeamVehicleReply> SampleTeamTickReply() {
+  std::vector<TeamVehicleReply> replies(2);
+  for (int k = 0; k < 2; ++k) {
+    TeamVehicleReply& r = replies[static_cast<size_t>(k)];
+    r.vehicle = 2 * k;
+    r.output.command.w_B_radps = {0.5 + k, -0.25, 0.125};
+    r.output.command.thrust_N = 7.75 - k;
+    r.output.status = ControlStatus::kFallback;
+    r.output.solve_time_ms = 0.375;
+    r.output.cost = 12.5;
+    r.cable_taut = false;
+  }
+  return replies;
 }
 
 }  // namespace hpa::flight

@@ -42,6 +42,10 @@ enum class MessageType : uint32_t {
   kDetectReply = 9,  // flight stack -> simulator: its detection, or what to read out (binary)
   kRateTick = 10,    // simulator -> a stack owning the rate loop: one step of it due (binary)
   kRateReply = 11,   // flight stack -> simulator: that step's rotor speed commands (binary)
+  kTeamHello = 12,   // simulator -> a team's stack: JSON (its vehicles, the team, reference)
+  kTeamHelloAck = 13,   // a team's stack -> simulator: JSON (version, name, control rate)
+  kTeamTick = 14,       // simulator -> a team's stack: its vehicles' views (binary)
+  kTeamTickReply = 15,  // a team's stack -> simulator: their commands (binary)
 };
 
 /// A malformed, unexpected or failed message (the text names what was wrong).
@@ -202,6 +206,17 @@ constexpr size_t kMaxHealthEntries = 1000;
 /// with a name of letters, digits and underscores, unique and not a key metrics.json's
 /// estimator block reserves (variant).
 FinishReply ParseFinishReply(const std::vector<uint8_t>& body, size_t frames);
+
+/// Params as JSON (the hello's config.params): every declared value by its C++ name.
+nlohmann::json ParamsToJson(const Params& params);
+/// Params from ParamsToJson's JSON, each value checked against its declared range; throws
+/// ProtocolError naming SECTION.name for a missing key or a value outside its range.
+Params ParamsFromJson(const nlohmann::json& j, const std::string& section = "params");
+/// A payload reference spec as JSON (the hello's config.reference); doubles keep every bit.
+nlohmann::json ReferenceToJson(const ReferenceSpec& reference);
+/// ReferenceToJson's JSON read back; throws ProtocolError for a missing key, a type this side
+/// does not have or a key value outside its declared range.
+ReferenceSpec ReferenceFromJson(const nlohmann::json& j);
 
 /// FlightConfig as JSON (the hello's "config"); doubles keep every bit.
 nlohmann::json ConfigToJson(const FlightConfig& config);

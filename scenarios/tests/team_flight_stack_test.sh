@@ -1,0 +1,134 @@
+#!/usr/bin/env bash
+# A team's separate flight stacks (docs/protocol.md, Teams): hpa-flight per vehicle (the default,
+# each started with HPA_VEHICLE set) and one hpa-flight for the whole team (--team-stack one) fly
+# the team exactly as in process: metrics.json equal but for the timings and what flew (the
+# team block too, but for its solve times), log.csv row for row but for the solve times. A stack
+# that answers a non-finite command, a reply for another vehicle or a reply cut short ends the run
+# with a run error naming it (exit 3, metrics.json written with the run so far).
+# Usage: team_flight_stack_test.sh HPA_BINARY SOURCE_DIR PYTHON
+set -uo pipefail
+source "$2/scenarios/tests/cli_test_lib.sh"
+cli_test_start "$@"  # hpa, src, python; out: a folder removed at exit
+
+# a runner that hands the stacks no payload reference cannot fly them: skipped (ctest's 77)
+"$hpa" run "$src/scenarios/ci/team2_line.yaml" --quiet --out "$out/probe" --set duration=0.1 \
+  --flight-stack hpa-flight > /dev/null 2>&1
+if grep -q "payload reference does not reach it" "$out/probe/metrics.json"; then
+  echo "SKIP: this hpa hands a team's stacks no payload reference"
+  exit 77
+fi
+
+# same_team_run A B LABEL: same_run's checks with the team block and the log's per-vehicle solve
+# times compared here (each *_ms value and v*_solve_ms column left out)
+same_team_run() {
+  local a=$1 b=$2 label=$3
+  same_run "$a" "$b" "$label" --skip team --stack-b hpa-flight
+  "$python" - "$a" "$b" <<'PY' || fail "$label: the team blocks or logs differ"
+import csv, json, sys
+
+def strip(v):
+    """v without its timings: every key ending in _ms, at any depth."""
+    if isinstance(v, dict):
+        return {k: strip(x) for k, x in v.items() if not k.endswith("_ms")}
+    if isinstance(v, list):
+        return [strip(x) for x in v]
+    return v
+
+a, b = (json.load(open(p + "/metrics.json")) for p in sys.argv[1:3])
+assert a["team"] is not None, "A has no team block"
+assert strip(a["team"]) == strip(b["team"]), "team blocks differ: %r != %r" % (
+    strip(a["team"]), strip(b["team"]))
+la, lb = (list(csv.reader(open(p + "/log.csv"))) for p in sys.argv[1:3])
+assert la[0] == lb[0], "log columns differ"
+keep = [i for i, c in enumerate(la[0]) if not c.endswith("solve_ms")]
+assert len(la) == len(lb) > 100, "log rows: %d and %d" % (len(la), len(lb))
+bad = [i for i, (x, y) in enumerate(zip(la, lb)) if [x[k] for k in keep] != [y[k] for k in keep]]
+assert not bad, "log rows differ from row %d" % bad[0]
+PY
+}
+
+# 1. team2_line (two vehicles, the cooperative controller) and team3_lift (three, lifting from the
+# ground) in process, per vehicle and as one stack; team2_line with hpa_mpc on each vehicle. The
+# runs are cut short, so an expect bound may fail (exit 1): the same in every run, compared too
+flown() {
+  local status=$1 label=$2
+  [ "$status" -le 1 ] || fail "$label failed (exit $status)"
+}
+fly() {
+  local name=$1 scenario=$2; shift 2
+  "$hpa" run "$scenario" --quiet --out "$out/${name}_in" "$@" > /dev/null
+  flown $? "$name in process"
+  "$hpa" run "$scenario" --quiet --out "$out/${name}_per" "$@" --flight-stack hpa-flight \
+    > /dev/null
+  flown $? "$name per vehicle"
+  same_team_run "$out/${name}_in" "$out/${name}_per" "$name per vehicle"
+  "$hpa" run "$scenario" --quiet --out "$out/${name}_one" "$@" --flight-stack hpa-flight \
+    --team-stack one > /dev/null
+  flown $? "$name one stack"
+  same_team_run "$out/${name}_in" "$out/${name}_one" "$name one stack"
+}
+fly line "$src/scenarios/ci/team2_line.yaml" --set duration=3
+fly lift "$src/scenarios/ci/team3_lift.yaml" --set duration=3
+fly line_mpc "$src/scenarios/ci/team2_line.yaml" --set duration=1.5 --controller hpa_mpc
+
+# 2. each per-vehicle stack is started with HPA_VEHICLE, and a stack for another vehicle than its
+# HPA_VEHICLE says is refused by hpa-flight itself
+"$hpa" run "$src/scenarios/ci/team2_line.yaml" --quiet --out "$out/env" --set duration=0.2 \
+  --flight-stack 'echo "vehicle $HPA_VEHICLE" >&2; exec hpa-flight' 2> "$out/env.err" > /dev/null \
+  || fail "the HPA_VEHICLE run failed"
+grep -q "vehicle 0" "$out/env.err" && grep -q "vehicle 1" "$out/env.err" \
+  || fail "HPA_VEHICLE was not set per vehicle: $(cat "$out/env.err")"
+expect_exit 3 "HPA_VEHICLE=1, but the team_hello asks for 2 vehicle" run \
+  "$src/scenarios/ci/team2_line.yaml" --quiet --out "$out/env_one" --set duration=0.2 \
+  --flight-stack "HPA_VEHICLE=1 hpa-flight" --team-stack one
+
+# 3. bad replies at the stack's 20th control step: a run error naming the value, the vehicle and
+# the step; metrics.json written with the run so far
+cat > "$out/bad_team.py" <<PY
+import json, sys
+sys.path[:0] = ["$src/python"]
+from hpa_sim import lockstep
+
+ids = {name: kind for kind, name in lockstep.MESSAGE_TYPES.items()}
+mode = sys.argv[1]
+client = lockstep.FlightStackClient()
+kind, body = client.receive()
+hello = json.loads(body)
+client.send(ids["team_hello_ack"], json.dumps({
+    "protocol_version": lockstep.PROTOCOL_VERSION, "name": "bad team", "control_rate_hz": 100.0,
+    "vehicles": hello["vehicles"]}).encode())
+steps = 0
+while True:
+    kind, body = client.receive()
+    if kind == ids["finish"]:
+        client.send(ids["finish_reply"], b"{}")
+        break
+    tick = lockstep.decode("team_tick", body, "team_tick")
+    steps += 1
+    bad = steps == 20
+    replies = []
+    for v in tick["views"]:
+        thrust_N = float("nan") if bad and mode == "nan" else 5.0
+        vehicle = v["vehicle"] + (7 if bad and mode == "vehicle" else 0)
+        replies.append({"vehicle": vehicle, "cable_taut": True,
+                        "output": {"command": {"w_B_radps": [0.0, 0.0, 0.0], "thrust_N": thrust_N},
+                                   "status": "success", "solve_time_ms": 0.0, "cost": 0.0}})
+    data = lockstep.encode("team_tick_reply", {"replies": replies})
+    client.send(ids["team_tick_reply"], data[:-4] if bad and mode == "short" else data)
+PY
+bad_run() {
+  local mode=$1 pattern=$2; shift 2
+  expect_exit 3 "$pattern" run "$src/scenarios/ci/team2_line.yaml" --quiet --out "$out/bad_$mode" \
+    --set duration=1 --flight-stack "$python $out/bad_team.py $mode" "$@"
+  "$python" - "$out/bad_$mode" "$pattern" <<'PY' || fail "bad $mode: metrics.json lacks the error"
+import json, re, sys
+m = json.load(open(sys.argv[1] + "/metrics.json"))
+assert m["run_error"] and re.search(sys.argv[2], m["run_error"]), m["run_error"]
+assert m["flight_stack"] == "bad team", m["flight_stack"]
+PY
+}
+bad_run nan "\(vehicle 0\): team_tick at t = 0\.200000 s: malformed team_tick_reply message: a non-finite command \(body rate or thrust\) \(reply 0, vehicle 0\)"
+bad_run vehicle "team_tick at t = 0\.200000 s: team_tick_reply refused: reply 0 is for vehicle 7, expected vehicle 0" --team-stack one
+bad_run short "team_tick at t = 0\.200000 s: malformed team_tick_reply message: replies count 2, more than the rest of the message holds" --team-stack one
+
+exit $((failures > 0))
