@@ -32,11 +32,17 @@ int RequireId(const mjModel* m, mjtObj type, const char* name, const std::string
   return id;
 }
 
-SingleSceneSettings ReadSingleScene(const std::string& path) {
+// The single-vehicle scene compiled; throws naming it if MuJoCo cannot load it.
+std::unique_ptr<mjModel, void (*)(mjModel*)> LoadSingleScene(const std::string& path) {
   char error[1024] = "";
   std::unique_ptr<mjModel, void (*)(mjModel*)> m(
       mj_loadXML(path.c_str(), nullptr, error, sizeof(error)), mj_deleteModel);
   if (m == nullptr) throw std::runtime_error(path + ": MuJoCo cannot load it: " + error);
+  return m;
+}
+
+SingleSceneSettings ReadSingleScene(const std::string& path) {
+  const std::unique_ptr<mjModel, void (*)(mjModel*)> m = LoadSingleScene(path);
   SingleSceneSettings s;
   s.timestep_s = m->opt.timestep;
   s.gravity_W_mps2 = Eigen::Vector3d(m->opt.gravity[0], m->opt.gravity[1], m->opt.gravity[2]);
@@ -61,6 +67,11 @@ std::string Triple(const Eigen::Vector3d& v) {
 }
 
 }  // namespace
+
+double SingleSceneRotorRadius_m(const std::string& single_scene_path) {
+  const std::unique_ptr<mjModel, void (*)(mjModel*)> m = LoadSingleScene(single_scene_path);
+  return m->geom_size[3 * RequireId(m.get(), mjOBJ_GEOM, "rotor0_disc", single_scene_path)];
+}
 
 std::string CooperativeSceneXml(const CooperativeTeam& team, const std::string& single_scene_path) {
   const SingleSceneSettings s = ReadSingleScene(single_scene_path);

@@ -179,6 +179,7 @@ struct TeamWorld::Impl {
   std::vector<int> box_geom;                       // each vehicle's collision box (n)
   std::vector<int> tension_adr;                    // each cable's tension sensor (n)
   int payload_geom = -1, ground_geom = -1;
+  double rotor_radius_m = 0.0;  // the single scene's rotor disc: a rotor's reach beyond its axis
 
   int64_t step = 0;
   std::mt19937_64 rng;  // all of the world's noise
@@ -383,6 +384,34 @@ struct TeamWorld::Impl {
       return LatchCrash(BodyName(vehicle) + " contact with " + what);
     }
 
+    // a cable through another vehicle's rotors: MuJoCo's tendons have no contact geometry, so
+    // each cable (a straight segment while it is taut, the only time it can cut) is checked
+    // against every other vehicle's rotor disc, a flat cylinder of the vehicle's reach in its
+    // body's x-y plane; a strike is a crash, as a cable caught in a propeller is
+    for (int i = 0; i < n; ++i) {
+      if (!Taut(i)) continue;
+      const Eigen::Vector3d a_W = Block(vehicles[i]).head<3>();
+      const Eigen::Vector3d b_W = AttachPoint_W(i);
+      for (int j = 0; j < n; ++j) {
+        if (j == i) continue;
+        const Eigen::Matrix<double, 13, 1> x = Block(vehicles[j]);
+        const Eigen::Quaterniond q_WB =
+            Eigen::Quaterniond(x(6), x(7), x(8), x(9)).normalized();
+        const double reach_m = params(j).arm_length_m + rotor_radius_m;
+        const double half_height_m = params(j).body_half_size_m.z();
+        // samples no farther apart than the disc's half thickness: a crossing is never missed
+        const int samples = static_cast<int>(std::ceil((b_W - a_W).norm() / half_height_m));
+        for (int k = 0; k <= samples; ++k) {
+          const Eigen::Vector3d p_B =
+              q_WB.conjugate() * (a_W + (b_W - a_W) * k / samples - x.head<3>());
+          if (std::abs(p_B.z()) <= half_height_m && p_B.head<2>().norm() <= reach_m) {
+            return LatchCrash("cable " + std::to_string(i) + " strikes " + BodyName(j) +
+                              "'s rotors");
+          }
+        }
+      }
+    }
+
     // a vehicle's tilt past 90 deg: its body z below the horizon
     for (int i = 0; i < n; ++i) {
       const Eigen::Matrix<double, 13, 1> x = Block(vehicles[i]);
@@ -454,6 +483,11 @@ TeamWorld::TeamWorld(const TeamWorldConfig& config) : impl_(std::make_unique<Imp
   };
   w.payload = free_body("payload", "payload_joint");
   w.payload_geom = RequireId(w.m, mjOBJ_GEOM, "payload_sphere");
+  try {
+    w.rotor_radius_m = SingleSceneRotorRadius_m(config.scene_path);
+  } catch (const std::runtime_error& e) {
+    throw InputError(config.scene_path, "", e.what());
+  }
   w.ground_geom = RequireId(w.m, mjOBJ_GEOM, "ground");
   for (int i = 0; i < w.n; ++i) {
     const std::string q = "quadrotor_" + std::to_string(i);

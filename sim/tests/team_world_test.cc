@@ -13,6 +13,7 @@
 #include "hpa/models/cooperative_model.h"
 #include "hpa/models/input_error.h"
 #include "hpa/models/params.h"
+#include "hpa/sim/cooperative_scene.h"
 
 namespace hpa::sim {
 namespace {
@@ -247,6 +248,34 @@ TEST(TeamWorldTest, VehiclesPushedTogetherCollide) {
   for (int s = 0; s < 300; ++s) world.Step();
   EXPECT_EQ(world.Crash().reason, crash.reason);
   EXPECT_EQ(world.Crash().time_s, crash.time_s);
+}
+
+// A taut cable through another vehicle's rotor disc is a crash naming both (MuJoCo's tendons
+// do not collide, so the world checks it); the same vehicle beside the cable, just beyond its
+// rotors' reach, is not.
+TEST(TeamWorldTest, ACableThroughAnotherVehiclesRotorsCrashes) {
+  CooperativeTeam team = Bar();
+  team.vehicles[1].cable_length_m = 1.0;  // slack wherever vehicle 1 is placed below
+  const CooperativeModel model(team);
+  const VectorXd hanging = model.HangingState(Vector3d(0, 0, 1.0));
+  const Vector3d p_vehicle0 = hanging.segment<3>(I::Vehicle(0));
+  const Vector3d p_attach0 = hanging.head<3>() + team.vehicles[0].p_PA_P_m;
+  const double reach_m = team.vehicles[1].params.arm_length_m + SingleSceneRotorRadius_m(
+                                                                    DataPath("models/scene.xml"));
+  for (const double offset_m : {0.0, reach_m - 0.01, reach_m + 0.01}) {
+    // vehicle 1 level, halfway down vehicle 0's cable, offset_m from it across the bar
+    VectorXd x0 = hanging;
+    x0.segment<3>(I::Vehicle(1)) = 0.5 * (p_vehicle0 + p_attach0) + Vector3d(0, offset_m, 0);
+    TeamWorld world(Config(team));
+    world.Reset(x0);
+    world.Step();
+    if (offset_m < reach_m) {
+      EXPECT_TRUE(world.Crash().crashed) << offset_m;
+      EXPECT_EQ(world.Crash().reason, "cable 0 strikes vehicle 1's rotors") << offset_m;
+    } else {
+      EXPECT_FALSE(world.Crash().crashed) << world.Crash().reason;
+    }
+  }
 }
 
 // (e) A vehicle with its motors at their minimum falls onto the ground: the crash names it. The

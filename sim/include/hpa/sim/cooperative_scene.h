@@ -17,4 +17,9 @@ namespace hpa::sim {
 /// (models/scene.xml), read through MuJoCo; throws std::runtime_error if it cannot be loaded.
 std::string CooperativeSceneXml(const CooperativeTeam& team, const std::string& single_scene_path);
 
+/// The radius (m) of a rotor disc in the single-vehicle scene (its geom "rotor0_disc"), the
+/// rotor's reach beyond its axis; throws std::runtime_error if the scene cannot be loaded or has
+/// no such geom.
+double SingleSceneRotorRadius_m(const std::string& single_scene_path);
+
 }  // namespace hpa::sim
