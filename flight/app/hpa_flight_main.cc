@@ -113,8 +113,7 @@ int ServeTeam(Channel& channel, const std::vector<uint8_t>& hello_bytes,
   const hpa::flight::TeamHello hello = hpa::flight::ParseTeamHello(hello_bytes);
   // a stack started for one vehicle (HPA_VEHICLE) flies that one
   const char* env = std::getenv("HPA_VEHICLE");
-  if (env != nullptr && *env != '\0' &&
-      hello.vehicles != std::vector<int>{std::atoi(env)}) {
+  if (env != nullptr && *env != '\0' && hello.vehicles != std::vector<int>{std::atoi(env)}) {
     throw ProtocolError(std::string("started with HPA_VEHICLE=") + env +
                         ", but the team_hello asks for " + std::to_string(hello.vehicles.size()) +
                         " vehicle(s) from " + std::to_string(hello.vehicles.front()));

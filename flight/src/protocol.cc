@@ -460,7 +460,9 @@ void CheckMessageBindings() {
   visit(visit, DetectReplyCodec().spec());
   visit(visit, RateTickCodec().spec());
   visit(visit, RateReplyCodec().spec());
-  for (const char* team : {"team_tick", "team_tick_reply"}) visit(visit, wire::Table::Get().Find(team));
+  for (const char* team : {"team_tick", "team_tick_reply"}) {
+    visit(visit, wire::Table::Get().Find(team));
+  }
   for (const auto& item : MessageTable().at("structs").items()) {
     if (bound.count(item.key()) == 0) {
       throw std::logic_error("messages.json's struct " + item.key() + " is in no message");

@@ -170,9 +170,7 @@ void TablesFromJson(const std::vector<ParamTable<C>>& tables, const nlohmann::js
 
 }  // namespace
 
-nlohmann::json ParamsToJson(const Params& params) {
-  return TablesToJson(ParamsTables(), params);
-}
+nlohmann::json ParamsToJson(const Params& params) { return TablesToJson(ParamsTables(), params); }
 
 Params ParamsFromJson(const nlohmann::json& j, const std::string& section) {
   try {

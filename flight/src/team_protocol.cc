@@ -38,8 +38,8 @@ const Codec<TeamVehicleView>& TeamVehicleViewCodec() {
 
 const Codec<TeamTick>& TeamTickCodec() {
   static const Codec<TeamTick> codec(
-      "team_tick", {Bind("time_s", &TeamTick::time_s),
-                    Bind("views", &TeamTick::views, TeamVehicleViewCodec())});
+      "team_tick",
+      {Bind("time_s", &TeamTick::time_s), Bind("views", &TeamTick::views, TeamVehicleViewCodec())});
   return codec;
 }
 
@@ -132,10 +132,10 @@ double FiniteNumber(const nlohmann::json& j, const char* key, const std::string&
 // Three finite numbers at `key` of j (`what` names j).
 Eigen::Vector3d FiniteVec3(const nlohmann::json& j, const char* key, const std::string& what) {
   const nlohmann::json& v = j.at(key);
-  const bool ok = v.is_array() && v.size() == 3 &&
-                  std::all_of(v.begin(), v.end(), [](const nlohmann::json& x) {
-                    return x.is_number() && std::isfinite(x.get<double>());
-                  });
+  const bool ok =
+      v.is_array() && v.size() == 3 && std::all_of(v.begin(), v.end(), [](const nlohmann::json& x) {
+        return x.is_number() && std::isfinite(x.get<double>());
+      });
   if (!ok) throw ProtocolError(what + "'s " + key + " is " + Shown(v) + ", expected 3 numbers");
   return {v[0].get<double>(), v[1].get<double>(), v[2].get<double>()};
 }
@@ -147,8 +147,8 @@ std::vector<int> VehicleList(const nlohmann::json& v, size_t n, const std::strin
   std::vector<int> out;
   bool ok = v.is_array() && !v.empty();
   for (size_t i = 0; ok && i < v.size(); ++i) {
-    ok = v[i].is_number_integer() && v[i].get<int64_t>() >= 0 &&
-         v[i].get<uint64_t>() < n && (out.empty() || v[i].get<int>() > out.back());
+    ok = v[i].is_number_integer() && v[i].get<int64_t>() >= 0 && v[i].get<uint64_t>() < n &&
+         (out.empty() || v[i].get<int>() > out.back());
     if (ok) out.push_back(v[i].get<int>());
   }
   if (!ok) {
@@ -217,10 +217,10 @@ void CheckTeamTickReply(const std::vector<TeamVehicleReply>& replies, const Team
   }
   for (size_t i = 0; i < replies.size(); ++i) {
     if (replies[i].vehicle != tick.views[i].vehicle) {
-      throw ProtocolError("team_tick_reply refused: reply " + std::to_string(i) + " is for vehicle " +
-                          std::to_string(replies[i].vehicle) + ", expected vehicle " +
-                          std::to_string(tick.views[i].vehicle) + " (the team_tick's view " +
-                          std::to_string(i) + ")");
+      throw ProtocolError("team_tick_reply refused: reply " + std::to_string(i) +
+                          " is for vehicle " + std::to_string(replies[i].vehicle) +
+                          ", expected vehicle " + std::to_string(tick.views[i].vehicle) +
+                          " (the team_tick's view " + std::to_string(i) + ")");
     }
   }
 }
@@ -280,7 +280,8 @@ TeamHello ParseTeamHello(const std::vector<uint8_t>& body) {
                           ", expected {params, cable_length_m, p_PA_P_m}");
     }
     CooperativeVehicle v;
-    v.params = ParamsFromJson(vj[i].at("params"), "team.vehicles[" + std::to_string(i) + "].params");
+    v.params =
+        ParamsFromJson(vj[i].at("params"), "team.vehicles[" + std::to_string(i) + "].params");
     v.cable_length_m = FiniteNumber(vj[i], "cable_length_m", where, true);
     v.p_PA_P_m = FiniteVec3(vj[i], "p_PA_P_m", where);
     t.vehicles.push_back(v);
@@ -306,11 +307,11 @@ TeamHelloAck ParseTeamHelloAck(const std::vector<uint8_t>& body, const std::vect
   }
   ack.control_rate_hz = rate_hz;
   const nlohmann::json& v = j.at("vehicles");
-  const bool same = v.is_array() && v.size() == vehicles.size() &&
-                    std::equal(vehicles.begin(), vehicles.end(), v.begin(),
-                               [](int a, const nlohmann::json& b) {
-                                 return b.is_number_integer() && b.get<int64_t>() == a;
-                               });
+  const bool same =
+      v.is_array() && v.size() == vehicles.size() &&
+      std::equal(vehicles.begin(), vehicles.end(), v.begin(), [](int a, const nlohmann::json& b) {
+        return b.is_number_integer() && b.get<int64_t>() == a;
+      });
   if (!same) {
     throw ProtocolError(what + "'s vehicles are " + Shown(v) + ", expected the team_hello's (" +
                         VehiclesShown(vehicles) + ")");

@@ -120,8 +120,7 @@ TEST(TeamProtocolTest, BadRepliesAreRefusedNamingTheVehicleAndTheValue) {
             "malformed team_tick_reply message: replies count 2, more than the rest of the "
             "message holds");
   bytes.push_back(0);
-  EXPECT_NE(Refusal([&] { DecodeTeamTickReply(bytes); }).find("after its end"),
-            std::string::npos);
+  EXPECT_NE(Refusal([&] { DecodeTeamTickReply(bytes); }).find("after its end"), std::string::npos);
 
   // against its team_tick: one reply per view, each the view's vehicle
   replies = SampleTeamTickReply();
@@ -174,8 +173,7 @@ TEST(TeamProtocolTest, TheHelloCarriesTheTeamAndItsReference) {
             "team_hello's team's vehicle 1's cable_length_m is -0.5, expected a finite number > 0");
   j = good;
   j["team"].erase("payload_mass_kg");
-  EXPECT_EQ(Refusal([&] { ParseTeamHello(Bytes(j)); }),
-            "team_hello's team has no payload_mass_kg");
+  EXPECT_EQ(Refusal([&] { ParseTeamHello(Bytes(j)); }), "team_hello's team has no payload_mass_kg");
   j = good;
   j["protocol_version"] = 2;
   EXPECT_NE(Refusal([&] { ParseTeamHello(Bytes(j)); }).find("protocol version 2"),
@@ -196,19 +194,27 @@ TEST(TeamProtocolTest, TheHelloAckNamesTheStackItsRateAndItsVehicles) {
 
   nlohmann::json j = ack;
   j["vehicles"] = {1};
-  EXPECT_EQ(Refusal([&] { ParseTeamHelloAck(Bytes(j), {0, 1}); }),
+  EXPECT_EQ(Refusal([&] {
+              ParseTeamHelloAck(Bytes(j), {0, 1});
+            }),
             "team_hello_ack's vehicles are [1], expected the team_hello's (vehicles 0, 1)");
   j = ack;
   j["control_rate_hz"] = 0;
-  EXPECT_EQ(Refusal([&] { ParseTeamHelloAck(Bytes(j), {0, 1}); }),
+  EXPECT_EQ(Refusal([&] {
+              ParseTeamHelloAck(Bytes(j), {0, 1});
+            }),
             "team_hello_ack's control_rate_hz is 0, expected a rate in (0, 1000] Hz");
   j = ack;
   j.erase("control_rate_hz");
-  EXPECT_EQ(Refusal([&] { ParseTeamHelloAck(Bytes(j), {0, 1}); }),
+  EXPECT_EQ(Refusal([&] {
+              ParseTeamHelloAck(Bytes(j), {0, 1});
+            }),
             "team_hello_ack has no control_rate_hz");
   j = ack;
   j["batched_ticks"] = true;
-  EXPECT_EQ(Refusal([&] { ParseTeamHelloAck(Bytes(j), {0, 1}); }),
+  EXPECT_EQ(Refusal([&] {
+              ParseTeamHelloAck(Bytes(j), {0, 1});
+            }),
             "team_hello_ack's key 'batched_ticks' is not declared in the message table "
             "(messages.json)");
 }

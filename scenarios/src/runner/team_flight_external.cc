@@ -49,8 +49,8 @@ constexpr double kConnectTimeoutS = 30.0;
 template <class O, class = void>
 struct HasReference : std::false_type {};
 template <class O>
-struct HasReference<O, std::void_t<decltype(std::declval<const O&>().reference)>>
-    : std::true_type {};
+struct HasReference<O, std::void_t<decltype(std::declval<const O&>().reference)>> : std::true_type {
+};
 
 // The scenario's payload reference as the options carry it (none: the runner hands none over).
 template <class O>
@@ -93,10 +93,9 @@ class TeamStack {
     socket_path_ = dir_ + "/lockstep.sock";
     Listen();
     // the vehicle it flies, in its environment beside HPA_FLIGHT_SOCKET
-    const std::string command =
-        vehicle_env_ < 0 ? options_.command
-                         : "HPA_VEHICLE=" + std::to_string(vehicle_env_) +
-                               "; export HPA_VEHICLE; " + options_.command;
+    const std::string command = vehicle_env_ < 0 ? options_.command
+                                                 : "HPA_VEHICLE=" + std::to_string(vehicle_env_) +
+                                                       "; export HPA_VEHICLE; " + options_.command;
     const std::string path_env =
         ExecutableDir() + ":" + (std::getenv("PATH") ? std::getenv("PATH") : "");
     try {
@@ -127,8 +126,11 @@ class TeamStack {
 
   // Sends its team_hello.
   void SendHello(const flight::TeamHello& hello) {
-    Guard([&] { channel_->SendJson(MessageType::kTeamHello, flight::TeamHelloToJson(hello), Limit()); },
-          "team_hello");
+    Guard(
+        [&] {
+          channel_->SendJson(MessageType::kTeamHello, flight::TeamHelloToJson(hello), Limit());
+        },
+        "team_hello");
   }
 
   // Reads and checks its team_hello_ack.
@@ -169,14 +171,14 @@ class TeamStack {
   void SendFinish(double time_s) {
     flight::FlightInputs in;
     in.time_s = time_s;
-    Guard([&] { channel_->Send(MessageType::kFinish, flight::EncodeTick(in), Limit()); },
-          "finish");
+    Guard([&] { channel_->Send(MessageType::kFinish, flight::EncodeTick(in), Limit()); }, "finish");
   }
 
   // Reads and checks its finish_reply.
   void ReadFinish() {
-    Guard([&] { flight::ParseFinishReply(channel_->Expect(MessageType::kFinishReply, Limit()), 0); },
-          "finish");
+    Guard(
+        [&] { flight::ParseFinishReply(channel_->Expect(MessageType::kFinishReply, Limit()), 0); },
+        "finish");
   }
 
   // Closes the socket, stops the process (its group and every process carrying its socket) and
@@ -305,7 +307,7 @@ class TeamStack {
   int listen_fd_ = -1;
   pid_t pid_ = 0, pgid_ = 0;
   std::unique_ptr<Channel> channel_;
-  bool failed_ = false;  // a message failed: the stack is not asked again
+  bool failed_ = false;                        // a message failed: the stack is not asked again
   std::optional<Clock::time_point> stop_due_;  // waits end then (a stop)
 };
 
@@ -316,7 +318,8 @@ class ExternalTeamFlight final : public TeamFlightLink {
       : options_(options) {
     const int n = static_cast<int>(team.vehicles.size());
     if (options_.per_vehicle) {
-      for (int i = 0; i < n; ++i) stacks_.push_back(std::make_unique<TeamStack>(options_, std::vector<int>{i}, i));
+      for (int i = 0; i < n; ++i)
+        stacks_.push_back(std::make_unique<TeamStack>(options_, std::vector<int>{i}, i));
     } else {
       std::vector<int> all;
       for (int i = 0; i < n; ++i) all.push_back(i);

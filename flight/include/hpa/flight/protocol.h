@@ -42,10 +42,12 @@ enum class MessageType : uint32_t {
   kDetectReply = 9,  // flight stack -> simulator: its detection, or what to read out (binary)
   kRateTick = 10,    // simulator -> a stack owning the rate loop: one step of it due (binary)
   kRateReply = 11,   // flight stack -> simulator: that step's rotor speed commands (binary)
-  kTeamHello = 12,   // simulator -> a team's stack: JSON (its vehicles, the team, reference)
-  kTeamHelloAck = 13,   // a team's stack -> simulator: JSON (version, name, control rate)
-  kTeamTick = 14,       // simulator -> a team's stack: its vehicles' views (binary)
-  kTeamTickReply = 15,  // a team's stack -> simulator: their commands (binary)
+
+  // a team's stacks (one per vehicle, or one for the team)
+  kTeamHello = 12,      // simulator -> stack: JSON (its vehicles, the team, the reference)
+  kTeamHelloAck = 13,   // stack -> simulator: JSON (version, name, control rate, vehicles)
+  kTeamTick = 14,       // simulator -> stack: its vehicles' views (binary)
+  kTeamTickReply = 15,  // stack -> simulator: their commands (binary)
 };
 
 /// A malformed, unexpected or failed message (the text names what was wrong).

@@ -28,7 +28,7 @@ struct TeamVehicleView {
 
 /// One control step of a team, for the vehicles a stack flies (those with a view).
 struct TeamTick {
-  double time_s = 0.0;                  // simulated time of the control step
+  double time_s = 0.0;                 // simulated time of the control step
   std::vector<TeamVehicleView> views;  // by vehicle index
 };
 
