@@ -85,7 +85,7 @@ expect_exit 3 "HPA_VEHICLE=1, but the team_hello asks for 2 vehicle" run \
 # 3. bad replies at the stack's 20th control step: a run error naming the value, the vehicle and
 # the step; metrics.json written with the run so far
 cat > "$out/bad_team.py" <<PY
-import json, sys
+import json, sys, time
 sys.path[:0] = ["$src/python"]
 from hpa_sim import lockstep
 
@@ -106,6 +106,8 @@ while True:
     tick = lockstep.decode("team_tick", body, "team_tick")
     steps += 1
     bad = steps == 20
+    if bad and mode == "hang":
+        time.sleep(30)
     replies = []
     for v in tick["views"]:
         thrust_N = float("nan") if bad and mode == "nan" else 5.0
@@ -130,5 +132,28 @@ PY
 bad_run nan "\(vehicle 0\): team_tick at t = 0\.200000 s: malformed team_tick_reply message: a non-finite command \(body rate or thrust\) \(reply 0, vehicle 0\)"
 bad_run vehicle "team_tick at t = 0\.200000 s: team_tick_reply refused: reply 0 is for vehicle 7, expected vehicle 0" --team-stack one
 bad_run short "team_tick at t = 0\.200000 s: malformed team_tick_reply message: replies count 2, more than the rest of the message holds" --team-stack one
+
+# 4. a single vehicle's stack is greeted with a team_hello, which it refuses: a run error
+expect_exit 3 "expected a hello, got a team_hello message" run \
+  "$src/scenarios/ci/team2_line.yaml" --quiet --out "$out/single" --set duration=0.2 \
+  --flight-stack "$python $src/examples/python/hover_controller.py"
+
+# 5. SIGINT while the stacks are waited for, to connect and to reply: stopped (exit 130), the
+# run's files written, no stack left running
+stopped() {
+  local label=$1 wait_s=$2; shift 2
+  "$hpa" run "$src/scenarios/ci/team2_line.yaml" --quiet --out "$out/$label" "$@" \
+    > /dev/null 2>&1 &
+  local pid=$!
+  sleep "$wait_s"
+  kill -INT "$pid"
+  wait "$pid"
+  local status=$?
+  [ "$status" -eq 130 ] || fail "$label: exit $status after SIGINT, expected 130"
+  grep -q "stopped by signal 2" "$out/$label/metrics.json" || fail "$label: no stop in metrics.json"
+}
+stopped stop_connect 0.5 --flight-stack "sleep 30"
+stopped stop_reply 2 --flight-stack "$python $out/bad_team.py hang" --team-stack one
+pgrep -f "$out/bad_team.py" > /dev/null && fail "a stack outlived its stopped run"
 
 exit $((failures > 0))
