@@ -172,7 +172,11 @@ int Serve(Channel& channel, const std::string& controller, const std::string& es
           bool per_tick, bool own_rate_loop) {
   std::vector<uint8_t> hello_bytes;
   const MessageType first = channel.Receive(&hello_bytes, 60.0);
-  if (first == MessageType::kTeamHello) return ServeTeam(channel, hello_bytes, controller);
+  if (first == MessageType::kTeamHello) {
+    // a team's vehicles keep their rate loops in the simulator
+    if (own_rate_loop) throw ProtocolError("--own-rate-loop: a team's stack owns no rate loop");
+    return ServeTeam(channel, hello_bytes, controller);
+  }
   if (first != MessageType::kHello) {
     throw ProtocolError("expected a hello message, got " + hpa::flight::MessageTypeName(first));
   }

@@ -137,6 +137,9 @@ bad_run short "team_tick at t = 0\.200000 s: malformed team_tick_reply message: 
 expect_exit 3 "expected a hello, got a team_hello message" run \
   "$src/scenarios/ci/team2_line.yaml" --quiet --out "$out/single" --set duration=0.2 \
   --flight-stack "$python $src/examples/python/hover_controller.py"
+# and hpa-flight refuses to own a team vehicle's rate loop (the simulator keeps it)
+expect_exit 3 "a team's stack owns no rate loop" run "$src/scenarios/ci/team2_line.yaml" --quiet \
+  --out "$out/own" --set duration=0.2 --flight-stack "hpa-flight --own-rate-loop"
 
 # 5. SIGINT while the stacks are waited for, to connect and to reply: stopped (exit 130), the
 # run's files written, no stack left running
