@@ -219,5 +219,4 @@ set_tests_properties(cli.team_video PROPERTIES LABELS "cli;scenario" TIMEOUT 300
 add_test(NAME cli.team_flight_stack
          COMMAND bash ${SCEN}/tests/team_flight_stack_test.sh ${HPA_BIN} ${CMAKE_SOURCE_DIR}
                  ${HPA_PYTHON3})
-set_tests_properties(cli.team_flight_stack PROPERTIES LABELS "cli;scenario" TIMEOUT 600
-                     SKIP_RETURN_CODE 77)
+set_tests_properties(cli.team_flight_stack PROPERTIES LABELS "cli;scenario" TIMEOUT 600)

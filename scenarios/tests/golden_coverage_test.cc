@@ -13,6 +13,7 @@
 
 #include "hpa/controller/controller_registry.h"
 #include "hpa/controller/rti_solver.h"
+#include "hpa/controller/team_controller.h"
 #include "hpa/estimator/estimator_registry.h"
 #include "hpa/models/data_dir.h"
 #include "hpa/scenarios/events.h"
@@ -67,6 +68,20 @@ std::string SettingOf(const Scenario& s, const std::string& key) {
 
 // What one scenario flies, as "kind: name" entries.
 std::set<std::string> PathsOf(const Scenario& s) {
+  if (s.team.IsTeam()) {
+    // a team: its controller on every vehicle, its reference and events (no estimator, camera
+    // or controller settings: each vehicle flies on motion capture)
+    std::set<std::string> paths = {"team controller: " + s.controller.type,
+                                   "reference: " + s.reference.type};
+    for (const EventSpec& e : s.events) {
+      if (const auto* impulse = dynamic_cast<const ImpulseEvent*>(e.action.get())) {
+        paths.insert(std::string("team event: impulse on ") +
+                     (impulse->on_payload ? "the payload" : "a vehicle"));
+      }
+    }
+    if (s.team.payload_on_ground) paths.insert("team: payload lifted from the ground");
+    return paths;
+  }
   std::set<std::string> paths = {
       "controller: " + s.controller.type,
       "estimator: " + EstimatorOf(s),
@@ -128,6 +143,9 @@ std::set<std::string> RegisteredPaths() {
   paths.insert("switch: estimation.slack_tension_cue false");
   paths.insert("switch: estimation.camera_randomize true");
   for (const WorldPart& part : WorldParts()) paths.insert("world part: " + part.name);
+  for (const std::string& n : TeamControllerNames()) paths.insert("team controller: " + n);
+  paths.insert("team event: impulse on a vehicle");
+  paths.insert("team: payload lifted from the ground");
   return paths;
 }
 

@@ -10,41 +10,10 @@ set -uo pipefail
 source "$2/scenarios/tests/cli_test_lib.sh"
 cli_test_start "$@"  # hpa, src, python; out: a folder removed at exit
 
-# a runner that hands the stacks no payload reference cannot fly them: skipped (ctest's 77)
-"$hpa" run "$src/scenarios/ci/team2_line.yaml" --quiet --out "$out/probe" --set duration=0.1 \
-  --flight-stack hpa-flight > /dev/null 2>&1
-if grep -q "payload reference does not reach it" "$out/probe/metrics.json"; then
-  echo "SKIP: this hpa hands a team's stacks no payload reference"
-  exit 77
-fi
-
-# same_team_run A B LABEL: same_run's checks with the team block and the log's per-vehicle solve
-# times compared here (each *_ms value and v*_solve_ms column left out)
+# same_team_run A B LABEL: the same run, metrics (timings left out at any depth) and log row for
+# row (every vehicle's solve time left out), B flown by hpa-flight
 same_team_run() {
-  local a=$1 b=$2 label=$3
-  same_run "$a" "$b" "$label" --skip team --stack-b hpa-flight
-  "$python" - "$a" "$b" <<'PY' || fail "$label: the team blocks or logs differ"
-import csv, json, sys
-
-def strip(v):
-    """v without its timings: every key ending in _ms, at any depth."""
-    if isinstance(v, dict):
-        return {k: strip(x) for k, x in v.items() if not k.endswith("_ms")}
-    if isinstance(v, list):
-        return [strip(x) for x in v]
-    return v
-
-a, b = (json.load(open(p + "/metrics.json")) for p in sys.argv[1:3])
-assert a["team"] is not None, "A has no team block"
-assert strip(a["team"]) == strip(b["team"]), "team blocks differ: %r != %r" % (
-    strip(a["team"]), strip(b["team"]))
-la, lb = (list(csv.reader(open(p + "/log.csv"))) for p in sys.argv[1:3])
-assert la[0] == lb[0], "log columns differ"
-keep = [i for i, c in enumerate(la[0]) if not c.endswith("solve_ms")]
-assert len(la) == len(lb) > 100, "log rows: %d and %d" % (len(la), len(lb))
-bad = [i for i, (x, y) in enumerate(zip(la, lb)) if [x[k] for k in keep] != [y[k] for k in keep]]
-assert not bad, "log rows differ from row %d" % bad[0]
-PY
+  same_run "$1" "$2" "$3" --rows 100 --stack-b hpa-flight
 }
 
 # 1. team2_line (two vehicles, the cooperative controller) and team3_lift (three, lifting from the

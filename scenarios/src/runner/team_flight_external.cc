@@ -20,7 +20,6 @@
 #include <cstring>
 #include <optional>
 #include <thread>
-#include <type_traits>
 #include <utility>
 
 #include "hpa/flight/protocol.h"
@@ -44,24 +43,6 @@ constexpr double kStopGraceS = 0.2;
 constexpr double kExitNoteWaitS = 2.0;
 // How long a stack may take to connect (s).
 constexpr double kConnectTimeoutS = 30.0;
-
-// Whether ExternalTeamFlightOptions carries the scenario's payload reference (`reference`).
-template <class O, class = void>
-struct HasReference : std::false_type {};
-template <class O>
-struct HasReference<O, std::void_t<decltype(std::declval<const O&>().reference)>> : std::true_type {
-};
-
-// The scenario's payload reference as the options carry it (none: the runner hands none over).
-template <class O>
-std::optional<ReferenceSpec> ReferenceOf(const O& options) {
-  if constexpr (HasReference<O>::value) {
-    return options.reference;
-  } else {
-    (void)options;
-    return std::nullopt;
-  }
-}
 
 // The directory of the running executable (hpa-flight sits beside hpa).
 std::string ExecutableDir() {
@@ -325,12 +306,6 @@ class ExternalTeamFlight final : public TeamFlightLink {
       for (int i = 0; i < n; ++i) all.push_back(i);
       stacks_.push_back(std::make_unique<TeamStack>(options_, all, -1));
     }
-    const std::optional<ReferenceSpec> reference = ReferenceOf(options_);
-    if (!reference) {
-      throw ProtocolError("flight stack '" + options_.command +
-                          "': the team's payload reference does not reach it (the runner hands "
-                          "ExternalTeamFlightOptions no reference)");
-    }
     // what earlier runs of killed hpa processes left behind, before this run adds its own
     RemoveStaleFlightRuns();
     // every process started first, so they start up side by side
@@ -343,7 +318,7 @@ class ExternalTeamFlight final : public TeamFlightLink {
     hello.seed = options_.seed;
     hello.controller = options_.controller;
     hello.team = team;
-    hello.reference = *reference;
+    hello.reference = options_.reference;
     for (const auto& s : stacks_) {
       hello.vehicles = s->vehicles();
       s->SendHello(hello);

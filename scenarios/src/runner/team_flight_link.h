@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "hpa/controller/reference_spec.h"
 #include "hpa/controller/team_controller.h"
 #include "hpa/models/cooperative_model.h"
 
@@ -47,6 +48,7 @@ struct ExternalTeamFlightOptions {
   std::string scenario;          // the scenario's name and seed, for the hello
   unsigned long seed = 0;
   std::string controller;        // the scenario's team controller, for the hello
+  ReferenceSpec reference;       // the scenario's payload reference, for the hello
 };
 
 /// Starts the team's separate stack(s) and completes their hello; throws flight::ProtocolError

@@ -212,6 +212,7 @@ RunResult RunTeamScenario(const Scenario& scenario, const Params& base_params,
     external.scenario = scenario.name;
     external.seed = scenario.seed;
     external.controller = scenario.controller.type;
+    external.reference = scenario.reference;
     try {
       flight = runner::StartExternalTeamFlight(team, external);
     } catch (const std::exception& e) {

@@ -32,12 +32,23 @@ std::string ScenariosDir() { return DataPath("scenarios"); }
 // Fields that measure the machine or name the build, not the behaviour.
 bool IsMachineKey(const std::string& key) {
   return key == "build" || key == "wall_time_s" || key == "mpc_solve_ms" || key == "render_ms" ||
-         key == "detector_ms" || key == "image_model_ms";
+         key == "detector_ms" || key == "image_model_ms" || key == "solve_ms";
 }
 
 Json StripMachineFields(Json metrics) {
+  if (metrics.is_array()) {
+    for (Json& entry : metrics) entry = StripMachineFields(std::move(entry));
+    return metrics;
+  }
+  if (!metrics.is_object()) return metrics;
+  // at any depth: a team's vehicles each have their controller's update time
   for (auto it = metrics.begin(); it != metrics.end();) {
-    it = IsMachineKey(it.key()) ? metrics.erase(it) : std::next(it);
+    if (IsMachineKey(it.key())) {
+      it = metrics.erase(it);
+    } else {
+      it.value() = StripMachineFields(std::move(it.value()));
+      ++it;
+    }
   }
   return metrics;
 }
