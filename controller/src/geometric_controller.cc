@@ -59,8 +59,8 @@ ControlOutput GeometricController::Update(const SystemState& state) {
   return out;
 }
 
-BodyRateCommand AttitudeCascadeCommand(const Eigen::Vector3d& force_W_N, const Eigen::Matrix3d& r_des,
-                                       const Eigen::Quaterniond& q_WB,
+BodyRateCommand AttitudeCascadeCommand(const Eigen::Vector3d& force_W_N,
+                                       const Eigen::Matrix3d& r_des, const Eigen::Quaterniond& q_WB,
                                        const Eigen::Vector3d& k_attitude_per_s,
                                        double max_rate_radps) {
   const Eigen::Matrix3d r = q_WB.normalized().toRotationMatrix();

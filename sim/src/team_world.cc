@@ -395,8 +395,7 @@ struct TeamWorld::Impl {
       for (int j = 0; j < n; ++j) {
         if (j == i) continue;
         const Eigen::Matrix<double, 13, 1> x = Block(vehicles[j]);
-        const Eigen::Quaterniond q_WB =
-            Eigen::Quaterniond(x(6), x(7), x(8), x(9)).normalized();
+        const Eigen::Quaterniond q_WB = Eigen::Quaterniond(x(6), x(7), x(8), x(9)).normalized();
         const double reach_m = params(j).arm_length_m + rotor_radius_m;
         const double half_height_m = params(j).body_half_size_m.z();
         // samples no farther apart than the disc's half thickness: a crossing is never missed

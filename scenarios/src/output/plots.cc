@@ -5,7 +5,6 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "hpa/models/cooperative_model.h"
-
 #include "hpa/models/input_error.h"
 #include "hpa/scenarios/plot_canvas.h"
 
@@ -166,9 +165,9 @@ std::vector<double> TeamColumn(const std::vector<TeamLogRow>& rows, F f) {
 }
 
 // A team's payload x, y and z against the reference, the time any cable was slack shaded.
-std::string WriteTeamTrackingPlot(const std::vector<TeamLogRow>& rows,
-                                  const std::vector<double>& t, const std::string& title_suffix,
-                                  const std::string& dir, PlotFormat format) {
+std::string WriteTeamTrackingPlot(const std::vector<TeamLogRow>& rows, const std::vector<double>& t,
+                                  const std::string& title_suffix, const std::string& dir,
+                                  PlotFormat format) {
   Figure fig(1200, 900);
   static const char* kAxis[3] = {"x", "y", "z"};
   std::vector<CableMode> any_slack;
@@ -265,9 +264,8 @@ namespace {
 
 // A team comparison: each run's payload x, y and z against the reference (dotted) and its worst
 // vehicle's tilt, one colour per run.
-std::string WriteTeamComparisonPlot(const std::vector<RunResult>& results,
-                                    const std::string& stem, PlotFormat format,
-                                    const std::vector<std::string>& labels) {
+std::string WriteTeamComparisonPlot(const std::vector<RunResult>& results, const std::string& stem,
+                                    PlotFormat format, const std::vector<std::string>& labels) {
   Figure fig(1400, 1000);
   const std::string name = results.front().metrics.scenario;
   static const char* kTitles[4] = {"payload x (dotted: reference)", "payload y (dotted: reference)",

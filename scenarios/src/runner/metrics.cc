@@ -484,10 +484,10 @@ std::string MetricsToJson(const Metrics& m) {
   if (m.team) {
     // a team run measured none of the single vehicle's quadrotor, estimator, camera or contact
     // metrics: null, never a perfect-looking value
-    for (const char* key : {"payload_rmse_est_m", "quad_rmse_m", "quad_position_deviation_max_m",
-                            "mode_accuracy", "payload_in_fov_fraction", "payload_lost_time_s",
-                            "closed_loop_cost", "payload_quad_min_distance_m", "contacts",
-                            "slack_detection_latency_s"}) {
+    for (const char* key :
+         {"payload_rmse_est_m", "quad_rmse_m", "quad_position_deviation_max_m", "mode_accuracy",
+          "payload_in_fov_fraction", "payload_lost_time_s", "closed_loop_cost",
+          "payload_quad_min_distance_m", "contacts", "slack_detection_latency_s"}) {
       o[key] = Json();
     }
     o["retaut"]["quad_vz_min_mps"] = Json();
@@ -629,10 +629,18 @@ void WriteTeamLogCsv(const std::string& path, const std::vector<TeamLogRow>& row
          "true_qP_y,true_qP_z,true_wP_x,true_wP_y,true_wP_z,ref_pL_x,ref_pL_y,ref_pL_z";
   for (int i = 0; i < n; ++i) {
     const std::string v = "v" + std::to_string(i) + "_";
-    for (const char* c :
-         {"pQ_x", "pQ_y", "pQ_z", "vQ_x", "vQ_y", "vQ_z", "q_w", "q_x", "q_y", "q_z", "w_x", "w_y",
-          "w_z", "cable_length_m", "tension_N", "mode", "taut_seen", "cmd_w_x", "cmd_w_y",
-          "cmd_w_z", "cmd_thrust_N", "status", "solve_ms", "mixer_saturated"}) {
+    for (const char* c : {"pQ_x",         "pQ_y",
+                          "pQ_z",         "vQ_x",
+                          "vQ_y",         "vQ_z",
+                          "q_w",          "q_x",
+                          "q_y",          "q_z",
+                          "w_x",          "w_y",
+                          "w_z",          "cable_length_m",
+                          "tension_N",    "mode",
+                          "taut_seen",    "cmd_w_x",
+                          "cmd_w_y",      "cmd_w_z",
+                          "cmd_thrust_N", "status",
+                          "solve_ms",     "mixer_saturated"}) {
       out << "," << v << c;
     }
   }

@@ -45,16 +45,15 @@ std::vector<RateRow> TeamRateTable(const Scenario& scenario, const Params& param
   for (const VehicleSpec& v : scenario.team.vehicles) {
     team.vehicles.push_back({params, v.cable_length_m, v.p_PA_P_m});
   }
-  const std::unique_ptr<TeamController> controller = MakeTeamController(
-      scenario.controller.type, team, 0, MakeReference(scenario, params));
+  const std::unique_ptr<TeamController> controller =
+      MakeTeamController(scenario.controller.type, team, 0, MakeReference(scenario, params));
   const auto number = [](double value) {
     char text[32];
     std::snprintf(text, sizeof text, "%g", value);
     return std::string(text);
   };
-  std::vector<RateRow> rows = {
-      {"physics", 1.0 / sim::World::kPhysicsDt_s, 0.0,
-       "MuJoCo timestep (sim::World::kPhysicsDt_s)", ""}};
+  std::vector<RateRow> rows = {{"physics", 1.0 / sim::World::kPhysicsDt_s, 0.0,
+                                "MuJoCo timestep (sim::World::kPhysicsDt_s)", ""}};
   if (scenario.estimation.ground_truth) {
     rows.push_back({"ground truth (every body)", 1.0 / sim::World::kPhysicsDt_s, 0.0,
                     "estimation.ground_truth", ""});

@@ -162,7 +162,8 @@ TeamSpec ParseTeam(const YamlMap& root) {
   if (root.Has("payload")) {
     const YamlMap p = root.Map("payload");
     team.payload_mass_kg = p.Number("mass_kg", mass.min, mass.max, team.payload_mass_kg);
-    if (p.Has("inertia_kgm2")) team.payload_inertia_P_kgm2 = p.Vector("inertia_kgm2", 3, 1e-7, 10.0);
+    if (p.Has("inertia_kgm2"))
+      team.payload_inertia_P_kgm2 = p.Vector("inertia_kgm2", 3, 1e-7, 10.0);
     team.payload_on_ground = p.Bool("on_ground", false);
     p.RejectUnknownKeys();
   }

@@ -47,8 +47,8 @@ struct ExternalTeamFlightOptions {
   double step_timeout_s = 10.0;  // longest wait for one reply
   std::string scenario;          // the scenario's name and seed, for the hello
   unsigned long seed = 0;
-  std::string controller;        // the scenario's team controller, for the hello
-  ReferenceSpec reference;       // the scenario's payload reference, for the hello
+  std::string controller;   // the scenario's team controller, for the hello
+  ReferenceSpec reference;  // the scenario's payload reference, for the hello
 };
 
 /// Starts the team's separate stack(s) and completes their hello; throws flight::ProtocolError

@@ -142,10 +142,10 @@ void ComputeTeamMetrics(const std::vector<TeamLogRow>& rows, int vehicles,
       vm.retaut_count += end < end_s ? 1 : 0;  // slack to the end never came taut again
     }
     vm.solve_ms = ComputeQuantiles(solve_ms[static_cast<size_t>(i)]);
-    vm.mixer_saturated_fraction =
-        rate_steps[static_cast<size_t>(i)] > 0
-            ? static_cast<double>(saturated[static_cast<size_t>(i)]) / rate_steps[static_cast<size_t>(i)]
-            : 0.0;
+    vm.mixer_saturated_fraction = rate_steps[static_cast<size_t>(i)] > 0
+                                      ? static_cast<double>(saturated[static_cast<size_t>(i)]) /
+                                            rate_steps[static_cast<size_t>(i)]
+                                      : 0.0;
     retauts += vm.retaut_count;
     failures += vm.control_failures;
   }
@@ -234,7 +234,8 @@ RunResult RunTeamScenario(const Scenario& scenario, const Params& base_params,
   const int control_loop = clock.AddLoop("control", flight->RateHz());
   const int rate_loop = clock.AddLoop("rate loop", rate_loop_hz);
   double video_rate_hz = 0.0;
-  for (const RunRecorder* r : options.recorders) video_rate_hz = std::max(video_rate_hz, r->video_rate_hz());
+  for (const RunRecorder* r : options.recorders)
+    video_rate_hz = std::max(video_rate_hz, r->video_rate_hz());
   const int video_loop = video_rate_hz > 0.0 ? clock.AddLoop("video", video_rate_hz) : -1;
 
   // what each vehicle's flight code holds: the latest reading of each body (payload first)
@@ -258,9 +259,9 @@ RunResult RunTeamScenario(const Scenario& scenario, const Params& base_params,
         if (const auto* e = dynamic_cast<const ImpulseEvent*>(action)) {
           world.ApplyImpulse(e->on_payload ? -1 : e->vehicle, e->impulse_W_Ns);
         } else if (const auto* v = dynamic_cast<const VelocityChangeEvent*>(action)) {
-          const double mass_kg = v->on_payload ? team.payload_mass_kg
-                                               : team.vehicles[static_cast<size_t>(v->vehicle)]
-                                                     .params.quad_mass_kg;
+          const double mass_kg =
+              v->on_payload ? team.payload_mass_kg
+                            : team.vehicles[static_cast<size_t>(v->vehicle)].params.quad_mass_kg;
           world.ApplyImpulse(v->on_payload ? -1 : v->vehicle, mass_kg * v->dv_W_mps);
         }
       }
@@ -314,7 +315,8 @@ RunResult RunTeamScenario(const Scenario& scenario, const Params& base_params,
         }
         // a row once every vehicle has flown a command (the first readings take the
         // motion-capture latency to arrive; until then the motors hold the start's hover)
-        if (std::all_of(command.begin(), command.end(), [](const auto& c) { return c.has_value(); })) {
+        if (std::all_of(command.begin(), command.end(),
+                        [](const auto& c) { return c.has_value(); })) {
           row.vehicles = last;
           result.team_rows.push_back(std::move(row));
         }
@@ -331,7 +333,8 @@ RunResult RunTeamScenario(const Scenario& scenario, const Params& base_params,
         }
       }
       if (video_loop >= 0 && clock.Fires(video_loop)) {
-        const TeamLogRow* latest_row = result.team_rows.empty() ? nullptr : &result.team_rows.back();
+        const TeamLogRow* latest_row =
+            result.team_rows.empty() ? nullptr : &result.team_rows.back();
         for (RunRecorder* r : options.recorders) r->OnTeamVideoTick(world, latest_row);
       }
       if (tick == end_tick) break;
@@ -342,8 +345,7 @@ RunResult RunTeamScenario(const Scenario& scenario, const Params& base_params,
         const int pct = static_cast<int>(100.0 * tick / std::max(end_tick, 1L));
         if (pct != last_pct) {
           last_pct = pct;
-          const double wall_s =
-              std::chrono::duration<double>(Clock::now() - wall_start).count();
+          const double wall_s = std::chrono::duration<double>(Clock::now() - wall_start).count();
           std::fprintf(stderr, "\r%s: %3d%%  t = %6.2f / %.2f s  (%.2f sim s per wall s)",
                        scenario.name.c_str(), pct, t, scenario.duration_s,
                        t / std::max(wall_s, 1e-9));
@@ -353,7 +355,8 @@ RunResult RunTeamScenario(const Scenario& scenario, const Params& base_params,
     flight->Finish();
   } catch (const std::exception& e) {
     // keep what was computed: the metrics of the run so far, with the error named
-    metrics.run_error = std::string(e.what()) + " (at t = " + std::to_string(world.time_s()) + " s)";
+    metrics.run_error =
+        std::string(e.what()) + " (at t = " + std::to_string(world.time_s()) + " s)";
   }
   if (show_progress) std::fprintf(stderr, "\n");
   const sim::CrashStatus crash = world.Crash();

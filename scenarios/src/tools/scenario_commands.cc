@@ -190,10 +190,11 @@ void PrintSummary(const Metrics& m, const std::string& out_dir) {
                 m.team->min_vehicle_separation_m);
     for (size_t i = 0; i < m.team->vehicles.size(); ++i) {
       const VehicleMetrics& v = m.team->vehicles[i];
-      std::printf("  vehicle %zu: slack %.2f s (%d events, %d re-taut), tilt max %.1f deg, "
-                  "tension max %.2f N, update median %.4f ms, failures %d\n",
-                  i, v.slack_time_s, v.slack_events, v.retaut_count, v.tilt_max_deg,
-                  v.cable_tension_max_N, v.solve_ms.median, v.control_failures);
+      std::printf(
+          "  vehicle %zu: slack %.2f s (%d events, %d re-taut), tilt max %.1f deg, "
+          "tension max %.2f N, update median %.4f ms, failures %d\n",
+          i, v.slack_time_s, v.slack_events, v.retaut_count, v.tilt_max_deg, v.cable_tension_max_N,
+          v.solve_ms.median, v.control_failures);
     }
     for (const auto& f : m.expect_failed) std::printf("  EXPECT FAILED %s\n", f.c_str());
     std::printf("  wrote %s/metrics.json, %s/log.csv\n", out_dir.c_str(), out_dir.c_str());
@@ -541,7 +542,7 @@ int RenderFrameMain(int argc, char** argv) {
       const double fit =
           std::min({1.0, kMaxRenderWidth_px / width_px, kMaxRenderHeight_px / height_px});
       frame = world.renderer().RenderChaseCamera(std::max(1, static_cast<int>(width_px * fit)),
-                                      std::max(1, static_cast<int>(height_px * fit)));
+                                                 std::max(1, static_cast<int>(height_px * fit)));
     } else {
       frame = world.renderer().RenderPayloadCamera();
     }

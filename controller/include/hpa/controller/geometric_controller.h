@@ -23,8 +23,8 @@ struct GeometricGains {
 /// The cascade's last step, shared by the geometric and the team controllers: the collective
 /// thrust F . R e3 of a desired force and the body rate -K_R e_R toward the attitude r_des, with
 /// e_R = 1/2 vee(R_d^T R - R^T R_d) (Lee et al.), each rate clamped to +-max_rate_radps.
-BodyRateCommand AttitudeCascadeCommand(const Eigen::Vector3d& force_W_N, const Eigen::Matrix3d& r_des,
-                                       const Eigen::Quaterniond& q_WB,
+BodyRateCommand AttitudeCascadeCommand(const Eigen::Vector3d& force_W_N,
+                                       const Eigen::Matrix3d& r_des, const Eigen::Quaterniond& q_WB,
                                        const Eigen::Vector3d& k_attitude_per_s,
                                        double max_rate_radps);
 

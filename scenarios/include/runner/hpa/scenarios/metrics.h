@@ -117,7 +117,7 @@ struct VehicleMetrics {
 
 /// The team's metrics of a team run (metrics.json `team`; docs/cooperative.md).
 struct TeamMetrics {
-  std::vector<VehicleMetrics> vehicles;  // one per vehicle, in the scenario's order
+  std::vector<VehicleMetrics> vehicles;   // one per vehicle, in the scenario's order
   double min_vehicle_separation_m = 0.0;  // smallest distance between two vehicles' centres
   double payload_tilt_max_deg = 0.0;      // largest angle between the payload's z axis and up
 };
