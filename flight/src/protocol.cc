@@ -17,6 +17,7 @@
 
 #include "hpa/flight/team_protocol.h"
 #include "message_table.h"
+#include "protocol_common.h"
 
 namespace hpa::flight {
 namespace {
@@ -120,22 +121,6 @@ const Codec<FlightInputs>& TickCodec() {
   return codec;
 }
 
-const Codec<BodyRateCommand>& BodyRateCommandCodec() {
-  static const Codec<BodyRateCommand> codec("body_rate_command",
-                                            {Bind("w_B_radps", &BodyRateCommand::w_B_radps),
-                                             Bind("thrust_N", &BodyRateCommand::thrust_N)});
-  return codec;
-}
-
-const Codec<ControlOutput>& ControlOutputCodec() {
-  static const Codec<ControlOutput> codec(
-      "control_output",
-      {Bind("command", &ControlOutput::command, BodyRateCommandCodec()),
-       Bind("status", &ControlOutput::status), Bind("solve_time_ms", &ControlOutput::solve_time_ms),
-       Bind("cost", &ControlOutput::cost)});
-  return codec;
-}
-
 const Codec<FlightOutputs>& ReplyCodec() {
   static const Codec<FlightOutputs> codec(
       "tick_reply",
@@ -175,13 +160,6 @@ const Codec<AutopilotOutput>& RateReplyCodec() {
   return codec;
 }
 
-// A JSON value as an error message shows it: its text, cut after 60 bytes.
-std::string Shown(const nlohmann::json& j) {
-  std::string text = j.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
-  if (text.size() > 60) text = text.substr(0, 60) + "...";
-  return CleanUtf8(text);
-}
-
 // Whether `name` is 1 to kMaxNameBytes letters, digits and underscores.
 bool IsIdentifier(const std::string& name) {
   if (name.empty() || name.size() > kMaxNameBytes) return false;
@@ -190,7 +168,7 @@ bool IsIdentifier(const std::string& name) {
   });
 }
 
-// A reply's JSON object; ProtocolError naming the message when it is not one.
+// A message's JSON object; ProtocolError naming the message when it is not one.
 nlohmann::json ParseObject(const std::vector<uint8_t>& body, const std::string& what) {
   nlohmann::json j;
   try {
@@ -202,7 +180,48 @@ nlohmann::json ParseObject(const std::vector<uint8_t>& body, const std::string& 
   return j;
 }
 
-// An optional string field of a reply (absent: `fallback`), at most kMaxNameBytes long.
+}  // namespace
+
+// ---- shared with the team's messages (protocol_common.h) ----------------------------------
+
+const wire::Codec<BodyRateCommand>& BodyRateCommandCodec() {
+  static const wire::Codec<BodyRateCommand> codec("body_rate_command",
+                                                  {Bind("w_B_radps", &BodyRateCommand::w_B_radps),
+                                                   Bind("thrust_N", &BodyRateCommand::thrust_N)});
+  return codec;
+}
+
+const wire::Codec<ControlOutput>& ControlOutputCodec() {
+  static const wire::Codec<ControlOutput> codec(
+      "control_output",
+      {Bind("command", &ControlOutput::command, BodyRateCommandCodec()),
+       Bind("status", &ControlOutput::status), Bind("solve_time_ms", &ControlOutput::solve_time_ms),
+       Bind("cost", &ControlOutput::cost)});
+  return codec;
+}
+
+std::string Shown(const nlohmann::json& j) {
+  std::string text = j.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
+  if (text.size() > 60) text = text.substr(0, 60) + "...";
+  return CleanUtf8(text);
+}
+
+nlohmann::json ParseVersionedMessage(const std::vector<uint8_t>& body, MessageType type,
+                                     const std::string& this_side) {
+  const std::string what = MessageTypeName(type);
+  const nlohmann::json j = ParseObject(body, what);
+  const nlohmann::json version = j.value("protocol_version", nlohmann::json());
+  if (!version.is_number_integer() || version.get<int64_t>() < 0 ||
+      version.get<uint64_t>() != kProtocolVersion) {
+    throw ProtocolError("it speaks protocol version " + Shown(version) + ", " + this_side +
+                        " version " + std::to_string(kProtocolVersion) + " (" + what +
+                        "'s protocol_version must be the integer " +
+                        std::to_string(kProtocolVersion) + ")");
+  }
+  CheckJsonMessage(type, j);
+  return j;
+}
+
 std::string NameField(const nlohmann::json& j, const std::string& what, const char* key,
                       const std::string& fallback) {
   if (!j.contains(key)) return fallback;
@@ -213,8 +232,6 @@ std::string NameField(const nlohmann::json& j, const std::string& what, const ch
   }
   return CleanUtf8(v.get<std::string>());
 }
-
-}  // namespace
 
 std::string CleanUtf8(std::string_view text) {
   std::string out;
@@ -509,18 +526,9 @@ void CheckReply(const FlightOutputs& out, const ReplyBounds& bounds) {
 
 HelloAck ParseHelloAck(const std::vector<uint8_t>& body, double tick_hz) {
   const std::string what = "hello_ack";
-  const nlohmann::json j = ParseObject(body, what);
-  // the version: exactly the integer this side speaks (1.9 or 2^32 + 1 are not version 1)
-  const nlohmann::json version = j.value("protocol_version", nlohmann::json());
-  if (!version.is_number_integer() || version.get<int64_t>() < 0 ||
-      version.get<uint64_t>() != kProtocolVersion) {
-    throw ProtocolError("it speaks protocol version " + Shown(version) +
-                        ", this simulator version " + std::to_string(kProtocolVersion) +
-                        " (hello_ack's protocol_version must be the integer " +
-                        std::to_string(kProtocolVersion) + ")");
-  }
-  // the keys and their types as the message table declares them; then what the table cannot say
-  CheckJsonMessage(MessageType::kHelloAck, j);
+  // the version, the keys and their types as the message table declares them; then what the
+  // table cannot say
+  const nlohmann::json j = ParseVersionedMessage(body, MessageType::kHelloAck, "this simulator");
   HelloAck ack;
   ack.name = NameField(j, what, "name", "external");
   ack.controller = NameField(j, what, "controller", "");

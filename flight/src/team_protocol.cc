@@ -8,6 +8,7 @@
 #include <set>
 
 #include "message_table.h"
+#include "protocol_common.h"
 
 namespace hpa::flight {
 namespace {
@@ -43,23 +44,6 @@ const Codec<TeamTick>& TeamTickCodec() {
   return codec;
 }
 
-// control_output's codec: the single vehicle's binding of the same struct.
-const Codec<BodyRateCommand>& BodyRateCommandCodec() {
-  static const Codec<BodyRateCommand> codec("body_rate_command",
-                                            {Bind("w_B_radps", &BodyRateCommand::w_B_radps),
-                                             Bind("thrust_N", &BodyRateCommand::thrust_N)});
-  return codec;
-}
-
-const Codec<ControlOutput>& ControlOutputCodec() {
-  static const Codec<ControlOutput> codec(
-      "control_output",
-      {Bind("command", &ControlOutput::command, BodyRateCommandCodec()),
-       Bind("status", &ControlOutput::status), Bind("solve_time_ms", &ControlOutput::solve_time_ms),
-       Bind("cost", &ControlOutput::cost)});
-  return codec;
-}
-
 const Codec<TeamVehicleReply>& TeamVehicleReplyCodec() {
   static const Codec<TeamVehicleReply> codec(
       "team_vehicle_reply", {Bind("vehicle", &TeamVehicleReply::vehicle),
@@ -72,50 +56,6 @@ const Codec<TeamTickReply>& TeamTickReplyCodec() {
   static const Codec<TeamTickReply> codec(
       "team_tick_reply", {Bind("replies", &TeamTickReply::replies, TeamVehicleReplyCodec())});
   return codec;
-}
-
-// A JSON value as an error message shows it: its text, cut after 60 bytes.
-std::string Shown(const nlohmann::json& j) {
-  std::string text = j.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
-  if (text.size() > 60) text = text.substr(0, 60) + "...";
-  return CleanUtf8(text);
-}
-
-// A message's JSON object; ProtocolError naming the message when it is not one.
-nlohmann::json ParseObject(const std::vector<uint8_t>& body, const std::string& what) {
-  nlohmann::json j;
-  try {
-    j = nlohmann::json::parse(body.begin(), body.end());
-  } catch (const nlohmann::json::exception& e) {
-    throw ProtocolError("a malformed " + what + ": " + e.what());
-  }
-  if (!j.is_object()) throw ProtocolError(what + " is " + Shown(j) + ", expected a JSON object");
-  return j;
-}
-
-// Refuses a protocol_version other than the integer kProtocolVersion (1.9 or 2^32 + 1 are not
-// version 1).
-void CheckVersion(const nlohmann::json& j, const std::string& what) {
-  const nlohmann::json version = j.value("protocol_version", nlohmann::json());
-  if (!version.is_number_integer() || version.get<int64_t>() < 0 ||
-      version.get<uint64_t>() != kProtocolVersion) {
-    throw ProtocolError("it speaks protocol version " + Shown(version) + ", this side version " +
-                        std::to_string(kProtocolVersion) + " (" + what +
-                        "'s protocol_version must be the integer " +
-                        std::to_string(kProtocolVersion) + ")");
-  }
-}
-
-// An optional string key (absent: `fallback`), at most kMaxNameBytes long.
-std::string NameField(const nlohmann::json& j, const std::string& what, const char* key,
-                      const std::string& fallback) {
-  if (!j.contains(key)) return fallback;
-  const nlohmann::json& v = j.at(key);
-  if (!v.is_string() || v.get_ref<const std::string&>().size() > kMaxNameBytes) {
-    throw ProtocolError(what + "'s " + key + " is " + Shown(v) + ", expected a string of at most " +
-                        std::to_string(kMaxNameBytes) + " bytes");
-  }
-  return CleanUtf8(v.get<std::string>());
 }
 
 // A finite number at `key` of j (`what` names j), > 0 when `positive`.
@@ -252,9 +192,7 @@ nlohmann::json TeamHelloToJson(const TeamHello& hello) {
 
 TeamHello ParseTeamHello(const std::vector<uint8_t>& body) {
   const std::string what = "team_hello";
-  const nlohmann::json j = ParseObject(body, what);
-  CheckVersion(j, what);
-  CheckJsonMessage(MessageType::kTeamHello, j);
+  const nlohmann::json j = ParseVersionedMessage(body, MessageType::kTeamHello, "this side");
   TeamHello hello;
   hello.scenario = j.at("scenario").get<std::string>();
   hello.seed = j.at("seed").get<uint64_t>();
@@ -294,9 +232,7 @@ TeamHello ParseTeamHello(const std::vector<uint8_t>& body) {
 TeamHelloAck ParseTeamHelloAck(const std::vector<uint8_t>& body, const std::vector<int>& vehicles,
                                double tick_hz) {
   const std::string what = "team_hello_ack";
-  const nlohmann::json j = ParseObject(body, what);
-  CheckVersion(j, what);
-  CheckJsonMessage(MessageType::kTeamHelloAck, j);
+  const nlohmann::json j = ParseVersionedMessage(body, MessageType::kTeamHelloAck, "this side");
   TeamHelloAck ack;
   ack.name = NameField(j, what, "name", "external");
   ack.controller = NameField(j, what, "controller", "");

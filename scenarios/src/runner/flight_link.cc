@@ -1,27 +1,14 @@
 #include "scenarios/src/runner/flight_link.h"
 
-#include <poll.h>
-#include <signal.h>
-#include <sys/socket.h>
-#include <sys/un.h>
-#include <sys/wait.h>
-#include <unistd.h>
-
 #include <algorithm>
 #include <atomic>
-#include <cerrno>
-#include <chrono>
-#include <climits>
 #include <cmath>
-#include <cstdlib>
-#include <cstring>
 #include <deque>
-#include <optional>
-#include <thread>
 
 #include "hpa/scenarios/runner.h"
 #include "scenarios/src/runner/flight_process.h"
 #include "scenarios/src/runner/frame_ring.h"
+#include "scenarios/src/runner/stack_process.h"
 
 namespace hpa::runner {
 namespace {
@@ -58,31 +45,12 @@ class InProcessFlight final : public FlightLink {
   flight::FlightStack stack_;
 };
 
-// The directory of the running executable (hpa-flight sits beside hpa).
-std::string ExecutableDir() {
-  char buf[PATH_MAX];
-  const ssize_t n = ::readlink("/proc/self/exe", buf, sizeof buf - 1);
-  if (n <= 0) return "";
-  std::string path(buf, static_cast<size_t>(n));
-  return path.substr(0, path.rfind('/'));
-}
-
-// Whether a stop (SIGINT, SIGTERM) was requested.
-bool Stopping() { return StopRequested() != 0; }
-
-// How long the waits on a stack go on once a stop was requested (s): a stack that answers
-// promptly completes the message in flight and its finish report, a hung one is abandoned.
-constexpr double kStopGraceS = 0.2;
-
-// How long a stack that broke the protocol is given to end (s), so the run error can say how it
-// ended; the wait ends as soon as it has, and one still running after it is killed.
-constexpr double kExitNoteWaitS = 2.0;
-
 // A separate flight stack: its process, the socket it connected to and the frame ring.
 class ExternalFlight final : public FlightLink {
  public:
   ExternalFlight(const flight::FlightConfig& config, const ExternalFlightOptions& options)
       : options_(options),
+        process_("flight stack '" + options.command + "'", options.step_timeout_s),
         params_(config.params),
         tick_hz_(config.tick_hz),
         control_clock_(config.tick_hz) {
@@ -102,19 +70,13 @@ class ExternalFlight final : public FlightLink {
     RemoveStaleFlightRuns();
     static std::atomic<int> counter{0};
     const int n = counter++;
-    const std::string owner = FlightOwnerTag();
-    std::string dir = "/tmp/hpa-flight-" + owner + "-XXXXXX";
-    if (::mkdtemp(dir.data()) == nullptr) Fail(std::string("mkdtemp: ") + std::strerror(errno));
-    dir_ = dir;
-    socket_path_ = dir_ + "/lockstep.sock";
-    Listen();
     if (options.frames.slots > 0) {
-      ring_ = std::make_unique<FrameRing>("/hpa-flight-" + owner + "-" + std::to_string(n),
-                                          options.frames.slots, options.frames.width_px,
-                                          options.frames.height_px);
+      ring_ = std::make_unique<FrameRing>(
+          "/hpa-flight-" + FlightOwnerTag() + "-" + std::to_string(n), options.frames.slots,
+          options.frames.width_px, options.frames.height_px);
     }
-    Spawn();
-    Accept();
+    process_.Start(options.command);
+    process_.Accept(StackProcess::After(options.connect_timeout_s), options.connect_timeout_s);
     nlohmann::json hello = {{"protocol_version", flight::kProtocolVersion},
                             {"scenario", options.scenario},
                             {"seed", options.seed},
@@ -128,11 +90,11 @@ class ExternalFlight final : public FlightLink {
                          {"height_px", options.frames.height_px},
                          {"slot_bytes", ring_->slot_bytes()}};
     }
-    Guard(
+    process_.Guard(
         [&] {
-          channel_->SendJson(MessageType::kHello, hello, Limit());
+          channel().SendJson(MessageType::kHello, hello, Limit());
           const flight::HelloAck ack = flight::ParseHelloAck(
-              channel_->Expect(MessageType::kHelloAck, Limit()), config.tick_hz);
+              channel().Expect(MessageType::kHelloAck, Limit()), config.tick_hz);
           name_ = ack.name;
           // a stack that names no controller flies its own: its name labels the run
           controller_ = !ack.controller.empty() ? ack.controller
@@ -151,20 +113,10 @@ class ExternalFlight final : public FlightLink {
         "hello");
   }
 
-  // Closes the socket (a stack waiting on it sees the end), stops the process (its group and
-  // every process carrying its socket), frees the ring and removes the socket's directory.
+  // Stops the process and removes its socket (StackProcess::Cleanup), then frees the ring.
   void Cleanup() {
-    channel_.reset();
-    Reap(Stopping() ? 0.0 : 2.0, true);
-    if (!socket_path_.empty()) KillProcessesOfSocket(socket_path_);
+    process_.Cleanup();
     ring_.reset();
-    if (listen_fd_ >= 0) ::close(listen_fd_);
-    listen_fd_ = -1;
-    if (!dir_.empty()) {
-      ::unlink(socket_path_.c_str());
-      ::rmdir(dir_.c_str());
-      dir_.clear();
-    }
   }
 
   flight::FlightOutputs Step(const flight::FlightInputs& in) override {
@@ -173,11 +125,11 @@ class ExternalFlight final : public FlightLink {
     frames_unanswered_ += in.frames.size();
     next_tick_s_ = in.time_s + 1.0 / tick_hz_;
     if (!batched_) {
-      Guard(
+      process_.Guard(
           [&] {
             if (ring_) ring_->Check();  // frames rendered into a ring cut short are never sent
-            channel_->Send(MessageType::kTick, flight::EncodeTick(in), Limit());
-            out = flight::DecodeReply(channel_->Expect(MessageType::kTickReply, Limit()));
+            channel().Send(MessageType::kTick, flight::EncodeTick(in), Limit());
+            out = flight::DecodeReply(channel().Expect(MessageType::kTickReply, Limit()));
             flight::CheckReply(out, Bounds(in));
           },
           "tick at t = " + std::to_string(in.time_s) + " s");
@@ -190,16 +142,16 @@ class ExternalFlight final : public FlightLink {
     const bool control = control_clock_.Fires(control_loop_);
     control_clock_.Advance();
     const bool wanted = control || in.need_estimate;
-    Guard(
+    process_.Guard(
         [&] {
           if (ring_) ring_->Check();
           tick_ = in;  // the tick as sent: no_reply when no reply to it is read
           tick_.no_reply = !wanted;
-          channel_->Queue(MessageType::kTick, flight::EncodeTick(tick_));
+          channel().Queue(MessageType::kTick, flight::EncodeTick(tick_));
           if (!wanted) return;
           awaited_.push_back({in.time_s, Bounds(in), control});
           frames_unanswered_ = 0;
-          channel_->Flush(Limit());
+          channel().Flush(Limit());
           if (in.need_estimate) {
             while (!awaited_.empty()) out = ReadReply();
           }
@@ -220,7 +172,7 @@ class ExternalFlight final : public FlightLink {
 
   flight::FlightOutputs AwaitReply() override {
     flight::FlightOutputs out;
-    Guard(
+    process_.Guard(
         [&] {
           while (commands_.empty()) {
             if (awaited_.empty()) throw std::logic_error("no control step awaits its command");
@@ -240,7 +192,7 @@ class ExternalFlight final : public FlightLink {
     flight::DetectReply reply;
     CameraFrame frame;
     frame.capture_time_s = next_tick_s_;
-    Guard(
+    process_.Guard(
         [&] {
           reply = Detect(frame);
           if (reply.has_detection) {
@@ -262,7 +214,7 @@ class ExternalFlight final : public FlightLink {
     reply.whole_wanted = true;
     // the region the stack asked for, into the ring's first slot
     if (captured.region.area() > 0 && !captured.region_bgr.empty()) {
-      Guard(
+      process_.Guard(
           [&] {
             ring_->Check();
             cv::Mat* slot = ring_->Slot(0);
@@ -282,7 +234,7 @@ class ExternalFlight final : public FlightLink {
     if (reply.has_detection) return reply.detection;
     // the whole frame, into the second slot
     const cv::Mat& whole = read_whole();
-    Guard(
+    process_.Guard(
         [&] {
           ring_->Check();
           whole.copyTo(*ring_->Slot(1));
@@ -302,13 +254,13 @@ class ExternalFlight final : public FlightLink {
   // of the ticks before it first).
   AutopilotOutput RateLoop(const flight::RateTick& tick) override {
     AutopilotOutput out;
-    Guard(
+    process_.Guard(
         [&] {
-          channel_->Queue(MessageType::kRateTick, flight::EncodeRateTick(tick));
-          channel_->Flush(Limit());
+          channel().Queue(MessageType::kRateTick, flight::EncodeRateTick(tick));
+          channel().Flush(Limit());
           std::vector<uint8_t> body;
           while (true) {
-            const MessageType type = channel_->Receive(&body, Limit());
+            const MessageType type = channel().Receive(&body, Limit());
             if (type == MessageType::kRateReply) break;
             if (type != MessageType::kTickReply || awaited_.empty()) {
               throw ProtocolError("expected a rate_reply message, got " +
@@ -327,18 +279,18 @@ class ExternalFlight final : public FlightLink {
     FlightFinish f;
     // a stack that failed (or a wait a stop ended) is not asked again: the run error says why;
     // after a stop, only within its grace
-    if (failed_ || StopDue()) return f;
+    if (!process_.Finishable()) return f;
     const flight::WaitLimit limit = Limit();
-    Guard(
+    process_.Guard(
         [&] {
           if (ring_) ring_->Check();
           // the replies still on their way come first
-          channel_->Flush(limit);
+          channel().Flush(limit);
           while (!awaited_.empty()) ReadReply();
-          channel_->Send(MessageType::kFinish, flight::EncodeTick(pending), limit);
+          channel().Send(MessageType::kFinish, flight::EncodeTick(pending), limit);
           // frames of ticks no reply answered are counted in the finish's
           const flight::FinishReply reply =
-              flight::ParseFinishReply(channel_->Expect(MessageType::kFinishReply, limit),
+              flight::ParseFinishReply(channel().Expect(MessageType::kFinishReply, limit),
                                        pending.frames.size() + frames_unanswered_);
           f.estimator = reply.estimator;
           f.frames_detected = reply.frames_detected + std::exchange(frames_found_, 0);
@@ -350,7 +302,7 @@ class ExternalFlight final : public FlightLink {
 
   cv::Mat* NextFrameSlot(int* slot) override {
     if (!ring_) return nullptr;
-    Guard([&] { ring_->Check(); }, "frame ring");
+    process_.Guard([&] { ring_->Check(); }, "frame ring");
     *slot = next_slot_;
     next_slot_ = (next_slot_ + 1) % options_.frames.slots;
     return ring_->Slot(*slot);
@@ -394,7 +346,7 @@ class ExternalFlight final : public FlightLink {
   // Reads the reply of the oldest awaited tick and checks it against that tick; a command taken
   // later is kept for AwaitReply.
   flight::FlightOutputs ReadReply() {
-    return ReadReplyBody(channel_->Expect(MessageType::kTickReply, Limit()));
+    return ReadReplyBody(channel().Expect(MessageType::kTickReply, Limit()));
   }
 
   // The reply of the oldest awaited tick, from its body (as ReadReply).
@@ -429,11 +381,11 @@ class ExternalFlight final : public FlightLink {
   // Sends a detect (after the ticks queued before it) and reads its reply (the replies of the
   // ticks before it first).
   flight::DetectReply Detect(const CameraFrame& frame) {
-    channel_->Queue(MessageType::kDetect, flight::EncodeDetect(frame));
-    channel_->Flush(Limit());
+    channel().Queue(MessageType::kDetect, flight::EncodeDetect(frame));
+    channel().Flush(Limit());
     std::vector<uint8_t> body;
     while (true) {
-      const MessageType type = channel_->Receive(&body, Limit());
+      const MessageType type = channel().Receive(&body, Limit());
       if (type == MessageType::kDetectReply) break;
       if (type != MessageType::kTickReply || awaited_.empty()) {
         throw ProtocolError("expected a detect_reply message, got " +
@@ -456,142 +408,15 @@ class ExternalFlight final : public FlightLink {
     return reply;
   }
 
-  [[noreturn]] void Fail(const std::string& what) const {
-    // the text may carry the stack's own bytes (a parse error quotes them): it becomes JSON
-    throw ProtocolError(flight::CleanUtf8("flight stack '" + options_.command + "': " + what));
-  }
-
-  // Ends the run as stopped by the requested signal while it waited on the stack (`during`
-  // says for what); the stack is killed and not asked again.
-  [[noreturn]] void Stopped(const std::string& during) {
-    failed_ = true;
-    Reap(0.0, true);
-    throw flight::WaitInterrupted(
-        flight::CleanUtf8("stopped by signal " + std::to_string(StopRequested()) +
-                          " while waiting for flight stack '" + options_.command + "' " + during));
-  }
-
-  // One message's wait: the step timeout, ended kStopGraceS after a stop was requested.
-  flight::WaitLimit Limit() {
-    return {options_.step_timeout_s, [this] { return StopDue(); }};
-  }
-
-  // Whether a stop was requested kStopGraceS ago or more (counted from when a wait or the
-  // finish first saw it).
-  bool StopDue() {
-    if (!Stopping()) return false;
-    const auto now = std::chrono::steady_clock::now();
-    if (!stop_due_) {
-      stop_due_ = now + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
-                            std::chrono::duration<double>(kStopGraceS));
-    }
-    return now >= *stop_due_;
-  }
-
-  // Runs `f`; a protocol failure is rethrown naming the command, the step and, if the process
-  // has ended, how; a wait a stop signal ended is rethrown as the stop.
-  template <class F>
-  void Guard(F&& f, const std::string& step) {
-    if (failed_) Fail(step + ": not sent, the flight stack failed before");
-    try {
-      f();
-    } catch (const flight::WaitInterrupted&) {
-      Stopped("(" + step + ")");
-    } catch (const ProtocolError& e) {
-      failed_ = true;
-      std::string what = step + ": " + e.what();
-      // a stack that closed the connection is usually exiting: its status names why (an
-      // interpreter's shutdown on a loaded machine can take a good part of a second)
-      Reap(kExitNoteWaitS, true);
-      if (!exit_note_.empty()) what += " (" + exit_note_ + ")";
-      Fail(what);
-    }
-  }
-
-  void Listen() {
-    listen_fd_ = ::socket(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC, 0);
-    if (listen_fd_ < 0) Fail(std::string("socket: ") + std::strerror(errno));
-    sockaddr_un addr{};
-    addr.sun_family = AF_UNIX;
-    std::strncpy(addr.sun_path, socket_path_.c_str(), sizeof addr.sun_path - 1);
-    if (::bind(listen_fd_, reinterpret_cast<sockaddr*>(&addr), sizeof addr) != 0 ||
-        ::listen(listen_fd_, 1) != 0) {
-      Fail("cannot serve " + socket_path_ + ": " + std::strerror(errno));
-    }
-  }
-
-  void Spawn() {
-    const std::string path_env =
-        ExecutableDir() + ":" + (std::getenv("PATH") ? std::getenv("PATH") : "");
-    try {
-      pid_ = pgid_ = SpawnFlightStack(options_.command, socket_path_, path_env);
-    } catch (const std::runtime_error& e) {
-      Fail(e.what());
-    }
-  }
-
-  // Waits for the stack to connect, polling for its end and for a stop signal.
-  void Accept() {
-    using Clock = std::chrono::steady_clock;
-    const auto deadline = Clock::now() + std::chrono::duration<double>(options_.connect_timeout_s);
-    while (Clock::now() < deadline) {
-      if (Stopping()) Stopped("to connect");
-      pollfd pfd{listen_fd_, POLLIN, 0};
-      const int ready = ::poll(&pfd, 1, static_cast<int>(flight::kStopPollS * 1000.0));
-      if (ready > 0) {
-        const int fd = ::accept4(listen_fd_, nullptr, nullptr, SOCK_CLOEXEC);
-        if (fd >= 0) {
-          channel_ = std::make_unique<Channel>(fd);
-          return;
-        }
-      }
-      Reap(0.0, false);
-      if (!exit_note_.empty()) Fail(exit_note_ + " before connecting");
-    }
-    Fail("it did not connect within " + std::to_string(options_.connect_timeout_s) +
-         " s (does it read HPA_FLIGHT_SOCKET?)");
-  }
-
-  // Waits up to wait_s (cut short by a stop signal) for the process to end and notes how it
-  // ended; if it has not and `stop` is set, kills its process group.
-  void Reap(double wait_s, bool stop) {
-    if (pid_ <= 0) return;
-    using Clock = std::chrono::steady_clock;
-    const auto deadline = Clock::now() + std::chrono::duration<double>(wait_s);
-    int status = 0;
-    while (true) {
-      const pid_t r = ::waitpid(pid_, &status, WNOHANG);
-      if (r == pid_) {
-        pid_ = 0;
-        if (WIFEXITED(status)) {
-          exit_note_ = "it exited with status " + std::to_string(WEXITSTATUS(status));
-        } else if (WIFSIGNALED(status)) {
-          exit_note_ = std::string("it was killed by signal ") + std::to_string(WTERMSIG(status)) +
-                       " (" + strsignal(WTERMSIG(status)) + ")";
-        }
-        if (stop) KillGroup();  // anything it left behind
-        return;
-      }
-      if (r < 0 || Clock::now() >= deadline || Stopping()) break;
-      std::this_thread::sleep_for(std::chrono::milliseconds(5));
-    }
-    if (stop) {
-      KillGroup();
-      ::waitpid(pid_, &status, 0);
-      pid_ = 0;
-    }
-  }
-  void KillGroup() const {
-    if (pgid_ > 0) ::kill(-pgid_, SIGKILL);
-  }
+  // The connection to the stack, and one message's wait on it.
+  Channel& channel() { return process_.channel(); }
+  flight::WaitLimit Limit() { return process_.Limit(); }
 
   ExternalFlightOptions options_;
+  StackProcess process_;  // its process and socket
   Params params_;  // the flight params (the motors' range a rate_reply is checked against)
-  std::string dir_, socket_path_, name_ = "external", controller_ = "external", exit_note_;
-  double control_rate_hz_ = 0.0;  // from the hello_ack (0: not stated)
-  int listen_fd_ = -1;
-  pid_t pid_ = 0, pgid_ = 0;
-  std::unique_ptr<Channel> channel_;
+  std::string name_ = "external", controller_ = "external";
+  double control_rate_hz_ = 0.0;     // from the hello_ack (0: not stated)
   std::unique_ptr<FrameRing> ring_;  // the rendered frames, when they cross
   int next_slot_ = 0;
   uint64_t messages_so_far_ = 0;  // sensor messages sent (the estimator counters' bound)
@@ -609,8 +434,6 @@ class ExternalFlight final : public FlightLink {
   int frames_found_ = 0;          // frames_detected read, not yet reported to the run
   cv::Rect last_roi_;             // camera_roi of the last reply read
   cv::Rect capture_region_;       // the region of the frame being captured
-  bool failed_ = false;           // a message failed: the stack is not asked again
-  std::optional<std::chrono::steady_clock::time_point> stop_due_;  // waits end then (a stop)
 };
 
 }  // namespace

@@ -10,6 +10,7 @@
 #include <string>
 
 #include "hpa/flight/protocol.h"
+#include "scenarios/src/runner/stack_process.h"
 
 namespace hpa::runner {
 
@@ -93,12 +94,12 @@ std::unique_ptr<FlightLink> MakeInProcessFlight(const flight::FlightConfig& conf
 
 /// Settings of a separate flight stack.
 struct ExternalFlightOptions {
-  std::string command;              // shell command line that starts it
-  double step_timeout_s = 10.0;     // longest wait for one whole message (reply, hello_ack)
-  double connect_timeout_s = 30.0;  // longest wait for it to connect
-  FrameRingSpec frames;             // the rendered camera's frames, if they cross
-  nlohmann::json rates;             // the rate table, for the hello
-  std::string scenario;             // the scenario's name and seed, for the hello
+  std::string command;           // shell command line that starts it
+  double step_timeout_s = 10.0;  // longest wait for one whole message (reply, hello_ack)
+  double connect_timeout_s = kConnectTimeoutS;  // longest wait for it to connect
+  FrameRingSpec frames;                         // the rendered camera's frames, if they cross
+  nlohmann::json rates;                         // the rate table, for the hello
+  std::string scenario;                         // the scenario's name and seed, for the hello
   unsigned long seed = 0;
   flight::RateLoopConfig rate_loop;  // the vehicle's rate loop, for a stack that owns it
 };
