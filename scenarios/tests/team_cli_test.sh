@@ -67,6 +67,15 @@ grep -q "motion capture" "$out/rates.md" || fail "rate table lacks the motion ca
 "$hpa" run "$base" --controller hpa_mpc --out "$out/mpc" --quiet || fail "hpa_mpc team run"
 grep -q '"controller": "hpa_mpc"' "$out/mpc/metrics.json" || fail "baseline not named"
 
+# hpa compare flies both team controllers by default and names an unknown one
+"$hpa" compare "$base" --out "$out/compare" --quiet || fail "team compare exited $?"
+for c in cooperative hpa_mpc; do
+  [ -s "$out/compare/$c/metrics.json" ] || fail "compare flew no $c"
+done
+[ -s "$out/compare/comparison.png" ] || fail "no team comparison plot"
+expect_exit 2 "--controllers.*unknown controller 'nonhybrid_mpc'" compare "$base" \
+  --controllers cooperative,nonhybrid_mpc --out "$out/compare_bad"
+
 # the shipped team sweeps run (a fifth of each: every 5th run, which walks through all six grid
 # cells, both controllers among them)
 for sweep in team_cables team_attachment; do

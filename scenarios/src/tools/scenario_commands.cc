@@ -309,13 +309,17 @@ int RunMain(int argc, char** argv) {
   CLI::App app{"Runs one scenario; writes DIR/metrics.json and DIR/log.csv.", "hpa run"};
   AddScenarioOptions(app, &o, true, true);
   app.add_option("--out", out_dir, "output folder (default out/<scenario name>)");
-  app.add_option("--controller", controller, "a registered controller (see hpa --help)");
-  app.add_option("--video", video, "MP4 of the chase camera with the onboard inset");
+  app.add_option("--controller", controller,
+                 "a registered controller (see hpa --help); a team scenario's: a team controller "
+                 "(cooperative | hpa_mpc, hpa schema controllers)");
+  app.add_option("--video", video,
+                 "MP4 of the chase camera with the onboard inset (a team: every vehicle, each "
+                 "with its onboard inset)");
   app.add_flag("--video-slack-events", slack_events,
                "keep only a window around each slack event (alone: DIR/slack_events.mp4)");
   app.add_flag("--plots", plots,
-               "write plots of the run into DIR (tracking, xy_path, retaut), each with the CSV "
-               "of what it draws");
+               "write plots of the run into DIR (tracking, xy_path, retaut; a team: tracking, "
+               "team_cables), each with the CSV of what it draws");
   app.add_option("--plot-format", plot_format, "png | svg | pdf: the plots' format")
       ->default_str("png");
   app.add_option("--flight-stack", flight_stack,
@@ -390,7 +394,7 @@ int RunMain(int argc, char** argv) {
 
 int CompareMain(int argc, char** argv) {
   ScenarioOptions o;
-  std::string out_dir, list = "hpa_mpc,nonhybrid_mpc", plot_format = "png";
+  std::string out_dir, list, plot_format = "png";
   std::vector<std::string> stacks;  // --flight-stack NAME=CMD, in order
   double flight_timeout_s = 10.0;
   bool slack_events = false;
@@ -401,8 +405,10 @@ int CompareMain(int argc, char** argv) {
       "hpa compare"};
   AddScenarioOptions(app, &o, true, true);
   app.add_option("--out", out_dir, "output folder")->required();
-  app.add_option("--controllers", list, "comma-separated controller types, flown first")
-      ->default_str("hpa_mpc,nonhybrid_mpc");
+  CLI::Option* controllers_option =
+      app.add_option("--controllers", list,
+                     "comma-separated controller types, flown first (default "
+                     "hpa_mpc,nonhybrid_mpc; a team scenario: cooperative,hpa_mpc)");
   app.add_option("--flight-stack", stacks,
                  "NAME=CMD (repeatable): also fly the separate flight stack CMD (a shell command, "
                  "as hpa run --flight-stack) into DIR/NAME/, labelled NAME in the table and the "
@@ -423,6 +429,9 @@ int CompareMain(int argc, char** argv) {
   const Params params = LoadParamsOf(o);
   const Scenario base = LoadScenarioOf(o);
   // every name and command checked before the first run
+  if (controllers_option->count() == 0) {
+    list = base.team.IsTeam() ? "cooperative,hpa_mpc" : "hpa_mpc,nonhybrid_mpc";
+  }
   std::vector<CompareEntry> entries = CompareEntries(list, stacks, base.team.IsTeam());
   std::vector<std::string> names;
   for (const CompareEntry& e : entries) names.push_back(e.name);
