@@ -495,10 +495,18 @@ void CheckReply(const FlightOutputs& out, const ReplyBounds& bounds) {
     fail("frames_detected " + std::to_string(out.frames_detected) + ", but the tick delivered " +
          std::to_string(bounds.frames) + " frame(s)");
   }
-  // each counted update was made with a message the stack received
-  for (const auto& [name, v] :
-       {std::pair<const char*, int>{"rejected_updates", out.estimator_rejected_updates},
-        {"resets", out.estimator_resets}}) {
+  // each counted update, and each health-check re-initialisation (made at an update), was made
+  // with a message the stack received
+  std::vector<std::pair<std::string, int>> counts = {
+      {"rejected_updates", out.estimator_rejected_updates}, {"resets", out.estimator_resets}};
+  if (out.estimator_health_resets) {
+    const EstimatorHealthResets& r = *out.estimator_health_resets;
+    counts.insert(counts.end(), {{"health_resets.quad_non_finite", r.quad_non_finite},
+                                 {"health_resets.payload_non_finite", r.payload_non_finite},
+                                 {"health_resets.payload_speed", r.payload_speed},
+                                 {"health_resets.cable_length", r.cable_length}});
+  }
+  for (const auto& [name, v] : counts) {
     if (static_cast<uint64_t>(v) > bounds.messages_so_far) {
       fail(std::string(name) + " " + std::to_string(v) + ", more than the " +
            std::to_string(bounds.messages_so_far) + " sensor messages delivered so far");

@@ -296,6 +296,14 @@ TEST(ProtocolTest, RepliesAreCheckedAgainstTheirTick) {
   bad.estimator_resets = 17;
   EXPECT_TRUE(Has(ErrorOf([&] { CheckReply(bad, bounds); }), "resets 17, more than the 16"));
   bad = out;
+  bad.estimator_health_resets = EstimatorHealthResets{0, 0, 16, 0};
+  EXPECT_EQ(ErrorOf([&] { CheckReply(bad, bounds); }), "");
+  bad.estimator_health_resets->cable_length = 17;
+  EXPECT_TRUE(Has(ErrorOf([&] { CheckReply(bad, bounds); }),
+                  "health_resets.cable_length 17, more than the 16"));
+  bad.estimator_health_resets->cable_length = -1;
+  EXPECT_TRUE(Has(ErrorOf([&] { CheckReply(bad, bounds); }), "health_resets.cable_length -1"));
+  bad = out;
   bad.has_command = false;
   bad.has_estimate = false;
   EXPECT_TRUE(Has(ErrorOf([&] { CheckReply(bad, bounds); }), "no estimate, but the tick asked"));
