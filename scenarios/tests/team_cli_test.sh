@@ -34,6 +34,11 @@ expect_exit 2 "events.0.vehicle.*vehicle 1 is not in the scenario \(1 vehicle," 
 expect_exit 2 "events.0.*impulse and velocity_change events only, not 'wind'" run "$base" \
   --set 'events.0={at: 1.0, type: wind, force: [1, 0, 0], duration: 1.0}' --out "$out/bad"
 expect_exit 2 "payload.mass_kg" run "$base" --set payload.mass_kg=0 --out "$out/bad"
+# a start no team can fly from is refused; a team too weak to lift its payload is warned about
+expect_exit 2 "vehicles.*vehicles 0 and 1 start 0 m apart, their bodies overlapping" run "$base" \
+  --set 'vehicles.1.attach_m=[0.35, 0, 0]' --out "$out/bad"
+expect_exit 1 "full thrust, 40.2 N, cannot lift its weight, 995 N" run "$base" \
+  --set payload.mass_kg=100 --out "$out/weak"
 
 # the same run twice is the same run; its log has every vehicle's columns and its plots are
 # written

@@ -61,6 +61,41 @@ Eigen::VectorXd StartState(const Scenario& scenario, const CooperativeModel& mod
   return x;
 }
 
+// Refuses a start no team can fly from (two vehicles' boxes overlapping: MuJoCo would push them
+// apart at once, a crash at t = 0 that says nothing about the controller), and warns when the
+// team's full thrust cannot lift the team.
+void CheckStart(const Scenario& scenario, const CooperativeTeam& team, const Eigen::VectorXd& x0) {
+  const int n = static_cast<int>(team.vehicles.size());
+  for (int i = 0; i < n; ++i) {
+    for (int j = i + 1; j < n; ++j) {
+      const Eigen::Vector3d d_m =
+          x0.segment<3>(Index::Vehicle(i)) - x0.segment<3>(Index::Vehicle(j));
+      const Eigen::Vector3d reach_m =
+          team.vehicles[i].params.body_half_size_m + team.vehicles[j].params.body_half_size_m;
+      if ((d_m.cwiseAbs().array() < reach_m.array()).all()) {
+        char text[256];
+        std::snprintf(text, sizeof text,
+                      "vehicles %d and %d start %.3g m apart, their bodies overlapping: place "
+                      "their attachment points (attach_m) or start slack farther apart",
+                      i, j, d_m.norm());
+        throw InputError(scenario.file, "vehicles", text);
+      }
+    }
+  }
+  double lift_N = 0.0, weight_N = team.payload_mass_kg * team.gravity_mps2;
+  for (const CooperativeVehicle& v : team.vehicles) {
+    const Params& p = v.params;
+    lift_N += 4.0 * p.k_f_N_per_radps2 * p.motor_speed_max_radps * p.motor_speed_max_radps;
+    weight_N += p.quad_mass_kg * p.gravity_mps2;
+  }
+  if (lift_N <= weight_N) {
+    std::fprintf(stderr,
+                 "warning: %s: the team's full thrust, %.3g N, cannot lift its weight, %.3g N "
+                 "(the vehicles and a %.3g kg payload)\n",
+                 scenario.name.c_str(), lift_N, weight_N, team.payload_mass_kg);
+  }
+}
+
 // A body's pose and velocity from the team state (body -1: the payload).
 sim::BodyReading ReadingFromState(const Eigen::VectorXd& x, int body, double time_s) {
   const int start = body < 0 ? 0 : Index::Vehicle(body);
@@ -198,8 +233,11 @@ RunResult RunTeamScenario(const Scenario& scenario, const Params& base_params,
   world_config.team = team;
   world_config.seed = scenario.seed;
   world_config.gl_backend = options.gl_backend;  // the video's cameras (the physics never renders)
+  const Eigen::VectorXd x0 =
+      StartState(scenario, model, reference->At(0.0).p_WL_W, params.payload_radius_m);
+  CheckStart(scenario, team, x0);
   sim::TeamWorld world(world_config);
-  world.Reset(StartState(scenario, model, reference->At(0.0).p_WL_W, params.payload_radius_m));
+  world.Reset(x0);
 
   std::unique_ptr<runner::TeamFlightLink> flight;
   if (options.flight_stack.empty()) {
