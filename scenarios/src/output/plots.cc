@@ -20,12 +20,12 @@ namespace {
 const cv::Scalar kSlackShade(0, 165, 255);  // orange (BGR)
 const cv::Scalar kReference(90, 90, 90);
 
-// A column of the log as a vector.
-template <typename F>
-std::vector<double> Column(const std::vector<LogRow>& rows, F f) {
+// A column of a log (a single vehicle's or a team's rows) as a vector.
+template <typename Row, typename F>
+std::vector<double> Column(const std::vector<Row>& rows, F f) {
   std::vector<double> out;
   out.reserve(rows.size());
-  for (const LogRow& r : rows) out.push_back(f(r));
+  for (const Row& r : rows) out.push_back(f(r));
   return out;
 }
 
@@ -155,15 +155,6 @@ double VehicleTiltDeg(const TeamLogRow& row, int vehicle) {
                                        CooperativeStateIndex::kVehicleQuat));
 }
 
-// A column of a team's log as a vector.
-template <typename F>
-std::vector<double> TeamColumn(const std::vector<TeamLogRow>& rows, F f) {
-  std::vector<double> out;
-  out.reserve(rows.size());
-  for (const TeamLogRow& r : rows) out.push_back(f(r));
-  return out;
-}
-
 // A team's payload x, y and z against the reference, the time any cable was slack shaded.
 std::string WriteTeamTrackingPlot(const std::vector<TeamLogRow>& rows, const std::vector<double>& t,
                                   const std::string& title_suffix, const std::string& dir,
@@ -180,10 +171,10 @@ std::string WriteTeamTrackingPlot(const std::vector<TeamLogRow>& rows, const std
     PlotPanel p(&fig, cv::Rect(0, i * 300, 1200, 300),
                 std::string("payload ") + kAxis[i] + (i == 0 ? title_suffix : ""), "t [s]",
                 std::string(kAxis[i]) + "_L [m]");
-    const auto actual = TeamColumn(rows, [i](const TeamLogRow& r) {
+    const auto actual = Column(rows, [i](const TeamLogRow& r) {
       return r.x_true(CooperativeStateIndex::kPayloadPos + i);
     });
-    const auto ref = TeamColumn(rows, [i](const TeamLogRow& r) { return r.reference.p_WL_W(i); });
+    const auto ref = Column(rows, [i](const TeamLogRow& r) { return r.reference.p_WL_W(i); });
     p.FitRange({t}, {actual, ref});
     for (const auto& [a, b] : SlackIntervals(t, any_slack)) {
       p.ShadeX(a, b, kSlackShade, "a cable slack");
@@ -211,10 +202,10 @@ std::string WriteTeamCablesPlot(const std::vector<TeamLogRow>& rows, const std::
   PlotPanel p1(&fig, cv::Rect(0, 300, 1200, 300), "vehicle tilt", "t [s]", "[deg]");
   std::vector<std::vector<double>> tension, tilt;
   for (int i = 0; i < n; ++i) {
-    tension.push_back(TeamColumn(rows, [i](const TeamLogRow& r) {
+    tension.push_back(Column(rows, [i](const TeamLogRow& r) {
       return r.vehicles[static_cast<size_t>(i)].cable_tension_N;
     }));
-    tilt.push_back(TeamColumn(rows, [i](const TeamLogRow& r) { return VehicleTiltDeg(r, i); }));
+    tilt.push_back(Column(rows, [i](const TeamLogRow& r) { return VehicleTiltDeg(r, i); }));
   }
   p0.FitRange({t}, tension);
   p0.DrawAxes();
@@ -243,7 +234,7 @@ std::vector<std::string> WriteRunPlots(const RunResult& result, const Params& pa
   const auto& rows = result.rows;
   std::vector<std::string> written;
   if (!result.team_rows.empty()) {
-    const auto t = TeamColumn(result.team_rows, [](const TeamLogRow& r) { return r.time_s; });
+    const auto t = Column(result.team_rows, [](const TeamLogRow& r) { return r.time_s; });
     const std::string title_suffix =
         " - " + result.metrics.scenario + " (" + result.metrics.controller + ")";
     written.push_back(WriteTeamTrackingPlot(result.team_rows, t, title_suffix, dir, format));
@@ -276,8 +267,8 @@ std::string WriteTeamComparisonPlot(const std::vector<RunResult>& results, const
                 std::string(kTitles[k]) + (k == 0 ? " - " + name : ""), "t [s]", kUnits[k]);
     std::vector<std::vector<double>> ts, ys;
     for (const RunResult& r : results) {
-      ts.push_back(TeamColumn(r.team_rows, [](const TeamLogRow& row) { return row.time_s; }));
-      ys.push_back(TeamColumn(r.team_rows, [k](const TeamLogRow& row) {
+      ts.push_back(Column(r.team_rows, [](const TeamLogRow& row) { return row.time_s; }));
+      ys.push_back(Column(r.team_rows, [k](const TeamLogRow& row) {
         if (k < 3) return row.x_true(CooperativeStateIndex::kPayloadPos + k);
         double tilt_deg = 0.0;
         for (size_t i = 0; i < row.vehicles.size(); ++i) {
@@ -291,8 +282,8 @@ std::string WriteTeamComparisonPlot(const std::vector<RunResult>& results, const
     std::vector<std::pair<std::string, cv::Scalar>> legend;
     for (size_t i = 0; i < results.size(); ++i) {
       if (k < 3) {
-        const auto ref = TeamColumn(results[i].team_rows,
-                                    [k](const TeamLogRow& r) { return r.reference.p_WL_W(k); });
+        const auto ref = Column(results[i].team_rows,
+                                [k](const TeamLogRow& r) { return r.reference.p_WL_W(k); });
         p.Line(ts[i], ref, SeriesColour(static_cast<int>(i)), 1, true);
       }
       p.Line(ts[i], ys[i], SeriesColour(static_cast<int>(i)), 2);
