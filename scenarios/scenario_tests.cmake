@@ -67,6 +67,12 @@ add_test(NAME cli.impulse_finding
          COMMAND bash ${SCEN}/tests/impulse_finding_test.sh ${HPA_BIN} ${SCEN} ${SCEN_OUT}/impulse_finding)
 set_tests_properties(cli.impulse_finding PROPERTIES LABELS "cli;scenario" TIMEOUT 900)
 
+# The paper's VI-C finding: L_cam keeps a held payload in view, on the shipped path and faster
+add_test(NAME cli.perception_finding
+         COMMAND bash ${SCEN}/tests/perception_finding_test.sh ${HPA_BIN} ${SCEN}
+                 ${SCEN_OUT}/perception_finding)
+set_tests_properties(cli.perception_finding PROPERTIES LABELS "cli;scenario" TIMEOUT 600)
+
 add_test(NAME cli.retaut_finding
          COMMAND bash ${SCEN}/tests/retaut_finding_test.sh ${HPA_BIN} ${SCEN} ${SCEN_OUT}/retaut_finding)
 set_tests_properties(cli.retaut_finding PROPERTIES LABELS "cli;scenario" TIMEOUT 600)

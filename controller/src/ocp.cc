@@ -127,6 +127,7 @@ OcpWeights OcpWeights::Tuned() {
   w.q_cam_per_m2 = Eigen::Vector2d(20.0, 20.0);
   w.q_cam_slack_per_m2 = Eigen::Vector2d(1500.0, 1500.0);
   w.cam_slack_deadzone_fraction = 0.5;
+  w.cam_held_deadzone_fraction = 0.15;
   w.terminal_factor = 5.0;
   w.tilt_max_rad = 45.0 * M_PI / 180.0;
   w.tilt_weight = 1e4;
@@ -167,7 +168,7 @@ InputVector InputReference(const Params& params, const ReferencePoint& point, Ca
 }
 
 void SetCameraDeadzone(const SystemState& state, Ocp* ocp) {
-  const double fraction = ocp->weights.cam_slack_deadzone_fraction;
+  const double fraction = ocp_internal::SlackDeadzoneFraction(*ocp);
   const Eigen::Matrix3d R_WB = state.q_WB.toRotationMatrix();
   const double depth_m =
       ((R_WB * ocp->R_BC).transpose() * (state.p_WL_W - state.p_WQ_W - R_WB * ocp->t_BC_B_m)).z();

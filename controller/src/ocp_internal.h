@@ -46,5 +46,12 @@ inline const StateVector& StageStateReference(const Ocp& ocp, int k) {
   return ocp.x_ref[std::min<int>(k, ocp.x_ref.size() - 1)];
 }
 
+// Slack L_cam's dead zone as a fraction of the half field of view: a held payload's
+// (OcpWeights::cam_held_deadzone_fraction) or a free one's.
+inline double SlackDeadzoneFraction(const Ocp& ocp) {
+  return ocp.payload_supported ? ocp.weights.cam_held_deadzone_fraction
+                               : ocp.weights.cam_slack_deadzone_fraction;
+}
+
 }  // namespace ocp_internal
 }  // namespace hpa

@@ -15,6 +15,7 @@ using ocp_internal::CameraPoint;
 using ocp_internal::CameraPointQuatJacobian;
 using ocp_internal::RotationOf;
 using ocp_internal::SeenPayloadOffset;
+using ocp_internal::SlackDeadzoneFraction;
 using ocp_internal::StageStateReference;
 
 // --- the terms: weight per mode and weighted residual --------------------------------------
@@ -82,7 +83,7 @@ void PerceptionError(const Ocp& ocp, int k, const StateVector& x, const InputVec
     const Eigen::Vector3d p_C = rr * (d_W - r_ref * ocp.t_BC_B_m);
     const Eigen::Matrix3d p_d = rr * d_d;  // d p_C / d x_L = -d p_C / d x_Q
     const double deadzone =
-        ocp.StageMode(k) == CableMode::kSlack ? w.cam_slack_deadzone_fraction : 0.0;
+        ocp.StageMode(k) == CableMode::kSlack ? SlackDeadzoneFraction(ocp) : 0.0;
     for (int i = 0; i < 2; ++i) {
       const double slope = sqrt_cam(i);  // d r_i / d p_i, with or without the dead zone
       if (deadzone <= 0.0) {

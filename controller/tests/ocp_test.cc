@@ -140,10 +140,14 @@ TEST(OcpTest, TermJacobiansMatchFiniteDifferences) {
   const StateVector x = s.ToVector();
   double max_error_x = 0.0, max_error_u = 0.0;
   for (bool cam_at_reference : {true, false}) {
-    for (CableMode mode : {CableMode::kTaut, CableMode::kSlack}) {
+    // taut, slack, and slack with the payload held (no free fall in L_cam, its own dead zone)
+    const std::pair<CableMode, bool> cases[] = {
+        {CableMode::kTaut, false}, {CableMode::kSlack, false}, {CableMode::kSlack, true}};
+    for (const auto& [mode, held] : cases) {
       OcpWeights weights = OcpWeights::Tuned();
       weights.cam_at_reference_attitude = cam_at_reference;
       Ocp ocp = BuildOcp(params, *ref, 2.5, mode, 2.0, weights);
+      ocp.payload_supported = held;
       SystemState level = s;  // dead zone from the depth of the payload below a level body
       level.q_WB.setIdentity();
       SetCameraDeadzone(level, &ocp);
@@ -158,7 +162,8 @@ TEST(OcpTest, TermJacobiansMatchFiniteDifferences) {
           ASSERT_EQ(r.size(), term->rows);
           // every weighted term is active at stage 1 (slack: the payload terms weigh 0)
           if (k < ocp.horizon_steps && OcpTermStageWeight(ocp, *term, k).maxCoeff() > 0.0) {
-            EXPECT_GT(r.norm(), 0.0) << name << " inactive, mode " << ToString(mode);
+            EXPECT_GT(r.norm(), 0.0) << name << " inactive, mode " << ToString(mode) << " held "
+                                     << held;
           }
           // h: 1e-6 on unit-scale states, 1e-3 rad/s on ~1e3 rad/s rotor speeds. Measured max
           // error 9.5e-9 in d/dx (truncation and rounding of the nonlinear terms), 4.7e-14 in
@@ -171,7 +176,8 @@ TEST(OcpTest, TermJacobiansMatchFiniteDifferences) {
             EvaluateOcpTerm(ocp, *term, k, x_m, u, &r_m, nullptr, nullptr);
             const double error = ((r_p - r_m) / 2e-6 - r_x.col(j)).cwiseAbs().maxCoeff();
             max_error_x = std::max(max_error_x, error);
-            EXPECT_LT(error, 1e-7) << name << " d/dx_" << j << " mode " << ToString(mode);
+            EXPECT_LT(error, 1e-7) << name << " d/dx_" << j << " mode " << ToString(mode)
+                                   << " held " << held;
           }
           for (int j = 0; j < kNu; ++j) {
             InputVector u_p = u, u_m = u;
@@ -263,6 +269,15 @@ TEST(OcpTest, SlackCameraCostHasADeadZone) {
   SetCameraDeadzone(s, &ocp);
   StageResidual(ocp, 1, s.ToVector(), ocp.u_ref[1], &r, &r_x, &r_u);
   EXPECT_EQ(r.segment<2>(kCamRow).norm(), 0.0);
+  // a held payload has its own, tighter zone: the first offset above is beyond it
+  ocp.payload_supported = true;
+  s.p_WL_W = s.p_WQ_W + Eigen::Vector3d(0.1, 0.05, -0.3);
+  SetCameraDeadzone(s, &ocp);
+  const Eigen::Vector2d held_dead =
+      ocp.weights.cam_held_deadzone_fraction * 0.25 * Eigen::Vector2d(640.0 / f, 360.0 / f);
+  EXPECT_TRUE(ocp.cam_slack_deadzone_m.isApprox(held_dead, 1e-12));
+  StageResidual(ocp, 1, s.ToVector(), ocp.u_ref[1], &r, &r_x, &r_u);
+  EXPECT_NEAR(r(kCamRow), scale * (0.1 - held_dead.x()), 1e-12);
 }
 
 // The slack camera term follows each stage's predicted payload: a payload thrown down fast

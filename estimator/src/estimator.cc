@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <deque>
+#include <limits>
 #include <optional>
 
 namespace hpa {
@@ -203,11 +204,15 @@ class CableEstimator final : public Estimator {
           support_.Clear();
           slack_entered_at_s_ = d.time_s;
         }
-      } else {
-        tracker_.Update(d.time_s, d.p_WL_W, cov_W);
+      } else if (tracker_.Update(d.time_s, d.p_WL_W, cov_W) != FilterStatus::kOk) {
+        held_fit_after_s_ = d.time_s;
       }
+      // a jump of the vehicle's estimate (a forced VIO update, a restart) moves every later
+      // detection: the fit of a held payload's motion starts again after it
+      if (FrameJumps() != frame_jumps_) held_fit_after_s_ = d.time_s;
+      frame_jumps_ = FrameJumps();
       // only frames captured since the cable unloaded (a push's frames before it are not free)
-      if (d.time_s >= slack_entered_at_s_) support_.Add(d.time_s, d.p_WL_W.z());
+      if (d.time_s >= slack_entered_at_s_) support_.Add(d.time_s, d.p_WL_W);
       return;
     }
     // the cable EKF was frozen while slack, also while a tension-cue slack waited for its
@@ -218,6 +223,14 @@ class CableEstimator final : public Estimator {
     }
     if (velocity_row_pending_) FuseRetautVelocity(d, last);
     UpdateTautCable(d);
+  }
+
+  // Forced accepts and rejections of the payload tracker, forced accepts of the quadrotor
+  // filter and health resets, summed: a change means a detection was an outlier or the frame
+  // detections are located in jumped.
+  int FrameJumps() const {
+    return quad_.counts().forced_accepts + tracker_.counts().forced_accepts +
+           tracker_.counts().rejected_updates + health_resets_.Total();
   }
 
   // Seconds since the newest detection taken (since the start before the first).
@@ -252,7 +265,14 @@ class CableEstimator final : public Estimator {
       return false;
     }
     tracker_.PredictTo(time_s, p_WL_W, v_WL_W);
-    if (support_.supported() && !payload_visible_) {
+    Eigen::Vector3d p_fit_WL_W, v_fit_WL_W;
+    if (support_.supported() && payload_visible_ && support_.fit_start_s() > held_fit_after_s_ &&
+        support_.MotionAt(time_s, &p_fit_WL_W, &v_fit_WL_W)) {
+      // held and in view: across the image where the fit of its detections puts it (a hand is
+      // not in free fall); the tracker keeps its height
+      p_WL_W->head<2>() = p_fit_WL_W.head<2>();
+      v_WL_W->head<2>() = v_fit_WL_W.head<2>();
+    } else if (support_.supported() && !payload_visible_) {
       // held up and out of view: carried on from where it was last seen at its last horizontal
       // velocity (a hand does not let it fall, nor stop where the camera lost it)
       Eigen::Vector3d v_held_WL_W = tracker_.state().tail<3>();
@@ -563,6 +583,9 @@ class CableEstimator final : public Estimator {
   PayloadTracker tracker_;
   TensionCue tension_cue_;
   SupportDetector support_;           // slack: held up or falling, from the detections
+  // a held payload's fitted motion is used only on detections captured after this (FrameJumps)
+  double held_fit_after_s_ = -std::numeric_limits<double>::infinity();
+  int frame_jumps_ = 0;  // FrameJumps() at the last slack detection
   double slack_entered_at_s_ = 0.0;   // when the last slack began (tension flag or detection)
   double thrust_N_;                   // last allocated collective thrust
   CableMode mode_;                    // estimated mode (always taut when !hybrid)

@@ -40,7 +40,7 @@ grep -q "controller.perception_weight: 0.0 (A) vs 1.0 (B)" "$out/numeric.log" \
   || fail "sweep-diff does not name the setting that differs"
 
 echo "== the perception term matters: L_cam on keeps the held payload in view, off does not"
-# measured +0.356 [0.352, 0.360] over 20 pairs; an inert term (as when the held payload was
+# measured +0.360 [0.355, 0.366] over 20 pairs; an inert term (as when the held payload was
 # predicted to fall under the vehicle: +0.0006) gives no verdict, half the effect still does
 [ "$(verdict "$out/numeric/diff.json" payload_in_fov_fraction)" = better ] \
   || fail "L_cam not found better in view: $(cat "$out/numeric.log")"

@@ -48,6 +48,10 @@ struct OcpWeights {
   // Slack-mode L_cam penalises only the part of the payload's image offset beyond this
   // fraction of the half field of view (per axis, a dead zone). 0 = the paper's plain quadratic.
   double cam_slack_deadzone_fraction = 0.0;
+  // The same for a held payload (Ocp::payload_supported): it moves only as the hand moves it,
+  // so the vehicle can follow it closely; a free one swings and falls, and a tight zone would
+  // chase every swing.
+  double cam_held_deadzone_fraction = 0.0;
   double terminal_factor = 1.0;      // terminal state weights = factor * stage state weights
   double tilt_max_rad = 0.0;         // soft limit on the angle between body z and world z
   double tilt_weight = 0.0;          // weight on max(0, (1 - cos tilt) - (1 - cos tilt_max))^2
@@ -184,8 +188,9 @@ void EvaluateOcpTerm(const Ocp& ocp, const OcpTerm& term, int k, const StateVect
 
 // --- building the problem --------------------------------------------------------------------
 
-/// Sets ocp->cam_slack_deadzone_m from the current state: deadzone fraction x tan(half FOV) x
-/// the payload's depth in the camera; a payload at or above the lens plane (thrown up) cannot
+/// Sets ocp->cam_slack_deadzone_m from the current state: deadzone fraction (a held payload's
+/// when ocp->payload_supported, else a free one's) x tan(half FOV) x the payload's depth in the
+/// camera; a payload at or above the lens plane (thrown up) cannot
 /// be brought into view by moving, so the slack L_cam is switched off (infinite dead zone).
 void SetCameraDeadzone(const SystemState& state, Ocp* ocp);
 
