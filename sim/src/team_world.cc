@@ -602,12 +602,21 @@ void TeamWorld::Step() {
 double TeamWorld::time_s() const { return impl_->time_s(); }
 
 TeamTruth TeamWorld::GetTruth() const {
-  const Impl& w = *impl_;
   TeamTruth t;
+  GetTruth(&t);
+  return t;
+}
+
+void TeamWorld::GetTruth(TeamTruth* truth) const {
+  const Impl& w = *impl_;
+  TeamTruth& t = *truth;
   t.time_s = w.time_s();
   t.x.resize(I::Size(w.n));
   t.x.segment<I::kBlockSize>(0) = w.Block(w.payload);
   t.motor_speed_radps.resize(4 * w.n);
+  t.cable_length_m.clear();
+  t.cable_tension_N.clear();
+  t.modes.clear();
   for (int i = 0; i < w.n; ++i) {
     t.x.segment<I::kBlockSize>(I::Vehicle(i)) = w.Block(w.vehicles[i]);
     const double length_m = w.CableLength_m(i);
@@ -619,16 +628,20 @@ TeamTruth TeamWorld::GetTruth() const {
                           : CableMode::kSlack);
     t.motor_speed_radps.segment<4>(4 * i) = w.motor_speed_radps[i];
   }
-  return t;
 }
 
 std::vector<BodyReading> TeamWorld::TakeDelivered() {
-  Impl& w = *impl_;
   std::vector<BodyReading> out;
-  while (std::optional<BodyReading> r = w.mocap_line.PopReady(w.time_s())) {
-    out.push_back(std::move(*r));
-  }
+  TakeDelivered(&out);
   return out;
+}
+
+void TeamWorld::TakeDelivered(std::vector<BodyReading>* readings) {
+  Impl& w = *impl_;
+  readings->clear();
+  while (std::optional<BodyReading> r = w.mocap_line.PopReady(w.time_s())) {
+    readings->push_back(std::move(*r));
+  }
 }
 
 Eigen::Vector3d TeamWorld::GyroSample_B(int vehicle) const {

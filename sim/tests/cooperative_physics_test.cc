@@ -15,6 +15,7 @@
 #include "hpa/models/params.h"
 #include "hpa/sim/cooperative_scene.h"
 #include "models/tests/temp_dir.h"
+#include "sim/tests/test_teams.h"
 
 namespace hpa::sim {
 namespace {
@@ -149,26 +150,6 @@ void ExpectAgree(const Residual& r) {
   EXPECT_LT(r.body_rate_radps, kBodyRateTol_radps);
 }
 
-// A team of n params.yaml vehicles on a payload of the given mass and inertia, attachments
-// spread on a circle of radius_m (a bar for n = 2, a triangle for n = 3), cables of lengths
-// 0.5, 0.6, 0.7 m.
-CooperativeTeam Team(int n, double payload_mass_kg, const Vector3d& inertia_kgm2, double radius_m) {
-  const Params p = LoadParams(DefaultParamsPath());
-  CooperativeTeam team;
-  team.payload_mass_kg = payload_mass_kg;
-  team.payload_inertia_P_kgm2 = inertia_kgm2;
-  team.gravity_mps2 = p.gravity_mps2;
-  for (int i = 0; i < n; ++i) {
-    CooperativeVehicle v;
-    v.params = p;
-    v.cable_length_m = 0.5 + 0.1 * i;
-    const double a = 2 * M_PI * i / n;
-    v.p_PA_P_m = radius_m * Vector3d(std::cos(a), std::sin(a), 0);
-    team.vehicles.push_back(v);
-  }
-  return team;
-}
-
 // Rotor speeds giving each vehicle its own weight plus an equal share of the payload's.
 VectorXd ShareOfHover(const CooperativeTeam& team) {
   const int n = static_cast<int>(team.vehicles.size());
@@ -206,14 +187,14 @@ VectorXd SpreadMovingState(const CooperativeTeam& team, double lean_rad) {
 
 TEST(CooperativePhysicsTest, TwoVehiclesHangingABarAtHover) {
   // a 0.2 kg, 0.5 m bar hanging level under two vehicles, each at its share of hover
-  const CooperativeTeam team = Team(2, 0.2, Vector3d(1e-4, 4.2e-3, 4.2e-3), 0.2);
+  const CooperativeTeam team = TestTeam(2, 0.2, Vector3d(1e-4, 4.2e-3, 4.2e-3), 0.2);
   const CooperativeModel model(team);
   ExpectAgree(Rollout("bar hanging", team, model.HangingState(Vector3d(0, 0, 1.5)),
                       ShareOfHover(team), 0.5));
 }
 
 TEST(CooperativePhysicsTest, TwoVehiclesSpreadAndMovingWithUnequalRotors) {
-  const CooperativeTeam team = Team(2, 0.2, Vector3d(1e-4, 4.2e-3, 4.2e-3), 0.2);
+  const CooperativeTeam team = TestTeam(2, 0.2, Vector3d(1e-4, 4.2e-3, 4.2e-3), 0.2);
   const CooperativeModel model(team);
   const VectorXd x0 = SpreadMovingState(team, 0.35);
   VectorXd u = ShareOfHover(team);
@@ -225,7 +206,7 @@ TEST(CooperativePhysicsTest, TwoVehiclesSpreadAndMovingWithUnequalRotors) {
 
 TEST(CooperativePhysicsTest, ThreeVehiclesOnATriangleSpreadAndTurning) {
   // a 0.3 kg triangular plate, attachments 0.2 m from its centre, cables 0.5, 0.6, 0.7 m
-  const CooperativeTeam team = Team(3, 0.3, Vector3d(3e-3, 3e-3, 6e-3), 0.2);
+  const CooperativeTeam team = TestTeam(3, 0.3, Vector3d(3e-3, 3e-3, 6e-3), 0.2);
   const CooperativeModel model(team);
   const VectorXd x0 = SpreadMovingState(team, 0.3);
   VectorXd u = ShareOfHover(team);
@@ -253,7 +234,7 @@ TEST(CooperativePhysicsTest, TwoCablesSnappingTautTogetherAreRotorTmsInelasticCo
   // zero gravity, rotors at their minimum thrust: a bar at rest, both cables 0.5 % short of their
   // length, the vehicles flying away along them at 1.0 and 0.6 m/s so that both snap taut at the
   // fifth step; the model takes RotorTM's multi-cable collision there and flies on taut
-  CooperativeTeam team = Team(2, 0.2, Vector3d(1e-4, 4.2e-3, 4.2e-3), 0.2);
+  CooperativeTeam team = TestTeam(2, 0.2, Vector3d(1e-4, 4.2e-3, 4.2e-3), 0.2);
   team.gravity_mps2 = 0;
   for (CooperativeVehicle& v : team.vehicles) v.params.gravity_mps2 = 0;
   const CooperativeModel model(team);
@@ -336,7 +317,7 @@ TEST(CooperativePhysicsTest, TwoCablesSnappingTautTogetherAreRotorTmsInelasticCo
 }
 
 TEST(CooperativePhysicsTest, SceneReadsTheSingleSceneCable) {
-  const CooperativeTeam team = Team(3, 0.3, Vector3d(3e-3, 3e-3, 6e-3), 0.2);
+  const CooperativeTeam team = TestTeam(3, 0.3, Vector3d(3e-3, 3e-3, 6e-3), 0.2);
   const std::string xml = CooperativeSceneXml(team, DataPath("models/scene.xml"));
   EXPECT_NE(xml.find("solreflimit=\"0.002 10\""), std::string::npos) << xml;
   EXPECT_NE(xml.find("range=\"0 0.69999999999999996\""), std::string::npos);

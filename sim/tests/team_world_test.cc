@@ -14,6 +14,7 @@
 #include "hpa/models/input_error.h"
 #include "hpa/models/params.h"
 #include "hpa/sim/cooperative_scene.h"
+#include "sim/tests/test_teams.h"
 
 namespace hpa::sim {
 namespace {
@@ -22,30 +23,10 @@ using Eigen::Vector3d;
 using Eigen::VectorXd;
 using I = CooperativeStateIndex;
 
-// A team of n params.yaml vehicles on a payload of the given mass and inertia, attachments
-// spread on a circle of radius_m (a bar for n = 2, a triangle for n = 3), cables of lengths
-// 0.5, 0.6, 0.7 m (cooperative_physics_test's teams).
-CooperativeTeam Team(int n, double payload_mass_kg, const Vector3d& inertia_kgm2, double radius_m) {
-  const Params p = LoadParams(DefaultParamsPath());
-  CooperativeTeam team;
-  team.payload_mass_kg = payload_mass_kg;
-  team.payload_inertia_P_kgm2 = inertia_kgm2;
-  team.gravity_mps2 = p.gravity_mps2;
-  for (int i = 0; i < n; ++i) {
-    CooperativeVehicle v;
-    v.params = p;
-    v.cable_length_m = 0.5 + 0.1 * i;
-    const double a = 2 * M_PI * i / n;
-    v.p_PA_P_m = radius_m * Vector3d(std::cos(a), std::sin(a), 0);
-    team.vehicles.push_back(v);
-  }
-  return team;
-}
-
 // A 0.2 kg, 0.5 m bar under two vehicles.
-CooperativeTeam Bar() { return Team(2, 0.2, Vector3d(1e-4, 4.2e-3, 4.2e-3), 0.2); }
+CooperativeTeam Bar() { return TestTeam(2, 0.2, Vector3d(1e-4, 4.2e-3, 4.2e-3), 0.2); }
 // A 0.3 kg triangular plate under three vehicles.
-CooperativeTeam Triangle() { return Team(3, 0.3, Vector3d(3e-3, 3e-3, 6e-3), 0.2); }
+CooperativeTeam Triangle() { return TestTeam(3, 0.3, Vector3d(3e-3, 3e-3, 6e-3), 0.2); }
 
 TeamWorldConfig Config(const CooperativeTeam& team, uint64_t seed = 1) {
   TeamWorldConfig c;
@@ -428,7 +409,7 @@ TEST(TeamWorldTest, BadInputIsNamed) {
   config.team.vehicles.clear();
   ExpectInputError(config, "team.vehicles");
 
-  config = Config(Team(4, 0.3, Vector3d(3e-3, 3e-3, 6e-3), 0.2));
+  config = Config(TestTeam(4, 0.3, Vector3d(3e-3, 3e-3, 6e-3), 0.2));
   ExpectInputError(config, "team.vehicles");
 
   config = Config(Bar());

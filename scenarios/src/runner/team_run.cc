@@ -282,6 +282,9 @@ RunResult RunTeamScenario(const Scenario& scenario, const Params& base_params,
   std::vector<TeamLogRow::Vehicle> last(static_cast<size_t>(n));
   std::vector<int> rate_steps(static_cast<size_t>(n), 0), saturated(static_cast<size_t>(n), 0);
   double min_separation_m = world.MinVehicleSeparation_m();
+  // refilled every physics step, their memory kept
+  sim::TeamTruth truth;
+  std::vector<sim::BodyReading> delivered;
   size_t next_event = 0;
   const long end_tick = std::lround(scenario.duration_s / sim::World::kPhysicsDt_s);
   const bool show_progress = options.progress && isatty(STDERR_FILENO);
@@ -303,13 +306,14 @@ RunResult RunTeamScenario(const Scenario& scenario, const Params& base_params,
           world.ApplyImpulse(v->on_payload ? -1 : v->vehicle, mass_kg * v->dv_W_mps);
         }
       }
-      const sim::TeamTruth truth = world.GetTruth();
+      world.GetTruth(&truth);
       if (scenario.estimation.ground_truth) {
         for (int body = -1; body < n; ++body) {
           latest[static_cast<size_t>(body + 1)] = ReadingFromState(truth.x, body, t);
         }
       } else {
-        for (sim::BodyReading& r : world.TakeDelivered()) {
+        world.TakeDelivered(&delivered);
+        for (sim::BodyReading& r : delivered) {
           latest[static_cast<size_t>(r.body + 1)] = r;
         }
       }

@@ -105,6 +105,8 @@ class TeamWorld {
 
   /// Ground truth now.
   TeamTruth GetTruth() const;
+  /// Ground truth now into *truth, reusing its vectors' memory (no allocation once sized).
+  void GetTruth(TeamTruth* truth) const;
   /// Every motion-capture reading whose latency has passed, in capture order (payload first,
   /// then vehicle 0, 1, ... within one capture).
   /// A capture is taken at Reset and after every Step that reaches a multiple of 1 / rate_hz,
@@ -112,6 +114,8 @@ class TeamWorld {
   /// rounding margin). The attitude noise is a rotation in the body frame: q_W = q_true *
   /// exp(n), n ~ N(0, attitude_noise_rad^2) per axis.
   std::vector<BodyReading> TakeDelivered();
+  /// TakeDelivered into *readings (cleared first, its memory kept).
+  void TakeDelivered(std::vector<BodyReading>* readings);
   /// Vehicle's rate-gyro sample of this step (body frame, rad/s, with noise).
   /// The true body rate at time_s() plus N(0, rate_gyro_noise_radps^2) per axis, drawn at Reset
   /// and after every Step. A vehicle outside 0 .. N-1 throws std::out_of_range.
