@@ -226,8 +226,8 @@ class CableEstimator final : public Estimator {
   }
 
   // Forced accepts and rejections of the payload tracker, forced accepts of the quadrotor
-  // filter and health resets, summed: a change means a detection was an outlier or the frame
-  // detections are located in jumped.
+  // filter and health resets, summed: a change means a detection was an outlier, or the frame
+  // the detections are located in jumped.
   int FrameJumps() const {
     return quad_.counts().forced_accepts + tracker_.counts().forced_accepts +
            tracker_.counts().rejected_updates + health_resets_.Total();

@@ -3,6 +3,7 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace hpa {
 
@@ -15,6 +16,7 @@ void SupportDetector::Clear() {
   supported_ = false;
   has_fit_ = false;
   motion_valid_ = false;
+  fit_start_s_ = -std::numeric_limits<double>::infinity();
   fit_a_WL_W_.setZero();
 }
 

@@ -32,7 +32,8 @@ struct SupportDetectorConfig {
   double max_motion_residual_m = 0.01;
 };
 
-/// Classifies a slack payload as held up or falling from its detections (world heights).
+/// Classifies a slack payload as held up or falling from its detections (world positions), and
+/// gives a held one's motion from the same fit.
 class SupportDetector {
  public:
   SupportDetector(const Params& params, const SupportDetectorConfig& config);
