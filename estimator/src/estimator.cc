@@ -204,13 +204,14 @@ class CableEstimator final : public Estimator {
           support_.Clear();
           slack_entered_at_s_ = d.time_s;
         }
-      } else if (tracker_.Update(d.time_s, d.p_WL_W, cov_W) != FilterStatus::kOk) {
-        held_fit_after_s_ = d.time_s;
+      } else {
+        tracker_.Update(d.time_s, d.p_WL_W, cov_W);
       }
-      // a jump of the vehicle's estimate (a forced VIO update, a restart) moves every later
-      // detection: the fit of a held payload's motion starts again after it
-      if (FrameJumps() != frame_jumps_) held_fit_after_s_ = d.time_s;
-      frame_jumps_ = FrameJumps();
+      // an outlier, or a jump of the vehicle's estimate (a forced VIO update, a restart) that
+      // moves every later detection: the fit of a held payload's motion starts again after it
+      const int frame_jumps = FrameJumps();
+      if (frame_jumps != frame_jumps_) held_fit_after_s_ = d.time_s;
+      frame_jumps_ = frame_jumps;
       // only frames captured since the cable unloaded (a push's frames before it are not free)
       if (d.time_s >= slack_entered_at_s_) support_.Add(d.time_s, d.p_WL_W);
       return;

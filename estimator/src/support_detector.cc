@@ -14,7 +14,6 @@ void SupportDetector::Clear() {
   head_ = 0;
   count_ = 0;
   supported_ = false;
-  has_fit_ = false;
   motion_valid_ = false;
   fit_start_s_ = -std::numeric_limits<double>::infinity();
   fit_a_WL_W_.setZero();
@@ -35,7 +34,6 @@ void SupportDetector::Add(double time_s, const Eigen::Vector3d& p_WL_W) {
     --count_;
   }
   supported_ = false;
-  has_fit_ = false;
   motion_valid_ = false;
   if (count_ < config_.min_detections) return;
   // least squares p = a + b tau + c tau^2 per axis, tau = t - time_s (normal equations, 3 x 3;
@@ -52,7 +50,6 @@ void SupportDetector::Add(double time_s, const Eigen::Vector3d& p_WL_W) {
   const Eigen::LDLT<Eigen::Matrix3d> ldlt(normal);
   const Eigen::Matrix3d coeffs = ldlt.solve(rhs);
   if (ldlt.info() != Eigen::Success || !coeffs.allFinite()) return;
-  has_fit_ = true;
   fit_time_s_ = time_s;
   fit_start_s_ = samples_[head_].time_s;
   fit_p_WL_W_ = coeffs.row(0).transpose();
@@ -71,7 +68,7 @@ void SupportDetector::Add(double time_s, const Eigen::Vector3d& p_WL_W) {
 
 bool SupportDetector::MotionAt(double time_s, Eigen::Vector3d* p_WL_W,
                                Eigen::Vector3d* v_WL_W) const {
-  if (!has_fit_ || !motion_valid_) return false;
+  if (!motion_valid_) return false;
   const double age_s = std::clamp(time_s - fit_time_s_, 0.0, config_.max_extrapolation_s);
   *p_WL_W = fit_p_WL_W_ + fit_v_WL_W_ * age_s + 0.5 * fit_a_WL_W_ * age_s * age_s;
   *v_WL_W = fit_v_WL_W_ + fit_a_WL_W_ * age_s;

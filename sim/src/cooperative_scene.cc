@@ -148,8 +148,8 @@ std::string CooperativeSceneXml(const CooperativeTeam& team, const std::string& 
   x << "  <actuator>\n";
   for (int i = 0; i < n; ++i) {
     const Params& p = team.vehicles[i].params;
-    const double f_min_N = p.k_f_N_per_radps2 * p.motor_speed_min_radps * p.motor_speed_min_radps;
-    const double f_max_N = p.k_f_N_per_radps2 * p.motor_speed_max_radps * p.motor_speed_max_radps;
+    const double f_min_N = p.RotorThrustMinN();
+    const double f_max_N = p.RotorThrustMaxN();
     for (int k = 0; k < 4; ++k) {
       x << "    <general name=\"rotor_" << i << "_" << k << "\" site=\"rotor_" << i << "_" << k
         << "\" gear=\"0 0 1 0 0 " << RotorSpin(k) * p.k_m_Nm_per_radps2 / p.k_f_N_per_radps2

@@ -51,10 +51,8 @@ void CheckFlyable(const Reference& reference, const Scenario& scenario, const Pa
   // of it, leaving a fifth to steer with: a quadrotor at its thrust limit cannot also tilt),
   // and the idle thrust below the weight (else it cannot descend)
   const double weight_N = (params.quad_mass_kg + params.payload_mass_kg) * params.gravity_mps2;
-  const double thrust_max_N =
-      4.0 * params.k_f_N_per_radps2 * params.motor_speed_max_radps * params.motor_speed_max_radps;
-  const double thrust_idle_N =
-      4.0 * params.k_f_N_per_radps2 * params.motor_speed_min_radps * params.motor_speed_min_radps;
+  const double thrust_max_N = 4.0 * params.RotorThrustMaxN();
+  const double thrust_idle_N = 4.0 * params.RotorThrustMinN();
   constexpr double kHoverFractionMax = 0.8;
   if (!(weight_N <= kHoverFractionMax * thrust_max_N)) {
     throw InputError(file, "params",

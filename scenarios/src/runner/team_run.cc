@@ -85,7 +85,7 @@ void CheckStart(const Scenario& scenario, const CooperativeTeam& team, const Eig
   double lift_N = 0.0, weight_N = team.payload_mass_kg * team.gravity_mps2;
   for (const CooperativeVehicle& v : team.vehicles) {
     const Params& p = v.params;
-    lift_N += 4.0 * p.k_f_N_per_radps2 * p.motor_speed_max_radps * p.motor_speed_max_radps;
+    lift_N += 4.0 * p.RotorThrustMaxN();
     weight_N += p.quad_mass_kg * p.gravity_mps2;
   }
   if (lift_N <= weight_N) {

@@ -66,8 +66,7 @@ class SupportDetector {
   int head_ = 0;
   int count_ = 0;
   bool supported_ = false;
-  bool has_fit_ = false;
-  bool motion_valid_ = false;  // the last fit's horizontal residuals within the bound
+  bool motion_valid_ = false;  // a last fit, its horizontal residuals within the bound
   // the last fit at the newest detection's time
   double fit_time_s_ = 0.0;
   double fit_start_s_ = -std::numeric_limits<double>::infinity();

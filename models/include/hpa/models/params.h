@@ -47,6 +47,14 @@ struct Params {
   double HoverThrustN() const { return (quad_mass_kg + payload_mass_kg) * gravity_mps2; }
   /// Rotor speed at which four rotors carry quadrotor + payload.
   double HoverMotorSpeedRadps() const;
+  /// One rotor's thrust at its slowest speed, k_f w_min^2 (N).
+  double RotorThrustMinN() const {
+    return k_f_N_per_radps2 * motor_speed_min_radps * motor_speed_min_radps;
+  }
+  /// One rotor's thrust at its fastest speed, k_f w_max^2 (N).
+  double RotorThrustMaxN() const {
+    return k_f_N_per_radps2 * motor_speed_max_radps * motor_speed_max_radps;
+  }
   /// Camera focal length in pixels (square pixels), from fovy and the image height.
   double CameraFocalPx() const;
 };
