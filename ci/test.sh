@@ -6,23 +6,8 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 ./ci/setup.sh
 
-echo "== dependency rule: flight code (models, autopilot, estimator, controller, flight) never includes MuJoCo or GL"
-if grep -rIl -e '#include *<mujoco' -e '#include *<GL/' -e 'OSMesa' \
-     models autopilot controller estimator flight --include='*.h' --include='*.cc' | grep -v '/tests/'; then
-  echo "dependency rule broken by the files above" >&2
-  exit 1
-fi
-if grep -rIl '#include *<opencv' autopilot controller --include='*.h' --include='*.cc' | grep -v '/tests/'; then
-  echo "autopilot/ and controller/ must not depend on OpenCV" >&2
-  exit 1
-fi
-
-echo "== sim/ depends on models only (no flight code)"
-if grep -rIl -e '#include "hpa/estimator' -e '#include "hpa/controller' -e '#include "hpa/autopilot' \
-     sim/src sim/include sim/tests; then
-  echo "sim/ depends on models only: the files above include flight code" >&2
-  exit 1
-fi
+echo "== dependency rule (ci/dependency_rule.sh; also ctest build.dependency_rule)"
+./ci/dependency_rule.sh
 
 echo "== flight-only build (HPA_FLIGHT_ONLY=ON: no MuJoCo, no GL, no sim target)"
 cmake -S . -B build-flight -G Ninja -DCMAKE_BUILD_TYPE=Release -DHPA_FLIGHT_ONLY=ON \

@@ -226,3 +226,10 @@ add_test(NAME cli.team_flight_stack
          COMMAND bash ${SCEN}/tests/team_flight_stack_test.sh ${HPA_BIN} ${CMAKE_SOURCE_DIR}
                  ${HPA_PYTHON3})
 set_tests_properties(cli.team_flight_stack PROPERTIES LABELS "cli;scenario" TIMEOUT 600)
+
+# The dependency rule (docs/design.md section 1) as a test: ci/dependency_rule.sh holds on the
+# source tree and catches a planted MuJoCo, GL, EGL, OpenCV or flight-code include in a copy
+add_test(NAME build.dependency_rule
+         COMMAND bash ${SCEN}/tests/dependency_rule_test.sh ${CMAKE_SOURCE_DIR}
+                 ${CMAKE_BINARY_DIR}/dependency_rule)
+set_tests_properties(build.dependency_rule PROPERTIES LABELS build)
