@@ -98,6 +98,12 @@ set_tests_properties(cli.flight_stack_rate_loop PROPERTIES LABELS "cli;scenario"
 add_test(NAME cli.team
          COMMAND bash ${SCEN}/tests/team_cli_test.sh ${HPA_BIN} ${CMAKE_SOURCE_DIR} ${HPA_PYTHON3})
 set_tests_properties(cli.team PROPERTIES LABELS "cli;scenario" TIMEOUT 600)
+# A one-vehicle `vehicles:` list is the single vehicle: the same run as without it, bit for bit;
+# team-only keys and a team's leftovers refused by key (docs/cooperative.md, "One vehicle")
+add_test(NAME cli.one_vehicle_list
+         COMMAND bash ${SCEN}/tests/one_vehicle_list_test.sh ${HPA_BIN} ${CMAKE_SOURCE_DIR}
+                 ${HPA_PYTHON3})
+set_tests_properties(cli.one_vehicle_list PROPERTIES LABELS "cli;scenario" TIMEOUT 600)
 
 # Plots in PNG, SVG and PDF, each with the CSV of what it draws; plots never change a run
 add_test(NAME cli.plot_formats

@@ -39,7 +39,7 @@ def expect_keys(hpa):
                          text=True).stdout
     keys = {}
     for line in out.splitlines():
-        m = re.match(r"\| `([a-z_]+)` \| `([a-z_.]+)` \| ([^|]+) \|", line)
+        m = re.match(r"\| `([a-z_]+)` \| `([A-Za-z_.]+)` \| ([^|]+) \|", line)
         if not m:
             continue
         key, metric, passes = m.group(1), m.group(2), m.group(3)

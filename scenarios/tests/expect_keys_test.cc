@@ -76,6 +76,16 @@ const std::map<std::string, Case>& Cases() {
        {{0.1},
         [](Metrics* m) { m->team = TeamVehicles({0.0, 0.0}, {0.0, 0.2}); },
         [](Metrics* m) { m->team = TeamVehicles({0.0, 0.0}, {0.05, 0.0}); }}},
+      {"team_tension_max",
+       {{30.0},
+        [](Metrics* m) {
+          m->team = TeamVehicles({0.0, 0.0}, {0.0, 0.0});
+          m->team->vehicles[1].cable_tension_max_N = 30.0;
+        },
+        [](Metrics* m) {
+          m->team = TeamVehicles({0.0, 0.0}, {0.0, 0.0});
+          m->team->vehicles[0].cable_tension_max_N = 31.0;
+        }}},
       {"payload_rmse_max",
        {{0.1, 0.1, 0.1},
         [](Metrics* m) { m->payload_rmse_m = Eigen::Vector3d(0.09, 0, 0.1); },

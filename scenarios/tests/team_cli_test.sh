@@ -30,7 +30,8 @@ expect_exit 2 "--controller.*unknown controller 'geometric'" run "$base" --contr
 expect_exit 2 "events.0.vehicle.*vehicle 2 is not in the scenario \(2 vehicles" run "$base" \
   --set events.0.vehicle=2 --out "$out/bad"
 expect_exit 2 "events.0.vehicle.*vehicle 1 is not in the scenario \(1 vehicle," run \
-  "$src/scenarios/line_impulse.yaml" --set events.0.vehicle=1 --out "$out/bad"
+  "$src/scenarios/line_impulse.yaml" --set events.0.body=quadrotor --set events.0.vehicle=1 \
+  --out "$out/bad"
 expect_exit 2 "events.0.*impulse and velocity_change events only, not 'wind'" run "$base" \
   --set 'events.0={at: 1.0, type: wind, force: [1, 0, 0], duration: 1.0}' --out "$out/bad"
 expect_exit 2 "payload.mass_kg" run "$base" --set payload.mass_kg=0 --out "$out/bad"

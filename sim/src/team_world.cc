@@ -29,8 +29,6 @@ namespace {
 
 using I = CooperativeStateIndex;
 
-constexpr int kMaxVehicles = 3;
-
 // "1.5" for a number in an error message.
 std::string NumberText(double v) {
   std::ostringstream out;
@@ -56,10 +54,10 @@ void RequireNonNegative(double value, const std::string& key) {
 void ValidateConfig(const TeamWorldConfig& config) {
   const CooperativeTeam& team = config.team;
   const int n = static_cast<int>(team.vehicles.size());
-  if (n < 1 || n > kMaxVehicles) {
+  if (n < 1 || n > kMaxTeamVehicles) {
     throw InputError(
         "", "team.vehicles",
-        "a team has 1 to " + std::to_string(kMaxVehicles) + " vehicles, got " + std::to_string(n));
+        "a team has 1 to " + std::to_string(kMaxTeamVehicles) + " vehicles, got " + std::to_string(n));
   }
   RequirePositive(team.payload_mass_kg, "team.payload_mass_kg");
   for (int k = 0; k < 3; ++k) {
@@ -188,6 +186,13 @@ struct TeamWorld::Impl {
   std::vector<InputVector> motor_command_radps;  // commanded, clamped (n x 4)
   std::vector<Eigen::Vector3d> gyro_B_radps;     // this step's gyro samples (n x 3)
   DelayLine<BodyReading> mocap_line{0.0};        // readings waiting for their latency
+  // a push's constant force on a body until (not including) end_step
+  struct TimedForce {
+    int body = -1;                                     // MuJoCo body id
+    Eigen::Vector3d force_W_N = Eigen::Vector3d::Zero();  // world frame (3)
+    int64_t end_step = 0;
+  };
+  std::vector<TimedForce> forces;  // the pushes not yet over
   CrashStatus crash;
   std::vector<int> warning_count;  // per MuJoCo warning kind (mjNWARNING)
 
@@ -311,6 +316,19 @@ struct TeamWorld::Impl {
     // a bound if the caller never takes them: 10 s of readings at 100 Hz
     const size_t max_queued = static_cast<size_t>(1000 * (n + 1));
     while (mocap_line.size() > max_queued) mocap_line.DropOldest();
+  }
+
+  // the pushes due this step into xfrc_applied (at the body's centre of mass, world frame); the
+  // ones that end with this step are dropped, as Disturbances::Apply drops them
+  void ApplyForces() {
+    mju_zero(d->xfrc_applied, 6 * m->nbody);
+    for (const TimedForce& f : forces) {
+      if (step >= f.end_step) continue;
+      for (int k = 0; k < 3; ++k) d->xfrc_applied[6 * f.body + k] += f.force_W_N(k);
+    }
+    forces.erase(std::remove_if(forces.begin(), forces.end(),
+                                [this](const TimedForce& f) { return step + 1 >= f.end_step; }),
+                 forces.end());
   }
 
   // rotor thrust f = k_f w^2 into each actuator (the yaw torque is the actuator's gear)
@@ -529,6 +547,7 @@ void TeamWorld::Reset(const Eigen::VectorXd& x0) {
   w.d->time = 0.0;
   w.warning_count.assign(mjNWARNING, 0);
   w.crash = CrashStatus{};
+  w.forces.clear();
   w.mocap_line.Clear();
   w.rng.seed(w.config.seed);
   w.normal.reset();
@@ -561,17 +580,30 @@ void TeamWorld::SetMotorSpeedCommand(int vehicle, const InputVector& w_cmd_radps
       w_cmd_radps.cwiseMax(p.motor_speed_min_radps).cwiseMin(p.motor_speed_max_radps);
 }
 
-void TeamWorld::ApplyImpulse(int body, const Eigen::Vector3d& impulse_W_Ns) {
+void TeamWorld::ApplyImpulse(int body, const Eigen::Vector3d& impulse_W_Ns, double duration_s) {
   Impl& w = *impl_;
   if (body < -1 || body >= w.n) {
     throw std::out_of_range("TeamWorld::ApplyImpulse: no body " + std::to_string(body));
   }
-  if (!impulse_W_Ns.allFinite()) {
-    throw std::invalid_argument("TeamWorld::ApplyImpulse: non-finite impulse");
+  if (!impulse_W_Ns.allFinite() || !std::isfinite(duration_s)) {
+    throw std::invalid_argument("TeamWorld::ApplyImpulse: non-finite impulse or duration");
+  }
+  const int64_t steps = std::max<int64_t>(1, std::llround(duration_s / World::kPhysicsDt_s));
+  w.forces.push_back(
+      {w.Body(body).body, impulse_W_Ns / (static_cast<double>(steps) * World::kPhysicsDt_s),
+       w.step + steps});
+}
+
+void TeamWorld::AddVelocity(int body, const Eigen::Vector3d& dv_W_mps) {
+  Impl& w = *impl_;
+  if (body < -1 || body >= w.n) {
+    throw std::out_of_range("TeamWorld::AddVelocity: no body " + std::to_string(body));
+  }
+  if (!dv_W_mps.allFinite()) {
+    throw std::invalid_argument("TeamWorld::AddVelocity: non-finite velocity change");
   }
   const Impl::FreeBody& b = w.Body(body);
-  const double mass_kg = w.m->body_mass[b.body];
-  for (int k = 0; k < 3; ++k) w.d->qvel[b.dof + k] += impulse_W_Ns(k) / mass_kg;
+  for (int k = 0; k < 3; ++k) w.d->qvel[b.dof + k] += dv_W_mps(k);
   mj_forward(w.m, w.d);
   w.CheckWarnings();
 }
@@ -584,6 +616,7 @@ void TeamWorld::Step() {
     w.motor_speed_radps[i] += alpha * (w.motor_command_radps[i] - w.motor_speed_radps[i]);
   }
   w.WriteMotorControls();
+  w.ApplyForces();
 
   // dynamics at t_k and integration to t_{k+1}, then kinematics and contacts at t_{k+1} (the
   // single-vehicle World's order: the state, contacts and tendon lengths read after a step

@@ -113,7 +113,7 @@ TEST(TeamRenderTest, ASlackCableIsDrawnOrange) {
   TeamWorld world(Config(team));
   const auto orange = [](int b, int g, int r) { return r > 200 && g > 90 && g < 180 && b < 60; };
   EXPECT_EQ(Find(world.renderer().RenderChaseCamera(960, 540), orange).pixels, 0);
-  world.ApplyImpulse(1, Vector3d(0, 0, -1.0));
+  world.ApplyImpulse(1, Vector3d(0, 0, -1.0), 0.001);
   for (int k = 0; k < 30 && world.GetTruth().modes[1] == CableMode::kTaut; ++k) world.Step();
   ASSERT_EQ(world.GetTruth().modes[1], CableMode::kSlack);
   EXPECT_GT(Find(world.renderer().RenderChaseCamera(960, 540), orange).pixels, 20);
@@ -125,8 +125,8 @@ TEST(TeamRenderTest, RenderingNeverChangesTheWorld) {
   TeamWorld plain(config), rendered(config);
   for (int k = 0; k < 200; ++k) {
     if (k == 50) {
-      plain.ApplyImpulse(1, Vector3d(0, 0, -0.5));  // a slack cable on the way
-      rendered.ApplyImpulse(1, Vector3d(0, 0, -0.5));
+      plain.ApplyImpulse(1, Vector3d(0, 0, -0.5), 0.001);  // a slack cable on the way
+      rendered.ApplyImpulse(1, Vector3d(0, 0, -0.5), 0.001);
     }
     if (k % 10 == 0) {
       cv::Mat frame;

@@ -236,6 +236,11 @@ std::vector<ExpectKey> BuildTable() {
                   "every cable's slack time, at most", kBig, [over_vehicles](const Metrics& m) {
                     return over_vehicles(m, &VehicleMetrics::slack_time_s);
                   }));
+  t.push_back(Max("team_tension_max", "team.vehicles.cable_tension_max_N", "N",
+                  "every cable's largest tension at the physics rate (a snap's peak), at most", kBig,
+                  [over_vehicles](const Metrics& m) {
+                    return over_vehicles(m, &VehicleMetrics::cable_tension_max_N);
+                  }));
   t.push_back(Min("team_slack_time_min", "team.vehicles.slack_time_s", "s",
                   "the slackest cable's slack time, at least (a push that slackens a cable)", 0.0,
                   kBig, [over_vehicles](const Metrics& m) {

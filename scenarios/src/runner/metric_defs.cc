@@ -95,6 +95,10 @@ const Registry<MetricDef>& TheRegistry() {
           {"team_cable_slack_time_max_s", "team.vehicles.slack_time_s", R::kLargest, "s",
            Better::kNeither, 0.05, false, false, "",
            "a team's slackest cable's slack time (team runs)"},
+          {"team_cable_tension_max_N", "team.vehicles.cable_tension_max_N", R::kLargest, "N",
+           Better::kLower, 1.0, false, false, "",
+           "a team's largest cable tension at the physics rate (a snap's peak), the worst "
+           "cable's (team runs; minimum effect: about one payload weight)"},
           {"mpc_solve_median_ms", "mpc_solve_ms.median", R::kNumber, "ms", Better::kLower, 0.02,
            true, true, "", "median wall time of one MPC update (the machine's, not the run's)"},
       });

@@ -83,27 +83,34 @@ std::vector<std::pair<double, double>> TrueSlackIntervals(const std::vector<LogR
   return SlackIntervals(times_s, modes);
 }
 
+bool InPayloadRmse(double time_s, const std::vector<std::pair<double, double>>& slack,
+                   double from_s) {
+  if (time_s < from_s - 1e-9) return false;
+  for (const auto& [start_s, end_s] : slack) {
+    if (time_s >= start_s && time_s < end_s) return false;
+  }
+  return true;
+}
+
+const char* PayloadRmseOver(const std::vector<std::pair<double, double>>& slack) {
+  return slack.empty() ? "whole_run" : "taut_time";
+}
+
 namespace {
 
 // Tracking errors (RMS over the run; the payload's over the taut time when the cable went slack),
 // speeds, mode agreement, the closed-loop cost and the time the payload was reported lost.
 void TrackingMetrics(const std::vector<LogRow>& rows,
                      const std::vector<std::pair<double, double>>& slack, Metrics* m) {
-  auto in_slack = [&](double t) {
-    for (const auto& s : slack) {
-      if (t >= s.first && t < s.second) return true;
-    }
-    return false;
-  };
   Eigen::Vector3d payload_sq = Eigen::Vector3d::Zero(), quad_sq = Eigen::Vector3d::Zero();
   Eigen::Vector3d payload_est_sq = Eigen::Vector3d::Zero();
   int payload_n = 0, mode_agree = 0;
-  m->payload_rmse_over = slack.empty() ? "whole_run" : "taut_time";
+  m->payload_rmse_over = PayloadRmseOver(slack);
   for (const LogRow& r : rows) {
     const Eigen::Vector3d e_Q = r.truth.p_WQ_W - r.reference.p_WQ_W;
     quad_sq += e_Q.cwiseAbs2();
     m->quad_position_deviation_max_m = std::max(m->quad_position_deviation_max_m, e_Q.norm());
-    if ((slack.empty() || !in_slack(r.time_s)) && r.time_s >= m->payload_rmse_from_s - 1e-9) {
+    if (InPayloadRmse(r.time_s, slack, m->payload_rmse_from_s)) {
       payload_sq += (r.truth.p_WL_W - r.reference.p_WL_W).cwiseAbs2();
       payload_est_sq += (r.estimate.p_WL_W - r.reference.p_WL_W).cwiseAbs2();
       ++payload_n;

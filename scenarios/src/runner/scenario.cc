@@ -9,6 +9,7 @@
 #include "hpa/controller/controller_registry.h"
 #include "hpa/controller/team_controller.h"
 #include "hpa/estimator/estimator_registry.h"
+#include "hpa/models/cooperative_model.h"
 #include "hpa/models/input_error.h"
 #include "hpa/models/param_yaml.h"
 #include "hpa/models/params_yaml.h"
@@ -149,9 +150,6 @@ void SetDottedPath(YAML::Node root, const std::string& path, const std::string& 
   }
 }
 
-// Most vehicles a team scenario may fly: the cooperative scenes are written for up to three
-// (sim::TeamWorld).
-constexpr int kMaxTeamVehicles = 3;
 
 // The `payload:` and `vehicles:` blocks of a team scenario; each number within the range
 // params.yaml declares for the single vehicle's field it stands for.
@@ -179,12 +177,92 @@ TeamSpec ParseTeam(const YamlMap& root) {
     VehicleSpec spec;
     spec.cable_length_m = v.Number("cable_length_m", length.min, length.max, spec.cable_length_m);
     // an attachment point on the payload's body: within a metre of its centre
-    if (v.Has("attach_m")) spec.p_PA_P_m = v.Vector("attach_m", 3, -1.0, 1.0);
+    if (v.Has("attach_m")) {
+      spec.p_PA_P_m = v.Vector("attach_m", 3, -1.0, 1.0);
+    } else if (list.size() > 1) {
+      v.Fail("attach_m",
+             "each vehicle of a team says where its cable holds the payload (payload frame, m)");
+    }
     spec.start_slack_m = v.Number("start_slack_m", 0.0, spec.cable_length_m, 0.0);
     v.RejectUnknownKeys();
     team.vehicles.push_back(spec);
   }
   return team;
+}
+
+// The section of params.yaml that declares `member` ("payload", "cable").
+template <class M>
+std::string ParamSection(M Params::*member) {
+  const ParamDecl<Params>& decl = FindParamDecl(ParamsTables(), member);
+  for (const ParamTable<Params>& table : ParamsTables()) {
+    for (const ParamDecl<Params>& d : table.params) {
+      if (&d == &decl) return table.section;
+    }
+  }
+  throw std::logic_error("a declared parameter outside every table");
+}
+
+// A `vehicles:` list of one is the single vehicle (RotorTM's N = 1 model switch: one cable on
+// the payload's centre, a point mass): its cable length and the payload's mass become the
+// scenario's params (the flight code's and the world's alike), and the scenario flies the
+// single-vehicle program. What only a rigid payload under several cables has (an attachment
+// point off the centre, an inertia, a start with a slack cable or on the ground) is refused,
+// naming the key.
+void AsSingleVehicle(const YamlMap& root, Scenario* s) {
+  const std::string file = root.file();
+  const std::string vehicle_path = root.KeyPath("vehicles") + ".0";
+  const VehicleSpec& vehicle = s->team.vehicles.front();
+  const char* why = "; one vehicle carries the payload as a point mass on its cable (the single "
+                    "vehicle's model, N = 1)";
+  if (!vehicle.p_PA_P_m.isZero(0.0)) {
+    throw InputError(file, vehicle_path + ".attach_m",
+                     std::string("must be [0, 0, 0] or left out") + why);
+  }
+  if (vehicle.start_slack_m != 0.0) {
+    throw InputError(file, vehicle_path + ".start_slack_m",
+                     std::string("must be 0 or left out: one vehicle starts at rest on its taut "
+                                 "cable") + why);
+  }
+  YAML::Node params =
+      root.Has("params") ? YAML::Clone(root.Node("params")) : YAML::Node(YAML::NodeType::Map);
+  // a value of the vehicle list into the params block, unless that block sets it otherwise
+  const auto into_params = [&](const std::string& key_path, double Params::*member,
+                               const char* key, double value) {
+    const std::string section = ParamSection(member);
+    const YAML::Node given = params[section][key];
+    if (given && given.IsScalar() && given.as<double>() != value) {
+      throw InputError(file, key_path,
+                       "says " + given.as<std::string>() + " where params." + section + "." +
+                           key + " says otherwise; give it once");
+    }
+    params[section][key] = value;
+  };
+  if (root.Node("vehicles")[0]["cable_length_m"]) {
+    into_params(vehicle_path + ".cable_length_m", &Params::cable_length_m,
+                FindParamDecl(ParamsTables(), &Params::cable_length_m).key.c_str(),
+                vehicle.cable_length_m);
+  }
+  if (root.Has("payload")) {
+    const YAML::Node payload = root.Node("payload");
+    const std::string path = root.KeyPath("payload");
+    for (const char* key : {"inertia_kgm2", "on_ground"}) {
+      if (payload[key] && !(std::string(key) == "on_ground" && !s->team.payload_on_ground)) {
+        throw InputError(file, path + "." + key,
+                         std::string("belongs to a team's rigid payload (two vehicles or more)") +
+                             why);
+      }
+    }
+    if (payload["mass_kg"]) {
+      into_params(path + ".mass_kg", &Params::payload_mass_kg,
+                  FindParamDecl(ParamsTables(), &Params::payload_mass_kg).key.c_str(),
+                  s->team.payload_mass_kg);
+    }
+  }
+  if (params.size() > 0) {
+    ParamsWithOverrides(Params(), params, file);
+    s->params_yaml = YAML::Dump(params);
+  }
+  s->team = TeamSpec();
 }
 
 // What a team scenario can say and a single-vehicle one cannot, and the other way round: a team
@@ -209,7 +287,20 @@ void CheckTeamScenario(const YamlMap& root, const Scenario& s) {
                        "a team scenario takes impulse and velocity_change events only, not '" +
                            s.events[i].type + "'");
     }
-    const int vehicle = impulse ? impulse->vehicle : velocity ? velocity->vehicle : 0;
+    const std::optional<int> named = impulse ? impulse->vehicle : velocity ? velocity->vehicle
+                                                                         : std::nullopt;
+    const bool on_payload = impulse ? impulse->on_payload : velocity && velocity->on_payload;
+    if (named && on_payload) {
+      throw InputError(root.file(), path + ".vehicle",
+                       "names the quadrotor a `body: quadrotor` event acts on; this event acts on "
+                       "the payload");
+    }
+    if (s.team.IsTeam() && !named && !on_payload) {
+      throw InputError(root.file(), path + ".vehicle",
+                       "a team's quadrotor event names its vehicle (0 to " +
+                           std::to_string(vehicles - 1) + ")");
+    }
+    const int vehicle = named.value_or(0);
     if (vehicle >= std::max(vehicles, 1)) {
       throw InputError(root.file(), path + ".vehicle",
                        "vehicle " + std::to_string(vehicle) + " is not in the scenario (" +
@@ -279,7 +370,11 @@ Scenario ParseScenario(const YamlMap& root, const std::optional<std::string>& re
   s.rate_loop = profile.rate_loop;
   if (root.Has("vehicles")) {
     s.team = ParseTeam(root);
-    s.controller.type = TeamControllerNames().front();
+    if (s.team.vehicles.size() == 1) {
+      AsSingleVehicle(root, &s);
+    } else {
+      s.controller.type = TeamControllerNames().front();
+    }
   } else if (root.Has("payload")) {
     root.Fail("payload", "a payload block belongs to a team scenario: add a vehicles list");
   }

@@ -116,8 +116,25 @@ bool IsFailure(ControlStatus status) {
          status == ControlStatus::kFallback;
 }
 
-// The payload's tracking and the team's metrics from the log (crash, timing and separation are
-// the runner's).
+// The extremes of a team run at the physics rate (every step's truth, not only the log rows', so
+// a cable's snap is its peak whenever it falls): each cable's tension, each vehicle's and the
+// payload's tilt. Over the log's span (from the first step every vehicle has commanded): before
+// it the start's cables take the payload's weight as a step load (a peak of twice the static
+// tension in the first milliseconds), which says nothing of the flight.
+void UpdateExtremes(const sim::TeamTruth& truth, TeamMetrics* team) {
+  for (size_t i = 0; i < team->vehicles.size(); ++i) {
+    VehicleMetrics& vm = team->vehicles[i];
+    const int start = Index::Vehicle(static_cast<int>(i)) + Index::kVehicleQuat;
+    vm.tilt_max_deg = std::max(vm.tilt_max_deg, TiltDeg(truth.x.segment<4>(start)));
+    vm.cable_tension_max_N = std::max(vm.cable_tension_max_N, truth.cable_tension_N[i]);
+  }
+  team->payload_tilt_max_deg =
+      std::max(team->payload_tilt_max_deg, TiltDeg(truth.x.segment<4>(Index::kPayloadQuat)));
+}
+
+// The payload's tracking and the team's metrics from the log (crash, timing, separation and the
+// physics-rate extremes are the runner's). The payload RMSE follows the single vehicle's rule
+// (InPayloadRmse): over the time every cable was taut when one went slack.
 void ComputeTeamMetrics(const std::vector<TeamLogRow>& rows, int vehicles,
                         const std::vector<int>& rate_steps, const std::vector<int>& saturated,
                         Metrics* m) {
@@ -132,31 +149,18 @@ void ComputeTeamMetrics(const std::vector<TeamLogRow>& rows, int vehicles,
   m->payload_quad_min_distance_m = NAN;
   m->closed_loop_cost = NAN;
   if (rows.empty()) return;
-  // payload RMSE over the whole run from the reference's ramp end
-  Eigen::Vector3d sum_sq = Eigen::Vector3d::Zero();
-  int samples = 0;
   std::vector<double> times_s, all_solve_ms;
   std::vector<CableMode> any_slack;
   std::vector<std::vector<CableMode>> modes(static_cast<size_t>(vehicles));
   std::vector<std::vector<double>> solve_ms(static_cast<size_t>(vehicles));
   for (const TeamLogRow& r : rows) {
-    const Eigen::Vector3d p_WL_W = r.x_true.segment<3>(Index::kPayloadPos);
-    if (r.time_s >= m->payload_rmse_from_s) {
-      sum_sq += (p_WL_W - r.reference.p_WL_W).cwiseAbs2();
-      ++samples;
-    }
     m->payload_max_speed_mps =
         std::max(m->payload_max_speed_mps, r.x_true.segment<3>(Index::kPayloadVel).norm());
-    team.payload_tilt_max_deg =
-        std::max(team.payload_tilt_max_deg, TiltDeg(r.x_true.segment<4>(Index::kPayloadQuat)));
     times_s.push_back(r.time_s);
     bool slack = false;
     for (int i = 0; i < vehicles; ++i) {
       const TeamLogRow::Vehicle& v = r.vehicles[static_cast<size_t>(i)];
       VehicleMetrics& vm = team.vehicles[static_cast<size_t>(i)];
-      vm.tilt_max_deg = std::max(
-          vm.tilt_max_deg, TiltDeg(r.x_true.segment<4>(Index::Vehicle(i) + Index::kVehicleQuat)));
-      vm.cable_tension_max_N = std::max(vm.cable_tension_max_N, v.cable_tension_N);
       vm.control_failures += IsFailure(v.status) ? 1 : 0;
       modes[static_cast<size_t>(i)].push_back(v.mode);
       solve_ms[static_cast<size_t>(i)].push_back(v.solve_time_ms);
@@ -164,6 +168,23 @@ void ComputeTeamMetrics(const std::vector<TeamLogRow>& rows, int vehicles,
       slack = slack || v.mode == CableMode::kSlack;
     }
     any_slack.push_back(slack ? CableMode::kSlack : CableMode::kTaut);
+  }
+  // the team's slack: time with at least one cable slack
+  const std::vector<std::pair<double, double>> team_slack = SlackIntervals(times_s, any_slack);
+  m->slack_time_s = 0.0;
+  m->slack_events = 0;
+  for (const auto& [start, end] : team_slack) {
+    m->slack_time_s += end - start;
+    ++m->slack_events;
+  }
+  // payload RMSE as the single vehicle's
+  m->payload_rmse_over = PayloadRmseOver(team_slack);
+  Eigen::Vector3d sum_sq = Eigen::Vector3d::Zero();
+  int samples = 0;
+  for (const TeamLogRow& r : rows) {
+    if (!InPayloadRmse(r.time_s, team_slack, m->payload_rmse_from_s)) continue;
+    sum_sq += (r.x_true.segment<3>(Index::kPayloadPos) - r.reference.p_WL_W).cwiseAbs2();
+    ++samples;
   }
   m->payload_rmse_m = samples > 0 ? Eigen::Vector3d((sum_sq / samples).cwiseSqrt())
                                   : Eigen::Vector3d::Constant(NAN);
@@ -183,13 +204,6 @@ void ComputeTeamMetrics(const std::vector<TeamLogRow>& rows, int vehicles,
                                       : 0.0;
     retauts += vm.retaut_count;
     failures += vm.control_failures;
-  }
-  // the team's slack: time with at least one cable slack
-  m->slack_time_s = 0.0;
-  m->slack_events = 0;
-  for (const auto& [start, end] : SlackIntervals(times_s, any_slack)) {
-    m->slack_time_s += end - start;
-    ++m->slack_events;
   }
   m->retaut_count = retauts;
   m->mpc_failures = failures;
@@ -298,15 +312,13 @@ RunResult RunTeamScenario(const Scenario& scenario, const Params& base_params,
       while (next_event < scenario.events.size() && scenario.events[next_event].at_s <= t + 1e-9) {
         const EventAction* action = scenario.events[next_event++].action.get();
         if (const auto* e = dynamic_cast<const ImpulseEvent*>(action)) {
-          world.ApplyImpulse(e->on_payload ? -1 : e->vehicle, e->impulse_W_Ns);
+          world.ApplyImpulse(e->on_payload ? -1 : e->vehicle.value_or(0), e->impulse_W_Ns, e->duration_s);
         } else if (const auto* v = dynamic_cast<const VelocityChangeEvent*>(action)) {
-          const double mass_kg =
-              v->on_payload ? team.payload_mass_kg
-                            : team.vehicles[static_cast<size_t>(v->vehicle)].params.quad_mass_kg;
-          world.ApplyImpulse(v->on_payload ? -1 : v->vehicle, mass_kg * v->dv_W_mps);
+          world.AddVelocity(v->on_payload ? -1 : v->vehicle.value_or(0), v->dv_W_mps);
         }
       }
       world.GetTruth(&truth);
+      if (!result.team_rows.empty()) UpdateExtremes(truth, &*metrics.team);
       if (scenario.estimation.ground_truth) {
         for (int body = -1; body < n; ++body) {
           latest[static_cast<size_t>(body + 1)] = ReadingFromState(truth.x, body, t);
@@ -401,6 +413,9 @@ RunResult RunTeamScenario(const Scenario& scenario, const Params& base_params,
         std::string(e.what()) + " (at t = " + std::to_string(world.time_s()) + " s)";
   }
   if (show_progress) std::fprintf(stderr, "\n");
+  // the last step's state (a crash ends the loop before its tick reads it)
+  world.GetTruth(&truth);
+  if (!result.team_rows.empty()) UpdateExtremes(truth, &*metrics.team);
   const sim::CrashStatus crash = world.Crash();
   metrics.crashed = crash.crashed;
   if (crash.crashed) {

@@ -12,6 +12,10 @@
 
 namespace hpa {
 
+/// Most vehicles a team flies: the cooperative scenes (CooperativeSceneXml) are written for up to
+/// three. The scenario reader, the events' `vehicle` key and the team's world all read this one.
+constexpr int kMaxTeamVehicles = 3;
+
 /// One vehicle of the team: the same rigid-body quadrotor as HybridModel's, on its own cable.
 struct CooperativeVehicle {
   Params params;                                       // mass, inertia, rotors, gravity

@@ -94,10 +94,15 @@ class TeamWorld {
   /// Vehicle's new rotor speed command (rad/s), clamped to its motor bounds; non-finite entries
   /// throw std::invalid_argument, a vehicle outside 0 .. N-1 std::out_of_range.
   void SetMotorSpeedCommand(int vehicle, const InputVector& w_cmd_radps);
-  /// An instantaneous push: the body's velocity changes by impulse / mass (body -1: payload).
-  /// A body outside -1 .. N-1 throws std::out_of_range, a non-finite impulse
+  /// A push as the single vehicle's World gives it (Disturbances::ApplyImpulse): a constant
+  /// force impulse / duration on the body (-1: payload) over the duration's whole physics steps
+  /// (at least one), from the next Step on. A body outside -1 .. N-1 throws std::out_of_range, a
+  /// non-finite impulse or duration std::invalid_argument.
+  void ApplyImpulse(int body, const Eigen::Vector3d& impulse_W_Ns, double duration_s);
+  /// An instantaneous velocity change of the body (-1: payload), as a velocity_change event
+  /// gives it. A body outside -1 .. N-1 throws std::out_of_range, a non-finite change
   /// std::invalid_argument.
-  void ApplyImpulse(int body, const Eigen::Vector3d& impulse_W_Ns);
+  void AddVelocity(int body, const Eigen::Vector3d& dv_W_mps);
   /// Advances 1 ms: motors, mj_step, sensors, crash check.
   void Step();
   /// Simulated time (s), a multiple of World::kPhysicsDt_s.

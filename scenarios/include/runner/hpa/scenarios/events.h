@@ -55,7 +55,7 @@ struct ImpulseEvent final : EventAction {
   Eigen::Vector3d impulse_W_Ns = Eigen::Vector3d::Zero();  // (3)
   double duration_s = 0.01;
   bool on_payload = true;  // body: payload or quadrotor
-  int vehicle = 0;         // a team's quadrotor it pushes (`vehicle`)
+  std::optional<int> vehicle;  // the quadrotor it pushes (`vehicle`; a team's must name it)
   static ImpulseEvent Parse(const YamlMap& map);
   void Apply(sim::World* world) const override;
   std::string Warning(const Params& world_params) const override;
@@ -65,7 +65,7 @@ struct ImpulseEvent final : EventAction {
 struct VelocityChangeEvent final : EventAction {
   Eigen::Vector3d dv_W_mps = Eigen::Vector3d::Zero();  // added to the body's velocity  (3)
   bool on_payload = true;                              // body: payload or quadrotor
-  int vehicle = 0;                                     // a team's quadrotor it acts on
+  std::optional<int> vehicle;  // the quadrotor it acts on (`vehicle`; a team's must name it)
   static VelocityChangeEvent Parse(const YamlMap& map);
   void Apply(sim::World* world) const override;
 };

@@ -224,6 +224,16 @@ double TiltDeg(const Eigen::Vector4d& q_wxyz);
 std::vector<std::pair<double, double>> SlackIntervals(const std::vector<double>& times_s,
                                                       const std::vector<CableMode>& modes);
 
+/// Whether a control step at time_s counts towards the payload RMSE, for one vehicle and a team
+/// alike: from from_s on (1 ns rounding margin) and outside every slack interval (`slack`: the
+/// run's true slack intervals, a team's those with any cable slack).
+bool InPayloadRmse(double time_s, const std::vector<std::pair<double, double>>& slack,
+                   double from_s);
+
+/// "taut_time" when the run had slack intervals (the payload RMSE leaves them out), else
+/// "whole_run": metrics.json's payload_rmse_over.
+const char* PayloadRmseOver(const std::vector<std::pair<double, double>>& slack);
+
 /// Slack intervals of the true mode in the log (SlackIntervals of its rows).
 std::vector<std::pair<double, double>> TrueSlackIntervals(const std::vector<LogRow>& rows);
 
