@@ -32,18 +32,17 @@ std::function<void(Metrics*)> OneFault(std::function<void(FaultRecovery*)> set) 
   };
 }
 
-// A team of vehicles with these largest tilts and slack times.
-TeamMetrics TeamVehicles(const std::vector<double>& tilt_max_deg,
-                         const std::vector<double>& slack_time_s) {
-  TeamMetrics team;
-  team.min_vehicle_separation_m = 0.6;
+// A team run whose vehicles have these largest tilts and slack times.
+void TeamVehicles(Metrics* m, const std::vector<double>& tilt_max_deg,
+                  const std::vector<double>& slack_time_s) {
+  m->team = TeamMetrics{0.6, 0.0};
+  m->vehicles.clear();
   for (size_t i = 0; i < tilt_max_deg.size(); ++i) {
     VehicleMetrics v;
     v.tilt_max_deg = tilt_max_deg[i];
     v.slack_time_s = slack_time_s[i];
-    team.vehicles.push_back(v);
+    m->vehicles.push_back(v);
   }
-  return team;
 }
 
 const std::map<std::string, Case>& Cases() {
@@ -58,33 +57,33 @@ const std::map<std::string, Case>& Cases() {
       {"crash_allowed", {{1.0}, [](Metrics*) {}, nullptr}},
       {"team_separation_min",
        {{0.5},
-        [](Metrics* m) { m->team = TeamMetrics{{}, 0.6, 0.0}; },
-        [](Metrics* m) { m->team = TeamMetrics{{}, 0.4, 0.0}; }}},
+        [](Metrics* m) { m->team = TeamMetrics{0.6, 0.0}; },
+        [](Metrics* m) { m->team = TeamMetrics{0.4, 0.0}; }}},
       {"team_payload_tilt_max",
        {{10.0},
-        [](Metrics* m) { m->team = TeamMetrics{{}, 0.6, 9.0}; },
-        [](Metrics* m) { m->team = TeamMetrics{{}, 0.6, 11.0}; }}},
+        [](Metrics* m) { m->team = TeamMetrics{0.6, 9.0}; },
+        [](Metrics* m) { m->team = TeamMetrics{0.6, 11.0}; }}},
       {"team_tilt_max",
        {{10.0},
-        [](Metrics* m) { m->team = TeamVehicles({9.0, 10.0}, {0.0, 0.0}); },
-        [](Metrics* m) { m->team = TeamVehicles({9.0, 11.0}, {0.0, 0.0}); }}},
+        [](Metrics* m) { TeamVehicles(m, {9.0, 10.0}, {0.0, 0.0}); },
+        [](Metrics* m) { TeamVehicles(m, {9.0, 11.0}, {0.0, 0.0}); }}},
       {"team_slack_time_max",
        {{0.5},
-        [](Metrics* m) { m->team = TeamVehicles({0.0, 0.0}, {0.5, 0.1}); },
-        [](Metrics* m) { m->team = TeamVehicles({0.0, 0.0}, {0.1, 0.6}); }}},
+        [](Metrics* m) { TeamVehicles(m, {0.0, 0.0}, {0.5, 0.1}); },
+        [](Metrics* m) { TeamVehicles(m, {0.0, 0.0}, {0.1, 0.6}); }}},
       {"team_slack_time_min",
        {{0.1},
-        [](Metrics* m) { m->team = TeamVehicles({0.0, 0.0}, {0.0, 0.2}); },
-        [](Metrics* m) { m->team = TeamVehicles({0.0, 0.0}, {0.05, 0.0}); }}},
+        [](Metrics* m) { TeamVehicles(m, {0.0, 0.0}, {0.0, 0.2}); },
+        [](Metrics* m) { TeamVehicles(m, {0.0, 0.0}, {0.05, 0.0}); }}},
       {"team_tension_max",
        {{30.0},
         [](Metrics* m) {
-          m->team = TeamVehicles({0.0, 0.0}, {0.0, 0.0});
-          m->team->vehicles[1].cable_tension_max_N = 30.0;
+          TeamVehicles(m, {0.0, 0.0}, {0.0, 0.0});
+          m->vehicles[1].cable_tension_max_N = 30.0;
         },
         [](Metrics* m) {
-          m->team = TeamVehicles({0.0, 0.0}, {0.0, 0.0});
-          m->team->vehicles[0].cable_tension_max_N = 31.0;
+          TeamVehicles(m, {0.0, 0.0}, {0.0, 0.0});
+          m->vehicles[0].cable_tension_max_N = 31.0;
         }}},
       {"payload_rmse_max",
        {{0.1, 0.1, 0.1},

@@ -16,6 +16,9 @@ namespace {
 nlohmann::json FlownMetrics() {
   Metrics m;
   m.control_steps = 100;
+  m.vehicles.resize(1);
+  m.vehicles[0].cable_tension_max_N = 12.5;
+  m.vehicles[0].tilt_max_deg = 7.0;
   m.camera_frames = 30;
   m.payload_rmse_m = Eigen::Vector3d(0.03, 0.04, 0.12);
   m.quad_position_deviation_max_m = 0.25;
@@ -43,7 +46,7 @@ nlohmann::json FlownTeamMetrics() {
   Metrics m;
   m.control_steps = 100;
   m.team = TeamMetrics();
-  m.team->vehicles.resize(2);
+  m.vehicles.resize(2);
   m.team->min_vehicle_separation_m = 0.7;
   return nlohmann::json::parse(MetricsToJson(m));
 }
@@ -67,6 +70,8 @@ TEST(MetricDefsTest, EveryMetricIsReadFromTheMetricsJsonTheRunnerWrites) {
   EXPECT_DOUBLE_EQ(*ReadMetric("retaut_quad_vz_min_mps", j), -0.7);
   EXPECT_DOUBLE_EQ(*ReadMetric("slack_detection_latency_max_s", j), 0.02);
   EXPECT_DOUBLE_EQ(*ReadMetric("mpc_solve_median_ms", j), 0.3);
+  EXPECT_DOUBLE_EQ(*ReadMetric("cable_tension_max_N", j), 12.5);
+  EXPECT_DOUBLE_EQ(*ReadMetric("vehicle_tilt_max_deg", j), 7.0);
   EXPECT_EQ(*ReadMetric("crashed", j), 0.0);
   EXPECT_THROW(ReadMetric("no_such_metric", j), std::logic_error);
 }
@@ -88,11 +93,11 @@ TEST(MetricDefsTest, ATeamMetricIsTheWorstVehicles) {
   Metrics m;
   m.control_steps = 10;
   m.team = TeamMetrics();
-  m.team->vehicles.resize(3);
-  m.team->vehicles[0].tilt_max_deg = 4.0;
-  m.team->vehicles[1].tilt_max_deg = 9.0;
-  m.team->vehicles[2].tilt_max_deg = 2.0;
-  m.team->vehicles[2].slack_time_s = 0.3;
+  m.vehicles.resize(3);
+  m.vehicles[0].tilt_max_deg = 4.0;
+  m.vehicles[1].tilt_max_deg = 9.0;
+  m.vehicles[2].tilt_max_deg = 2.0;
+  m.vehicles[2].slack_time_s = 0.3;
   const nlohmann::json j = nlohmann::json::parse(MetricsToJson(m));
   EXPECT_EQ(ReadMetric("team_vehicle_tilt_max_deg", j), 9.0);
   EXPECT_EQ(ReadMetric("team_cable_slack_time_max_s", j), 0.3);

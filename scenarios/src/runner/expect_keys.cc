@@ -214,9 +214,9 @@ std::vector<ExpectKey> BuildTable() {
                   kBig, [](const Metrics& m) { return m.payload_quad_min_distance_m; }));
   // a team run's (NaN, not measured, in a single-vehicle run)
   const auto over_vehicles = [](const Metrics& m, double VehicleMetrics::*field) {
-    if (!m.team || m.team->vehicles.empty()) return static_cast<double>(NAN);
+    if (!m.team || m.vehicles.empty()) return static_cast<double>(NAN);
     double worst = -INFINITY;
-    for (const VehicleMetrics& v : m.team->vehicles) worst = std::max(worst, v.*field);
+    for (const VehicleMetrics& v : m.vehicles) worst = std::max(worst, v.*field);
     return worst;
   };
   t.push_back(Min("team_separation_min", "team.min_vehicle_separation_m", "m",

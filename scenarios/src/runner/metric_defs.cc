@@ -84,6 +84,12 @@ const Registry<MetricDef>& TheRegistry() {
           {"fault_unrecovered", "fault_recovery.unrecovered", R::kNumber, "events",
            Better::kLower, 1.0, false, false, "",
            "fault events after which the payload stayed lost or out of its tracking bound"},
+          {"cable_tension_max_N", "vehicles.cable_tension_max_N", R::kLargest, "N",
+           Better::kLower, 1.0, false, false, "",
+           "largest cable tension at the physics rate (a snap's peak), the worst vehicle's "
+           "(minimum effect: about one payload weight)"},
+          {"vehicle_tilt_max_deg", "vehicles.tilt_max_deg", R::kLargest, "deg", Better::kLower,
+           1.0, false, false, "", "largest vehicle tilt at the physics rate, the worst vehicle's"},
           {"team_min_vehicle_separation_m", "team.min_vehicle_separation_m", R::kNumber, "m",
            Better::kHigher, 0.05, false, false, "",
            "a team's smallest distance between two vehicles' centres (team runs)"},

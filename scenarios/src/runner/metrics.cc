@@ -83,6 +83,12 @@ std::vector<std::pair<double, double>> TrueSlackIntervals(const std::vector<LogR
   return SlackIntervals(times_s, modes);
 }
 
+void UpdateVehicleExtremes(const Eigen::Vector4d& q_WB_wxyz, double cable_tension_N,
+                           VehicleMetrics* vehicle) {
+  vehicle->tilt_max_deg = std::max(vehicle->tilt_max_deg, TiltDeg(q_WB_wxyz));
+  vehicle->cable_tension_max_N = std::max(vehicle->cable_tension_max_N, cable_tension_N);
+}
+
 bool InPayloadRmse(double time_s, const std::vector<std::pair<double, double>>& slack,
                    double from_s) {
   if (time_s < from_s - 1e-9) return false;
@@ -296,6 +302,15 @@ void ComputeMetrics(const MetricsInputs& in, Metrics* m) {
   SlackMetrics(rows, slack, m);
   CameraAndTimingMetrics(in, m);
   FaultMetrics(in, m);
+  // the one vehicle's own metrics, as a team's vehicles have theirs
+  VehicleMetrics vehicle = in.extremes;
+  vehicle.slack_time_s = m->slack_time_s;
+  vehicle.slack_events = m->slack_events;
+  vehicle.retaut_count = m->retaut_count;
+  vehicle.mixer_saturated_fraction = m->mixer_saturated_fraction;
+  vehicle.control_failures = m->mpc_failures;
+  vehicle.solve_ms = m->mpc_solve_ms;
+  m->vehicles = {vehicle};
 }
 
 bool AddFaultFrameTallies(const std::vector<sim::FaultFrameTally>& tallies, Metrics* m) {
@@ -499,18 +514,22 @@ std::string MetricsToJson(const Metrics& m) {
     }
     o["retaut"]["quad_vz_min_mps"] = Json();
     o["retaut"]["peak_body_rate_radps"] = Json();
-    Json vehicles = Json::array();
-    for (const VehicleMetrics& v : m.team->vehicles) {
-      vehicles.push_back({{"slack_time_s", num(v.slack_time_s)},
-                          {"slack_events", v.slack_events},
-                          {"retaut_count", v.retaut_count},
-                          {"tilt_max_deg", measured(num(v.tilt_max_deg))},
-                          {"cable_tension_max_N", measured(num(v.cable_tension_max_N))},
-                          {"mixer_saturated_fraction", measured(num(v.mixer_saturated_fraction))},
-                          {"control_failures", v.control_failures},
-                          {"solve_ms", quantiles(v.solve_ms)}});
-    }
-    o["team"] = {{"vehicle_count", m.team->vehicles.size()},
+  }
+  // every vehicle's own metrics, one for a single vehicle (a team's also under team.vehicles)
+  Json vehicles = Json::array();
+  for (const VehicleMetrics& v : m.vehicles) {
+    vehicles.push_back({{"slack_time_s", measured(num(v.slack_time_s))},
+                        {"slack_events", v.slack_events},
+                        {"retaut_count", v.retaut_count},
+                        {"tilt_max_deg", measured(num(v.tilt_max_deg))},
+                        {"cable_tension_max_N", measured(num(v.cable_tension_max_N))},
+                        {"mixer_saturated_fraction", measured(num(v.mixer_saturated_fraction))},
+                        {"control_failures", v.control_failures},
+                        {"solve_ms", quantiles(v.solve_ms)}});
+  }
+  o["vehicles"] = vehicles;
+  if (m.team) {
+    o["team"] = {{"vehicle_count", m.vehicles.size()},
                  {"min_vehicle_separation_m", measured(num(m.team->min_vehicle_separation_m))},
                  {"payload_tilt_max_deg", measured(num(m.team->payload_tilt_max_deg))},
                  {"vehicles", vehicles}};

@@ -21,6 +21,9 @@ double Ms(std::chrono::steady_clock::time_point a, std::chrono::steady_clock::ti
   return std::chrono::duration<double, std::milli>(b - a).count();
 }
 
+// An attitude as the (w, x, y, z) vector TiltDeg reads.
+Eigen::Vector4d Wxyz(const Eigen::Quaterniond& q) { return {q.w(), q.x(), q.y(), q.z()}; }
+
 }  // namespace
 
 SystemState InitialState(const Reference& reference, const Params& params) {
@@ -414,6 +417,12 @@ void FillCommand(const ControlOutput& computed, LogRow* row) {
 // (one computed on the control thread is logged then, when it is taken).
 void RunLoop::ControlStep(double t, const sim::Truth& truth, const SystemState& state,
                           const flight::FlightOutputs& out) {
+  if (!flown_) {
+    // the log's span starts here: its first state counts towards the extremes
+    flown_ = true;
+    UpdateVehicleExtremes(Wxyz(truth.state.q_WB), truth.cable_tension_N,
+                          &inputs_.extremes);
+  }
   commands_in_flight_->Push(t, CommandInFlight{out.command, out.command_pending});
   LogRow row;
   row.time_s = t;
@@ -503,6 +512,11 @@ void RunLoop::VideoStep(double t, const sim::Truth& truth, const SystemState& st
 // check.
 bool RunLoop::StepWorld() {
   world_->Step();
+  if (flown_) {
+    const sim::Truth truth = world_->GetTruth();
+    UpdateVehicleExtremes(Wxyz(truth.state.q_WB), truth.cable_tension_N,
+                          &inputs_.extremes);
+  }
   world_->TakeDelivered(&delivered_);
   for (sim::SensorMessage& m : delivered_) {
     if (auto* imu = std::get_if<ImuSample>(&m)) pending_.imu.push_back(*imu);

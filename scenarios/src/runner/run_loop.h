@@ -123,6 +123,7 @@ class RunLoop {
   bool mixer_saturated_ = false;               // the rate loop's last allocation fell short
   std::vector<sim::SensorMessage> delivered_;  // the world's deliveries of one step (reused)
   std::optional<GyroSample> rate_gyro_;        // the rate gyro's newest sample not yet flown on
+  bool flown_ = false;  // a control step was logged: the physics-rate extremes count from then
   bool show_progress_ = false;
   int last_progress_pct_ = -1;
 };

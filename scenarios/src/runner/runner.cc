@@ -113,7 +113,7 @@ std::vector<RateRow> ScenarioRateTable(const Scenario& scenario, const Params& p
 
 void WriteRunLogCsv(const std::string& path, const RunResult& result) {
   if (result.metrics.team) {
-    WriteTeamLogCsv(path, result.team_rows, static_cast<int>(result.metrics.team->vehicles.size()));
+    WriteTeamLogCsv(path, result.team_rows, static_cast<int>(result.metrics.vehicles.size()));
   } else {
     WriteLogCsv(path, result.rows);
   }

@@ -121,15 +121,13 @@ bool IsFailure(ControlStatus status) {
 // payload's tilt. Over the log's span (from the first step every vehicle has commanded): before
 // it the start's cables take the payload's weight as a step load (a peak of twice the static
 // tension in the first milliseconds), which says nothing of the flight.
-void UpdateExtremes(const sim::TeamTruth& truth, TeamMetrics* team) {
-  for (size_t i = 0; i < team->vehicles.size(); ++i) {
-    VehicleMetrics& vm = team->vehicles[i];
+void UpdateExtremes(const sim::TeamTruth& truth, Metrics* m) {
+  for (size_t i = 0; i < m->vehicles.size(); ++i) {
     const int start = Index::Vehicle(static_cast<int>(i)) + Index::kVehicleQuat;
-    vm.tilt_max_deg = std::max(vm.tilt_max_deg, TiltDeg(truth.x.segment<4>(start)));
-    vm.cable_tension_max_N = std::max(vm.cable_tension_max_N, truth.cable_tension_N[i]);
+    UpdateVehicleExtremes(truth.x.segment<4>(start), truth.cable_tension_N[i], &m->vehicles[i]);
   }
-  team->payload_tilt_max_deg =
-      std::max(team->payload_tilt_max_deg, TiltDeg(truth.x.segment<4>(Index::kPayloadQuat)));
+  m->team->payload_tilt_max_deg =
+      std::max(m->team->payload_tilt_max_deg, TiltDeg(truth.x.segment<4>(Index::kPayloadQuat)));
 }
 
 // The payload's tracking and the team's metrics from the log (crash, timing, separation and the
@@ -138,7 +136,6 @@ void UpdateExtremes(const sim::TeamTruth& truth, TeamMetrics* team) {
 void ComputeTeamMetrics(const std::vector<TeamLogRow>& rows, int vehicles,
                         const std::vector<int>& rate_steps, const std::vector<int>& saturated,
                         Metrics* m) {
-  TeamMetrics& team = *m->team;
   m->control_steps = static_cast<int>(rows.size());
   // the single vehicle's quadrotor, estimator and camera metrics: not measured
   m->quad_rmse_m.setConstant(NAN);
@@ -160,7 +157,7 @@ void ComputeTeamMetrics(const std::vector<TeamLogRow>& rows, int vehicles,
     bool slack = false;
     for (int i = 0; i < vehicles; ++i) {
       const TeamLogRow::Vehicle& v = r.vehicles[static_cast<size_t>(i)];
-      VehicleMetrics& vm = team.vehicles[static_cast<size_t>(i)];
+      VehicleMetrics& vm = m->vehicles[static_cast<size_t>(i)];
       vm.control_failures += IsFailure(v.status) ? 1 : 0;
       modes[static_cast<size_t>(i)].push_back(v.mode);
       solve_ms[static_cast<size_t>(i)].push_back(v.solve_time_ms);
@@ -191,7 +188,7 @@ void ComputeTeamMetrics(const std::vector<TeamLogRow>& rows, int vehicles,
   const double end_s = rows.back().time_s;
   int retauts = 0, failures = 0;
   for (int i = 0; i < vehicles; ++i) {
-    VehicleMetrics& vm = team.vehicles[static_cast<size_t>(i)];
+    VehicleMetrics& vm = m->vehicles[static_cast<size_t>(i)];
     for (const auto& [start, end] : SlackIntervals(times_s, modes[static_cast<size_t>(i)])) {
       vm.slack_time_s += end - start;
       ++vm.slack_events;
@@ -238,7 +235,7 @@ RunResult RunTeamScenario(const Scenario& scenario, const Params& base_params,
   metrics.payload_rmse_from_s = RmseFromS(scenario.reference);
   const int n = static_cast<int>(scenario.team.vehicles.size());
   metrics.team = TeamMetrics();
-  metrics.team->vehicles.resize(static_cast<size_t>(n));
+  metrics.vehicles.resize(static_cast<size_t>(n));
 
   const CooperativeTeam team = TeamOf(scenario, params);
   const CooperativeModel model(team);
@@ -318,7 +315,7 @@ RunResult RunTeamScenario(const Scenario& scenario, const Params& base_params,
         }
       }
       world.GetTruth(&truth);
-      if (!result.team_rows.empty()) UpdateExtremes(truth, &*metrics.team);
+      if (!result.team_rows.empty()) UpdateExtremes(truth, &metrics);
       if (scenario.estimation.ground_truth) {
         for (int body = -1; body < n; ++body) {
           latest[static_cast<size_t>(body + 1)] = ReadingFromState(truth.x, body, t);
@@ -415,7 +412,7 @@ RunResult RunTeamScenario(const Scenario& scenario, const Params& base_params,
   if (show_progress) std::fprintf(stderr, "\n");
   // the last step's state (a crash ends the loop before its tick reads it)
   world.GetTruth(&truth);
-  if (!result.team_rows.empty()) UpdateExtremes(truth, &*metrics.team);
+  if (!result.team_rows.empty()) UpdateExtremes(truth, &metrics);
   const sim::CrashStatus crash = world.Crash();
   metrics.crashed = crash.crashed;
   if (crash.crashed) {

@@ -188,8 +188,8 @@ void PrintSummary(const Metrics& m, const std::string& out_dir) {
                 m.crashed ? "YES: " : "no", m.crashed ? m.crash_reason->c_str() : "",
                 m.payload_rmse_m.x(), m.payload_rmse_m.y(), m.payload_rmse_m.z(),
                 m.team->min_vehicle_separation_m);
-    for (size_t i = 0; i < m.team->vehicles.size(); ++i) {
-      const VehicleMetrics& v = m.team->vehicles[i];
+    for (size_t i = 0; i < m.vehicles.size(); ++i) {
+      const VehicleMetrics& v = m.vehicles[i];
       std::printf(
           "  vehicle %zu: slack %.2f s (%d events, %d re-taut), tilt max %.1f deg, "
           "tension max %.2f N, update median %.4f ms, failures %d\n",

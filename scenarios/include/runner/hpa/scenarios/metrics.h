@@ -103,11 +103,13 @@ struct Quantiles {
   double median = 0.0, p99 = 0.0, max = 0.0;
 };
 
-/// One vehicle's metrics in a team run (metrics.json `team.vehicles`).
+/// One vehicle's metrics, alone or in a team (metrics.json `vehicles`, a team's also
+/// `team.vehicles`).
 struct VehicleMetrics {
-  double slack_time_s = 0.0;         // its cable slack (true)
-  int slack_events = 0;              // slack intervals of its cable (chatter under 30 ms ignored)
-  int retaut_count = 0;              // slack to taut
+  double slack_time_s = 0.0;  // its cable slack (true)
+  int slack_events = 0;       // slack intervals of its cable (chatter under 30 ms ignored)
+  int retaut_count = 0;       // slack to taut
+  // the extremes, over every physics step of the log's span (PhysicsRateExtremes)
   double tilt_max_deg = 0.0;         // largest angle between its body z axis and the world's
   double cable_tension_max_N = 0.0;  // largest true tension of its cable
   double mixer_saturated_fraction = 0.0;  // share of its rate loop's allocations that fell short
@@ -117,7 +119,6 @@ struct VehicleMetrics {
 
 /// The team's metrics of a team run (metrics.json `team`; docs/cooperative.md).
 struct TeamMetrics {
-  std::vector<VehicleMetrics> vehicles;   // one per vehicle, in the scenario's order
   double min_vehicle_separation_m = 0.0;  // smallest distance between two vehicles' centres
   double payload_tilt_max_deg = 0.0;      // largest angle between the payload's z axis and up
 };
@@ -176,10 +177,18 @@ struct Metrics {
   std::vector<FaultRecovery> faults;  // one per fault event applied (metrics.json `faults`)
   bool expect_passed = true;
   std::vector<std::string> expect_failed;  // "payload_rmse_max.x: 0.071 > 0.06"
+  // one entry per vehicle, in the scenario's order (one for a single vehicle)
+  std::vector<VehicleMetrics> vehicles;
   // a team run's team metrics (none: one vehicle); the single vehicle's quadrotor, camera and
   // estimator metrics are then null
   std::optional<TeamMetrics> team;
 };
+
+/// A vehicle's extremes at the physics rate (VehicleMetrics' tilt_max_deg and
+/// cable_tension_max_N), for one vehicle and a team alike: every physics step's truth is offered,
+/// so a cable's snap of a few milliseconds is its peak, not whatever a control-step row caught.
+void UpdateVehicleExtremes(const Eigen::Vector4d& q_WB_wxyz, double cable_tension_N,
+                           VehicleMetrics* vehicle);
 
 /// Inputs the metrics need besides the log.
 struct MetricsInputs {
@@ -192,6 +201,8 @@ struct MetricsInputs {
   int mixer_saturated_steps = 0;    // of which fell short of the demanded thrust or torque
   std::vector<FaultWindow> faults;  // the fault events applied, in time order
   bool ground_truth = false;        // the flight code flew on the true state (no estimate)
+  // the vehicle's physics-rate extremes over the log's span (UpdateVehicleExtremes, the runner's)
+  VehicleMetrics extremes;
 };
 
 /// Computes every metric from the log (crash fields and timing are filled by the runner).
