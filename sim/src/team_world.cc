@@ -182,8 +182,10 @@ struct TeamWorld::Impl {
   int64_t step = 0;
   std::mt19937_64 rng;  // all of the world's noise
   std::normal_distribution<double> normal{0.0, 1.0};
-  std::vector<InputVector> motor_speed_radps;    // actual, per vehicle (n x 4)
-  std::vector<InputVector> motor_command_radps;  // commanded, clamped (n x 4)
+  // each vehicle's motors and rotors, the single World's component bound to its rotors (n)
+  std::vector<Vehicle> actuation;
+  ActuationProfile ideal_actuation;  // a team flies the ideal world: no spread, no battery sag
+  double t0_s = 0.0;                 // a team's clock starts at 0 at every Reset
   std::vector<Eigen::Vector3d> gyro_B_radps;     // this step's gyro samples (n x 3)
   DelayLine<BodyReading> mocap_line{0.0};        // readings waiting for their latency
   // a push's constant force on a body until (not including) end_step
@@ -331,15 +333,6 @@ struct TeamWorld::Impl {
                  forces.end());
   }
 
-  // rotor thrust f = k_f w^2 into each actuator (the yaw torque is the actuator's gear)
-  void WriteMotorControls() {
-    for (int i = 0; i < n; ++i) {
-      for (int k = 0; k < 4; ++k) {
-        const double w = motor_speed_radps[i](k);
-        d->ctrl[rotor_actuator[i][k]] = params(i).k_f_N_per_radps2 * w * w;
-      }
-    }
-  }
 
   // a MuJoCo warning is a run error, as in the single-vehicle World
   void CheckWarnings() {
@@ -519,8 +512,17 @@ TeamWorld::TeamWorld(const TeamWorldConfig& config) : impl_(std::make_unique<Imp
     const int sensor = RequireId(w.m, mjOBJ_SENSOR, "cable_" + std::to_string(i) + "_tension");
     w.tension_adr.push_back(w.m->sensor_adr[sensor]);
   }
-  w.motor_speed_radps.assign(w.n, InputVector::Zero());
-  w.motor_command_radps.assign(w.n, InputVector::Zero());
+  for (int i = 0; i < w.n; ++i) {
+    VehicleBinding binding;
+    binding.model = w.m;
+    binding.data = w.d;
+    binding.rotor_actuator = w.rotor_actuator[static_cast<size_t>(i)];
+    binding.params = &w.params(i);
+    binding.actuation = &w.ideal_actuation;
+    binding.step = &w.step;
+    binding.t0_s = &w.t0_s;
+    w.actuation.emplace_back(binding);
+  }
   w.gyro_B_radps.assign(w.n, Eigen::Vector3d::Zero());
 
   // start hanging at rest, the payload 1 m up
@@ -555,9 +557,11 @@ void TeamWorld::Reset(const Eigen::VectorXd& x0) {
   // the bodies, then each vehicle's motors at the speed that holds it and its share
   w.SetBlock(w.payload, x0, 0);
   for (int i = 0; i < w.n; ++i) w.SetBlock(w.vehicles[i], x0, I::Vehicle(i));
-  w.motor_speed_radps = w.HoldingSpeeds_radps();
-  w.motor_command_radps = w.motor_speed_radps;
-  w.WriteMotorControls();
+  const std::vector<InputVector> holding_radps = w.HoldingSpeeds_radps();
+  for (int i = 0; i < w.n; ++i) {
+    w.actuation[static_cast<size_t>(i)].SetSpeed(holding_radps[static_cast<size_t>(i)]);
+    w.actuation[static_cast<size_t>(i)].WriteMotorControls();
+  }
   mj_forward(w.m, w.d);
   w.CheckWarnings();
 
@@ -575,9 +579,7 @@ void TeamWorld::SetMotorSpeedCommand(int vehicle, const InputVector& w_cmd_radps
   if (!w_cmd_radps.allFinite()) {
     throw std::invalid_argument("TeamWorld::SetMotorSpeedCommand: non-finite motor speed command");
   }
-  const Params& p = w.params(vehicle);
-  w.motor_command_radps[vehicle] =
-      w_cmd_radps.cwiseMax(p.motor_speed_min_radps).cwiseMin(p.motor_speed_max_radps);
+  w.actuation[static_cast<size_t>(vehicle)].SetCommand(w_cmd_radps);
 }
 
 void TeamWorld::ApplyImpulse(int body, const Eigen::Vector3d& impulse_W_Ns, double duration_s) {
@@ -611,11 +613,10 @@ void TeamWorld::AddVelocity(int body, const Eigen::Vector3d& dv_W_mps) {
 void TeamWorld::Step() {
   Impl& w = *impl_;
   // first-order motor lag, exact for the 1 ms step; thrust to the actuators
-  for (int i = 0; i < w.n; ++i) {
-    const double alpha = 1.0 - std::exp(-World::kPhysicsDt_s / w.params(i).motor_time_constant_s);
-    w.motor_speed_radps[i] += alpha * (w.motor_command_radps[i] - w.motor_speed_radps[i]);
+  for (Vehicle& v : w.actuation) {
+    v.StepMotors();
+    v.WriteMotorControls();
   }
-  w.WriteMotorControls();
   w.ApplyForces();
 
   // dynamics at t_k and integration to t_{k+1}, then kinematics and contacts at t_{k+1} (the
@@ -659,7 +660,7 @@ void TeamWorld::GetTruth(TeamTruth* truth) const {
                                       World::kTautLengthTolerance_m
                           ? CableMode::kTaut
                           : CableMode::kSlack);
-    t.motor_speed_radps.segment<4>(4 * i) = w.motor_speed_radps[i];
+    t.motor_speed_radps.segment<4>(4 * i) = w.actuation[static_cast<size_t>(i)].motor_speed_radps();
   }
 }
 

@@ -88,6 +88,18 @@ World::World(const WorldConfig& config)
   DrawMismatch();
   ApplyOverrides();
   data_ = mj_makeData(model_);
+  // the vehicle's motors and rotors, bound to this world's rotors and clock
+  VehicleBinding binding;
+  binding.model = model_;
+  binding.data = data_;
+  for (int i = 0; i < 4; ++i) binding.rotor_actuator[static_cast<size_t>(i)] = ids_.rotor_actuator[i];
+  binding.params = &world_params_;
+  binding.actuation = &config_.profile.actuation;
+  binding.faults = &faults_;
+  binding.step = &step_;
+  binding.t0_s = &t0_s_;
+  vehicle_.emplace(binding);
+  vehicle_->SetRotorFactors(rotor_kf_draw_, rotor_km_draw_);
   ApplyWorldParams();
   renderer_ = std::unique_ptr<Renderer>(new Renderer(*this));
 
@@ -229,15 +241,15 @@ void World::SetState(const StateVector& x, const InputVector& motor_speed_radps)
     qpos[ids_.quad_jnt_qpos + 3 + i] = q(i);
     qpos[ids_.payload_jnt_qpos + 3 + i] = (i == 0) ? 1.0 : 0.0;
   }
-  vehicle_.SetSpeed(motor_speed_radps);
-  vehicle_.WriteMotorControls();
+  vehicle_->SetSpeed(motor_speed_radps);
+  vehicle_->WriteMotorControls();
   gripper_.Update();
   mj_forward(model_, data_);
   CheckWarnings();
 }
 
 void World::SetMotorSpeedCommand(const InputVector& w_cmd_radps) {
-  vehicle_.SetCommand(w_cmd_radps);
+  vehicle_->SetCommand(w_cmd_radps);
 }
 
 void World::Step() {
@@ -245,11 +257,11 @@ void World::Step() {
   const SystemState before = GetTruth().state;
 
   // first-order motor lag; thrust to the actuators
-  vehicle_.StepMotors();
+  vehicle_->StepMotors();
   if (!faults_.empty() && faults_.TakeGripperRelease(time_s())) {
     gripper_.Open();  // a gripper fault lets go
   }
-  vehicle_.WriteMotorControls();
+  vehicle_->WriteMotorControls();
   disturbances_.Apply();
 
   // dynamics at t_k and integration to t_{k+1}, then kinematics at t_{k+1}
@@ -307,7 +319,7 @@ Truth World::GetTruth() const {
                : CableMode::kSlack;
   s.payload_visible = true;
   s.payload_supported = gripper_.active();
-  t.motor_speed_radps = vehicle_.motor_speed_radps();
+  t.motor_speed_radps = vehicle_->motor_speed_radps();
   return t;
 }
 

@@ -54,8 +54,8 @@ void World::ApplyWorldParams() {
     const int site = model_->actuator_trnid[2 * a];
     const Eigen::Vector3d r_B = RotorPosition_B(p, i);
     for (int k = 0; k < 3; ++k) model_->site_pos[3 * site + k] = r_B(k);
-    const double k_f = p.k_f_N_per_radps2 * vehicle_.rotor_kf_factor_(i);
-    const double k_m = p.k_m_Nm_per_radps2 * vehicle_.rotor_km_factor_(i);
+    const double k_f = p.k_f_N_per_radps2 * vehicle_->rotor_thrust_factor()(i);
+    const double k_m = p.k_m_Nm_per_radps2 * vehicle_->rotor_torque_factor()(i);
     model_->actuator_gear[6 * a + 5] = RotorSpin(i) * k_m / k_f;
     model_->actuator_ctrlrange[2 * a + 0] = k_f * p.motor_speed_min_radps * p.motor_speed_min_radps;
     model_->actuator_ctrlrange[2 * a + 1] = k_f * p.motor_speed_max_radps * p.motor_speed_max_radps;
@@ -140,8 +140,8 @@ void World::DrawMismatch() {
   const ActuationProfile& a = config_.profile.actuation;
   if (a.enabled) {
     for (int i = 0; i < 4; ++i) {
-      vehicle_.rotor_kf_factor_(i) = std::max(0.2, 1.0 + a.thrust_coefficient_spread * normal(rng));
-      vehicle_.rotor_km_factor_(i) = std::max(0.2, 1.0 + a.torque_coefficient_spread * normal(rng));
+      rotor_kf_draw_(i) = std::max(0.2, 1.0 + a.thrust_coefficient_spread * normal(rng));
+      rotor_km_draw_(i) = std::max(0.2, 1.0 + a.torque_coefficient_spread * normal(rng));
     }
   }
 }

@@ -163,7 +163,7 @@ class World {
   const Params& world_params() const { return world_params_; }
 
   /// The vehicle's motors and rotors (vehicle.h): their spread, battery sag and speeds.
-  const Vehicle& vehicle() const { return vehicle_; }
+  const Vehicle& vehicle() const { return *vehicle_; }
   /// The gripper (gripper.h): grab, move and release events act on it.
   Gripper& gripper() { return gripper_; }
   /// Forces, impulses, velocity changes and wind (disturbances.h): their events act on it.
@@ -201,7 +201,6 @@ class World {
   Params world_params_;
   friend struct WorldInternals;  // sim/src/world_internals.h: MuJoCo access for sim tests
   // the components reach the model, the data and the step through their world
-  friend class Vehicle;
   friend class Gripper;
   friend class Disturbances;
   friend class Contacts;
@@ -226,7 +225,9 @@ class World {
   CrashStatus crash_;
 
   // the components, stepped by Step in its order
-  Vehicle vehicle_{*this};
+  std::optional<Vehicle> vehicle_;  // bound to the rotors once the model and data exist
+  // the actuation spread drawn with the mismatch, before the vehicle is bound  (4 each)
+  Eigen::Vector4d rotor_kf_draw_ = Eigen::Vector4d::Ones(), rotor_km_draw_ = Eigen::Vector4d::Ones();
   Gripper gripper_{*this};
   Disturbances disturbances_;
   Contacts contacts_{*this};
