@@ -2,6 +2,9 @@
 
 #include <gtest/gtest.h>
 
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -72,6 +75,63 @@ TEST(MetricsTest, PayloadRmseOnlyOverTautTimeWhenSlack) {
   EXPECT_NEAR(m.mode_accuracy, 1.0 - 4.0 / 600.0, 1e-12);
   EXPECT_EQ(m.retaut_count, 1);
   EXPECT_NEAR(m.mpc_solve_ms.max, 0.9, 1e-12);
+}
+
+// A single vehicle's run writes one entry of its own metrics: its slack, re-taut count,
+// failures and solve times as the run's, its physics-rate extremes as the runner measured them.
+TEST(MetricsTest, ASingleVehicleIsAListOfOneVehicle) {
+  MetricsInputs in;
+  in.rows = Rows(Eigen::Vector3d(0.01, 0, 0));
+  UpdateVehicleExtremes(Eigen::Vector4d(1, 0, 0, 0), 0.98, &in.extremes);
+  // a 30 deg roll and a 25 N snap, then a smaller tension: the maxima stay
+  UpdateVehicleExtremes(Eigen::Vector4d(std::cos(M_PI / 12), std::sin(M_PI / 12), 0, 0), 25.0,
+                        &in.extremes);
+  UpdateVehicleExtremes(Eigen::Vector4d(1, 0, 0, 0), 1.1, &in.extremes);
+  Metrics m;
+  ComputeMetrics(in, &m);
+  ASSERT_EQ(m.vehicles.size(), 1u);
+  const VehicleMetrics& v = m.vehicles[0];
+  EXPECT_EQ(v.slack_time_s, m.slack_time_s);
+  EXPECT_EQ(v.slack_events, 1);
+  EXPECT_EQ(v.retaut_count, m.retaut_count);
+  EXPECT_EQ(v.control_failures, m.mpc_failures);
+  EXPECT_EQ(v.solve_ms.max, m.mpc_solve_ms.max);
+  EXPECT_NEAR(v.tilt_max_deg, 30.0, 1e-9);
+  EXPECT_EQ(v.cable_tension_max_N, 25.0);
+  const std::string json = MetricsToJson(m);
+  EXPECT_NE(json.find("\"cable_tension_max_N\": 25.0"), std::string::npos) << json;
+  EXPECT_EQ(json.find("\"team\""), std::string::npos);
+}
+
+// What a team run does not measure is one list: the team runner marks each field and
+// metrics.json writes each path null, whatever the field held (a single vehicle's defaults, such
+// as payload_in_fov_fraction's 1.0, read as measured by an expect key otherwise).
+TEST(MetricsTest, ATeamNullsExactlyWhatItDoesNotMeasure) {
+  Metrics m;
+  m.control_steps = 10;
+  m.team = TeamMetrics{0.7, 1.0};
+  m.vehicles.resize(2);
+  m.contacts_payload_rotor = 0;
+  m.slack_detection_latency_max_s = 0.01;
+  m.retaut_quad_vz_min_mps = -0.3;
+  m.retaut_count = 2;
+  MarkUnmeasured(TeamUnmeasuredMetrics(), &m);
+  EXPECT_TRUE(std::isnan(m.payload_in_fov_fraction));
+  EXPECT_TRUE(std::isnan(m.quad_rmse_m.x()));
+  EXPECT_FALSE(m.retaut_quad_vz_min_mps.has_value());
+  const nlohmann::json j = nlohmann::json::parse(MetricsToJson(m));
+  for (const UnmeasuredMetric& u : TeamUnmeasuredMetrics()) {
+    std::string pointer = std::string("/") + u.json_key;
+    std::replace(pointer.begin(), pointer.end(), '.', '/');
+    EXPECT_TRUE(j.at(nlohmann::json::json_pointer(pointer)).is_null()) << u.json_key;
+  }
+  EXPECT_EQ(j["retaut"]["count"], 2);  // the team's own re-tauts are measured
+  EXPECT_EQ(j["vehicles"].size(), 2u);
+  EXPECT_EQ(j["team"]["vehicles"], j["vehicles"]);
+  ExpectSpec e;
+  e.bounds["payload_in_fov_min"] = {0.9};
+  CheckExpectations(e, &m);
+  EXPECT_FALSE(m.expect_passed);
 }
 
 TEST(MetricsTest, ExpectBoundsFailWithTheKeyNamed) {

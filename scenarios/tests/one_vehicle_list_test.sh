@@ -3,7 +3,8 @@
 # scenario with and without it is the same run, metrics and log row for row (hover, and the
 # rendered line with its payload push); a list's cable length and payload mass are the params
 # block's; and what only a team has (an attachment off the centre, a start slack, an inertia, a
-# team controller), or a team event that names no vehicle, is refused naming the key.
+# team controller), a team event that names no vehicle, or a bound on what the kind of run does
+# not measure, is refused naming the key.
 # usage: one_vehicle_list_test.sh HPA_BIN SOURCE_DIR PYTHON
 source "$(dirname "$0")/cli_test_lib.sh"
 cli_test_start "$@"
@@ -58,6 +59,13 @@ expect_exit 2 "events.0.vehicle.*acts on the payload" run "$line" --set events.0
 expect_exit 2 "vehicles.1.attach_m.*where its cable holds the payload" run "$team" \
   --set 'vehicles.1={cable_length_m: 0.5}' --out "$out/bad"
 expect_exit 2 "vehicles.3" run "$team" --set vehicles.3.cable_length_m=0.4 --out "$out/bad"
+# a bound on what the kind of run does not measure
+expect_exit 2 "expect.team_tilt_max.*flies one vehicle" run "$hover" --set expect.team_tilt_max=10 \
+  --out "$out/bad"
+expect_exit 2 "expect.payload_in_fov_min.*a team run does not measure" run "$team" \
+  --set expect.payload_in_fov_min=0.9 --out "$out/bad"
+expect_exit 2 "expect.quad_rmse_max.*a team run does not measure" run "$team" \
+  --set 'expect.quad_rmse_max=[0.1, 0.1, 0.1]' --out "$out/bad"
 
 [ "$failures" -eq 0 ] || exit 1
 echo "one-vehicle lists: the single vehicle's runs bit for bit; team-only keys refused"

@@ -83,6 +83,45 @@ std::vector<std::pair<double, double>> TrueSlackIntervals(const std::vector<LogR
   return SlackIntervals(times_s, modes);
 }
 
+namespace {
+
+// "retaut/quad_vz_min_mps" for "retaut.quad_vz_min_mps": a dotted path as a JSON pointer's.
+std::string ReplaceDots(std::string path) {
+  std::replace(path.begin(), path.end(), '.', '/');
+  return path;
+}
+
+}  // namespace
+
+const std::vector<UnmeasuredMetric>& TeamUnmeasuredMetrics() {
+  static const std::vector<UnmeasuredMetric> list = {
+      {"payload_rmse_est_m", [](Metrics* m) { m->payload_rmse_est_m.setConstant(NAN); }},
+      {"quad_rmse_m", [](Metrics* m) { m->quad_rmse_m.setConstant(NAN); }},
+      {"quad_position_deviation_max_m", [](Metrics* m) { m->quad_position_deviation_max_m = NAN; }},
+      {"mode_accuracy", [](Metrics* m) { m->mode_accuracy = NAN; }},
+      {"payload_in_fov_fraction", [](Metrics* m) { m->payload_in_fov_fraction = NAN; }},
+      {"payload_lost_time_s", [](Metrics* m) { m->payload_lost_time_s = NAN; }},
+      {"closed_loop_cost", [](Metrics* m) { m->closed_loop_cost = NAN; }},
+      {"payload_quad_min_distance_m", [](Metrics* m) { m->payload_quad_min_distance_m = NAN; }},
+      {"contacts", nullptr},
+      {"slack_detection_latency_s",
+       [](Metrics* m) {
+         m->slack_detection_latency_mean_s.reset();
+         m->slack_detection_latency_max_s.reset();
+       }},
+      {"retaut.quad_vz_min_mps", [](Metrics* m) { m->retaut_quad_vz_min_mps.reset(); }},
+      {"retaut.peak_body_rate_radps",
+       [](Metrics* m) { m->retaut_peak_body_rate_radps.reset(); }},
+  };
+  return list;
+}
+
+void MarkUnmeasured(const std::vector<UnmeasuredMetric>& unmeasured, Metrics* m) {
+  for (const UnmeasuredMetric& u : unmeasured) {
+    if (u.mark != nullptr) u.mark(m);
+  }
+}
+
 void UpdateVehicleExtremes(const Eigen::Vector4d& q_WB_wxyz, double cable_tension_N,
                            VehicleMetrics* vehicle) {
   vehicle->tilt_max_deg = std::max(vehicle->tilt_max_deg, TiltDeg(q_WB_wxyz));
@@ -505,15 +544,10 @@ std::string MetricsToJson(const Metrics& m) {
   }
   if (m.team) {
     // a team run measured none of the single vehicle's quadrotor, estimator, camera or contact
-    // metrics: null, never a perfect-looking value
-    for (const char* key :
-         {"payload_rmse_est_m", "quad_rmse_m", "quad_position_deviation_max_m", "mode_accuracy",
-          "payload_in_fov_fraction", "payload_lost_time_s", "closed_loop_cost",
-          "payload_quad_min_distance_m", "contacts", "slack_detection_latency_s"}) {
-      o[key] = Json();
+    // metrics: null, never a perfect-looking value (the re-taut's count is the team's)
+    for (const UnmeasuredMetric& u : TeamUnmeasuredMetrics()) {
+      o[Json::json_pointer("/" + ReplaceDots(u.json_key))] = Json();
     }
-    o["retaut"]["quad_vz_min_mps"] = Json();
-    o["retaut"]["peak_body_rate_radps"] = Json();
   }
   // every vehicle's own metrics, one for a single vehicle (a team's also under team.vehicles)
   Json vehicles = Json::array();

@@ -15,6 +15,7 @@
 #include "hpa/models/params_yaml.h"
 #include "hpa/models/yaml_reader.h"
 #include "hpa/scenarios/expect_keys.h"
+#include "hpa/scenarios/metrics.h"
 #include "hpa/scenarios/reference_types.h"
 #include "hpa/scenarios/world_profile_yaml.h"
 
@@ -306,6 +307,25 @@ void CheckTeamScenario(const YamlMap& root, const Scenario& s) {
                        "vehicle " + std::to_string(vehicle) + " is not in the scenario (" +
                            std::to_string(std::max(vehicles, 1)) + " vehicle" +
                            (vehicles > 1 ? "s" : "") + ", counted from 0)");
+    }
+  }
+  // bounds on what this kind of run measures: a team's keys need a team, and a team does not
+  // measure the single vehicle's quadrotor, estimator, camera or contact metrics
+  for (const ExpectKey& k : ExpectKeys()) {
+    if (!s.expect.Has(k.key)) continue;
+    const std::string path = root.KeyPath("expect") + "." + k.key;
+    if (!s.team.IsTeam() && k.metric.rfind("team.", 0) == 0) {
+      throw InputError(root.file(), path,
+                       "bounds a team's metric (" + k.metric + "); this scenario flies one vehicle");
+    }
+    if (!s.team.IsTeam()) continue;
+    for (const UnmeasuredMetric& u : TeamUnmeasuredMetrics()) {
+      const std::string unmeasured = u.json_key;
+      if (k.metric == unmeasured || k.metric.rfind(unmeasured + ".", 0) == 0) {
+        throw InputError(root.file(), path,
+                         "bounds " + k.metric + ", which a team run does not measure (the single "
+                         "vehicle's quadrotor, estimator, camera and contact metrics)");
+      }
     }
   }
 }

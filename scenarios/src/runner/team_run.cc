@@ -137,14 +137,8 @@ void ComputeTeamMetrics(const std::vector<TeamLogRow>& rows, int vehicles,
                         const std::vector<int>& rate_steps, const std::vector<int>& saturated,
                         Metrics* m) {
   m->control_steps = static_cast<int>(rows.size());
-  // the single vehicle's quadrotor, estimator and camera metrics: not measured
-  m->quad_rmse_m.setConstant(NAN);
-  m->payload_rmse_est_m.setConstant(NAN);
-  m->quad_position_deviation_max_m = NAN;
-  m->mode_accuracy = NAN;
-  m->payload_lost_time_s = NAN;
-  m->payload_quad_min_distance_m = NAN;
-  m->closed_loop_cost = NAN;
+  // the single vehicle's quadrotor, estimator, camera and contact metrics: not measured
+  MarkUnmeasured(TeamUnmeasuredMetrics(), m);
   if (rows.empty()) return;
   std::vector<double> times_s, all_solve_ms;
   std::vector<CableMode> any_slack;

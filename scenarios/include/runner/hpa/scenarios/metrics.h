@@ -184,6 +184,21 @@ struct Metrics {
   std::optional<TeamMetrics> team;
 };
 
+/// A metric a kind of run does not measure: its metrics.json key, written null, and how its
+/// field in Metrics reads "not measured" (NaN; none for a count, whose null in metrics.json says
+/// it), so that expect keys, sweeps and the JSON agree.
+struct UnmeasuredMetric {
+  const char* json_key;      // its metrics.json path, dotted ("retaut.quad_vz_min_mps")
+  void (*mark)(Metrics* m);  // sets the field to not measured (nullptr: a count)
+};
+
+/// What a team run does not measure: the single vehicle's quadrotor, estimator, camera and
+/// contact metrics. The one list the team runner marks and MetricsToJson writes null.
+const std::vector<UnmeasuredMetric>& TeamUnmeasuredMetrics();
+
+/// Marks every metric of `unmeasured` not measured in m.
+void MarkUnmeasured(const std::vector<UnmeasuredMetric>& unmeasured, Metrics* m);
+
 /// A vehicle's extremes at the physics rate (VehicleMetrics' tilt_max_deg and
 /// cable_tension_max_N), for one vehicle and a team alike: every physics step's truth is offered,
 /// so a cable's snap of a few milliseconds is its peak, not whatever a control-step row caught.
