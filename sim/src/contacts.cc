@@ -2,13 +2,14 @@
 
 #include "hpa/sim/contacts.h"
 
+#include <Eigen/Core>
 #include <mujoco/mujoco.h>
 
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
 #include <utility>
 
-#include "hpa/sim/world.h"
 
 namespace hpa::sim {
 
@@ -30,6 +31,12 @@ double CylinderSignedDistance(const Eigen::Vector3d& p, double r, double h) {
 
 }  // namespace
 
+Contacts::Contacts(const ContactsBinding& binding) : b_(binding) {
+  if (b_.model == nullptr || b_.data == nullptr) {
+    throw std::logic_error("sim::Contacts: a binding without its world's model and data");
+  }
+}
+
 void Contacts::Reset() {
   counts_ = ContactCounts{};
   for (bool& t : touching_) t = false;
@@ -37,38 +44,38 @@ void Contacts::Reset() {
 }
 
 double Contacts::PayloadQuadDistance() const {
-  const Eigen::Vector3d p_WL_W(w_.data_->xpos + 3 * w_.ids_.payload_body);
-  const double radius_m = w_.model_->geom_size[3 * w_.ids_.payload_geom];
+  const Eigen::Vector3d p_WL_W(b_.data->xpos + 3 * b_.payload_body);
+  const double radius_m = b_.model->geom_size[3 * b_.payload_geom];
   // the payload centre in a geom's frame: R_WG^T (p_WL - p_WG)
   auto in_geom = [&](int g) {
-    const Eigen::Map<const Eigen::Matrix<double, 3, 3, Eigen::RowMajor>> R_WG(w_.data_->geom_xmat +
+    const Eigen::Map<const Eigen::Matrix<double, 3, 3, Eigen::RowMajor>> R_WG(b_.data->geom_xmat +
                                                                               9 * g);
     return Eigen::Vector3d(R_WG.transpose() *
-                           (p_WL_W - Eigen::Vector3d(w_.data_->geom_xpos + 3 * g)));
+                           (p_WL_W - Eigen::Vector3d(b_.data->geom_xpos + 3 * g)));
   };
-  const int box = w_.ids_.quad_box_geom;
-  double d = BoxSignedDistance(in_geom(box), Eigen::Vector3d(w_.model_->geom_size + 3 * box));
+  const int box = b_.quad_box_geom;
+  double d = BoxSignedDistance(in_geom(box), Eigen::Vector3d(b_.model->geom_size + 3 * box));
   for (int i = 0; i < 4; ++i) {
-    const int g = w_.ids_.rotor_disc_geom[i];
-    d = std::min(d, CylinderSignedDistance(in_geom(g), w_.model_->geom_size[3 * g],
-                                           w_.model_->geom_size[3 * g + 1]));
+    const int g = b_.rotor_disc_geom[i];
+    d = std::min(d, CylinderSignedDistance(in_geom(g), b_.model->geom_size[3 * g],
+                                           b_.model->geom_size[3 * g + 1]));
   }
   return d - radius_m;
 }
 
-void Contacts::Update() {
+bool Contacts::Update() {
   bool now[5] = {false, false, false, false, false};  // the ContactCounts fields, in order
   bool rotor_strike = false;
-  for (int i = 0; i < w_.data_->ncon; ++i) {
-    const mjContact& c = w_.data_->contact[i];
+  for (int i = 0; i < b_.data->ncon; ++i) {
+    const mjContact& c = b_.data->contact[i];
     for (const auto& [a, b] : {std::pair{c.geom1, c.geom2}, std::pair{c.geom2, c.geom1}}) {
-      if (a == w_.ids_.payload_geom) {
-        if (b == w_.ids_.quad_box_geom) now[0] = true;
-        for (int r = 0; r < 4; ++r) rotor_strike |= b == w_.ids_.rotor_disc_geom[r];
-        if (b == w_.ids_.ground_geom) now[2] = true;
-        if (b == w_.ids_.gripper_geom) now[4] = true;
+      if (a == b_.payload_geom) {
+        if (b == b_.quad_box_geom) now[0] = true;
+        for (int r = 0; r < 4; ++r) rotor_strike |= b == b_.rotor_disc_geom[r];
+        if (b == b_.ground_geom) now[2] = true;
+        if (b == b_.gripper_geom) now[4] = true;
       }
-      if (a == w_.ids_.ground_geom && w_.model_->geom_bodyid[b] == w_.ids_.quad_body) now[3] = true;
+      if (a == b_.ground_geom && b_.model->geom_bodyid[b] == b_.quad_body) now[3] = true;
     }
   }
   now[1] = rotor_strike;
@@ -79,7 +86,7 @@ void Contacts::Update() {
     touching_[k] = now[k];
   }
   payload_quad_min_distance_m_ = std::min(payload_quad_min_distance_m_, PayloadQuadDistance());
-  if (rotor_strike) w_.LatchCrash("rotor_strike");
+  return rotor_strike;
 }
 
 }  // namespace hpa::sim

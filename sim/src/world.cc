@@ -100,6 +100,34 @@ World::World(const WorldConfig& config)
   binding.t0_s = &t0_s_;
   vehicle_.emplace(binding);
   vehicle_->SetRotorFactors(rotor_kf_draw_, rotor_km_draw_);
+  // the payload's contacts with this vehicle, the ground and the gripper
+  ContactsBinding contacts;
+  contacts.model = model_;
+  contacts.data = data_;
+  contacts.payload_body = ids_.payload_body;
+  contacts.payload_geom = ids_.payload_geom;
+  contacts.quad_body = ids_.quad_body;
+  contacts.quad_box_geom = ids_.quad_box_geom;
+  for (int i = 0; i < 4; ++i) {
+    contacts.rotor_disc_geom[static_cast<size_t>(i)] = ids_.rotor_disc_geom[i];
+  }
+  contacts.ground_geom = ids_.ground_geom;
+  contacts.gripper_geom = ids_.gripper_geom;
+  contacts_.emplace(contacts);
+  // the hand that grabs, carries and releases the payload
+  GripperBinding hand;
+  hand.model = model_;
+  hand.data = data_;
+  hand.mocap = ids_.gripper_mocap;
+  hand.weld = ids_.gripper_weld;
+  hand.rod_geom = ids_.gripper_geom;
+  hand.payload_qpos = ids_.payload_jnt_qpos;
+  hand.payload_radius_m = &world_params_.payload_radius_m;
+  hand.contact = config_.profile.contact.enabled;
+  hand.faults = &faults_;
+  hand.step = &step_;
+  hand.t0_s = &t0_s_;
+  gripper_.emplace(hand);
   ApplyWorldParams();
   renderer_ = std::unique_ptr<Renderer>(new Renderer(*this));
 
@@ -205,7 +233,7 @@ void World::Reset(const SystemState& initial) {
 
   // disturbances, gripper, sensors, crash flag
   disturbances_.ClearForces();
-  gripper_.Reset();
+  gripper_->Reset();
   rng_.seed(config_.seed);
   for (const std::unique_ptr<Sensor>& sensor : sensors_) sensor->Reset();
   camera_->Reset();
@@ -217,8 +245,8 @@ void World::Reset(const SystemState& initial) {
   // motors at hover speed of the simulated system
   const double w_hover = world_params_.HoverMotorSpeedRadps();
   SetState(initial.ToVector(), InputVector::Constant(w_hover));
-  contacts_.Reset();
-  gripper_.UpdateContact();
+  contacts_->Reset();
+  gripper_->UpdateContact();
 }
 
 void World::SetState(const StateVector& x, const InputVector& motor_speed_radps) {
@@ -243,7 +271,7 @@ void World::SetState(const StateVector& x, const InputVector& motor_speed_radps)
   }
   vehicle_->SetSpeed(motor_speed_radps);
   vehicle_->WriteMotorControls();
-  gripper_.Update();
+  gripper_->Update();
   mj_forward(model_, data_);
   CheckWarnings();
 }
@@ -259,7 +287,7 @@ void World::Step() {
   // first-order motor lag; thrust to the actuators
   vehicle_->StepMotors();
   if (!faults_.empty() && faults_.TakeGripperRelease(time_s())) {
-    gripper_.Open();  // a gripper fault lets go
+    gripper_->Open();  // a gripper fault lets go
   }
   vehicle_->WriteMotorControls();
   disturbances_.Apply();
@@ -267,7 +295,7 @@ void World::Step() {
   // dynamics at t_k and integration to t_{k+1}, then kinematics at t_{k+1}
   mj_step2(model_, data_);
   ++step_;
-  gripper_.Update();
+  gripper_->Update();
   mj_step1(model_, data_);
   CheckWarnings();
 
@@ -285,8 +313,8 @@ void World::Step() {
       if (line.size() > kMaxQueued) line.DropOldest();
     }
   }
-  contacts_.Update();
-  gripper_.UpdateContact();
+  if (contacts_->Update()) LatchCrash("rotor_strike");
+  gripper_->UpdateContact();
   CheckCrash();
 }
 
@@ -318,7 +346,7 @@ Truth World::GetTruth() const {
                ? CableMode::kTaut
                : CableMode::kSlack;
   s.payload_visible = true;
-  s.payload_supported = gripper_.active();
+  s.payload_supported = gripper_->active();
   t.motor_speed_radps = vehicle_->motor_speed_radps();
   return t;
 }
@@ -358,7 +386,7 @@ std::vector<SensorMessage> World::TakeInFlight() {
 
 std::optional<CameraCapture> World::CaptureTickStart(const cv::Rect& region) {
   deliveries_[static_cast<size_t>(gripper_line_)].Push(
-      time_s(), gripper_sensor_->Sample(time_s(), gripper_.active()));
+      time_s(), gripper_sensor_->Sample(time_s(), gripper_->active()));
   std::optional<PayloadDetection> detection;
   std::optional<CameraCapture> capture = camera_->Capture(
       *this, step_, time_s(), region, faults_.empty() ? nullptr : &faults_, &detection);

@@ -165,11 +165,11 @@ class World {
   /// The vehicle's motors and rotors (vehicle.h): their spread, battery sag and speeds.
   const Vehicle& vehicle() const { return *vehicle_; }
   /// The gripper (gripper.h): grab, move and release events act on it.
-  Gripper& gripper() { return gripper_; }
+  Gripper& gripper() { return *gripper_; }
   /// Forces, impulses, velocity changes and wind (disturbances.h): their events act on it.
   Disturbances& disturbances() { return disturbances_; }
   /// Contact episodes and the payload's distance to the vehicle (contacts.h).
-  const Contacts& contacts() const { return contacts_; }
+  const Contacts& contacts() const { return *contacts_; }
   /// The payload and chase cameras (renderer.h).
   Renderer& renderer() { return *renderer_; }
 
@@ -201,9 +201,7 @@ class World {
   Params world_params_;
   friend struct WorldInternals;  // sim/src/world_internals.h: MuJoCo access for sim tests
   // the components reach the model, the data and the step through their world
-  friend class Gripper;
   friend class Disturbances;
-  friend class Contacts;
   friend class Renderer;
   mjModel_* model_ = nullptr;
   mjData_* data_ = nullptr;
@@ -228,9 +226,9 @@ class World {
   std::optional<Vehicle> vehicle_;  // bound to the rotors once the model and data exist
   // the actuation spread drawn with the mismatch, before the vehicle is bound  (4 each)
   Eigen::Vector4d rotor_kf_draw_ = Eigen::Vector4d::Ones(), rotor_km_draw_ = Eigen::Vector4d::Ones();
-  Gripper gripper_{*this};
+  std::optional<Gripper> gripper_;  // bound to the scene's hand once it is loaded
   Disturbances disturbances_;
-  Contacts contacts_{*this};
+  std::optional<Contacts> contacts_;  // bound to the scene's geometry once it is loaded
   std::unique_ptr<Renderer> renderer_;  // made once the model is loaded; released first
 };
 
