@@ -17,6 +17,17 @@ each reply (lockstep), so a slow controller slows the run, never the simulated v
 A stack that runs the vehicle's rate loop itself passes owns_rate_loop=True and gives its class a
 rate_loop(rate_tick) method returning a RotorCommand (rotor speeds in rad/s): the simulator then
 runs no autopilot of its own (docs/protocol.md, rate_tick and rate_reply).
+
+A team scenario's stack (docs/protocol.md, Teams) is served by run_team: it receives the
+team_hello, builds one controller per vehicle it flies, and at each of the team's control steps
+calls each vehicle's step(view) with a TeamView, which returns that vehicle's Command:
+
+    from hpa_sim import run_team, Command
+    class Hold:
+        def __init__(self, hello, vehicle): ...
+        def step(self, view):           # -> Command
+            ...
+    run_team(Hold, control_rate_hz=100.0)
 """
 
 import json
@@ -26,6 +37,7 @@ import os
 import socket
 import struct
 import sys
+import time
 import traceback
 
 import numpy as np
@@ -49,6 +61,10 @@ _TYPE_IDS = {name: kind for kind, name in MESSAGE_TYPES.items()}
 HELLO, HELLO_ACK, TICK, TICK_REPLY, FINISH, FINISH_REPLY, ERROR, RATE_TICK, RATE_REPLY = (
     _TYPE_IDS[name] for name in ("hello", "hello_ack", "tick", "tick_reply", "finish",
                                  "finish_reply", "error", "rate_tick", "rate_reply"))
+TEAM_HELLO, TEAM_HELLO_ACK, TEAM_TICK, TEAM_TICK_REPLY = (
+    _TYPE_IDS[name] for name in ("team_hello", "team_hello_ack", "team_tick", "team_tick_reply"))
+# a team's control loop: the rates a team_hello_ack may declare (Hz), (0, this]
+MAX_TEAM_CONTROL_RATE_HZ = 1000.0
 MAX_MESSAGE_BYTES = TABLE["max_message_bytes"]  # the simulator's own limit on a message body
 # the JSON messages' keys, by message name: the table's declarations (name, type, required, doc)
 JSON_KEYS = {t["name"]: t["keys"] for t in TABLE["message_types"] if t["encoding"] == "json"}
@@ -218,6 +234,34 @@ class Tick:
     (only with the scenario's ground-truth switch) or None; reference: dict p_WL_W, v_WL_W,
     a_WL_W; need_estimate, gripper_active, no_reply: the tick's flags; control_due: whether a
     loop at the stack's declared control_rate_hz fires at this tick (False without one)."""
+
+
+class TeamView:
+    """What one vehicle of a team knows at a control step (a team_tick's view, the C++ TeamView;
+    docs/cooperative.md): time_s (s), vehicle (its index in the team), then, as motion capture
+    measured them (or the truth with the scenario's ground-truth switch), numpy arrays: its own
+    p_WQ_W (m), v_WQ_W (m/s), q_WB (w, x, y, z) and w_B (rad/s, body frame: its rate gyro's
+    sample), and the payload's p_WL_W, v_WL_W, q_WP (w, x, y, z) and w_P (rad/s, payload
+    frame). Readings come as sent, unchecked: all_finite() says whether every number is finite
+    (a controller that gets a non-finite one should level out, as the C++ controllers do)."""
+
+    FIELDS = tuple(f.name for f in STRUCTS["team_view"].fields)  # the arrays, in wire order
+
+    def __init__(self, time_s, vehicle, **fields):
+        self.time_s = float(time_s)
+        self.vehicle = int(vehicle)
+        for name in self.FIELDS:
+            setattr(self, name, np.array(fields[name], dtype=float))
+
+    def all_finite(self):
+        """Whether time_s and every number of the view is finite."""
+        return math.isfinite(self.time_s) and all(
+            bool(np.all(np.isfinite(getattr(self, name)))) for name in self.FIELDS)
+
+    def __repr__(self):
+        return "TeamView(time_s=%g, vehicle=%d, %s)" % (self.time_s, self.vehicle, ", ".join(
+            "%s=%s" % (name, np.array2string(getattr(self, name), precision=4))
+            for name in self.FIELDS))
 
 
 class _Reader:
@@ -449,6 +493,26 @@ def encode_rate_reply(rotors):
                                             "saturated": rotors.saturated})
 
 
+def decode_team_tick(data):
+    """Decodes a team_tick message body into (time_s, views): the views of the stack's vehicles
+    that have one, in the message's order, each a TeamView; ProtocolError naming the message on
+    a malformed one."""
+    tick = decode(_LAYOUTS["team_tick"], data, "team_tick")
+    return tick["time_s"], [TeamView(tick["time_s"], v["vehicle"], **v["view"])
+                            for v in tick["views"]]
+
+
+def encode_team_tick_reply(replies):
+    """Encodes a team_tick_reply from (vehicle, Command, cable_taut) triples, one per view of the
+    team_tick in its order: each Command's body rate, thrust, status, solve time and cost."""
+    return encode(_LAYOUTS["team_tick_reply"], {"replies": [
+        {"vehicle": vehicle, "cable_taut": bool(cable_taut),
+         "output": {"command": {"w_B_radps": command.w_B_radps, "thrust_N": command.thrust_N},
+                    "status": command.status, "solve_time_ms": command.solve_time_ms,
+                    "cost": command.cost}}
+        for vehicle, command, cable_taut in replies]})
+
+
 def decode_header(header):
     """(type, body length) of a 12-byte message header; ProtocolError on a bad magic, an unknown
     type or a body past MAX_MESSAGE_BYTES."""
@@ -526,6 +590,33 @@ def decode_hello(body):
             raise ProtocolError("%s: 'slot_bytes' %d, expected at least 3 x width x height = %d"
                                 % (where, camera["slot_bytes"],
                                    3 * camera["width_px"] * camera["height_px"]))
+    return hello
+
+
+def decode_team_hello(body):
+    """The team_hello message's JSON object as a dict, checked against its keys in the message
+    table, its vehicles distinct ascending indices into team.vehicles; ProtocolError naming the
+    team_hello and what was wrong (for bad UTF-8 or JSON, the line and column). A hello of
+    another protocol version is returned unchecked: the caller refuses it by its version."""
+    where = "team_hello message"
+    text = _decode_utf8(body, where, error=ProtocolError)
+    hello = _require_object(_parse_json(text, where, error=ProtocolError), text, where, 1,
+                            "the team's parameters", error=ProtocolError)
+    if _field(hello, "protocol_version", where, (int,)) != PROTOCOL_VERSION:
+        return hello
+    check_json("team_hello", hello)
+    team = hello["team"]["vehicles"]
+    vehicles = hello["vehicles"]
+    if (not vehicles or not all(isinstance(v, int) and not isinstance(v, bool)
+                                and 0 <= v < len(team) for v in vehicles)
+            or vehicles != sorted(set(vehicles))):
+        raise ProtocolError("%s: 'vehicles' is %r, expected ascending vehicle indices in [0, %d)"
+                            % (where, vehicles, len(team)))
+    for i in vehicles:
+        if not isinstance(team[i], dict) or not all(
+                k in team[i] for k in ("params", "cable_length_m", "p_PA_P_m")):
+            raise ProtocolError("%s: team.vehicles[%d] is not an object of params, "
+                                "cable_length_m and p_PA_P_m" % (where, i))
     return hello
 
 
@@ -625,6 +716,35 @@ class FlightStackClient:
         check_json("hello_ack", ack)
         self.send(HELLO_ACK, json.dumps(ack).encode())
         return hello
+
+    def team_hello(self):
+        """Receives the team_hello (a dict, decode_team_hello's). ProtocolError for another
+        message (a single vehicle's hello: this stack flies a team), another protocol version,
+        or vehicles other than the one HPA_VEHICLE names when it is set (a stack started per
+        vehicle flies its own)."""
+        kind, body = self.receive()
+        if kind != TEAM_HELLO:
+            raise ProtocolError("expected a team_hello, got a %s message" % MESSAGE_TYPES[kind])
+        hello = decode_team_hello(body)
+        if hello["protocol_version"] != PROTOCOL_VERSION:
+            raise ProtocolError("the simulator speaks protocol version %d, this client %d"
+                                % (hello["protocol_version"], PROTOCOL_VERSION))
+        own = os.environ.get("HPA_VEHICLE", "")
+        if own and hello["vehicles"] != [int(own) if own.isdigit() else own]:
+            raise ProtocolError("started with HPA_VEHICLE=%s, but the team_hello asks for "
+                                "vehicles %s" % (own, hello["vehicles"]))
+        return hello
+
+    def team_hello_ack(self, hello, name, control_rate_hz, controller=None):
+        """Answers the team_hello with the ack: this stack's name (metrics.json's flight_stack),
+        the controller it flies (metrics.json's controller; absent: the name), its control rate
+        (Hz) and exactly the hello's vehicles."""
+        ack = {"protocol_version": PROTOCOL_VERSION, "name": name,
+               "control_rate_hz": float(control_rate_hz), "vehicles": hello["vehicles"]}
+        if controller is not None:
+            ack["controller"] = controller
+        check_json("team_hello_ack", ack)
+        self.send(TEAM_HELLO_ACK, json.dumps(ack).encode())
 
     def attach_frames(self, tick):
         """Points each frame's "image" at its whole frame in the ring (a read-only numpy view)."""
@@ -738,10 +858,74 @@ def run(controller_class, name=None, control_rate_hz=0.0, batched_ticks=False,
     except EOFError:
         return 0
     except Exception as e:  # tell the simulator why and where (its run error), then fail
-        try:
-            client.send(ERROR, describe_exception(e).encode("utf-8", "replace"))
-        except OSError:
-            pass
-        print("flight stack: %s: %s" % (type(e).__name__, e), file=sys.stderr)
-        traceback.print_exc(file=sys.stderr)
-        return 1
+        return _report_failure(client, e)
+
+
+def _report_failure(client, e):
+    # sends the exception's last frames as the error message (the run's run_error), prints the
+    # whole traceback to stderr; the stack's exit status 1
+    try:
+        client.send(ERROR, describe_exception(e).encode("utf-8", "replace"))
+    except OSError:
+        pass
+    print("flight stack: %s: %s" % (type(e).__name__, e), file=sys.stderr)
+    traceback.print_exc(file=sys.stderr)
+    return 1
+
+
+def run_team(controller_class, control_rate_hz, name=None, controller=None):
+    """Serves a team's stack (docs/protocol.md, Teams): receives the team_hello, builds
+    controller_class(hello, vehicle) for each vehicle it lists (one with --team-stack
+    per_vehicle, every vehicle with --team-stack one: the same class serves both), answers with
+    the team_hello_ack (name, default the class's name; controller, default the name;
+    control_rate_hz, the team's control loop in (0, 1000] Hz; the hello's vehicles), then at each
+    team_tick calls step(view) of each vehicle that has a view, a TeamView, and replies in the
+    tick's order. step returns that vehicle's Command (body rate, thrust, status, cost); the
+    reply's solve time is step's wall time (as hpa-flight times each update) and its cable_taut
+    the controller's `cable_taut` attribute after step (True when it has none). The finish is
+    answered with an empty finish_reply; a controller that raises (or returns something other
+    than a Command) ends the run as in run(): its last stack frames go to the simulator as the
+    run's error, the whole traceback to stderr, exit status 1. Returns the exit status."""
+    if (not isinstance(control_rate_hz, (int, float)) or isinstance(control_rate_hz, bool)
+            or not 0.0 < control_rate_hz <= MAX_TEAM_CONTROL_RATE_HZ):
+        raise ValueError("control_rate_hz %r, expected a rate in (0, %g] Hz"
+                         % (control_rate_hz, MAX_TEAM_CONTROL_RATE_HZ))
+    name = name or controller_class.__name__
+    client = FlightStackClient()
+    try:
+        hello = client.team_hello()
+        # built before the ack, so a controller that cannot fly the team fails the hello
+        controllers = {i: controller_class(hello, i) for i in hello["vehicles"]}
+        client.team_hello_ack(hello, name, control_rate_hz,
+                              name if controller is None else controller)
+        while True:
+            kind, body = client.receive()
+            if kind == FINISH:
+                client.send(FINISH_REPLY, b"{}")
+                return 0
+            if kind != TEAM_TICK:
+                raise ProtocolError("expected a team_tick or finish, got a %s message"
+                                    % MESSAGE_TYPES[kind])
+            time_s, views = decode_team_tick(body)
+            replies = []
+            for view in views:
+                vehicle = controllers.get(view.vehicle)
+                if vehicle is None:
+                    raise ProtocolError("a team_tick at t = %g s carries a view of vehicle %d, "
+                                        "which this stack does not fly (it flies %s)"
+                                        % (time_s, view.vehicle, hello["vehicles"]))
+                start = time.perf_counter()
+                command = vehicle.step(view)
+                solve_time_ms = (time.perf_counter() - start) * 1e3
+                if not isinstance(command, Command):
+                    raise TypeError("%s.step returned %r for vehicle %d at t = %g s, expected a "
+                                    "Command" % (type(vehicle).__name__, command, view.vehicle,
+                                                 time_s))
+                command = Command(command.w_B_radps, command.thrust_N, command.status,
+                                  solve_time_ms, command.cost)
+                replies.append((view.vehicle, command, getattr(vehicle, "cable_taut", True)))
+            client.send(TEAM_TICK_REPLY, encode_team_tick_reply(replies))
+    except EOFError:
+        return 0
+    except Exception as e:  # tell the simulator why and where (its run error), then fail
+        return _report_failure(client, e)
