@@ -123,7 +123,10 @@ TEST(MetricsTest, ATeamNullsExactlyWhatItDoesNotMeasure) {
   for (const UnmeasuredMetric& u : TeamUnmeasuredMetrics()) {
     std::string pointer = std::string("/") + u.json_key;
     std::replace(pointer.begin(), pointer.end(), '.', '/');
-    EXPECT_TRUE(j.at(nlohmann::json::json_pointer(pointer)).is_null()) << u.json_key;
+    // (a fault's recovery only in a run with a fault event)
+    const nlohmann::json::json_pointer at(pointer);
+    if (std::string(u.json_key).rfind("fault_recovery.", 0) == 0 && !j.contains(at)) continue;
+    EXPECT_TRUE(j.at(at).is_null()) << u.json_key;
   }
   EXPECT_EQ(j["retaut"]["count"], 2);  // the team's own re-tauts are measured
   EXPECT_EQ(j["vehicles"].size(), 2u);

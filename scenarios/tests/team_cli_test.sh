@@ -32,9 +32,21 @@ expect_exit 2 "events.0.vehicle.*vehicle 2 is not in the scenario \(2 vehicles" 
 expect_exit 2 "events.0.vehicle.*vehicle 1 is not in the scenario \(1 vehicle," run \
   "$src/scenarios/line_impulse.yaml" --set events.0.body=quadrotor --set events.0.vehicle=1 \
   --out "$out/bad"
-expect_exit 2 "events.0.*impulse and velocity_change events only, not 'wind'" run "$base" \
+expect_exit 2 "events.0.*impulse, velocity_change and motor fault events only, not 'wind'" run "$base" \
   --set 'events.0={at: 1.0, type: wind, force: [1, 0, 0], duration: 1.0}' --out "$out/bad"
 expect_exit 2 "payload.mass_kg" run "$base" --set payload.mass_kg=0 --out "$out/bad"
+# faults: a motor's reaches a team's vehicle, named by index; the single vehicle's sensors' do not
+expect_exit 2 "events.0.component.*only a motor's reaches them, not a 'vio' fault" run "$base" \
+  --set 'events.0={at: 1.0, type: fault, vehicle: 0, component: vio, mode: off, duration: 1.0}' \
+  --out "$out/bad"
+expect_exit 2 "events.0.vehicle.*a team's fault names its vehicle \(0 to 1\)" run "$base" \
+  --set 'events.0={at: 1.0, type: fault, component: motor, mode: off, motor: 0, duration: 0.1}' \
+  --out "$out/bad"
+expect_exit 2 "events.0.vehicle.*vehicle 2 is not in the scenario" run "$base" \
+  --set 'events.0={at: 1.0, type: fault, vehicle: 2, component: motor, mode: off, motor: 0}' \
+  --out "$out/bad"
+expect_exit 2 "expect.fault_health_flag_max.*a team run does not measure" run \
+  "$src/scenarios/ci/team2_motor_loss.yaml" --set expect.fault_health_flag_max=1 --out "$out/bad"
 # a start no team can fly from is refused; a team too weak to lift its payload is warned about
 expect_exit 2 "vehicles.*vehicles 0 and 1 start 0 m apart, their bodies overlapping" run "$base" \
   --set 'vehicles.1.attach_m=[0.35, 0, 0]' --out "$out/bad"
@@ -98,5 +110,20 @@ assert flown == {"cooperative", "hpa_mpc"}, flown
 PY
 done
 
+# a motor fault on vehicle 1: its recovery names the vehicle, and what a camera and an onboard
+# estimator would count is null (a team has neither)
+"$hpa" run "$src/scenarios/ci/team2_motor_loss.yaml" --out "$out/fault" --quiet ||
+  fail "team2_motor_loss exited $?"
+"$python" - "$out/fault/metrics.json" << 'PY' || fail "team fault metrics"
+import json, sys
+m = json.load(open(sys.argv[1]))
+f = m["faults"][0]
+assert f["vehicle"] == 1 and f["component"] == "motor" and f["mode"] == "loss", f
+assert f["tracking_left_bound"] and f["tracking_recovered_s"] is not None, f
+for key in ("payload_lost", "estimator_resets", "rejected_updates", "health_flag_s",
+            "estimate_error_max_m"):
+    assert f[key] is None, (key, f[key])
+assert m["fault_recovery"]["tracking_error_max_m"] > 0.1, m["fault_recovery"]
+PY
 [ "$failures" -eq 0 ] && echo "team CLI: all checks passed"
 exit "$failures"

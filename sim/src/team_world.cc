@@ -182,7 +182,9 @@ struct TeamWorld::Impl {
   int64_t step = 0;
   std::mt19937_64 rng;  // all of the world's noise
   std::normal_distribution<double> normal{0.0, 1.0};
-  // each vehicle's motors and rotors, the single World's component bound to its rotors (n)
+  // each vehicle's faults (its motors read them) and its motors and rotors, the single World's
+  // components bound to its rotors (n each)
+  std::vector<std::unique_ptr<Faults>> faults;
   std::vector<Vehicle> actuation;
   ActuationProfile ideal_actuation;  // a team flies the ideal world: no spread, no battery sag
   double t0_s = 0.0;                 // a team's clock starts at 0 at every Reset
@@ -513,12 +515,14 @@ TeamWorld::TeamWorld(const TeamWorldConfig& config) : impl_(std::make_unique<Imp
     w.tension_adr.push_back(w.m->sensor_adr[sensor]);
   }
   for (int i = 0; i < w.n; ++i) {
+    w.faults.push_back(std::make_unique<Faults>(config.seed));
     VehicleBinding binding;
     binding.model = w.m;
     binding.data = w.d;
     binding.rotor_actuator = w.rotor_actuator[static_cast<size_t>(i)];
     binding.params = &w.params(i);
     binding.actuation = &w.ideal_actuation;
+    binding.faults = w.faults.back().get();
     binding.step = &w.step;
     binding.t0_s = &w.t0_s;
     w.actuation.emplace_back(binding);
@@ -550,6 +554,7 @@ void TeamWorld::Reset(const Eigen::VectorXd& x0) {
   w.warning_count.assign(mjNWARNING, 0);
   w.crash = CrashStatus{};
   w.forces.clear();
+  for (const std::unique_ptr<Faults>& f : w.faults) f->Clear();
   w.mocap_line.Clear();
   w.rng.seed(w.config.seed);
   w.normal.reset();
@@ -594,6 +599,14 @@ void TeamWorld::ApplyImpulse(int body, const Eigen::Vector3d& impulse_W_Ns, doub
   w.forces.push_back(
       {w.Body(body).body, impulse_W_Ns / (static_cast<double>(steps) * World::kPhysicsDt_s),
        w.step + steps});
+}
+
+Faults& TeamWorld::faults(int vehicle) {
+  Impl& w = *impl_;
+  if (vehicle < 0 || vehicle >= w.n) {
+    throw std::out_of_range("TeamWorld::faults: no vehicle " + std::to_string(vehicle));
+  }
+  return *w.faults[static_cast<size_t>(vehicle)];
 }
 
 void TeamWorld::AddVelocity(int body, const Eigen::Vector3d& dv_W_mps) {

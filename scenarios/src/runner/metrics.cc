@@ -110,6 +110,11 @@ const std::vector<UnmeasuredMetric>& TeamUnmeasuredMetrics() {
          m->slack_detection_latency_max_s.reset();
        }},
       {"retaut.quad_vz_min_mps", [](Metrics* m) { m->retaut_quad_vz_min_mps.reset(); }},
+      // a fault's recovery as the camera and the estimator see it (its payload error is measured)
+      {"fault_recovery.health_flag_s", nullptr},
+      {"fault_recovery.payload_back_in_view_s", nullptr},
+      {"fault_recovery.estimate_error_max_m", nullptr},
+      {"fault_recovery.false_detection_rate", nullptr},
       {"retaut.peak_body_rate_radps",
        [](Metrics* m) { m->retaut_peak_body_rate_radps.reset(); }},
   };
@@ -254,15 +259,19 @@ void CameraAndTimingMetrics(const MetricsInputs& in, Metrics* m) {
 
 // Each fault event's recovery over its span (its start to the start of the next fault that starts
 // after it has ended, or the end of the log).
-void FaultMetrics(const MetricsInputs& in, Metrics* m) {
-  const std::vector<LogRow>& rows = in.rows;
-  m->faults.clear();
-  for (size_t k = 0; k < in.faults.size(); ++k) {
+
+}  // namespace
+
+std::vector<FaultRecovery> FaultRecoveries(const std::vector<LogRow>& rows,
+                                           const std::vector<FaultWindow>& windows,
+                                           bool ground_truth) {
+  std::vector<FaultRecovery> recoveries;
+  for (size_t k = 0; k < windows.size(); ++k) {
     FaultRecovery r;
-    r.window = in.faults[k];
+    r.window = windows[k];
     const FaultWindow& w = r.window;
     double span_end_s = rows.empty() ? w.start_s : rows.back().time_s + 1e-9;
-    for (const FaultWindow& later : in.faults) {
+    for (const FaultWindow& later : windows) {
       const bool after_its_end = w.end_s && later.start_s >= *w.end_s - 1e-9;
       if (later.start_s > w.start_s + 1e-9 && after_its_end) {
         span_end_s = std::min(span_end_s, later.start_s);
@@ -275,7 +284,7 @@ void FaultMetrics(const MetricsInputs& in, Metrics* m) {
     size_t last = first;  // one past the span's last row
     while (last < rows.size() && rows[last].time_s < span_end_s) ++last;
     if (first == last) {
-      m->faults.push_back(r);
+      recoveries.push_back(r);
       continue;
     }
     const LogRow& before = rows[first > 0 ? first - 1 : first];
@@ -299,7 +308,7 @@ void FaultMetrics(const MetricsInputs& in, Metrics* m) {
       if (error_m > w.tracking_bound_m) last_out = i;
     }
     r.tracking_error_max_m = error_max_m;
-    if (!in.ground_truth) r.estimate_error_max_m = estimate_error_max_m;
+    if (!ground_truth) r.estimate_error_max_m = estimate_error_max_m;
     // back: the row after the last one out, if the span goes on past it
     const auto back_after = [&](const std::optional<size_t>& last_bad) -> std::optional<double> {
       if (!last_bad || *last_bad + 1 >= last) return std::nullopt;
@@ -323,11 +332,10 @@ void FaultMetrics(const MetricsInputs& in, Metrics* m) {
       d.cable_length = end->cable_length - start->cable_length;
       r.health_resets = d;
     }
-    m->faults.push_back(r);
+    recoveries.push_back(r);
   }
+  return recoveries;
 }
-
-}  // namespace
 
 void ComputeMetrics(const MetricsInputs& in, Metrics* m) {
   const auto& rows = in.rows;
@@ -340,7 +348,7 @@ void ComputeMetrics(const MetricsInputs& in, Metrics* m) {
                              : 0.0;
   SlackMetrics(rows, slack, m);
   CameraAndTimingMetrics(in, m);
-  FaultMetrics(in, m);
+  m->faults = FaultRecoveries(in.rows, in.faults, in.ground_truth);
   // the one vehicle's own metrics, as a team's vehicles have theirs
   VehicleMetrics vehicle = in.extremes;
   vehicle.slack_time_s = m->slack_time_s;
@@ -499,24 +507,27 @@ std::string MetricsToJson(const Metrics& m) {
     const auto worst = [](std::optional<double>* w, const std::optional<double>& v) {
       if (v && (!*w || *v > **w)) *w = v;
     };
+    // a team has no payload camera and no onboard estimator: what they would count is null
+    const auto on_camera = [&](const auto& v) { return m.team ? Json() : Json(v); };
     for (const FaultRecovery& r : m.faults) {
       const FaultWindow& w = r.window;
       faults.push_back({{"event", w.event},
+                        {"vehicle", w.vehicle},
                         {"component", w.component},
                         {"mode", w.mode},
                         {"start_s", num(w.start_s)},
                         {"end_s", opt_num(w.end_s)},
                         {"span_end_s", num(r.span_end_s)},
                         {"health_flag_s", opt_num(r.health_flag_s)},
-                        {"payload_lost", r.payload_lost},
+                        {"payload_lost", on_camera(r.payload_lost)},
                         {"payload_back_in_view_s", opt_num(r.payload_back_in_view_s)},
                         {"tracking_bound_m", num(w.tracking_bound_m)},
                         {"tracking_left_bound", r.tracking_left_bound},
                         {"tracking_recovered_s", opt_num(r.tracking_recovered_s)},
                         {"tracking_error_max_m", opt_num(r.tracking_error_max_m)},
                         {"estimate_error_max_m", opt_num(r.estimate_error_max_m)},
-                        {"estimator_resets", r.estimator_resets},
-                        {"rejected_updates", r.rejected_updates},
+                        {"estimator_resets", on_camera(r.estimator_resets)},
+                        {"rejected_updates", on_camera(r.rejected_updates)},
                         {"health_resets", health_resets(r.health_resets)},
                         {"distractor_drawn_fraction", opt_num(r.distractor_drawn_fraction)},
                         {"distractor_in_image_fraction", opt_num(r.distractor_in_image_fraction)},
@@ -546,7 +557,8 @@ std::string MetricsToJson(const Metrics& m) {
     // a team run measured none of the single vehicle's quadrotor, estimator, camera or contact
     // metrics: null, never a perfect-looking value (the re-taut's count is the team's)
     for (const UnmeasuredMetric& u : TeamUnmeasuredMetrics()) {
-      o[Json::json_pointer("/" + ReplaceDots(u.json_key))] = Json();
+      const Json::json_pointer at("/" + ReplaceDots(u.json_key));
+      if (o.contains(at)) o[at] = Json();
     }
   }
   // every vehicle's own metrics, one for a single vehicle (a team's also under team.vehicles)

@@ -16,6 +16,7 @@
 #include "hpa/models/yaml_reader.h"
 #include "hpa/scenarios/expect_keys.h"
 #include "hpa/scenarios/metrics.h"
+#include "scenarios/src/runner/events/fault_event.h"
 #include "hpa/scenarios/reference_types.h"
 #include "hpa/scenarios/world_profile_yaml.h"
 
@@ -282,14 +283,24 @@ void CheckTeamScenario(const YamlMap& root, const Scenario& s) {
     const EventAction* action = s.events[i].action.get();
     const auto* impulse = dynamic_cast<const ImpulseEvent*>(action);
     const auto* velocity = dynamic_cast<const VelocityChangeEvent*>(action);
+    const auto* fault = dynamic_cast<const FaultEvent*>(action);
     const std::string path = root.KeyPath("events") + "." + std::to_string(i);
-    if (s.team.IsTeam() && impulse == nullptr && velocity == nullptr) {
+    if (s.team.IsTeam() && fault != nullptr && fault->fault.component != sim::FaultComponent::kMotor) {
+      throw InputError(root.file(), path + ".component",
+                       "a team's vehicles fly on motion capture and their rate gyros: of the "
+                       "single vehicle's faults only a motor's reaches them, not a '" +
+                           fault->component + "' fault");
+    }
+    if (s.team.IsTeam() && impulse == nullptr && velocity == nullptr && fault == nullptr) {
       throw InputError(root.file(), path,
-                       "a team scenario takes impulse and velocity_change events only, not '" +
+                       "a team scenario takes impulse, velocity_change and motor fault events "
+                       "only, not '" +
                            s.events[i].type + "'");
     }
-    const std::optional<int> named = impulse ? impulse->vehicle : velocity ? velocity->vehicle
-                                                                         : std::nullopt;
+    const std::optional<int> named = impulse    ? impulse->vehicle
+                                     : velocity ? velocity->vehicle
+                                     : fault    ? fault->vehicle
+                                                : std::nullopt;
     const bool on_payload = impulse ? impulse->on_payload : velocity && velocity->on_payload;
     if (named && on_payload) {
       throw InputError(root.file(), path + ".vehicle",
@@ -298,7 +309,8 @@ void CheckTeamScenario(const YamlMap& root, const Scenario& s) {
     }
     if (s.team.IsTeam() && !named && !on_payload) {
       throw InputError(root.file(), path + ".vehicle",
-                       "a team's quadrotor event names its vehicle (0 to " +
+                       std::string(fault ? "a team's fault" : "a team's quadrotor event") +
+                           " names its vehicle (0 to " +
                            std::to_string(vehicles - 1) + ")");
     }
     const int vehicle = named.value_or(0);

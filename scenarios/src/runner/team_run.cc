@@ -22,6 +22,7 @@
 #include "hpa/models/rotor_model.h"
 #include "hpa/scenarios/runner.h"
 #include "hpa/sim/team_world.h"
+#include "scenarios/src/runner/events/fault_event.h"
 #include "scenarios/src/runner/team_flight_link.h"
 
 namespace hpa {
@@ -208,6 +209,21 @@ void ComputeTeamMetrics(const std::vector<TeamLogRow>& rows, int vehicles,
       all_steps > 0 ? static_cast<double>(all_saturated) / all_steps : 0.0;
 }
 
+// Each fault event's recovery, as the single vehicle's (FaultRecoveries) on the payload's truth
+// and reference: a team has no onboard estimator, so its flags and counts are not measured.
+std::vector<FaultRecovery> TeamFaultRecoveries(const std::vector<TeamLogRow>& team_rows,
+                                               const std::vector<FaultWindow>& windows) {
+  if (windows.empty()) return {};
+  std::vector<LogRow> rows(team_rows.size());
+  for (size_t i = 0; i < team_rows.size(); ++i) {
+    rows[i].time_s = team_rows[i].time_s;
+    rows[i].truth.p_WL_W = team_rows[i].x_true.segment<3>(Index::kPayloadPos);
+    rows[i].reference = team_rows[i].reference;
+    rows[i].estimate = rows[i].truth;
+  }
+  return FaultRecoveries(rows, windows, /*ground_truth=*/true);
+}
+
 }  // namespace
 
 RunResult RunTeamScenario(const Scenario& scenario, const Params& base_params,
@@ -306,6 +322,8 @@ RunResult RunTeamScenario(const Scenario& scenario, const Params& base_params,
           world.ApplyImpulse(e->on_payload ? -1 : e->vehicle.value_or(0), e->impulse_W_Ns, e->duration_s);
         } else if (const auto* v = dynamic_cast<const VelocityChangeEvent*>(action)) {
           world.AddVelocity(v->on_payload ? -1 : v->vehicle.value_or(0), v->dv_W_mps);
+        } else if (const auto* f = dynamic_cast<const FaultEvent*>(action)) {
+          world.faults(f->vehicle.value_or(0)).Inject(f->At(world.time_s()));
         }
       }
       world.GetTruth(&truth);
@@ -416,6 +434,8 @@ RunResult RunTeamScenario(const Scenario& scenario, const Params& base_params,
   metrics.sim_time_s = world.time_s();
   metrics.team->min_vehicle_separation_m = min_separation_m;
   ComputeTeamMetrics(result.team_rows, n, rate_steps, saturated, &metrics);
+  metrics.faults = TeamFaultRecoveries(result.team_rows,
+                                       FaultWindows(scenario.events, metrics.sim_time_s));
   metrics.wall_time_s = std::chrono::duration<double>(Clock::now() - wall_start).count();
   CheckExpectations(scenario.expect, &metrics);
   return result;

@@ -9,17 +9,20 @@
 #include <string>
 #include <vector>
 
+#include "event_body.h"
 #include "hpa/models/yaml_reader.h"
 #include "hpa/sim/world.h"
 
 namespace hpa {
 
-void FaultEvent::Apply(sim::World* world) const {
+sim::Fault FaultEvent::At(double now_s) const {
   sim::Fault f = fault;
-  f.start_s = world->time_s();
+  f.start_s = now_s;
   f.end_s = f.start_s + duration_s.value_or(std::numeric_limits<double>::infinity());
-  world->faults().Inject(f);
+  return f;
 }
+
+void FaultEvent::Apply(sim::World* world) const { world->faults().Inject(At(world->time_s())); }
 
 /// Reads a fault event's keys (component, mode, duration and the mode's own keys).
 std::shared_ptr<const EventAction> ParseFaultEvent(const YamlMap& map) {
@@ -50,6 +53,7 @@ std::shared_ptr<const EventAction> ParseFaultEvent(const YamlMap& map) {
     event->duration_s = 0.0;
   }
   event->tracking_bound_m = map.Number("tracking_bound", 0.001, 10.0, 0.1);
+  event->vehicle = EventVehicle(map);
   for (const sim::FaultKeyDecl& k : m->keys) {
     if (k.number != nullptr) {
       double value = 0.0;
@@ -85,6 +89,7 @@ std::vector<FaultWindow> FaultWindows(const std::vector<EventSpec>& events, doub
     w.start_s = events[i].at_s;
     if (fault->duration_s) w.end_s = events[i].at_s + *fault->duration_s;
     w.tracking_bound_m = fault->tracking_bound_m;
+    w.vehicle = fault->vehicle.value_or(0);
     windows.push_back(w);
   }
   std::stable_sort(windows.begin(), windows.end(), [](const FaultWindow& a, const FaultWindow& b) {

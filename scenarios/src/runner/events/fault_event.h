@@ -19,6 +19,9 @@ struct FaultEvent final : EventAction {
   sim::Fault fault;                  // its window is set when it is applied
   std::optional<double> duration_s;  // s (none: to the end of the run; 0: an instant)
   double tracking_bound_m = 0.1;     // the payload error counted as tracking again
+  std::optional<int> vehicle;        // the vehicle it hits (`vehicle`; a team's must name it)
+  /// The fault with its window from now_s for its duration.
+  sim::Fault At(double now_s) const;
   /// Injects the fault from the world's time now for its duration.
   void Apply(sim::World* world) const override;
 };

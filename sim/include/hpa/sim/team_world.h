@@ -126,6 +126,11 @@ class TeamWorld {
   /// and after every Step. A vehicle outside 0 .. N-1 throws std::out_of_range.
   Eigen::Vector3d GyroSample_B(int vehicle) const;
 
+  /// Vehicle's faults (faults.h), as the single World's faults(): a scenario's fault event on a
+  /// vehicle injects into them, and its motors read them (a motor's loss or failure); cleared by
+  /// Reset. A vehicle outside 0 .. N-1 throws std::out_of_range.
+  Faults& faults(int vehicle);
+
   /// Latched: a vehicle's contact with the ground, the payload or another vehicle (the latter
   /// named "vehicle 0 and vehicle 1 collide"), a vehicle's tilt > 90 deg, any body leaving the
   /// arena (kArenaHalfWidth_m, kArenaHeight_m), non-finite state. The reason names the vehicle.

@@ -61,6 +61,7 @@ struct FaultWindow {
   double start_s = 0.0;           // when it started
   std::optional<double> end_s;    // when it ended (none: it lasted to the end of the run)
   double tracking_bound_m = 0.1;  // payload error counted as tracking again
+  int vehicle = 0;                // the vehicle it hit (0: the single vehicle)
 };
 
 /// How the flight code recovered from one fault event (metrics.json `faults`); each time is null
@@ -189,7 +190,8 @@ struct Metrics {
 /// it), so that expect keys, sweeps and the JSON agree.
 struct UnmeasuredMetric {
   const char* json_key;      // its metrics.json path, dotted ("retaut.quad_vz_min_mps")
-  void (*mark)(Metrics* m);  // sets the field to not measured (nullptr: a count)
+  void (*mark)(Metrics* m);  // sets the field to not measured (nullptr: a count, or what the
+                             // run leaves null itself)
 };
 
 /// What a team run does not measure: the single vehicle's quadrotor, estimator, camera and
@@ -219,6 +221,13 @@ struct MetricsInputs {
   // the vehicle's physics-rate extremes over the log's span (UpdateVehicleExtremes, the runner's)
   VehicleMetrics extremes;
 };
+
+/// How the flight code recovered from each fault window, from the log's rows (a team's as rows of
+/// its payload's truth and reference): the span to the next fault, the payload's error and its
+/// return within the window's bound, the estimator's flags and counts (none with ground_truth).
+std::vector<FaultRecovery> FaultRecoveries(const std::vector<LogRow>& rows,
+                                           const std::vector<FaultWindow>& windows,
+                                           bool ground_truth);
 
 /// Computes every metric from the log (crash fields and timing are filled by the runner).
 void ComputeMetrics(const MetricsInputs& inputs, Metrics* metrics);
