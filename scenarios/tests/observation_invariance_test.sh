@@ -12,15 +12,21 @@ out=$3
 rm -rf "$out"
 mkdir -p "$out"
 
-# metrics that measure the machine, not the run
-timing='wall_time_s mpc_solve_ms render_ms image_model_ms detector_ms'
+# metrics that measure the machine, not the run (at any depth: each vehicle's solve_ms)
+timing='wall_time_s mpc_solve_ms render_ms image_model_ms detector_ms solve_ms'
 
 same() {  # same A_DIR B_DIR: every metric but timing equal
   python3 - "$1/metrics.json" "$2/metrics.json" "$timing" <<'PY'
 import json, sys
-a, b = (json.load(open(p)) for p in sys.argv[1:3])
 timing = set(sys.argv[3].split())
-diff = [k for k in sorted(set(a) | set(b)) if k not in timing and a.get(k) != b.get(k)]
+def strip(v):
+    if isinstance(v, dict):
+        return {k: strip(x) for k, x in v.items() if k not in timing}
+    if isinstance(v, list):
+        return [strip(x) for x in v]
+    return v
+a, b = (strip(json.load(open(p))) for p in sys.argv[1:3])
+diff = [k for k in sorted(set(a) | set(b)) if a.get(k) != b.get(k)]
 for k in diff:
     print(f"  {k}: {a.get(k)!r} != {b.get(k)!r}")
 sys.exit(1 if diff else 0)

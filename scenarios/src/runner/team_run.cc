@@ -1,10 +1,6 @@
 // The team runner (RunTeamScenario, docs/cooperative.md): N vehicles on their own cables carrying
-// one payload. The team's world, each vehicle's controller and autopilot and the motion-capture
-// system run on one lockstep clock at the physics rate; each vehicle's controller sees its own
-// state and the payload's as the motion-capture system delivered them (or the truth, with the
-// scenario's ground-truth switch), never another vehicle's.
-
-#include <unistd.h>
+// one payload. It sets up the team, its start and its flight code, flies the run loop
+// (team_run_loop.h) and computes the team's metrics from its log.
 
 #include <algorithm>
 #include <chrono>
@@ -14,16 +10,15 @@
 #include <optional>
 #include <stdexcept>
 
-#include "hpa/autopilot/autopilot.h"
 #include "hpa/controller/team_controller.h"
 #include "hpa/models/cooperative_model.h"
 #include "hpa/models/input_error.h"
-#include "hpa/models/lockstep.h"
 #include "hpa/models/rotor_model.h"
 #include "hpa/scenarios/runner.h"
 #include "hpa/sim/team_world.h"
 #include "scenarios/src/runner/events/fault_event.h"
 #include "scenarios/src/runner/team_flight_link.h"
+#include "scenarios/src/runner/team_run_loop.h"
 
 namespace hpa {
 namespace {
@@ -97,38 +92,10 @@ void CheckStart(const Scenario& scenario, const CooperativeTeam& team, const Eig
   }
 }
 
-// A body's pose and velocity from the team state (body -1: the payload).
-sim::BodyReading ReadingFromState(const Eigen::VectorXd& x, int body, double time_s) {
-  const int start = body < 0 ? 0 : Index::Vehicle(body);
-  sim::BodyReading r;
-  r.body = body;
-  r.capture_time_s = time_s;
-  r.p_W_m = x.segment<3>(start + Index::kVehiclePos);
-  r.v_W_mps = x.segment<3>(start + Index::kVehicleVel);
-  const Eigen::Vector4d q = x.segment<4>(start + Index::kVehicleQuat);
-  r.q_W = Eigen::Quaterniond(q(0), q(1), q(2), q(3));
-  r.w_body_radps = x.segment<3>(start + Index::kVehicleRate);
-  return r;
-}
-
 // Whether a status is a failed update (as the single vehicle's mpc_failures counts them).
 bool IsFailure(ControlStatus status) {
   return status == ControlStatus::kQpFailure || status == ControlStatus::kNonFinite ||
          status == ControlStatus::kFallback;
-}
-
-// The extremes of a team run at the physics rate (every step's truth, not only the log rows', so
-// a cable's snap is its peak whenever it falls): each cable's tension, each vehicle's and the
-// payload's tilt. Over the log's span (from the first step every vehicle has commanded): before
-// it the start's cables take the payload's weight as a step load (a peak of twice the static
-// tension in the first milliseconds), which says nothing of the flight.
-void UpdateExtremes(const sim::TeamTruth& truth, Metrics* m) {
-  for (size_t i = 0; i < m->vehicles.size(); ++i) {
-    const int start = Index::Vehicle(static_cast<int>(i)) + Index::kVehicleQuat;
-    UpdateVehicleExtremes(truth.x.segment<4>(start), truth.cable_tension_N[i], &m->vehicles[i]);
-  }
-  m->team->payload_tilt_max_deg =
-      std::max(m->team->payload_tilt_max_deg, TiltDeg(truth.x.segment<4>(Index::kPayloadQuat)));
 }
 
 // The payload's tracking and the team's metrics from the log (crash, timing, separation and the
@@ -257,8 +224,8 @@ RunResult RunTeamScenario(const Scenario& scenario, const Params& base_params,
   const Eigen::VectorXd x0 =
       StartState(scenario, model, reference->At(0.0).p_WL_W, params.payload_radius_m);
   CheckStart(scenario, team, x0);
-  sim::TeamWorld world(world_config);
-  world.Reset(x0);
+  auto world = std::make_unique<sim::TeamWorld>(world_config);
+  world->Reset(x0);
 
   std::unique_ptr<runner::TeamFlightLink> flight;
   if (options.flight_stack.empty()) {
@@ -284,156 +251,11 @@ RunResult RunTeamScenario(const Scenario& scenario, const Params& base_params,
   }
   metrics.flight_stack = flight->name();
   metrics.controller = flight->controller();
-  std::vector<std::unique_ptr<Autopilot>> autopilots;
-  const double rate_loop_hz = RateTable().imu.rate_hz;
-  for (int i = 0; i < n; ++i) {
-    autopilots.push_back(MakeAutopilot(params, scenario.rate_loop, rate_loop_hz));
-  }
-  LockstepClock clock(1.0 / sim::World::kPhysicsDt_s);
-  const int control_loop = clock.AddLoop("control", flight->RateHz());
-  const int rate_loop = clock.AddLoop("rate loop", rate_loop_hz);
-  double video_rate_hz = 0.0;
-  for (const RunRecorder* r : options.recorders)
-    video_rate_hz = std::max(video_rate_hz, r->video_rate_hz());
-  const int video_loop = video_rate_hz > 0.0 ? clock.AddLoop("video", video_rate_hz) : -1;
-
-  // what each vehicle's flight code holds: the latest reading of each body (payload first)
-  std::vector<std::optional<sim::BodyReading>> latest(static_cast<size_t>(n + 1));
-  std::vector<std::optional<BodyRateCommand>> command(static_cast<size_t>(n));
-  std::vector<TeamLogRow::Vehicle> last(static_cast<size_t>(n));
-  std::vector<int> rate_steps(static_cast<size_t>(n), 0), saturated(static_cast<size_t>(n), 0);
-  double min_separation_m = world.MinVehicleSeparation_m();
-  // refilled every physics step, their memory kept
-  sim::TeamTruth truth;
-  std::vector<sim::BodyReading> delivered;
-  size_t next_event = 0;
-  const long end_tick = std::lround(scenario.duration_s / sim::World::kPhysicsDt_s);
-  const bool show_progress = options.progress && isatty(STDERR_FILENO);
-  int last_pct = -1;
-  try {
-    for (long tick = 0; tick <= end_tick; ++tick, clock.Advance()) {
-      const double t = clock.time_s();
-      if (StopRequested() != 0) {
-        throw std::runtime_error("stopped by signal " + std::to_string(StopRequested()));
-      }
-      while (next_event < scenario.events.size() && scenario.events[next_event].at_s <= t + 1e-9) {
-        const EventAction* action = scenario.events[next_event++].action.get();
-        if (const auto* e = dynamic_cast<const ImpulseEvent*>(action)) {
-          world.ApplyImpulse(e->on_payload ? -1 : e->vehicle.value_or(0), e->impulse_W_Ns, e->duration_s);
-        } else if (const auto* v = dynamic_cast<const VelocityChangeEvent*>(action)) {
-          world.AddVelocity(v->on_payload ? -1 : v->vehicle.value_or(0), v->dv_W_mps);
-        } else if (const auto* f = dynamic_cast<const FaultEvent*>(action)) {
-          world.faults(f->vehicle.value_or(0)).Inject(f->At(world.time_s()));
-        }
-      }
-      world.GetTruth(&truth);
-      if (!result.team_rows.empty()) UpdateExtremes(truth, &metrics);
-      if (scenario.estimation.ground_truth) {
-        for (int body = -1; body < n; ++body) {
-          latest[static_cast<size_t>(body + 1)] = ReadingFromState(truth.x, body, t);
-        }
-      } else {
-        world.TakeDelivered(&delivered);
-        for (sim::BodyReading& r : delivered) {
-          latest[static_cast<size_t>(r.body + 1)] = r;
-        }
-      }
-      clock.BeginTick();
-      if (clock.Fires(control_loop)) {
-        TeamLogRow row;
-        row.time_s = t;
-        row.x_true = truth.x;
-        row.reference = reference->At(t);
-        // each vehicle's view: its own readings and the payload's, nothing of another vehicle's
-        std::vector<std::optional<TeamView>> views(static_cast<size_t>(n));
-        for (int i = 0; i < n; ++i) {
-          const std::optional<sim::BodyReading>& own = latest[static_cast<size_t>(i) + 1];
-          const std::optional<sim::BodyReading>& payload = latest[0];
-          if (!own || !payload) continue;
-          TeamView& view = views[static_cast<size_t>(i)].emplace();
-          view.time_s = t;
-          view.p_WQ_W = own->p_W_m;
-          view.v_WQ_W = own->v_W_mps;
-          view.q_WB = own->q_W;
-          view.w_B = scenario.estimation.ground_truth ? own->w_body_radps : world.GyroSample_B(i);
-          view.p_WL_W = payload->p_W_m;
-          view.v_WL_W = payload->v_W_mps;
-          view.q_WP = payload->q_W;
-          view.w_P = payload->w_body_radps;
-        }
-        const std::vector<std::optional<runner::TeamReply>> replies = flight->Step(views);
-        for (int i = 0; i < n; ++i) {
-          const size_t k = static_cast<size_t>(i);
-          TeamLogRow::Vehicle& v = last[k];
-          if (replies[k]) {
-            command[k] = replies[k]->output.command;
-            v.command = replies[k]->output.command;
-            v.status = replies[k]->output.status;
-            v.solve_time_ms = replies[k]->output.solve_time_ms;
-            v.taut_seen = replies[k]->cable_taut;
-          }
-          v.cable_length_m = truth.cable_length_m[k];
-          v.cable_tension_N = truth.cable_tension_N[k];
-          v.mode = truth.modes[k];
-        }
-        // a row once every vehicle has flown a command (the first readings take the
-        // motion-capture latency to arrive; until then the motors hold the start's hover)
-        if (std::all_of(command.begin(), command.end(),
-                        [](const auto& c) { return c.has_value(); })) {
-          row.vehicles = last;
-          result.team_rows.push_back(std::move(row));
-        }
-      }
-      if (clock.Fires(rate_loop)) {
-        for (int i = 0; i < n; ++i) {
-          const size_t k = static_cast<size_t>(i);
-          if (!command[k]) continue;
-          const AutopilotOutput out = autopilots[k]->Update(*command[k], world.GyroSample_B(i));
-          world.SetMotorSpeedCommand(i, out.w_cmd_radps);
-          last[k].mixer_saturated = out.saturated;
-          ++rate_steps[k];
-          saturated[k] += out.saturated ? 1 : 0;
-        }
-      }
-      if (video_loop >= 0 && clock.Fires(video_loop)) {
-        const TeamLogRow* latest_row =
-            result.team_rows.empty() ? nullptr : &result.team_rows.back();
-        for (RunRecorder* r : options.recorders) r->OnTeamVideoTick(world, latest_row);
-      }
-      if (tick == end_tick) break;
-      world.Step();
-      min_separation_m = std::min(min_separation_m, world.MinVehicleSeparation_m());
-      if (world.Crash().crashed) break;
-      if (show_progress) {
-        const int pct = static_cast<int>(100.0 * tick / std::max(end_tick, 1L));
-        if (pct != last_pct) {
-          last_pct = pct;
-          const double wall_s = std::chrono::duration<double>(Clock::now() - wall_start).count();
-          std::fprintf(stderr, "\r%s: %3d%%  t = %6.2f / %.2f s  (%.2f sim s per wall s)",
-                       scenario.name.c_str(), pct, t, scenario.duration_s,
-                       t / std::max(wall_s, 1e-9));
-        }
-      }
-    }
-    flight->Finish();
-  } catch (const std::exception& e) {
-    // keep what was computed: the metrics of the run so far, with the error named
-    metrics.run_error =
-        std::string(e.what()) + " (at t = " + std::to_string(world.time_s()) + " s)";
-  }
-  if (show_progress) std::fprintf(stderr, "\n");
-  // the last step's state (a crash ends the loop before its tick reads it)
-  world.GetTruth(&truth);
-  if (!result.team_rows.empty()) UpdateExtremes(truth, &metrics);
-  const sim::CrashStatus crash = world.Crash();
-  metrics.crashed = crash.crashed;
-  if (crash.crashed) {
-    metrics.crash_time_s = crash.time_s;
-    metrics.crash_reason = crash.reason;
-  }
-  metrics.sim_time_s = world.time_s();
-  metrics.team->min_vehicle_separation_m = min_separation_m;
-  ComputeTeamMetrics(result.team_rows, n, rate_steps, saturated, &metrics);
+  runner::TeamRunLoop loop(scenario, params, options, std::move(world), reference,
+                           std::move(flight), &result);
+  loop.Run();
+  loop.Finish();
+  ComputeTeamMetrics(result.team_rows, n, loop.rate_steps(), loop.saturated_steps(), &metrics);
   metrics.faults = TeamFaultRecoveries(result.team_rows,
                                        FaultWindows(scenario.events, metrics.sim_time_s));
   metrics.wall_time_s = std::chrono::duration<double>(Clock::now() - wall_start).count();

@@ -1,0 +1,92 @@
+#pragma once
+// The lockstep loop of one team run (private to the runner), in the shape of the single
+// vehicle's RunLoop: the team's world, each vehicle's flight code (through one TeamFlightLink)
+// and autopilot, and the per-tick steps, each a method of its own. Each vehicle's flight code
+// sees its own state and the payload's as motion capture delivered them (or the truth, with the
+// scenario's ground-truth switch), never another vehicle's.
+
+#include <Eigen/Core>
+#include <chrono>
+#include <memory>
+#include <optional>
+#include <vector>
+
+#include "hpa/autopilot/autopilot.h"
+#include "hpa/models/lockstep.h"
+#include "hpa/scenarios/runner.h"
+#include "hpa/sim/team_world.h"
+#include "scenarios/src/runner/team_flight_link.h"
+
+namespace hpa::runner {
+
+/// One team run's world, flight code and schedule; Run() steps it tick by tick.
+class TeamRunLoop {
+ public:
+  /// The team's world (reset to its start) flown by `flight` on the scenario's schedule; rows and
+  /// metrics go into *result, which must outlive the loop.
+  TeamRunLoop(const Scenario& scenario, const Params& params, const RunOptions& options,
+              std::unique_ptr<sim::TeamWorld> world, std::shared_ptr<const Reference> reference,
+              std::unique_ptr<TeamFlightLink> flight, RunResult* result);
+
+  /// Runs to the end, a crash or a stop request, then tells the flight code the run is over; an
+  /// error on the way ends the run with a run error naming it and its time (the results so far
+  /// are kept).
+  void Run();
+
+  /// The crash, the time reached, the vehicles' separation and the last step's extremes, into
+  /// the metrics (after Run).
+  void Finish();
+
+  /// Each vehicle's rate-loop allocations  (N)
+  const std::vector<int>& rate_steps() const { return rate_steps_; }
+  /// Each vehicle's allocations that fell short of its command  (N)
+  const std::vector<int>& saturated_steps() const { return saturated_; }
+
+ private:
+  using Clock = std::chrono::steady_clock;
+
+  bool Tick();  // one physics tick; false: the run ends here
+  void ApplyDueEvents(double t);
+  void ReadBodies(double t);  // this tick's truth, extremes and readings
+  void ControlStep(double t);
+  void RateLoopStep();
+  void VideoStep();
+  bool StepWorld();  // false: crashed
+  void ShowProgress(double t);
+
+  const Scenario& scenario_;
+  const RunOptions& options_;
+  RunResult* result_;
+  Metrics& metrics_;  // result_->metrics
+  Clock::time_point wall_start_;
+  int n_ = 0;  // vehicles
+
+  std::unique_ptr<sim::TeamWorld> world_;
+  std::shared_ptr<const Reference> reference_;  // for the log
+  std::unique_ptr<TeamFlightLink> flight_;      // each vehicle's controller
+  std::vector<std::unique_ptr<Autopilot>> autopilots_;  // each vehicle's rate loop  (N)
+
+  // schedule
+  long tick_ = 0, end_tick_ = 0;
+  LockstepClock clock_;
+  int control_loop_ = -1, rate_loop_ = -1, video_loop_ = -1;
+  size_t next_event_ = 0;
+
+  // what each vehicle's flight code holds: the latest reading of each body (payload first)
+  std::vector<std::optional<sim::BodyReading>> latest_;       // (N + 1)
+  std::vector<std::optional<BodyRateCommand>> command_;       // each vehicle's last  (N)
+  std::vector<TeamLogRow::Vehicle> last_;                     // each vehicle's log columns  (N)
+  std::vector<int> rate_steps_, saturated_;                   // (N each)
+  double min_separation_m_ = 0.0;
+  // refilled every physics step, their memory kept
+  sim::TeamTruth truth_;
+  std::vector<sim::BodyReading> delivered_;
+  bool show_progress_ = false;
+  int last_progress_pct_ = -1;
+};
+
+/// A vehicle's and the payload's extremes at the physics rate (UpdateVehicleExtremes per
+/// vehicle, and the payload's tilt).
+void UpdateTeamExtremes(const sim::TeamTruth& truth, Metrics* metrics);
+
+}  // namespace hpa::runner
