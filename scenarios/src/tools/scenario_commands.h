@@ -1,6 +1,7 @@
 #pragma once
-// `hpa run`, `hpa compare` and `hpa render-frame` (scenario_commands.cc), which hpa_main.cc
-// dispatches to, and the exit codes every `hpa` command returns.
+// `hpa run`, `hpa compare` and `hpa render-frame` (run_command.cc, compare_command.cc,
+// render_frame_command.cc), which hpa_main.cc dispatches to, and the exit codes every `hpa`
+// command returns.
 
 namespace hpa {
 
