@@ -125,5 +125,13 @@ for key in ("payload_lost", "estimator_resets", "rejected_updates", "health_flag
     assert f[key] is None, (key, f[key])
 assert m["fault_recovery"]["tracking_error_max_m"] > 0.1, m["fault_recovery"]
 PY
+# hpa compare on a team: the team's metrics, none of what a team does not measure
+"$hpa" compare "$base" --out "$out/compare" --quiet > /dev/null 2>&1 || fail "team compare exited $?"
+for row in "cable tension max \[N\]" "vehicle separation min \[m\]" "payload tilt max \[deg\]"; do
+  grep -Eq "^\| $row \| [0-9]" "$out/compare/comparison.md" ||
+    fail "team comparison lacks the row '$row': $(cat "$out/compare/comparison.md")"
+done
+grep -q "mode accuracy\|payload in view" "$out/compare/comparison.md" &&
+  fail "team comparison has rows a team does not measure: $(cat "$out/compare/comparison.md")"
 [ "$failures" -eq 0 ] && echo "team CLI: all checks passed"
 exit "$failures"

@@ -121,6 +121,14 @@ const std::vector<UnmeasuredMetric>& TeamUnmeasuredMetrics() {
   return list;
 }
 
+bool TeamMeasures(const std::string& json_path) {
+  for (const UnmeasuredMetric& u : TeamUnmeasuredMetrics()) {
+    const std::string unmeasured = u.json_key;
+    if (json_path == unmeasured || json_path.rfind(unmeasured + ".", 0) == 0) return false;
+  }
+  return true;
+}
+
 void MarkUnmeasured(const std::vector<UnmeasuredMetric>& unmeasured, Metrics* m) {
   for (const UnmeasuredMetric& u : unmeasured) {
     if (u.mark != nullptr) u.mark(m);

@@ -330,14 +330,10 @@ void CheckTeamScenario(const YamlMap& root, const Scenario& s) {
       throw InputError(root.file(), path,
                        "bounds a team's metric (" + k.metric + "); this scenario flies one vehicle");
     }
-    if (!s.team.IsTeam()) continue;
-    for (const UnmeasuredMetric& u : TeamUnmeasuredMetrics()) {
-      const std::string unmeasured = u.json_key;
-      if (k.metric == unmeasured || k.metric.rfind(unmeasured + ".", 0) == 0) {
-        throw InputError(root.file(), path,
-                         "bounds " + k.metric + ", which a team run does not measure (the single "
-                         "vehicle's quadrotor, estimator, camera and contact metrics)");
-      }
+    if (s.team.IsTeam() && !TeamMeasures(k.metric)) {
+      throw InputError(root.file(), path,
+                       "bounds " + k.metric + ", which a team run does not measure (the single "
+                       "vehicle's quadrotor, estimator, camera and contact metrics)");
     }
   }
 }

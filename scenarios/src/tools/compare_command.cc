@@ -100,10 +100,16 @@ std::string ComparisonTable(const std::vector<RunResult>& results,
              "`, which flew as " + results[i].metrics.controller + " (flight_stack " +
              results[i].metrics.flight_stack + ")\n";
   }
-  // the rows: every metric of the metric table with a label, read from each run's metrics.json
+  // the rows: every metric of the metric table with a label that this kind of run measures (a
+  // team's metrics for a team, none of what a team does not measure), read from each run's
+  // metrics.json
+  const bool team = results.front().metrics.team.has_value();
   std::vector<const MetricDef*> rows;
   for (const MetricDef& def : MetricDefs()) {
-    if (!def.label.empty()) rows.push_back(&def);
+    if (def.label.empty()) continue;
+    const bool team_metric = def.json_path.rfind("team.", 0) == 0;
+    if (team ? !TeamMeasures(def.json_path) : team_metric) continue;
+    rows.push_back(&def);
   }
   std::vector<nlohmann::json> metrics;
   for (const RunResult& r : results)

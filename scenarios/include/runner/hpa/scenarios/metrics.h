@@ -198,6 +198,10 @@ struct UnmeasuredMetric {
 /// contact metrics. The one list the team runner marks and MetricsToJson writes null.
 const std::vector<UnmeasuredMetric>& TeamUnmeasuredMetrics();
 
+/// Whether a team run measures the metric at this metrics.json path (dotted): false for a path
+/// of TeamUnmeasuredMetrics() or inside one.
+bool TeamMeasures(const std::string& json_path);
+
 /// Marks every metric of `unmeasured` not measured in m.
 void MarkUnmeasured(const std::vector<UnmeasuredMetric>& unmeasured, Metrics* m);
 
