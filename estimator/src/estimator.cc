@@ -9,6 +9,7 @@
 #include <memory>
 
 #include "cable_estimator.h"
+#include "hpa/estimator/vehicle_filter.h"
 
 namespace hpa {
 
@@ -44,10 +45,7 @@ void CableEstimator::OnImu(const ImuSample& imu) {
 
 void CableEstimator::OnVio(const VioSample& vio) {
   quad_.UpdateVio(vio);
-  if (vio.p_WB_W.allFinite() && vio.v_WB_W.allFinite() && vio.q_WB.coeffs().allFinite() &&
-      std::isfinite(vio.time_s)) {
-    last_vio_ = vio;
-  }
+  if (VioUsable(vio)) last_vio_ = vio;
   CheckHealth();
 }
 

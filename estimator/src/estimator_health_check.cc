@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "cable_estimator.h"
+#include "hpa/estimator/vehicle_filter.h"
 
 namespace hpa {
 
@@ -13,16 +14,10 @@ namespace hpa {
 // and the detector's error) re-initialises the filter that holds it, counted by cause.
 void CableEstimator::CheckHealth() {
   const QuadFilterState& quad = quad_.state();
-  if (!quad.p_WB_W.allFinite() || !quad.v_WB_W.allFinite() || !quad.q_WB.coeffs().allFinite() ||
-      !quad.w_B_radps.allFinite() || !quad_.covariance().allFinite()) {
+  if (!QuadFilterFinite(quad_)) {
     if (!last_vio_) return;  // nothing to start from yet; Estimate falls back to the hover
     ++health_resets_.quad_non_finite;
-    QuadFilterState from_vio;
-    from_vio.time_s = last_vio_->time_s;
-    from_vio.p_WB_W = last_vio_->p_WB_W;
-    from_vio.v_WB_W = last_vio_->v_WB_W;
-    from_vio.q_WB = last_vio_->q_WB;
-    quad_ = QuadFilter(params_, config_.quad_filter, from_vio);
+    quad_ = QuadFilterFromVio(params_, config_.quad_filter, *last_vio_);
   }
   Eigen::Vector3d p_WL_W, v_WL_W;
   PayloadAt(quad.time_s, quad.p_WB_W, quad.v_WB_W, &p_WL_W, &v_WL_W);
