@@ -17,6 +17,7 @@
 #include "hpa/models/params.h"
 #include "hpa/models/rotor_model.h"
 #include "hpa/models/seed_streams.h"
+#include "specific_force.h"
 #include "world_detail.h"
 
 namespace hpa::sim {
@@ -57,29 +58,12 @@ std::string TakeWarnings() {
 }
 
 World::World(const WorldConfig& config)
-    : config_(config),
-      world_params_(config.params),
-      rng_(config.seed),
-      sensors_(MakeSensors(config, &rng_)),
-      faults_(config.seed),
-      disturbances_(*this, config) {
-  // each sensor's output reaches its reader after the latency it declares
-  for (size_t i = 0; i < sensors_.size(); ++i) {
-    const SensorDeclaration& d = sensors_[i]->declaration();
-    sensor_lines_.push_back(static_cast<int>(deliveries_.size()));
-    deliveries_.emplace_back(d.latency_s);
-    const int index = static_cast<int>(i);
-    if (d.name == "imu") imu_sensor_ = index;
-    if (d.name.rfind("rate gyro", 0) == 0) rate_gyro_sensor_ = index;
-    if (d.name == "vio") vio_sensor_ = index;
-  }
-  // read at the start of a tick
+    : config_(config), world_params_(config.params), sensors_(config), faults_(config.seed) {
+  // read at the start of a tick, delivered after the sensors' lines
   gripper_sensor_ = std::make_unique<GripperSensor>(config);
-  gripper_line_ = static_cast<int>(deliveries_.size());
-  deliveries_.emplace_back(gripper_sensor_->declaration().latency_s);
+  gripper_line_ = sensors_.AddLine(gripper_sensor_->declaration().latency_s);
   camera_ = std::make_unique<PayloadCameraSensor>(config);
-  camera_line_ = static_cast<int>(deliveries_.size());
-  deliveries_.emplace_back(camera_->declaration().latency_s);
+  camera_line_ = sensors_.AddLine(camera_->declaration().latency_s);
   InstallWarningHandler();
   LoadScene();
   ResolveIds();
@@ -92,7 +76,8 @@ World::World(const WorldConfig& config)
   VehicleBinding binding;
   binding.model = model_;
   binding.data = data_;
-  for (int i = 0; i < 4; ++i) binding.rotor_actuator[static_cast<size_t>(i)] = ids_.rotor_actuator[i];
+  for (int i = 0; i < 4; ++i)
+    binding.rotor_actuator[static_cast<size_t>(i)] = ids_.rotor_actuator[i];
   binding.params = &world_params_;
   binding.actuation = &config_.profile.actuation;
   binding.faults = &faults_;
@@ -128,6 +113,7 @@ World::World(const WorldConfig& config)
   hand.step = &step_;
   hand.t0_s = &t0_s_;
   gripper_.emplace(hand);
+  BindDisturbances();
   ApplyWorldParams();
   renderer_ = std::unique_ptr<Renderer>(new Renderer(*this));
 
@@ -136,6 +122,21 @@ World::World(const WorldConfig& config)
   initial.p_WQ_W = Eigen::Vector3d(0, 0, 1.0);
   initial.p_WL_W = initial.p_WQ_W - Eigen::Vector3d(0, 0, world_params_.cable_length_m);
   Reset(initial);
+}
+
+// Forces, impulses, velocity changes and the air on this world's quadrotor and payload.
+void World::BindDisturbances() {
+  DisturbancesBinding air;
+  air.model = model_;
+  air.data = data_;
+  air.vehicles.push_back({ids_.quad_body, ids_.quad_jnt_qpos, ids_.quad_jnt_dof, &world_params_});
+  air.payload_body = ids_.payload_body;
+  air.payload_dof = ids_.payload_jnt_dof;
+  air.payload_radius_m = &world_params_.payload_radius_m;
+  air.aero = &config_.profile.aero;
+  air.step = &step_;
+  disturbances_.emplace(air, config_.profile.wind, config_.rates.physics_hz,
+                        DeriveSeed(config_.seed, SeedStream::kWind));
 }
 
 // Loads the MJCF; any load error or warning is bad input naming the file.
@@ -209,8 +210,8 @@ void World::ApplyOverrides() {
     if (!InDeclRange(d, *value)) {
       mj_deleteModel(model_);
       throw InputError("", key,
-                       "expected " + ParamValueText(d.min) + " to " + ParamValueText(d.max) +
-                           " " + d.unit + ", got " + ParamValueText(*value));
+                       "expected " + ParamValueText(d.min) + " to " + ParamValueText(d.max) + " " +
+                           d.unit + ", got " + ParamValueText(*value));
     }
     world_params_.*member = *value;
   };
@@ -232,13 +233,11 @@ void World::Reset(const SystemState& initial) {
   warning_count_.assign(mjNWARNING, 0);
 
   // disturbances, gripper, sensors, crash flag
-  disturbances_.ClearForces();
+  disturbances_->ClearForces();
   gripper_->Reset();
-  rng_.seed(config_.seed);
-  for (const std::unique_ptr<Sensor>& sensor : sensors_) sensor->Reset();
+  sensors_.Reset();
   camera_->Reset();
-  for (DelayLine<SensorMessage>& line : deliveries_) line.Clear();
-  disturbances_.ResetWind();
+  disturbances_->ResetWind();
   crash_ = CrashStatus{};
   faults_.Clear();
 
@@ -290,7 +289,7 @@ void World::Step() {
     gripper_->Open();  // a gripper fault lets go
   }
   vehicle_->WriteMotorControls();
-  disturbances_.Apply();
+  disturbances_->Apply();
 
   // dynamics at t_k and integration to t_{k+1}, then kinematics at t_{k+1}
   mj_step2(model_, data_);
@@ -304,25 +303,12 @@ void World::Step() {
   SensorInput in;
   in.t_k_s = t0_s_ + (step_ - 1) * kPhysicsDt_s;
   in.state = &before;
-  in.specific_force_B_mps2 = QuadSpecificForce_B(before.q_WB);
-  for (size_t i = 0; i < sensors_.size(); ++i) {
-    if (std::optional<SensorMessage> m = sensors_[i]->Sample(in)) {
-      DelayLine<SensorMessage>& line = deliveries_[static_cast<size_t>(sensor_lines_[i])];
-      line.Push(Sensor::CaptureTime(*m), std::move(*m));
-      constexpr size_t kMaxQueued = 1000;  // 2 s of IMU samples if the caller never takes them
-      if (line.size() > kMaxQueued) line.DropOldest();
-    }
-  }
+  in.specific_force_B_mps2 = SpecificForce_B(data_, ids_.quad_jnt_dof, before.q_WB,
+                                             Eigen::Vector3d(0, 0, -world_params_.gravity_mps2));
+  sensors_.Sample(in);
   if (contacts_->Update()) LatchCrash("rotor_strike");
   gripper_->UpdateContact();
   CheckCrash();
-}
-
-Eigen::Vector3d World::QuadSpecificForce_B(const Eigen::Quaterniond& q_WB) const {
-  const Eigen::Vector3d a_W(data_->qacc[ids_.quad_jnt_dof], data_->qacc[ids_.quad_jnt_dof + 1],
-                            data_->qacc[ids_.quad_jnt_dof + 2]);
-  const Eigen::Vector3d g_W(0, 0, world_params_.gravity_mps2);
-  return q_WB.normalized().toRotationMatrix().transpose() * (a_W + g_W);
 }
 
 double World::time_s() const { return t0_s_ + step_ * kPhysicsDt_s; }
@@ -358,35 +344,17 @@ std::vector<SensorMessage> World::TakeDelivered() {
 }
 
 void World::TakeDelivered(std::vector<SensorMessage>* out) {
-  out->clear();
-  for (DelayLine<SensorMessage>& line : deliveries_) {
-    while (std::optional<SensorMessage> m = line.PopReady(time_s())) out->push_back(std::move(*m));
-  }
-  if (!faults_.empty()) faults_.FilterDelivered(time_s(), out);
+  sensors_.TakeDelivered(time_s(), &faults_, out);
 }
 
-void World::AddSensor(std::unique_ptr<Sensor> sensor) {
-  sensor->Reset();
-  sensor_lines_.push_back(static_cast<int>(deliveries_.size()));
-  deliveries_.emplace_back(sensor->declaration().latency_s);
-  sensors_.push_back(std::move(sensor));
-}
+void World::AddSensor(std::unique_ptr<Sensor> sensor) { sensors_.AddSensor(std::move(sensor)); }
 
 std::vector<SensorMessage> World::TakeInFlight() {
-  std::vector<SensorMessage> out;
-  for (DelayLine<SensorMessage>& line : deliveries_) {
-    while (std::optional<SensorMessage> m = line.PopReady(1e300)) out.push_back(std::move(*m));
-  }
-  if (!faults_.empty()) {
-    faults_.FilterDelivered(time_s(), &out);
-    faults_.TakeHeld(&out);
-  }
-  return out;
+  return sensors_.TakeInFlight(time_s(), &faults_);
 }
 
 std::optional<CameraCapture> World::CaptureTickStart(const cv::Rect& region) {
-  deliveries_[static_cast<size_t>(gripper_line_)].Push(
-      time_s(), gripper_sensor_->Sample(time_s(), gripper_->active()));
+  sensors_.Push(gripper_line_, time_s(), gripper_sensor_->Sample(time_s(), gripper_->active()));
   std::optional<PayloadDetection> detection;
   std::optional<CameraCapture> capture = camera_->Capture(
       *this, step_, time_s(), region, faults_.empty() ? nullptr : &faults_, &detection);
@@ -398,7 +366,7 @@ std::optional<CameraCapture> World::CaptureTickStart(const cv::Rect& region) {
   }
   if (detection) {
     const double capture_time_s = detection->time_s;
-    deliveries_[static_cast<size_t>(camera_line_)].Push(capture_time_s, std::move(*detection));
+    sensors_.Push(camera_line_, capture_time_s, std::move(*detection));
   }
   return capture;
 }
@@ -417,7 +385,7 @@ void World::QueueCameraMessage(SensorMessage message) {
     if (const auto* d = std::get_if<PayloadDetection>(&message)) detection = *d;
     faults_.OnCameraReading(capture_time_s, GetTruth().state, world_params_, true, &detection);
   }
-  deliveries_[static_cast<size_t>(camera_line_)].Push(capture_time_s, std::move(message));
+  sensors_.Push(camera_line_, capture_time_s, std::move(message));
 }
 
 }  // namespace hpa::sim

@@ -9,13 +9,14 @@ namespace hpa {
 
 /// One named random stream; the value is its salt (ASCII of its name, kept for reproducibility).
 enum class SeedStream : uint64_t {
-  kMismatch = 0x6D69736D61746368ULL,  // "mismatch": the profile's model-mismatch draw
-  kVioDrift = 0x76696FULL,            // "vio": VIO drift, dropouts and re-localisation jumps
-  kWind = 0x77696E64ULL,              // "wind": gusts
-  kRateGyro = 0x726174656779ULL,      // "rategy": the rate loop's own gyro noise
-  kAppearance = 0x6C69676874ULL,      // "light": randomised lighting and colours
-  kCameraImage = 0x63616D657261ULL,   // "camera": the rendered camera's image-noise offsets
-  kAnalyticCamera = 17,               // the analytic camera's detection noise
+  kMismatch = 0x6D69736D61746368ULL,      // "mismatch": the profile's model-mismatch draw
+  kVioDrift = 0x76696FULL,                // "vio": VIO drift, dropouts and re-localisation jumps
+  kWind = 0x77696E64ULL,                  // "wind": gusts
+  kRateGyro = 0x726174656779ULL,          // "rategy": the rate loop's own gyro noise
+  kAppearance = 0x6C69676874ULL,          // "light": randomised lighting and colours
+  kCameraImage = 0x63616D657261ULL,       // "camera": the rendered camera's image-noise offsets
+  kAnalyticCamera = 17,                   // the analytic camera's detection noise
+  kOnboardSensors = 0x6F6E626F617264ULL,  // "onboard": a team vehicle's IMU, VIO and rate gyro
 };
 
 /// The seed of `stream` for a run seeded `seed` (a golden-ratio multiplier, then the salt).
@@ -30,6 +31,12 @@ constexpr uint64_t SplitMix64(uint64_t x) {
   x = (x ^ (x >> 30)) * 0xBF58476D1CE4E5B9ULL;
   x = (x ^ (x >> 27)) * 0x94D049BB133111EBULL;
   return x ^ (x >> 31);
+}
+
+/// The seed of `stream` for vehicle `vehicle` of a team run seeded `seed`: one independent seed
+/// per vehicle (the stream's seed plus the vehicle index, mixed by SplitMix64).
+constexpr uint64_t DeriveVehicleSeed(uint64_t seed, SeedStream stream, int vehicle) {
+  return SplitMix64(DeriveSeed(seed, stream) + static_cast<uint64_t>(vehicle));
 }
 
 }  // namespace hpa

@@ -1,9 +1,12 @@
 #pragma once
 // The simulated world of a team (docs/cooperative.md): N quadrotors on their own cables carrying
 // one rigid-body payload, in MuJoCo (the scene of CooperativeSceneXml), at the single-vehicle
-// world's 1 kHz. Each vehicle has its own first-order motors, its own rate gyro, and the team's
-// motion-capture system reports every body's pose and velocity at its declared rate, latency and
-// noise (RotorTM's experiments fly on one). MuJoCo stays inside sim/src; flight code never sees it.
+// world's 1 kHz. Each vehicle has the single vehicle's components: its first-order motors
+// (vehicle.h), its faults (faults.h) and, when asked for, its onboard sensors (IMU, VIO, the rate
+// gyro: sensor_suite.h); the world's disturbances (disturbances.h) push, drag and blow on every
+// body. The team's motion-capture system reports every body's pose and velocity at its declared
+// rate, latency and noise (RotorTM's experiments fly on one), and each vehicle has a simple rate
+// gyro of its own. MuJoCo stays inside sim/src; flight code never sees it.
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
@@ -37,30 +40,37 @@ struct MocapConfig {
 struct TeamWorldConfig {
   CooperativeTeam team;                                   // payload and N vehicles
   std::string scene_path = DataPath("models/scene.xml");  // single-vehicle scene it is built from
-  uint64_t seed = 1;                                      // the one generator for all its noise
+  uint64_t seed = 1;  // the motion capture's generator; every other stream derived from it
   MocapConfig mocap;
   GlBackend gl_backend = GlBackend::kOsMesa;  // GL context of the video's cameras (renderer())
+  SensorNoiseConfig noise;                    // each vehicle's IMU and VIO noise (as WorldConfig's)
+  RateTable rates;  // physics (1 kHz), IMU and VIO rates and latencies (as WorldConfig's)
+  // realism parts (default: all off, the ideal world): the onboard sensors' (imu, vio,
+  // rate_gyro) and the air's (aero, wind); a team's actuation stays ideal
+  WorldProfile profile;
+  // each vehicle carries the single vehicle's IMU, VIO and rate gyro (off: none sampled)
+  bool onboard_sensors = false;
 };
 
 /// One body's pose and velocity as the motion-capture system saw it.
 struct BodyReading {
-  int body = -1;               // -1: the payload; 0 .. N-1: that vehicle
+  int body = -1;                // -1: the payload; 0 .. N-1: that vehicle
   double capture_time_s = 0.0;  // when it was sampled (delivered latency_s later)
-  Eigen::Vector3d p_W_m = Eigen::Vector3d::Zero();                  // position, world (3)
-  Eigen::Vector3d v_W_mps = Eigen::Vector3d::Zero();                // velocity, world (3)
-  Eigen::Quaterniond q_W = Eigen::Quaterniond::Identity();          // attitude in world
-  Eigen::Vector3d w_body_radps = Eigen::Vector3d::Zero();           // body rate, body frame (3)
+  Eigen::Vector3d p_W_m = Eigen::Vector3d::Zero();          // position, world (3)
+  Eigen::Vector3d v_W_mps = Eigen::Vector3d::Zero();        // velocity, world (3)
+  Eigen::Quaterniond q_W = Eigen::Quaterniond::Identity();  // attitude in world
+  Eigen::Vector3d w_body_radps = Eigen::Vector3d::Zero();   // body rate, body frame (3)
 };
 
 /// Ground truth of a team now.
 struct TeamTruth {
   double time_s = 0.0;
-  Eigen::VectorXd x;                  // CooperativeStateIndex layout, 13 (N + 1)
-  std::vector<double> cable_length_m;  // each vehicle's cable, |p_A_i - p_Q_i|  (N)
-  std::vector<double> cable_tension_N; // each cable's tendon limit force  (N)
-                                       // (>= 0, a pull; the force of the last step, as Truth's)
-  std::vector<CableMode> modes;        // taut iff the cable is within 1 mm of its length  (N)
-  Eigen::VectorXd motor_speed_radps;   // actual rotor speeds, vehicle by vehicle  (4N)
+  Eigen::VectorXd x;                    // CooperativeStateIndex layout, 13 (N + 1)
+  std::vector<double> cable_length_m;   // each vehicle's cable, |p_A_i - p_Q_i|  (N)
+  std::vector<double> cable_tension_N;  // each cable's tendon limit force  (N)
+                                        // (>= 0, a pull; the force of the last step, as Truth's)
+  std::vector<CableMode> modes;         // taut iff the cable is within 1 mm of its length  (N)
+  Eigen::VectorXd motor_speed_radps;    // actual rotor speeds, vehicle by vehicle  (4N)
 };
 
 /// The team's world, stepped by the team runner in lockstep with each vehicle's flight code.
@@ -127,9 +137,29 @@ class TeamWorld {
   Eigen::Vector3d GyroSample_B(int vehicle) const;
 
   /// Vehicle's faults (faults.h), as the single World's faults(): a scenario's fault event on a
-  /// vehicle injects into them, and its motors read them (a motor's loss or failure); cleared by
-  /// Reset. A vehicle outside 0 .. N-1 throws std::out_of_range.
+  /// vehicle injects into them, its motors read them (a motor's loss or failure) and its onboard
+  /// sensors' delivery goes through them (an imu or vio fault); cleared by Reset. A vehicle
+  /// outside 0 .. N-1 throws std::out_of_range.
   Faults& faults(int vehicle);
+
+  /// Whether each vehicle carries onboard sensors (config.onboard_sensors).
+  bool onboard_sensors() const;
+  /// Vehicle's onboard sensors, the single vehicle's MakeSensors list for its params and the
+  /// team's noise, rates and profile, its generator seeded per vehicle
+  /// (DeriveVehicleSeed(seed, SeedStream::kOnboardSensors, vehicle)); empty without onboard
+  /// sensors. Sampled after every Step on the vehicle's true state at the step's start (its
+  /// attachment point as the payload) and the specific force of that step. A vehicle outside
+  /// 0 .. N-1 throws std::out_of_range.
+  const std::vector<std::unique_ptr<Sensor>>& sensors(int vehicle) const;
+  /// Vehicle's onboard sensor messages whose latency has passed, sensor by sensor in capture
+  /// order, through its faults (as World::TakeDelivered), into `out` (cleared first, its memory
+  /// kept). A vehicle outside 0 .. N-1 throws std::out_of_range.
+  void TakeDelivered(int vehicle, std::vector<SensorMessage>* out);
+
+  /// Forces, impulses, velocity changes, wind and drag on the team's bodies (disturbances.h;
+  /// BodyRef(-1) is the payload, BodyRef(i) vehicle i). With the profile's aero part each
+  /// vehicle feels the single quadrotor's drag (its own params' box) and the payload a sphere's.
+  Disturbances& disturbances();
 
   /// Latched: a vehicle's contact with the ground, the payload or another vehicle (the latter
   /// named "vehicle 0 and vehicle 1 collide"), a vehicle's tilt > 90 deg, any body leaving the

@@ -30,6 +30,7 @@
 #include "hpa/sim/payload_camera.h"
 #include "hpa/sim/renderer.h"
 #include "hpa/sim/sensor_models.h"
+#include "hpa/sim/sensor_suite.h"
 #include "hpa/sim/sensors.h"
 #include "hpa/sim/vehicle.h"
 #include "hpa/sim/wind.h"
@@ -118,7 +119,7 @@ class World {
   Truth GetTruth() const;
   /// The world's sensors, in the order it samples them (each declares its rate, latency and
   /// noise).
-  const std::vector<std::unique_ptr<Sensor>>& sensors() const { return sensors_; }
+  const std::vector<std::unique_ptr<Sensor>>& sensors() const { return sensors_.sensors(); }
   /// Every sensor message whose latency has passed, sensor by sensor in the list's order, each
   /// sensor's in capture order (what the flight computer receives after this step).
   std::vector<SensorMessage> TakeDelivered();
@@ -167,7 +168,7 @@ class World {
   /// The gripper (gripper.h): grab, move and release events act on it.
   Gripper& gripper() { return *gripper_; }
   /// Forces, impulses, velocity changes and wind (disturbances.h): their events act on it.
-  Disturbances& disturbances() { return disturbances_; }
+  Disturbances& disturbances() { return *disturbances_; }
   /// Contact episodes and the payload's distance to the vehicle (contacts.h).
   const Contacts& contacts() const { return *contacts_; }
   /// The payload and chase cameras (renderer.h).
@@ -185,6 +186,7 @@ class World {
   };
 
   void LoadScene();
+  void BindDisturbances();
   void ResolveIds();
   void ApplyOverrides();
   void ApplyWorldParams();
@@ -194,14 +196,11 @@ class World {
   void CheckWarnings();
   void DrawMismatch();
   void LatchCrash(const std::string& reason);
-  // specific force R^T (a + g e3) from qacc (time t_k) in the attitude q_WB of that same time
-  Eigen::Vector3d QuadSpecificForce_B(const Eigen::Quaterniond& q_WB) const;
 
   WorldConfig config_;
   Params world_params_;
   friend struct WorldInternals;  // sim/src/world_internals.h: MuJoCo access for sim tests
-  // the components reach the model, the data and the step through their world
-  friend class Disturbances;
+  // the renderer reaches the model, the data and the step through its world
   friend class Renderer;
   mjModel_* model_ = nullptr;
   mjData_* data_ = nullptr;
@@ -210,14 +209,11 @@ class World {
   int64_t step_ = 0;
   std::vector<int> warning_count_;  // per MuJoCo warning kind (mjNWARNING)
 
-  std::mt19937_64 rng_;  // the IMU's and VIO's noise
-  std::vector<std::unique_ptr<Sensor>> sensors_;
-  std::vector<DelayLine<SensorMessage>> deliveries_;  // one per sensor, its declared latency
-  std::vector<int> sensor_lines_;                     // each of sensors_'s place in deliveries_
-  int imu_sensor_ = -1, rate_gyro_sensor_ = -1, vio_sensor_ = -1;  // their places in sensors_
+  // the IMU, rate gyro and VIO with their noise generator, and every sensor's delay line
+  SensorSuite sensors_;
   std::unique_ptr<GripperSensor> gripper_sensor_;
   std::unique_ptr<PayloadCameraSensor> camera_;
-  int gripper_line_ = -1, camera_line_ = -1;  // their places in deliveries_ (after the sensors')
+  int gripper_line_ = -1, camera_line_ = -1;  // their lines in sensors_ (after the sensors')
 
   Faults faults_;  // sensor and actuator faults (empty: every hook skipped)
   CrashStatus crash_;
@@ -225,11 +221,12 @@ class World {
   // the components, stepped by Step in its order
   std::optional<Vehicle> vehicle_;  // bound to the rotors once the model and data exist
   // the actuation spread drawn with the mismatch, before the vehicle is bound  (4 each)
-  Eigen::Vector4d rotor_kf_draw_ = Eigen::Vector4d::Ones(), rotor_km_draw_ = Eigen::Vector4d::Ones();
-  std::optional<Gripper> gripper_;  // bound to the scene's hand once it is loaded
-  Disturbances disturbances_;
-  std::optional<Contacts> contacts_;  // bound to the scene's geometry once it is loaded
-  std::unique_ptr<Renderer> renderer_;  // made once the model is loaded; released first
+  Eigen::Vector4d rotor_kf_draw_ = Eigen::Vector4d::Ones(),
+                  rotor_km_draw_ = Eigen::Vector4d::Ones();
+  std::optional<Gripper> gripper_;            // bound to the scene's hand once it is loaded
+  std::optional<Disturbances> disturbances_;  // bound to the scene's bodies once it is loaded
+  std::optional<Contacts> contacts_;          // bound to the scene's geometry once it is loaded
+  std::unique_ptr<Renderer> renderer_;        // made once the model is loaded; released first
 };
 
 }  // namespace hpa::sim
