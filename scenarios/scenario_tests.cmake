@@ -248,3 +248,10 @@ add_test(NAME cli.python_team_stack
          COMMAND bash ${SCEN}/tests/python_team_stack_test.sh ${HPA_BIN} ${CMAKE_SOURCE_DIR}
                  ${HPA_PYTHON3})
 set_tests_properties(cli.python_team_stack PROPERTIES LABELS "cli;scenario" TIMEOUT 300)
+
+# Bad input around vehicles (a vehicle index out of range in an event, a fault or a --set path, a
+# team's key on one vehicle, a single vehicle's key on a team, a team's gripper) refused naming
+# the key, and vehicle 0 of a single vehicle flown
+add_test(NAME cli.vehicle_input
+         COMMAND bash ${SCEN}/tests/vehicle_input_test.sh ${HPA_BIN} ${CMAKE_SOURCE_DIR})
+set_tests_properties(cli.vehicle_input PROPERTIES LABELS cli TIMEOUT 600)

@@ -3,8 +3,6 @@
 #include <algorithm>
 #include <cctype>
 #include <cmath>
-#include <cstdlib>
-#include <sstream>
 
 #include "hpa/controller/controller_registry.h"
 #include "hpa/controller/team_controller.h"
@@ -16,9 +14,10 @@
 #include "hpa/models/yaml_reader.h"
 #include "hpa/scenarios/expect_keys.h"
 #include "hpa/scenarios/metrics.h"
-#include "scenarios/src/runner/events/fault_event.h"
 #include "hpa/scenarios/reference_types.h"
 #include "hpa/scenarios/world_profile_yaml.h"
+#include "scenarios/src/runner/events/event_vehicles.h"
+#include "scenarios/src/runner/scenario_set_path.h"
 
 namespace hpa {
 namespace {
@@ -67,91 +66,6 @@ ExpectSpec ParseExpect(const YamlMap& e) {
   e.RejectUnknownKeys();
   return x;
 }
-
-bool IsNumber(const std::string& s, double* v = nullptr) {
-  char* end = nullptr;
-  const double d = std::strtod(s.c_str(), &end);
-  if (s.empty() || *end != '\0' || !std::isfinite(d)) return false;
-  if (v) *v = d;
-  return true;
-}
-
-// A list index written the one way it can be: 0, 1, 2, ... (no sign, point, exponent or leading
-// zero), so one list element cannot be varied under two spellings.
-bool ListIndex(const std::string& s, double* v) {
-  if (s.empty() || s.size() > 9 || s.find_first_not_of("0123456789") != std::string::npos ||
-      (s.size() > 1 && s[0] == '0')) {
-    return false;
-  }
-  *v = std::stod(s);
-  return true;
-}
-
-// The YAML text of a set value ("0.5", "[0, 0, 1]", "hpa_mpc") as a node; malformed YAML is bad
-// input naming where the value came from and its key.
-YAML::Node ParseValue(const std::string& value, const std::string& path, const std::string& file) {
-  try {
-    return LoadYamlText(value, file);
-  } catch (const InputError& e) {
-    throw InputError(file, path, "malformed value '" + value + "': " + e.detail());
-  }
-}
-
-// Sets a dotted path in a YAML tree to a value; throws InputError if the path does not exist
-// (maps may gain a missing last key; list indices must exist).
-void SetDottedPath(YAML::Node root, const std::string& path, const std::string& value,
-                   const std::string& file) {
-  std::vector<std::string> parts;
-  std::stringstream ss(path);
-  for (std::string p; std::getline(ss, p, '.');) parts.push_back(p);
-  if (parts.empty()) throw InputError(file, path, "empty key path");
-  // walk with node handles; yaml-cpp nodes are references into the tree
-  std::vector<YAML::Node> chain{root};
-  std::string walked;
-  for (size_t i = 0; i + 1 < parts.size(); ++i) {
-    YAML::Node cur = chain.back();
-    walked += (walked.empty() ? "" : ".") + parts[i];
-    YAML::Node next;
-    if (cur.IsSequence()) {
-      double idx;
-      if (!ListIndex(parts[i], &idx) || idx >= cur.size()) {
-        throw InputError(file, path,
-                         "'" + walked + "' is not an index of the list (size " +
-                             std::to_string(cur.size()) + "; indices are written 0, 1, 2, ...)");
-      }
-      next = cur[static_cast<size_t>(idx)];
-    } else if (cur.IsMap()) {
-      if (!cur[parts[i]]) {
-        if (IsNumber(parts[i + 1])) {
-          throw InputError(file, path,
-                           "'" + walked + "' is not in the base scenario, so '" + parts[i + 1] +
-                               "' is not an index of a list");
-        }
-        cur[parts[i]] = YAML::Node(YAML::NodeType::Map);
-      }
-      next = cur[parts[i]];
-    } else {
-      throw InputError(file, path, "'" + walked + "' is not a map or a list in the base scenario");
-    }
-    chain.push_back(next);
-  }
-  YAML::Node parent = chain.back();
-  const std::string& last = parts.back();
-  if (parent.IsSequence()) {
-    double idx;
-    if (!ListIndex(last, &idx) || idx >= parent.size()) {
-      throw InputError(file, path,
-                       "'" + last + "' is not an index of the list (size " +
-                           std::to_string(parent.size()) + "; indices are written 0, 1, 2, ...)");
-    }
-    parent[static_cast<size_t>(idx)] = ParseValue(value, path, file);
-  } else if (parent.IsMap() || parent.IsNull()) {
-    parent[last] = ParseValue(value, path, file);
-  } else {
-    throw InputError(file, path, "parent of the last key is a scalar in the base scenario");
-  }
-}
-
 
 // The `payload:` and `vehicles:` blocks of a team scenario; each number within the range
 // params.yaml declares for the single vehicle's field it stands for.
@@ -214,8 +128,9 @@ void AsSingleVehicle(const YamlMap& root, Scenario* s) {
   const std::string file = root.file();
   const std::string vehicle_path = root.KeyPath("vehicles") + ".0";
   const VehicleSpec& vehicle = s->team.vehicles.front();
-  const char* why = "; one vehicle carries the payload as a point mass on its cable (the single "
-                    "vehicle's model, N = 1)";
+  const char* why =
+      "; one vehicle carries the payload as a point mass on its cable (the single "
+      "vehicle's model, N = 1)";
   if (!vehicle.p_PA_P_m.isZero(0.0)) {
     throw InputError(file, vehicle_path + ".attach_m",
                      std::string("must be [0, 0, 0] or left out") + why);
@@ -223,19 +138,20 @@ void AsSingleVehicle(const YamlMap& root, Scenario* s) {
   if (vehicle.start_slack_m != 0.0) {
     throw InputError(file, vehicle_path + ".start_slack_m",
                      std::string("must be 0 or left out: one vehicle starts at rest on its taut "
-                                 "cable") + why);
+                                 "cable") +
+                         why);
   }
   YAML::Node params =
       root.Has("params") ? YAML::Clone(root.Node("params")) : YAML::Node(YAML::NodeType::Map);
   // a value of the vehicle list into the params block, unless that block sets it otherwise
-  const auto into_params = [&](const std::string& key_path, double Params::*member,
-                               const char* key, double value) {
+  const auto into_params = [&](const std::string& key_path, double Params::*member, const char* key,
+                               double value) {
     const std::string section = ParamSection(member);
     const YAML::Node given = params[section][key];
     if (given && given.IsScalar() && given.as<double>() != value) {
       throw InputError(file, key_path,
-                       "says " + given.as<std::string>() + " where params." + section + "." +
-                           key + " says otherwise; give it once");
+                       "says " + given.as<std::string>() + " where params." + section + "." + key +
+                           " says otherwise; give it once");
     }
     params[section][key] = value;
   };
@@ -249,9 +165,9 @@ void AsSingleVehicle(const YamlMap& root, Scenario* s) {
     const std::string path = root.KeyPath("payload");
     for (const char* key : {"inertia_kgm2", "on_ground"}) {
       if (payload[key] && !(std::string(key) == "on_ground" && !s->team.payload_on_ground)) {
-        throw InputError(file, path + "." + key,
-                         std::string("belongs to a team's rigid payload (two vehicles or more)") +
-                             why);
+        throw InputError(
+            file, path + "." + key,
+            std::string("belongs to a team's rigid payload (two vehicles or more)") + why);
       }
     }
     if (payload["mass_kg"]) {
@@ -267,6 +183,40 @@ void AsSingleVehicle(const YamlMap& root, Scenario* s) {
   s->team = TeamSpec();
 }
 
+// Refuses the keys a team scenario would fly without them changing anything: what the single
+// vehicle's camera, estimator and realism profile read (a team flies the ideal world on motion
+// capture, with its profile's rate loop), and the params a team gives per vehicle and payload.
+void CheckTeamKeys(const YamlMap& root) {
+  const auto refuse_keys = [&](const char* block, const std::vector<std::string>& kept,
+                               const std::string& why) {
+    if (!root.Has(block)) return;
+    for (const auto& entry : root.Node(block)) {
+      const std::string key = entry.first.as<std::string>();
+      if (std::find(kept.begin(), kept.end(), key) != kept.end()) continue;
+      throw InputError(root.file(), root.KeyPath(block) + "." + key, why);
+    }
+  };
+  refuse_keys("estimation", {"ground_truth"},
+              "a team's vehicles fly on the motion-capture system, with no payload camera and no "
+              "estimator: of the estimation block a team takes ground_truth only");
+  refuse_keys("world", {"profile", "rate_loop"},
+              "a team flies the ideal world's bodies and motors (docs/cooperative.md): of the "
+              "world block a team takes profile and rate_loop only (the payload's mass is "
+              "payload.mass_kg, each cable's length its vehicle's cable_length_m)");
+  if (!root.Has("params")) return;
+  const YAML::Node params = root.Node("params");
+  const auto refuse_param = [&](double Params::*member, const std::string& where) {
+    const std::string section = ParamSection(member);
+    const std::string& key = FindParamDecl(ParamsTables(), member).key;
+    if (params[section] && params[section].IsMap() && params[section][key]) {
+      throw InputError(root.file(), root.KeyPath("params") + "." + section + "." + key,
+                       "a team does not fly it: its value is " + where);
+    }
+  };
+  refuse_param(&Params::cable_length_m, "each vehicle's vehicles.I.cable_length_m");
+  refuse_param(&Params::payload_mass_kg, "the payload block's payload.mass_kg");
+}
+
 // What a team scenario can say and a single-vehicle one cannot, and the other way round: a team
 // flies the ideal world (the realism profile's parts are the single vehicle's) and takes pushes
 // only (on the payload or a vehicle named by `vehicle`); one vehicle is vehicle 0.
@@ -276,64 +226,23 @@ void CheckTeamScenario(const YamlMap& root, const Scenario& s) {
     root.Fail("world", "a team scenario flies the ideal world (world: {profile: ideal}); the '" +
                            s.world.name + "' profile's parts are the single vehicle's");
   }
-  if (s.team.IsTeam() && s.estimation.estimator) {
-    root.Fail("estimation", "a team's vehicles fly on the motion-capture system; no estimator");
-  }
-  for (size_t i = 0; i < s.events.size(); ++i) {
-    const EventAction* action = s.events[i].action.get();
-    const auto* impulse = dynamic_cast<const ImpulseEvent*>(action);
-    const auto* velocity = dynamic_cast<const VelocityChangeEvent*>(action);
-    const auto* fault = dynamic_cast<const FaultEvent*>(action);
-    const std::string path = root.KeyPath("events") + "." + std::to_string(i);
-    if (s.team.IsTeam() && fault != nullptr && fault->fault.component != sim::FaultComponent::kMotor) {
-      throw InputError(root.file(), path + ".component",
-                       "a team's vehicles fly on motion capture and their rate gyros: of the "
-                       "single vehicle's faults only a motor's reaches them, not a '" +
-                           fault->component + "' fault");
-    }
-    if (s.team.IsTeam() && impulse == nullptr && velocity == nullptr && fault == nullptr) {
-      throw InputError(root.file(), path,
-                       "a team scenario takes impulse, velocity_change and motor fault events "
-                       "only, not '" +
-                           s.events[i].type + "'");
-    }
-    const std::optional<int> named = impulse    ? impulse->vehicle
-                                     : velocity ? velocity->vehicle
-                                     : fault    ? fault->vehicle
-                                                : std::nullopt;
-    const bool on_payload = impulse ? impulse->on_payload : velocity && velocity->on_payload;
-    if (named && on_payload) {
-      throw InputError(root.file(), path + ".vehicle",
-                       "names the quadrotor a `body: quadrotor` event acts on; this event acts on "
-                       "the payload");
-    }
-    if (s.team.IsTeam() && !named && !on_payload) {
-      throw InputError(root.file(), path + ".vehicle",
-                       std::string(fault ? "a team's fault" : "a team's quadrotor event") +
-                           " names its vehicle (0 to " +
-                           std::to_string(vehicles - 1) + ")");
-    }
-    const int vehicle = named.value_or(0);
-    if (vehicle >= std::max(vehicles, 1)) {
-      throw InputError(root.file(), path + ".vehicle",
-                       "vehicle " + std::to_string(vehicle) + " is not in the scenario (" +
-                           std::to_string(std::max(vehicles, 1)) + " vehicle" +
-                           (vehicles > 1 ? "s" : "") + ", counted from 0)");
-    }
-  }
+  if (s.team.IsTeam()) CheckTeamKeys(root);
+  CheckEventVehicles(s.events, vehicles, root);
   // bounds on what this kind of run measures: a team's keys need a team, and a team does not
   // measure the single vehicle's quadrotor, estimator, camera or contact metrics
   for (const ExpectKey& k : ExpectKeys()) {
     if (!s.expect.Has(k.key)) continue;
     const std::string path = root.KeyPath("expect") + "." + k.key;
     if (!s.team.IsTeam() && k.metric.rfind("team.", 0) == 0) {
-      throw InputError(root.file(), path,
-                       "bounds a team's metric (" + k.metric + "); this scenario flies one vehicle");
+      throw InputError(
+          root.file(), path,
+          "bounds a team's metric (" + k.metric + "); this scenario flies one vehicle");
     }
     if (s.team.IsTeam() && !TeamMeasures(k.metric)) {
       throw InputError(root.file(), path,
-                       "bounds " + k.metric + ", which a team run does not measure (the single "
-                       "vehicle's quadrotor, estimator, camera and contact metrics)");
+                       "bounds " + k.metric +
+                           ", which a team run does not measure (the single "
+                           "vehicle's quadrotor, estimator, camera and contact metrics)");
     }
   }
 }
@@ -477,6 +386,11 @@ Scenario LoadScenarioText(const std::string& text, const std::string& path,
   if (!root.IsMap()) throw InputError(path, "", "expected a YAML map at the top level");
   if (sets.empty()) return ParseScenario(YamlMap(root, path, ""), reference_csv_text);
   for (const ScenarioSet& set : sets) SetDottedPath(root, set.first, set.second, origin);
+  // a bad value names the set it came from: `--set KEY=VALUE`, or the sweep file with the value
+  const auto source = [&](const ScenarioSet& set) {
+    return origin == "--set" ? "--set " + set.first + "=" + set.second
+                             : origin + " (" + set.first + " = " + set.second + ")";
+  };
   try {
     return ParseScenario(YamlMap(root, path, ""), reference_csv_text);
   } catch (const InputError& e) {
@@ -484,10 +398,7 @@ Scenario LoadScenarioText(const std::string& text, const std::string& path,
     for (auto it = sets.rbegin(); it != sets.rend(); ++it) {
       const std::string& key = it->first;
       if (e.key() == key || e.key().rfind(key + ".", 0) == 0 || key.rfind(e.key() + ".", 0) == 0) {
-        const std::string source = origin == "--set"
-                                       ? "--set " + key + "=" + it->second
-                                       : origin + " (" + key + " = " + it->second + ")";
-        throw InputError(source, e.key(), e.detail());
+        throw InputError(source(*it), e.key(), e.detail());
       }
     }
     throw;

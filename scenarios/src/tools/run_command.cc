@@ -8,6 +8,7 @@
 #include <string>
 
 #include "hpa/controller/controller_registry.h"
+#include "hpa/models/input_error.h"
 #include "hpa/models/params.h"
 #include "hpa/scenarios/plot_canvas.h"
 #include "hpa/scenarios/plots.h"
@@ -118,6 +119,21 @@ void AddRunOptions(CLI::App& app, RunArgs* a) {
       ->default_str("per_vehicle");
 }
 
+// Refuses --team-stack where it would change nothing: on a single-vehicle scenario, and on a
+// team flown in process (it chooses how a team's separate flight stacks run).
+void CheckTeamStackOption(const CLI::App& app, const Scenario& scenario, const RunArgs& a) {
+  if (app.count("--team-stack") == 0) return;
+  if (!scenario.team.IsTeam()) {
+    throw InputError("", "--team-stack",
+                     "this scenario flies one vehicle; --team-stack chooses how a team's separate "
+                     "flight stacks run");
+  }
+  if (a.flight_stack.empty()) {
+    throw InputError("", "--team-stack",
+                     "only with --flight-stack: a team flown in process starts no stack process");
+  }
+}
+
 // The run's options from the command line (a video's recorder is added beside them).
 RunOptions RunOptionsOf(const ScenarioOptions& o, const RunArgs& a) {
   RunOptions options;
@@ -146,6 +162,7 @@ int RunMain(int argc, char** argv) {
     CheckControllerType(a.controller, "", "--controller", scenario.team.IsTeam());
     scenario.controller.type = a.controller;
   }
+  CheckTeamStackOption(app, scenario, a);
   if (a.out_dir.empty()) a.out_dir = "out/" + scenario.name;
   MakeOutputDir(a.out_dir);
   RemoveStaleOutputs(a.out_dir);

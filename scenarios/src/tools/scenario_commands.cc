@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "hpa/models/file_io.h"
+#include "hpa/models/input_error.h"
 #include "hpa/models/params.h"
 #include "hpa/models/yaml_reader.h"
 #include "hpa/scenarios/plot_canvas.h"
@@ -45,6 +46,12 @@ Scenario LoadScenarioOf(const ScenarioOptions& o) {
   for (const std::string& text : o.sets) sets.push_back(ParseSetArgument(text));
   Scenario s = LoadScenario(o.scenario_file, sets, "--set");
   if (o.seed) s.seed = *o.seed;
+  if (!o.camera.empty() && s.team.IsTeam()) {
+    // a team's vehicles carry no payload camera into the run: a camera choice would change nothing
+    throw InputError("", "--camera",
+                     "a team scenario flies on motion capture, with no payload camera "
+                     "(docs/cooperative.md); leave --camera out");
+  }
   if (!o.camera.empty()) s.estimation.camera = o.camera;
   return s;
 }

@@ -1,0 +1,109 @@
+// A scenario's YAML tree changed at a dotted key path (scenario_set_path.h).
+
+#include "scenarios/src/runner/scenario_set_path.h"
+
+#include <cmath>
+#include <cstdlib>
+#include <sstream>
+#include <vector>
+
+#include "hpa/models/input_error.h"
+#include "hpa/models/yaml_reader.h"
+
+namespace hpa {
+namespace {
+
+bool IsNumber(const std::string& s, double* v = nullptr) {
+  char* end = nullptr;
+  const double d = std::strtod(s.c_str(), &end);
+  if (s.empty() || *end != '\0' || !std::isfinite(d)) return false;
+  if (v) *v = d;
+  return true;
+}
+
+// A list index written the one way it can be: 0, 1, 2, ... (no sign, point, exponent or leading
+// zero), so one list element cannot be varied under two spellings.
+bool ListIndex(const std::string& s, double* v) {
+  if (s.empty() || s.size() > 9 || s.find_first_not_of("0123456789") != std::string::npos ||
+      (s.size() > 1 && s[0] == '0')) {
+    return false;
+  }
+  *v = std::stod(s);
+  return true;
+}
+
+// The index `part` of a list of `size` entries that `walked` (the path so far, `part` last)
+// names; InputError naming the whole path when it is not one (a sign, a point, a name, past the
+// end: a set changes an entry, it adds none).
+size_t ListEntry(const std::string& part, size_t size, const std::string& walked,
+                 const std::string& path, const std::string& file) {
+  double idx = 0.0;
+  const bool index = ListIndex(part, &idx);
+  if (index && idx < size) return static_cast<size_t>(idx);
+  const std::string entries = size == 0 ? "the list is empty"
+                                        : "the list has " + std::to_string(size) + " entr" +
+                                              (size == 1 ? "y" : "ies") + ", indices 0 to " +
+                                              std::to_string(size - 1);
+  throw InputError(file, path,
+                   "'" + walked + "': " +
+                       (index ? "index " + part + " is past the end of the list"
+                              : "'" + part + "' is not a list index (written 0, 1, 2, ...)") +
+                       " (" + entries + "; a set changes an entry, it adds none)");
+}
+
+// The YAML text of a set value ("0.5", "[0, 0, 1]", "hpa_mpc") as a node; malformed YAML is bad
+// input naming where the value came from and its key.
+YAML::Node ParseValue(const std::string& value, const std::string& path, const std::string& file) {
+  try {
+    return LoadYamlText(value, file);
+  } catch (const InputError& e) {
+    throw InputError(file, path, "malformed value '" + value + "': " + e.detail());
+  }
+}
+
+}  // namespace
+
+// Sets a dotted path in a YAML tree to a value; throws InputError if the path does not exist
+// (maps may gain a missing last key; list indices must exist).
+void SetDottedPath(YAML::Node root, const std::string& path, const std::string& value,
+                   const std::string& file) {
+  std::vector<std::string> parts;
+  std::stringstream ss(path);
+  for (std::string p; std::getline(ss, p, '.');) parts.push_back(p);
+  if (parts.empty()) throw InputError(file, path, "empty key path");
+  // walk with node handles; yaml-cpp nodes are references into the tree
+  std::vector<YAML::Node> chain{root};
+  std::string walked;
+  for (size_t i = 0; i + 1 < parts.size(); ++i) {
+    YAML::Node cur = chain.back();
+    walked += (walked.empty() ? "" : ".") + parts[i];
+    YAML::Node next;
+    if (cur.IsSequence()) {
+      next = cur[ListEntry(parts[i], cur.size(), walked, path, file)];
+    } else if (cur.IsMap()) {
+      if (!cur[parts[i]]) {
+        if (IsNumber(parts[i + 1])) {
+          throw InputError(file, path,
+                           "'" + walked + "' is not in the base scenario, so '" + parts[i + 1] +
+                               "' is not an index of a list");
+        }
+        cur[parts[i]] = YAML::Node(YAML::NodeType::Map);
+      }
+      next = cur[parts[i]];
+    } else {
+      throw InputError(file, path, "'" + walked + "' is not a map or a list in the base scenario");
+    }
+    chain.push_back(next);
+  }
+  YAML::Node parent = chain.back();
+  const std::string& last = parts.back();
+  if (parent.IsSequence()) {
+    parent[ListEntry(last, parent.size(), path, path, file)] = ParseValue(value, path, file);
+  } else if (parent.IsMap() || parent.IsNull()) {
+    parent[last] = ParseValue(value, path, file);
+  } else {
+    throw InputError(file, path, "parent of the last key is a scalar in the base scenario");
+  }
+}
+
+}  // namespace hpa
