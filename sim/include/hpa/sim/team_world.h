@@ -94,7 +94,8 @@ class TeamWorld {
   /// Places every body at x0 (CooperativeStateIndex layout, velocities and rates as given),
   /// each vehicle's motors (and command) at the speed that holds its own weight and its cable's
   /// share of the payload's (slack cable: its own weight only), time = 0; clears the delivery
-  /// queues and the crash flag and re-seeds the noise, so a Reset world replays the same noise.
+  /// queues, the faults, the pushes (the wind back to its start) and the crash flag, resets the
+  /// onboard sensors and re-seeds every generator, so a Reset world replays the same noise.
   /// A cable is taut when its vehicle is within World::kTautLengthTolerance_m of its length
   /// from its attachment point; the taut cables' shares are the tensions along them that hold
   /// the payload's weight with no net moment about its centre (least squares, minimum norm).
@@ -113,7 +114,7 @@ class TeamWorld {
   /// gives it. A body outside -1 .. N-1 throws std::out_of_range, a non-finite change
   /// std::invalid_argument.
   void AddVelocity(int body, const Eigen::Vector3d& dv_W_mps);
-  /// Advances 1 ms: motors, mj_step, sensors, crash check.
+  /// Advances 1 ms: motors, disturbances, mj_step, sensors, crash check.
   void Step();
   /// Simulated time (s), a multiple of World::kPhysicsDt_s.
   double time_s() const;
