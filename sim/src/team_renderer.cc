@@ -141,6 +141,9 @@ struct TeamRenderer::Impl {
   std::unique_ptr<OffscreenRenderer> offscreen;
   int chase_camera = -1, payload_body = -1;
   std::vector<int> onboard_camera, cable_tendon;  // (n)
+  std::vector<int> strut_geoms;                   // the payload's visual struts (0 .. n)
+  std::vector<std::array<float, 4>> strut_rgba;   // their colours in the video (as strut_geoms)
+  std::vector<double> onboard_fovy_deg;           // the onboard cameras' fovy in the video  (n)
   double chase_distance_m = 3.0;                  // from the team's centre
   float cable_width_m = 0.002f;                   // the scene's own width
 
@@ -202,6 +205,23 @@ struct TeamRenderer::Impl {
   void SetCableWidth(double width_m) {
     for (int i = 0; i < n; ++i) m->tendon_width[cable_tendon[i]] = width_m;
   }
+
+  // the payload camera's look: vehicle's camera at fovy_deg, the struts in the vehicles' grey
+  void SetPayloadCameraLook(int vehicle, double fovy_deg) {
+    constexpr std::array<float, 4> kVehicleGreyRgba = {0.15f, 0.15f, 0.18f, 1.0f};
+    m->cam_fovy[onboard_camera[vehicle]] = fovy_deg;
+    for (int g : strut_geoms) {
+      std::copy(kVehicleGreyRgba.begin(), kVehicleGreyRgba.end(), m->geom_rgba + 4 * g);
+    }
+  }
+
+  // the video's look back: every onboard camera's own fovy, the struts' own colours
+  void SetVideoLook() {
+    for (int i = 0; i < n; ++i) m->cam_fovy[onboard_camera[i]] = onboard_fovy_deg[i];
+    for (size_t k = 0; k < strut_geoms.size(); ++k) {
+      std::copy(strut_rgba[k].begin(), strut_rgba[k].end(), m->geom_rgba + 4 * strut_geoms[k]);
+    }
+  }
 };
 
 TeamRenderer::TeamRenderer(const TeamWorld& world) : impl_(std::make_unique<Impl>(world)) {
@@ -233,6 +253,15 @@ TeamRenderer::TeamRenderer(const TeamWorld& world) : impl_(std::make_unique<Impl
     r.cable_tendon.push_back(mj_name2id(r.m, mjOBJ_TENDON, ("cable_" + s).c_str()));
   }
   r.cable_width_m = static_cast<float>(r.m->tendon_width[r.cable_tendon.front()]);
+  // the payload's struts: its geoms other than the ball (visual only)
+  const int ball = mj_name2id(r.m, mjOBJ_GEOM, "payload_sphere");
+  for (int g = 0; g < r.m->ngeom; ++g) {
+    if (r.m->geom_bodyid[g] != r.payload_body || g == ball) continue;
+    r.strut_geoms.push_back(g);
+    const float* rgba = r.m->geom_rgba + 4 * g;
+    r.strut_rgba.push_back({rgba[0], rgba[1], rgba[2], rgba[3]});
+  }
+  for (int i = 0; i < r.n; ++i) r.onboard_fovy_deg.push_back(r.m->cam_fovy[r.onboard_camera[i]]);
 
   // the chase distance: the hanging team's farthest body from its centre, plus room to move,
   // inside the vertical field of view
@@ -286,6 +315,31 @@ cv::Mat TeamRenderer::RenderOnboardCamera(int vehicle) {
   cv::Mat bgr;
   RenderOnboardCamera(vehicle, kOnboardWidthPx, kOnboardHeightPx, &bgr);
   return bgr;
+}
+
+void TeamRenderer::RenderOnboardCamera(int vehicle, int width_px, int height_px, double fovy_deg,
+                                       bool show_cables, cv::Mat* bgr) {
+  Impl& r = *impl_;
+  if (vehicle < 0 || vehicle >= r.n) {
+    throw std::out_of_range("TeamRenderer::RenderOnboardCamera: no vehicle " +
+                            std::to_string(vehicle));
+  }
+  if (!(fovy_deg > 0.0 && fovy_deg < 180.0)) {
+    throw std::invalid_argument("TeamRenderer::RenderOnboardCamera: fovy " +
+                                std::to_string(fovy_deg) + " deg is not in (0, 180)");
+  }
+  const auto t0 = std::chrono::steady_clock::now();
+  r.Pose();
+  r.SetPayloadCameraLook(vehicle, fovy_deg);
+  try {
+    r.offscreen->Render(r.d, r.onboard_camera[vehicle], width_px, height_px, show_cables, bgr);
+  } catch (...) {
+    r.SetVideoLook();
+    throw;
+  }
+  r.SetVideoLook();
+  last_render_ms_ =
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
 }
 
 cv::Scalar TeamRenderer::VehicleColorBgr(int vehicle) const {

@@ -45,6 +45,15 @@ class TeamRenderer {
   void RenderOnboardCamera(int vehicle, int width_px, int height_px, cv::Mat* bgr);
   /// As above at kOnboardWidthPx x kOnboardHeightPx, returned.
   cv::Mat RenderOnboardCamera(int vehicle);
+  /// Vehicle's payload camera now into `bgr` as the camera image model expects its pinhole
+  /// render (CameraImageModel: the sensor's size, its render_fovy_deg()): the vehicle's Params
+  /// mount at width_px x height_px and vertical field of view fovy_deg, the cables drawn iff
+  /// show_cables (CameraImageProfile::draw_cable), the payload's struts in the vehicles' dark
+  /// grey (the detector looks for one red ball; a red strut would join its blob). The video's
+  /// cameras are left as they were. Throws std::invalid_argument for fovy_deg outside (0, 180),
+  /// else as the RenderOnboardCamera above.
+  void RenderOnboardCamera(int vehicle, int width_px, int height_px, double fovy_deg,
+                           bool show_cables, cv::Mat* bgr);
 
   /// Vehicle's colour in the pictures (its rotor discs; BGR, 0..255), for an inset's frame.
   cv::Scalar VehicleColorBgr(int vehicle) const;
