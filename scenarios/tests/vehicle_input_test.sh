@@ -42,17 +42,19 @@ done
 # a vehicle's map takes no index: an unknown key of vehicle 1, named with the set
 expect_exit 2 "error: --set vehicles.1.0.cable_length_m=0.4: key 'vehicles.1.0': unknown key" run "$team" \
   --set vehicles.1.0.cable_length_m=0.4 --out "$bad"
-expect_exit 2 "key 'vehicles.5.attach_m': 'vehicles.5': index 5 is past the end of the list \(the \
-list has 2 entries, indices 0 to 1" run "$team" --set 'vehicles.5.attach_m=[0, 0, 0]' --out "$bad"
-expect_exit 2 "key 'events.3.vehicle': 'events.3': index 3 is past the end" run "$team" \
-  --set events.3.vehicle=0 --out "$bad"
+expect_exit 2 "key 'vehicles.5.attach_m': '5' is not an index of the list vehicles \(it has 2 \
+entries, indices 0 to 1" run "$team" --set 'vehicles.5.attach_m=[0, 0, 0]' --out "$bad"
+expect_exit 2 "key 'vehicles.-1.cable_length_m': '-1' is not an index of the list vehicles" \
+  run "$team" --set vehicles.-1.cable_length_m=0.4 --out "$bad"
+expect_exit 2 "key 'events.3.vehicle': '3' is not an index of the list events \(it has 1 entry" \
+  run "$team" --set events.3.vehicle=0 --out "$bad"
 expect_exit 2 "error: --set: key 'vehicles.0.cable_length_m': 'vehicles' is not in the base scenario" \
   run "$hover" --set vehicles.0.cable_length_m=0.4 --out "$bad"
 
 # a sweep's drawn path is checked the same way before any run, naming the sweep file
 printf 'base: %s\nruns: 2\nvary:\n  vehicles.5.cable_length_m: {uniform: [0.4, 0.6]}\n' "$team" \
   > "$out/sweep.yaml"
-expect_exit 2 "sweep.yaml.*key 'vehicles.5.cable_length_m': 'vehicles.5': index 5 is past the end" \
+expect_exit 2 "sweep.yaml.*key 'vehicles.5.cable_length_m': '5' is not an index of the list" \
   sweep "$out/sweep.yaml" --out "$out/sweep"
 
 # vehicle 0 on a single vehicle is the documented default: flown (a short run; exit 0 or 1)

@@ -32,23 +32,21 @@ bool ListIndex(const std::string& s, double* v) {
   return true;
 }
 
-// The index `part` of a list of `size` entries that `walked` (the path so far, `part` last)
-// names; InputError naming the whole path when it is not one (a sign, a point, a name, past the
-// end: a set changes an entry, it adds none).
-size_t ListEntry(const std::string& part, size_t size, const std::string& walked,
+// The index `part` of the list at `list_path` with `size` entries; InputError naming the whole
+// path when `part` is not one (a sign, a point, a name, past the end: a set changes an entry, it
+// adds none).
+size_t ListEntry(const std::string& part, size_t size, const std::string& list_path,
                  const std::string& path, const std::string& file) {
   double idx = 0.0;
-  const bool index = ListIndex(part, &idx);
-  if (index && idx < size) return static_cast<size_t>(idx);
-  const std::string entries = size == 0 ? "the list is empty"
-                                        : "the list has " + std::to_string(size) + " entr" +
+  if (ListIndex(part, &idx) && idx < size) return static_cast<size_t>(idx);
+  const std::string entries = size == 0 ? "it is empty"
+                                        : "it has " + std::to_string(size) + " entr" +
                                               (size == 1 ? "y" : "ies") + ", indices 0 to " +
                                               std::to_string(size - 1);
   throw InputError(file, path,
-                   "'" + walked + "': " +
-                       (index ? "index " + part + " is past the end of the list"
-                              : "'" + part + "' is not a list index (written 0, 1, 2, ...)") +
-                       " (" + entries + "; a set changes an entry, it adds none)");
+                   "'" + part + "' is not an index of the list " + list_path + " (" + entries +
+                       "; indices are written 0, 1, 2, ...; a set changes an entry, it adds "
+                       "none)");
 }
 
 // The YAML text of a set value ("0.5", "[0, 0, 1]", "hpa_mpc") as a node; malformed YAML is bad
@@ -76,10 +74,11 @@ void SetDottedPath(YAML::Node root, const std::string& path, const std::string& 
   std::string walked;
   for (size_t i = 0; i + 1 < parts.size(); ++i) {
     YAML::Node cur = chain.back();
+    const std::string list_path = walked;  // the path to cur, for a list's message
     walked += (walked.empty() ? "" : ".") + parts[i];
     YAML::Node next;
     if (cur.IsSequence()) {
-      next = cur[ListEntry(parts[i], cur.size(), walked, path, file)];
+      next = cur[ListEntry(parts[i], cur.size(), list_path, path, file)];
     } else if (cur.IsMap()) {
       if (!cur[parts[i]]) {
         if (IsNumber(parts[i + 1])) {
@@ -98,7 +97,7 @@ void SetDottedPath(YAML::Node root, const std::string& path, const std::string& 
   YAML::Node parent = chain.back();
   const std::string& last = parts.back();
   if (parent.IsSequence()) {
-    parent[ListEntry(last, parent.size(), path, path, file)] = ParseValue(value, path, file);
+    parent[ListEntry(last, parent.size(), walked, path, file)] = ParseValue(value, path, file);
   } else if (parent.IsMap() || parent.IsNull()) {
     parent[last] = ParseValue(value, path, file);
   } else {
