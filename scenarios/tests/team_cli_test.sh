@@ -21,8 +21,8 @@ expect_exit 2 "vehicles.1.start_slack_m" run "$base" --set vehicles.1.start_slac
 expect_exit 2 "vehicles.0.*attach_m" run "$base" --set 'vehicles.0.attach_m=[0, 0]' \
   --out "$out/bad"
 expect_exit 2 "vehicles.0.*wheels" run "$base" --set vehicles.0.wheels=4 --out "$out/bad"
-expect_exit 2 "team scenario flies the ideal world" run "$base" --set world.profile=flight \
-  --out "$out/bad"
+expect_exit 2 "world.contact.*not the single vehicle's payload camera and contacts" run "$base" \
+  --set world.contact.enabled=true --out "$out/bad"
 expect_exit 2 "controller.type.*cooperative" run "$base" --set controller.type=nonhybrid_mpc \
   --out "$out/bad"
 expect_exit 2 "--controller.*unknown controller 'geometric'" run "$base" --controller geometric \
@@ -32,11 +32,11 @@ expect_exit 2 "events.0.vehicle.*vehicle 2 is not in the scenario \(2 vehicles" 
 expect_exit 2 "events.0.vehicle.*vehicle 1 is not in the scenario \(1 vehicle," run \
   "$src/scenarios/line_impulse.yaml" --set events.0.body=quadrotor --set events.0.vehicle=1 \
   --out "$out/bad"
-expect_exit 2 "events.0.*impulse, velocity_change and motor fault events only, not 'wind'" run "$base" \
+expect_exit 2 "events.0.*impulse, velocity_change and fault events only, not 'wind'" run "$base" \
   --set 'events.0={at: 1.0, type: wind, force: [1, 0, 0], duration: 1.0}' --out "$out/bad"
 expect_exit 2 "payload.mass_kg" run "$base" --set payload.mass_kg=0 --out "$out/bad"
-# faults: a motor's reaches a team's vehicle, named by index; the single vehicle's sensors' do not
-expect_exit 2 "events.0.component.*only a motor's reaches them, not a 'vio' fault" run "$base" \
+# faults: a motor's reaches a team's vehicle, named by index; a sensor's only when it flies on board
+expect_exit 2 "events.0.component.*estimates its own state on board.*'vio' fault" run "$base" \
   --set 'events.0={at: 1.0, type: fault, vehicle: 0, component: vio, mode: off, duration: 1.0}' \
   --out "$out/bad"
 expect_exit 2 "events.0.vehicle.*a team's fault names its vehicle \(0 to 1\)" run "$base" \

@@ -89,7 +89,7 @@ expect_exit 2 "events.0.*only, not 'wind'" run "$team" \
 for key in "estimator: hybrid" "camera: analytic" "camera_latency: 0.05" \
   "detector_noise_scale: 2" "slack_tension_cue: false" "camera_randomize: true"; do
   name=${key%%:*}
-  expect_exit 2 "key 'estimation.$name': a team's vehicles fly on the motion-capture system" \
+  expect_exit 2 "key 'estimation.$name': a team's payload is seen by the motion-capture system" \
     run "$team" --set "estimation={$key}" --out "$bad"
 done
 expect_exit 2 "key 'estimation.camera'" run "$team" --set estimation.camera=analytic --out "$bad"
@@ -97,12 +97,20 @@ expect_exit 2 "key '--camera': a team scenario flies on motion capture" run "$te
   --camera analytic --out "$bad"
 expect_exit 2 "key '--camera': a team scenario flies on motion capture" compare "$team" \
   --camera render --out "$bad"
-for key in "payload_mass: 0.3" "cable_length: 0.6" "wind: {gust_sigma_mps: 0.5}" \
-  "latency: {compute_s: 0.01}" "imu: {enabled: true}"; do
+for key in "payload_mass: 0.3" "cable_length: 0.6" "contact: {enabled: true}" \
+  "camera: {noise: true}"; do
   name=${key%%:*}
-  expect_exit 2 "key 'world.$name': a team flies the ideal world's bodies and motors" \
+  expect_exit 2 "key 'world.$name': a team flies the profile's parts on every vehicle" \
     run "$team" --set "world={profile: ideal, $key}" --out "$bad"
 done
+# where a vehicle's own state comes from: a team's choice; a single vehicle's is on board
+expect_exit 2 "key 'estimation.vehicle_state': a single vehicle flies on its onboard estimator" \
+  run "$hover" --set estimation.vehicle_state=motion_capture --out "$bad"
+expect_exit 2 "key 'estimation.vehicle_state': onboard and ground_truth: true contradict" \
+  run "$team" --set 'estimation={vehicle_state: onboard, ground_truth: true}' --out "$bad"
+# a vehicle's IMU, VIO and rate gyro fly only on board: their faults need it
+expect_exit 2 "events.0.component.*estimates its own state on board.*'vio' fault" run "$team" \
+  --set "events.0=$vio_fault, vehicle: 0}" --out "$bad"
 expect_exit 2 "key 'params.cable.length_m': a team does not fly it: .*cable_length_m" run "$team" \
   --set 'params={cable: {length_m: 0.6}}' --out "$bad"
 expect_exit 2 "key 'params.payload.mass_kg': a team does not fly it: .*payload.mass_kg" \
@@ -115,10 +123,10 @@ expect_exit 2 "key '--team-stack': only with --flight-stack" run "$team" --team-
   --out "$bad"
 
 # 3. a team has no gripper: neither its fault nor its events
-expect_exit 2 "events.0.component.*only a motor's reaches them, not a 'gripper' fault" run "$team" \
+expect_exit 2 "events.0.component.*no gripper and no payload camera: a 'gripper' fault" run "$team" \
   --set 'events.0={at: 1.0, type: fault, vehicle: 0, component: gripper, mode: early}' --out "$bad"
 for type in gripper_release "gripper_move, to: [0, 0, 1], duration: 1"; do
-  expect_exit 2 "events.0.*impulse, velocity_change and motor fault events only" run "$team" \
+  expect_exit 2 "events.0.*impulse, velocity_change and fault events only" run "$team" \
     --set "events.0={at: 1.0, type: $type}" --out "$bad"
 done
 # the single vehicle's gripper acts on no vehicle: a gripper event that names one is refused

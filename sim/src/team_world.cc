@@ -16,6 +16,7 @@
 
 #include "hpa/models/rotor_model.h"
 #include "hpa/models/seed_streams.h"
+#include "mismatch_draw.h"
 #include "team_world_impl.h"
 
 namespace hpa::sim {
@@ -80,11 +81,13 @@ void TeamWorld::Impl::BindComponents() {
     binding.data = d;
     binding.rotor_actuator = rotor_actuator[static_cast<size_t>(i)];
     binding.params = &params(i);
-    binding.actuation = &ideal_actuation;
+    binding.actuation = &config.profile.actuation;
     binding.faults = faults.back().get();
     binding.step = &step;
     binding.t0_s = &t0_s;
     actuation.emplace_back(binding);
+    actuation.back().SetRotorFactors(rotor_kf_draw[static_cast<size_t>(i)],
+                                     rotor_km_draw[static_cast<size_t>(i)]);
   }
   // pushes, wind and drag on every vehicle and the payload
   DisturbancesBinding air;
@@ -107,6 +110,10 @@ TeamWorld::TeamWorld(const TeamWorldConfig& config) : impl_(std::make_unique<Imp
   Impl& w = *impl_;
   ValidateTeamConfig(config);
   w.config = config;
+  // the world's own numbers: the profile's mismatch draw per vehicle (the flight code keeps the
+  // team as configured), and each vehicle's rotor spread
+  w.config.team = DrawTeamMismatch(config.team, config.profile, config.seed, &w.rotor_kf_draw,
+                                   &w.rotor_km_draw);
   w.n = static_cast<int>(config.team.vehicles.size());
   w.mocap_period_steps =
       static_cast<int>(std::lround(1.0 / (config.mocap.rate_hz * World::kPhysicsDt_s)));
@@ -115,6 +122,13 @@ TeamWorld::TeamWorld(const TeamWorldConfig& config) : impl_(std::make_unique<Imp
   w.MakeOnboardSensors();
   w.LoadScene();
   w.ResolveIds();
+  // each vehicle's inertia as drawn (LoadScene compiled a balanced one)
+  for (int i = 0; i < w.n; ++i) {
+    for (int k = 0; k < 3; ++k) {
+      w.m->body_inertia[3 * w.vehicles[static_cast<size_t>(i)].body + k] =
+          w.params(i).inertia_B_kgm2(k);
+    }
+  }
   w.BindComponents();
   w.gyro_B_radps.assign(w.n, Eigen::Vector3d::Zero());
 

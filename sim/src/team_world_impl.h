@@ -63,8 +63,9 @@ struct TeamWorld::Impl {
   // the single World's components bound to its rotors (n each)
   std::vector<std::unique_ptr<Faults>> faults;
   std::vector<Vehicle> actuation;
-  ActuationProfile ideal_actuation;  // a team flies the ideal actuation: no spread, no battery sag
-  double t0_s = 0.0;                 // a team's clock starts at 0 at every Reset
+  // each vehicle's rotors' thrust and torque factors, the profile's actuation draw  (n each)
+  std::vector<Eigen::Vector4d> rotor_kf_draw, rotor_km_draw;
+  double t0_s = 0.0;                          // a team's clock starts at 0 at every Reset
   std::vector<Eigen::Vector3d> gyro_B_radps;  // this step's gyro samples (n x 3)
   DelayLine<BodyReading> mocap_line{0.0};     // readings waiting for their latency
   std::optional<Disturbances> disturbances;   // pushes, wind and drag on every body

@@ -4,6 +4,7 @@
 
 #include <mujoco/mujoco.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -148,7 +149,16 @@ void TeamWorld::Impl::LoadScene() {
   if (!std::ifstream(file).good()) throw InputError(file, "", "cannot open the MJCF scene file");
   std::string xml;
   try {
-    xml = SceneWithContactPairs(CooperativeSceneXml(config.team, file), n);
+    // each vehicle's inertia drawn by the mismatch, one diagonal entry at a time as the single
+    // vehicle's, may break the triangle inequality MuJoCo's compiler checks: the scene is
+    // compiled with it balanced and the drawn one written into the model after (TeamWorld's
+    // constructor), as the single World writes its world's numbers into its loaded model
+    CooperativeTeam compiled = config.team;
+    for (CooperativeVehicle& v : compiled.vehicles) {
+      Eigen::Vector3d& I = v.params.inertia_B_kgm2;
+      for (int k = 0; k < 3; ++k) I(k) = std::min(I(k), I((k + 1) % 3) + I((k + 2) % 3));
+    }
+    xml = SceneWithContactPairs(CooperativeSceneXml(compiled, file), n);
   } catch (const std::runtime_error& e) {
     throw InputError(file, "", std::string("cannot build the team's scene from it: ") + e.what());
   }

@@ -12,6 +12,7 @@
 #include "hpa/models/rotor_model.h"
 #include "hpa/models/seed_streams.h"
 #include "hpa/sim/world.h"
+#include "mismatch_draw.h"
 #include "world_detail.h"
 
 namespace hpa::sim {
@@ -113,37 +114,10 @@ void World::ApplyCameraPose(const Params& p) {
 void World::DrawMismatch() {
   // a generator of its own, so the sensor noise stream is the same with and without mismatch
   std::mt19937_64 rng(DeriveSeed(config_.seed, SeedStream::kMismatch));
-  std::normal_distribution<double> normal(0.0, 1.0);
-  const MismatchProfile& m = config_.profile.mismatch;
-  if (m.enabled) {
-    Params& p = world_params_;
-    // a draw that leaves a field's declared range is brought back to it
-    const auto draw = [&](double Params::*member, double sigma) {
-      p.*member =
-          ClampToDecl(FindParamDecl(ParamsTables(), member), p.*member + sigma * normal(rng));
-    };
-    draw(&Params::payload_mass_kg, m.payload_mass_sigma_kg);
-    draw(&Params::cable_length_m, m.cable_length_sigma_m);
-    draw(&Params::quad_mass_kg, m.quad_mass_sigma_kg);
-    for (int i = 0; i < 3; ++i) {
-      p.inertia_B_kgm2(i) *= std::max(0.2, 1.0 + m.inertia_sigma_fraction * normal(rng));
-    }
-    p.k_f_N_per_radps2 *= std::max(0.2, 1.0 + m.thrust_coefficient_sigma_fraction * normal(rng));
-    for (int i = 0; i < 3; ++i) p.t_BC_B_m(i) += m.camera_position_sigma_m * normal(rng);
-    Eigen::Vector3d dtheta_B;
-    for (int i = 0; i < 3; ++i) dtheta_B(i) = m.camera_angle_sigma_rad * normal(rng);
-    if (dtheta_B.norm() > 0.0) {
-      p.R_BC =
-          Eigen::AngleAxisd(dtheta_B.norm(), dtheta_B.normalized()).toRotationMatrix() * p.R_BC;
-    }
-  }
-  const ActuationProfile& a = config_.profile.actuation;
-  if (a.enabled) {
-    for (int i = 0; i < 4; ++i) {
-      rotor_kf_draw_(i) = std::max(0.2, 1.0 + a.thrust_coefficient_spread * normal(rng));
-      rotor_km_draw_(i) = std::max(0.2, 1.0 + a.torque_coefficient_spread * normal(rng));
-    }
-  }
+  const MismatchDraw draw = sim::DrawMismatch(world_params_, config_.profile, &rng);
+  world_params_ = draw.params;
+  rotor_kf_draw_ = draw.rotor_kf;
+  rotor_km_draw_ = draw.rotor_km;
 }
 
 }  // namespace hpa::sim

@@ -184,8 +184,9 @@ void AsSingleVehicle(const YamlMap& root, Scenario* s) {
 }
 
 // Refuses the keys a team scenario would fly without them changing anything: what the single
-// vehicle's camera, estimator and realism profile read (a team flies the ideal world on motion
-// capture, with its profile's rate loop), and the params a team gives per vehicle and payload.
+// vehicle's payload camera and estimator read (a team vehicle flies on motion capture or on its
+// own IMU and VIO filter, the payload on motion capture), and the params a team gives per
+// vehicle and payload.
 void CheckTeamKeys(const YamlMap& root) {
   const auto refuse_keys = [&](const char* block, const std::vector<std::string>& kept,
                                const std::string& why) {
@@ -196,13 +197,17 @@ void CheckTeamKeys(const YamlMap& root) {
       throw InputError(root.file(), root.KeyPath(block) + "." + key, why);
     }
   };
-  refuse_keys("estimation", {"ground_truth"},
-              "a team's vehicles fly on the motion-capture system, with no payload camera and no "
-              "estimator: of the estimation block a team takes ground_truth only");
-  refuse_keys("world", {"profile", "rate_loop"},
-              "a team flies the ideal world's bodies and motors (docs/cooperative.md): of the "
-              "world block a team takes profile and rate_loop only (the payload's mass is "
-              "payload.mass_kg, each cable's length its vehicle's cable_length_m)");
+  refuse_keys("estimation", {"ground_truth", "vehicle_state"},
+              "a team's payload is seen by the motion-capture system, with no payload camera and "
+              "no payload estimator: of the estimation block a team takes ground_truth and "
+              "vehicle_state only");
+  refuse_keys("world",
+              {"profile", "rate_loop", "latency", "imu", "vio", "rate_gyro", "aero", "wind",
+               "actuation", "mismatch"},
+              "a team flies the profile's parts on every vehicle (docs/cooperative.md) but not "
+              "the single vehicle's payload camera and contacts (a team vehicle touching "
+              "anything is a crash); the payload's mass is payload.mass_kg, each cable's length "
+              "its vehicle's cable_length_m");
   if (!root.Has("params")) return;
   const YAML::Node params = root.Node("params");
   const auto refuse_param = [&](double Params::*member, const std::string& where) {
@@ -218,16 +223,27 @@ void CheckTeamKeys(const YamlMap& root) {
 }
 
 // What a team scenario can say and a single-vehicle one cannot, and the other way round: a team
-// flies the ideal world (the realism profile's parts are the single vehicle's) and takes pushes
-// only (on the payload or a vehicle named by `vehicle`); one vehicle is vehicle 0.
+// flies its world profile's parts on every vehicle, its vehicles on motion capture or their
+// onboard filters, and takes pushes and faults on the payload or a vehicle named by `vehicle`;
+// one vehicle is vehicle 0 and flies on its onboard estimator.
 void CheckTeamScenario(const YamlMap& root, const Scenario& s) {
   const int vehicles = static_cast<int>(s.team.vehicles.size());
-  if (s.team.IsTeam() && s.world.name != "ideal") {
-    root.Fail("world", "a team scenario flies the ideal world (world: {profile: ideal}); the '" +
-                           s.world.name + "' profile's parts are the single vehicle's");
+  if (root.Has("estimation") && root.Map("estimation").Has("vehicle_state")) {
+    const std::string key = root.KeyPath("estimation") + ".vehicle_state";
+    if (!s.team.IsTeam() && s.estimation.vehicle_state != "onboard") {
+      throw InputError(root.file(), key,
+                       "a single vehicle flies on its onboard estimator (or the truth with "
+                       "ground_truth: true); motion_capture is a team vehicle's");
+    }
+    if (s.estimation.ground_truth && s.estimation.vehicle_state == "onboard") {
+      throw InputError(root.file(), key,
+                       "onboard and ground_truth: true contradict each other (the truth replaces "
+                       "every estimate)");
+    }
   }
   if (s.team.IsTeam()) CheckTeamKeys(root);
-  CheckEventVehicles(s.events, vehicles, root);
+  CheckEventVehicles(s.events, vehicles,
+                     !s.estimation.ground_truth && s.estimation.vehicle_state == "onboard", root);
   // bounds on what this kind of run measures: a team's keys need a team, and a team does not
   // measure the single vehicle's quadrotor, estimator, camera or contact metrics
   for (const ExpectKey& k : ExpectKeys()) {
@@ -238,7 +254,8 @@ void CheckTeamScenario(const YamlMap& root, const Scenario& s) {
           root.file(), path,
           "bounds a team's metric (" + k.metric + "); this scenario flies one vehicle");
     }
-    if (s.team.IsTeam() && !TeamMeasures(k.metric)) {
+    const bool onboard = !s.estimation.ground_truth && s.estimation.vehicle_state == "onboard";
+    if (s.team.IsTeam() && !TeamMeasures(k.metric, onboard)) {
       throw InputError(root.file(), path,
                        "bounds " + k.metric +
                            ", which a team run does not measure (the single "
@@ -258,6 +275,12 @@ bool IsSafeName(const std::string& name) {
     }
   }
   return true;
+}
+
+// Where a team vehicle's own state comes from (EstimationSpec::vehicle_state).
+const std::vector<std::string>& VehicleStateNames() {
+  static const std::vector<std::string> names = {"motion_capture", "onboard"};
+  return names;
 }
 
 const std::vector<std::string>& CameraNames() {
@@ -336,6 +359,7 @@ Scenario ParseScenario(const YamlMap& root, const std::optional<std::string>& re
     s.estimation.slack_tension_cue = e.Bool("slack_tension_cue", true);
     s.estimation.camera_randomize = e.Bool("camera_randomize", false);
     if (e.Has("estimator")) s.estimation.estimator = e.Choice("estimator", EstimatorNames(), "");
+    s.estimation.vehicle_state = e.Choice("vehicle_state", VehicleStateNames(), "motion_capture");
     e.RejectUnknownKeys();
   }
   if (root.Has("reference")) {

@@ -177,18 +177,36 @@ void ComputeTeamMetrics(const std::vector<TeamLogRow>& rows, int vehicles,
 }
 
 // Each fault event's recovery, as the single vehicle's (FaultRecoveries) on the payload's truth
-// and reference: a team has no onboard estimator, so its flags and counts are not measured.
+// and reference and on the faulted vehicle's own state as its flight code saw it: with onboard
+// estimation its filter's error and counts are measured, on motion capture they are null.
 std::vector<FaultRecovery> TeamFaultRecoveries(const std::vector<TeamLogRow>& team_rows,
-                                               const std::vector<FaultWindow>& windows) {
-  if (windows.empty()) return {};
+                                               const std::vector<FaultWindow>& windows,
+                                               bool onboard) {
+  std::vector<FaultRecovery> recoveries(windows.size());
   std::vector<LogRow> rows(team_rows.size());
-  for (size_t i = 0; i < team_rows.size(); ++i) {
-    rows[i].time_s = team_rows[i].time_s;
-    rows[i].truth.p_WL_W = team_rows[i].x_true.segment<3>(Index::kPayloadPos);
-    rows[i].reference = team_rows[i].reference;
-    rows[i].estimate = rows[i].truth;
+  for (size_t k = 0; k < windows.size(); ++k) {
+    const int vehicle = windows[k].vehicle;
+    for (size_t i = 0; i < team_rows.size(); ++i) {
+      const TeamLogRow& in = team_rows[i];
+      const TeamLogRow::Vehicle& v = in.vehicles[static_cast<size_t>(vehicle)];
+      LogRow& row = rows[i];
+      row.time_s = in.time_s;
+      row.truth.p_WL_W = in.x_true.segment<3>(Index::kPayloadPos);
+      row.truth.p_WQ_W = in.x_true.segment<3>(Index::Vehicle(vehicle) + Index::kVehiclePos);
+      row.reference = in.reference;
+      row.estimate = row.truth;
+      row.estimate.p_WQ_W = v.p_WQ_seen_W;
+      row.estimator_rejected_updates = v.estimator_rejected_updates;
+      row.estimator_resets = v.estimator_resets;
+    }
+    // the spans need every window; this window's entry is the one computed on its vehicle's rows
+    recoveries[k] = FaultRecoveries(rows, windows, /*ground_truth=*/!onboard)[k];
+    if (!onboard) {
+      recoveries[k].estimator_resets.reset();
+      recoveries[k].rejected_updates.reset();
+    }
   }
-  return FaultRecoveries(rows, windows, /*ground_truth=*/true);
+  return recoveries;
 }
 
 }  // namespace
@@ -221,11 +239,19 @@ RunResult RunTeamScenario(const Scenario& scenario, const Params& base_params,
   world_config.team = team;
   world_config.seed = scenario.seed;
   world_config.gl_backend = options.gl_backend;  // the video's cameras (the physics never renders)
+  // each vehicle's own IMU, VIO and rate gyro, as the single vehicle's world makes them, when its
+  // flight code estimates its own state from them
+  world_config.rates = ScenarioRates(scenario);
+  world_config.profile = scenario.world;
+  world_config.onboard_sensors =
+      !scenario.estimation.ground_truth && scenario.estimation.vehicle_state == "onboard";
   const Eigen::VectorXd x0 =
       StartState(scenario, model, reference->At(0.0).p_WL_W, params.payload_radius_m);
   CheckStart(scenario, team, x0);
   auto world = std::make_unique<sim::TeamWorld>(world_config);
-  world->Reset(x0);
+  // the world starts on its own cables: the profile's mismatch draws their lengths
+  world->Reset(StartState(scenario, CooperativeModel(world->team()), reference->At(0.0).p_WL_W,
+                          params.payload_radius_m));
 
   std::unique_ptr<runner::TeamFlightLink> flight;
   if (options.flight_stack.empty()) {
@@ -255,9 +281,10 @@ RunResult RunTeamScenario(const Scenario& scenario, const Params& base_params,
                            std::move(flight), &result);
   loop.Run();
   loop.Finish();
+  metrics.team->onboard = loop.onboard();
   ComputeTeamMetrics(result.team_rows, n, loop.rate_steps(), loop.saturated_steps(), &metrics);
-  metrics.faults = TeamFaultRecoveries(result.team_rows,
-                                       FaultWindows(scenario.events, metrics.sim_time_s));
+  metrics.faults = TeamFaultRecoveries(
+      result.team_rows, FaultWindows(scenario.events, metrics.sim_time_s), loop.onboard());
   metrics.wall_time_s = std::chrono::duration<double>(Clock::now() - wall_start).count();
   CheckExpectations(scenario.expect, &metrics);
   return result;

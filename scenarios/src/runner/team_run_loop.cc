@@ -10,8 +10,11 @@
 #include <cstdio>
 #include <stdexcept>
 #include <string>
+#include <utility>
+#include <variant>
 
 #include "hpa/controller/team_controller.h"
+#include "hpa/estimator/estimator.h"
 #include "hpa/models/cooperative_model.h"
 #include "scenarios/src/runner/events/fault_event.h"
 
@@ -42,12 +45,12 @@ void UpdateTeamExtremes(const sim::TeamTruth& truth, Metrics* metrics) {
     UpdateVehicleExtremes(truth.x.segment<4>(start), truth.cable_tension_N[i],
                           &metrics->vehicles[i]);
   }
-  metrics->team->payload_tilt_max_deg = std::max(
-      metrics->team->payload_tilt_max_deg, TiltDeg(truth.x.segment<4>(Index::kPayloadQuat)));
+  metrics->team->payload_tilt_max_deg = std::max(metrics->team->payload_tilt_max_deg,
+                                                 TiltDeg(truth.x.segment<4>(Index::kPayloadQuat)));
 }
 
-TeamRunLoop::TeamRunLoop(const Scenario& scenario, const Params& params,
-                         const RunOptions& options, std::unique_ptr<sim::TeamWorld> world,
+TeamRunLoop::TeamRunLoop(const Scenario& scenario, const Params& params, const RunOptions& options,
+                         std::unique_ptr<sim::TeamWorld> world,
                          std::shared_ptr<const Reference> reference,
                          std::unique_ptr<TeamFlightLink> flight, RunResult* result)
     : scenario_(scenario),
@@ -74,6 +77,31 @@ TeamRunLoop::TeamRunLoop(const Scenario& scenario, const Params& params,
   video_loop_ = video_rate_hz > 0.0 ? clock_.AddLoop("video", video_rate_hz) : -1;
 
   const size_t n = static_cast<size_t>(n_);
+  if (world_->onboard_sensors()) {
+    // each vehicle's filter starts at its known start, as the single vehicle's estimator does
+    world_->GetTruth(&truth_);
+    for (int i = 0; i < n_; ++i) {
+      const int at = Index::Vehicle(i);
+      QuadFilterState start;
+      start.time_s = world_->time_s();
+      start.p_WB_W = truth_.x.segment<3>(at + Index::kVehiclePos);
+      start.v_WB_W = truth_.x.segment<3>(at + Index::kVehicleVel);
+      const Eigen::Vector4d q = truth_.x.segment<4>(at + Index::kVehicleQuat);
+      start.q_WB = Eigen::Quaterniond(q(0), q(1), q(2), q(3)).normalized();
+      filters_.emplace_back(params, QuadFilterConfig(), start);
+    }
+    rate_gyro_.resize(n);
+  }
+  // the profile's latencies, as the single vehicle's run loop and flight stack apply them
+  const sim::LatencyProfile& latency = scenario.world.latency;
+  if (latency.compute_s + latency.transport_s > 0.0) {
+    commands_in_flight_.assign(n,
+                               DelayLine<BodyRateCommand>(latency.compute_s + latency.transport_s));
+  }
+  if (latency.estimate_s > 0.0) {
+    own_in_flight_.assign(n, DelayLine<TeamView>(latency.estimate_s));
+    own_arrived_.resize(n);
+  }
   latest_.resize(n + 1);
   command_.resize(n);
   last_.resize(n);
@@ -105,9 +133,21 @@ bool TeamRunLoop::Tick() {
   }
   ApplyDueEvents(t);
   ReadBodies(t);
+  if (!own_in_flight_.empty()) DelayOwnStates(t);
   clock_.BeginTick();
   if (clock_.Fires(control_loop_)) ControlStep(t);
-  if (clock_.Fires(rate_loop_)) RateLoopStep();
+  if (!commands_in_flight_.empty()) DeliverCommands(t);
+  if (onboard() && autopilots_.front()->RunsOnGyro()) {
+    // PX4's loop on each new sample of the vehicle's own rate gyro, as the single vehicle's
+    for (int i = 0; i < n_; ++i) {
+      if (const std::optional<GyroSample> gyro =
+              std::exchange(rate_gyro_[static_cast<size_t>(i)], std::nullopt)) {
+        FlyRateLoop(i, gyro->gyro_B_radps);
+      }
+    }
+  } else if (clock_.Fires(rate_loop_)) {
+    RateLoopStep();
+  }
   if (video_loop_ >= 0 && clock_.Fires(video_loop_)) VideoStep();
   if (tick_ == end_tick_) return false;
   if (!StepWorld()) return false;
@@ -143,7 +183,63 @@ void TeamRunLoop::ReadBodies(double t) {
   } else {
     world_->TakeDelivered(&delivered_);
     for (sim::BodyReading& r : delivered_) latest_[static_cast<size_t>(r.body + 1)] = r;
+    if (onboard()) OnboardStep();
   }
+}
+
+void TeamRunLoop::OnboardStep() {
+  for (int i = 0; i < n_; ++i) {
+    VehicleFilter& filter = filters_[static_cast<size_t>(i)];
+    world_->TakeDelivered(i, &sensor_messages_);
+    for (const sim::SensorMessage& m : sensor_messages_) {
+      if (const auto* imu = std::get_if<ImuSample>(&m)) filter.OnImu(*imu);
+      if (const auto* vio = std::get_if<VioSample>(&m)) filter.OnVio(*vio);
+      if (const auto* gyro = std::get_if<GyroSample>(&m)) {
+        rate_gyro_[static_cast<size_t>(i)] = *gyro;  // the newest counts
+      }
+    }
+  }
+}
+
+// Each vehicle's own state as it is now goes into its estimate latency; the newest whose
+// latency has passed is what its flight code reads (the single vehicle's FlightStack does the
+// same with its estimate).
+void TeamRunLoop::DelayOwnStates(double t) {
+  for (int i = 0; i < n_; ++i) {
+    const size_t k = static_cast<size_t>(i);
+    TeamView own;
+    if (OwnState(i, t, &own)) own_in_flight_[k].Push(t, own);
+    while (std::optional<TeamView> old = own_in_flight_[k].PopReady(t)) own_arrived_[k] = *old;
+  }
+}
+
+// The commands whose compute and transport latency has passed reach their rate loops.
+void TeamRunLoop::DeliverCommands(double t) {
+  for (size_t k = 0; k < commands_in_flight_.size(); ++k) {
+    while (std::optional<BodyRateCommand> c = commands_in_flight_[k].PopReady(t)) command_[k] = *c;
+  }
+}
+
+// Vehicle i's own state in its view: its filter's estimate (onboard), else its own reading
+// (motion capture or the truth, body rate from its gyro on motion capture); false while it has
+// none yet.
+bool TeamRunLoop::OwnState(int i, double t, TeamView* view) const {
+  if (onboard()) {
+    const QuadFilterState e =
+        filters_[static_cast<size_t>(i)].Estimate(t, EstimatorConfig().max_extrapolation_s);
+    view->p_WQ_W = e.p_WB_W;
+    view->v_WQ_W = e.v_WB_W;
+    view->q_WB = e.q_WB;
+    view->w_B = e.w_B_radps;
+    return true;
+  }
+  const std::optional<sim::BodyReading>& own = latest_[static_cast<size_t>(i) + 1];
+  if (!own) return false;
+  view->p_WQ_W = own->p_W_m;
+  view->v_WQ_W = own->v_W_mps;
+  view->q_WB = own->q_W;
+  view->w_B = scenario_.estimation.ground_truth ? own->w_body_radps : world_->GyroSample_B(i);
+  return true;
 }
 
 // Each vehicle's view (its own readings and the payload's, nothing of another vehicle's) to its
@@ -158,14 +254,14 @@ void TeamRunLoop::ControlStep(double t) {
   std::vector<std::optional<TeamView>> views(static_cast<size_t>(n_));
   const std::optional<sim::BodyReading>& payload = latest_[0];
   for (int i = 0; i < n_; ++i) {
-    const std::optional<sim::BodyReading>& own = latest_[static_cast<size_t>(i) + 1];
-    if (!own || !payload) continue;
-    TeamView& view = views[static_cast<size_t>(i)].emplace();
+    TeamView own;
+    if (!payload || !OwnState(i, t, &own)) continue;
+    // with an estimate latency: the newest state that has arrived (now's until the first has)
+    if (!own_arrived_.empty() && own_arrived_[static_cast<size_t>(i)]) {
+      own = *own_arrived_[static_cast<size_t>(i)];
+    }
+    TeamView& view = views[static_cast<size_t>(i)].emplace(own);
     view.time_s = t;
-    view.p_WQ_W = own->p_W_m;
-    view.v_WQ_W = own->v_W_mps;
-    view.q_WB = own->q_W;
-    view.w_B = scenario_.estimation.ground_truth ? own->w_body_radps : world_->GyroSample_B(i);
     view.p_WL_W = payload->p_W_m;
     view.v_WL_W = payload->v_W_mps;
     view.q_WP = payload->q_W;
@@ -174,8 +270,18 @@ void TeamRunLoop::ControlStep(double t) {
   const std::vector<std::optional<TeamReply>> replies = flight_->Step(views);
   for (size_t k = 0; k < static_cast<size_t>(n_); ++k) {
     TeamLogRow::Vehicle& v = last_[k];
+    if (views[k]) v.p_WQ_seen_W = views[k]->p_WQ_W;
+    if (onboard()) {
+      const FilterCounts& counts = filters_[k].counts();
+      v.estimator_rejected_updates = counts.rejected_updates;
+      v.estimator_resets = counts.forced_accepts + filters_[k].restarts();
+    }
     if (replies[k]) {
-      command_[k] = replies[k]->output.command;
+      if (commands_in_flight_.empty()) {
+        command_[k] = replies[k]->output.command;
+      } else {
+        commands_in_flight_[k].Push(t, replies[k]->output.command);
+      }
       v.command = replies[k]->output.command;
       v.status = replies[k]->output.status;
       v.solve_time_ms = replies[k]->output.solve_time_ms;
@@ -191,17 +297,29 @@ void TeamRunLoop::ControlStep(double t) {
   }
 }
 
-// Each vehicle's autopilot on its own rate gyro, towards its last command.
+// Each vehicle's autopilot towards its last command, on its body rate: its filter's estimate
+// (onboard, as the single vehicle's own rate loop), else its motion-capture world's gyro.
 void TeamRunLoop::RateLoopStep() {
   for (int i = 0; i < n_; ++i) {
-    const size_t k = static_cast<size_t>(i);
-    if (!command_[k]) continue;
-    const AutopilotOutput out = autopilots_[k]->Update(*command_[k], world_->GyroSample_B(i));
-    world_->SetMotorSpeedCommand(i, out.w_cmd_radps);
-    last_[k].mixer_saturated = out.saturated;
-    ++rate_steps_[k];
-    saturated_[k] += out.saturated ? 1 : 0;
+    if (onboard()) {
+      const double t = world_->time_s();
+      FlyRateLoop(i, filters_[static_cast<size_t>(i)]
+                         .Estimate(t, EstimatorConfig().max_extrapolation_s)
+                         .w_B_radps);
+    } else {
+      FlyRateLoop(i, world_->GyroSample_B(i));
+    }
   }
+}
+
+void TeamRunLoop::FlyRateLoop(int i, const Eigen::Vector3d& w_B_radps) {
+  const size_t k = static_cast<size_t>(i);
+  if (!command_[k]) return;
+  const AutopilotOutput out = autopilots_[k]->Update(*command_[k], w_B_radps);
+  world_->SetMotorSpeedCommand(i, out.w_cmd_radps);
+  last_[k].mixer_saturated = out.saturated;
+  ++rate_steps_[k];
+  saturated_[k] += out.saturated ? 1 : 0;
 }
 
 void TeamRunLoop::VideoStep() {

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "hpa/autopilot/autopilot.h"
+#include "hpa/estimator/vehicle_filter.h"
 #include "hpa/models/lockstep.h"
 #include "hpa/scenarios/runner.h"
 #include "hpa/sim/team_world.h"
@@ -41,6 +42,9 @@ class TeamRunLoop {
   const std::vector<int>& rate_steps() const { return rate_steps_; }
   /// Each vehicle's allocations that fell short of its command  (N)
   const std::vector<int>& saturated_steps() const { return saturated_; }
+  /// Whether each vehicle flies on its onboard estimate of its own state (its VehicleFilter on
+  /// its own IMU and VIO) rather than on motion capture or the truth.
+  bool onboard() const { return !filters_.empty(); }
 
  private:
   using Clock = std::chrono::steady_clock;
@@ -50,6 +54,12 @@ class TeamRunLoop {
   void ReadBodies(double t);  // this tick's truth, extremes and readings
   void ControlStep(double t);
   void RateLoopStep();
+  void OnboardStep();  // each vehicle's delivered IMU, VIO and rate-gyro samples to its filter
+  void DelayOwnStates(double t);   // each vehicle's own state into and out of its latency
+  void DeliverCommands(double t);  // the commands whose latency has passed to the rate loops
+  // vehicle i's own state for its view: its filter's estimate, else its reading of itself
+  bool OwnState(int i, double t, TeamView* view) const;
+  void FlyRateLoop(int i, const Eigen::Vector3d& w_B_radps);  // one autopilot update
   void VideoStep();
   bool StepWorld();  // false: crashed
   void ShowProgress(double t);
@@ -62,8 +72,8 @@ class TeamRunLoop {
   int n_ = 0;  // vehicles
 
   std::unique_ptr<sim::TeamWorld> world_;
-  std::shared_ptr<const Reference> reference_;  // for the log
-  std::unique_ptr<TeamFlightLink> flight_;      // each vehicle's controller
+  std::shared_ptr<const Reference> reference_;          // for the log
+  std::unique_ptr<TeamFlightLink> flight_;              // each vehicle's controller
   std::vector<std::unique_ptr<Autopilot>> autopilots_;  // each vehicle's rate loop  (N)
 
   // schedule
@@ -73,14 +83,24 @@ class TeamRunLoop {
   size_t next_event_ = 0;
 
   // what each vehicle's flight code holds: the latest reading of each body (payload first)
-  std::vector<std::optional<sim::BodyReading>> latest_;       // (N + 1)
-  std::vector<std::optional<BodyRateCommand>> command_;       // each vehicle's last  (N)
-  std::vector<TeamLogRow::Vehicle> last_;                     // each vehicle's log columns  (N)
-  std::vector<int> rate_steps_, saturated_;                   // (N each)
+  std::vector<std::optional<sim::BodyReading>> latest_;  // (N + 1)
+  std::vector<std::optional<BodyRateCommand>> command_;  // each vehicle's last  (N)
+  std::vector<TeamLogRow::Vehicle> last_;                // each vehicle's log columns  (N)
+  std::vector<int> rate_steps_, saturated_;              // (N each)
   double min_separation_m_ = 0.0;
+  // the profile's latencies (empty when it has none): each vehicle's commands on their way to
+  // its rate loop (compute + transport), its own state on its way to its flight code (estimate)
+  // and the newest that has arrived  (N each)
+  std::vector<DelayLine<BodyRateCommand>> commands_in_flight_;
+  std::vector<DelayLine<TeamView>> own_in_flight_;
+  std::vector<std::optional<TeamView>> own_arrived_;
+  // onboard estimation: each vehicle's filter and its newest rate-gyro sample  (N each)
+  std::vector<VehicleFilter> filters_;
+  std::vector<std::optional<GyroSample>> rate_gyro_;
   // refilled every physics step, their memory kept
   sim::TeamTruth truth_;
   std::vector<sim::BodyReading> delivered_;
+  std::vector<sim::SensorMessage> sensor_messages_;
   bool show_progress_ = false;
   int last_progress_pct_ = -1;
 };

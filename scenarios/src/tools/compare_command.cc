@@ -104,11 +104,12 @@ std::string ComparisonTable(const std::vector<RunResult>& results,
   // team's metrics for a team, none of what a team does not measure), read from each run's
   // metrics.json
   const bool team = results.front().metrics.team.has_value();
+  const bool onboard = team && results.front().metrics.team->onboard;
   std::vector<const MetricDef*> rows;
   for (const MetricDef& def : MetricDefs()) {
     if (def.label.empty()) continue;
     const bool team_metric = def.json_path.rfind("team.", 0) == 0;
-    if (team ? !TeamMeasures(def.json_path) : team_metric) continue;
+    if (team ? !TeamMeasures(def.json_path, onboard) : team_metric) continue;
     rows.push_back(&def);
   }
   std::vector<nlohmann::json> metrics;

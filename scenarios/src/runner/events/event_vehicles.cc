@@ -32,33 +32,47 @@ EventTarget TargetOf(const EventAction* action) {
 }
 
 // Refuses what a team's world cannot do: an event other than a push, a velocity change or a
-// motor fault (a team has no gripper, no wind model and only motors among the faults).
-void CheckTeamEventType(const EventSpec& event, const std::string& path, const YamlMap& root) {
+// fault of a component its vehicles carry (a team has no gripper and no payload camera; its
+// vehicles' IMU, VIO and rate gyro fly only when they estimate their own state on board).
+void CheckTeamEventType(const EventSpec& event, const std::string& path, bool onboard_sensors,
+                        const YamlMap& root) {
   const EventAction* action = event.action.get();
   const auto* fault = dynamic_cast<const FaultEvent*>(action);
-  if (fault != nullptr && fault->fault.component != sim::FaultComponent::kMotor) {
+  const sim::FaultComponent component =
+      fault != nullptr ? fault->fault.component : sim::FaultComponent::kMotor;
+  const bool sensor = component == sim::FaultComponent::kVio ||
+                      component == sim::FaultComponent::kImu ||
+                      component == sim::FaultComponent::kRateGyro;
+  if (sensor && !onboard_sensors) {
     throw InputError(root.file(), path + ".component",
-                     "a team's vehicles fly on motion capture and their rate gyros: of the "
-                     "single vehicle's faults only a motor's reaches them, not a '" +
-                         fault->component + "' fault");
+                     "a team vehicle carries its IMU, VIO and rate gyro when it estimates its own "
+                     "state on board (estimation.vehicle_state: onboard); on motion capture or "
+                     "the truth a '" +
+                         fault->component + "' fault would act on nothing");
+  }
+  if (fault != nullptr && !sensor && component != sim::FaultComponent::kMotor) {
+    throw InputError(root.file(), path + ".component",
+                     "a team's vehicles have no gripper and no payload camera: a '" +
+                         fault->component + "' fault would act on nothing");
   }
   if (fault == nullptr && dynamic_cast<const ImpulseEvent*>(action) == nullptr &&
       dynamic_cast<const VelocityChangeEvent*>(action) == nullptr) {
     throw InputError(root.file(), path,
-                     "a team scenario takes impulse, velocity_change and motor fault events "
-                     "only, not '" +
+                     "a team scenario takes impulse, velocity_change and fault events only, "
+                     "not '" +
                          event.type + "'");
   }
 }
 
 }  // namespace
 
-void CheckEventVehicles(const std::vector<EventSpec>& events, int vehicles, const YamlMap& root) {
+void CheckEventVehicles(const std::vector<EventSpec>& events, int vehicles, bool onboard_sensors,
+                        const YamlMap& root) {
   const bool team = vehicles > 1;
   const int flown = std::max(vehicles, 1);
   for (size_t i = 0; i < events.size(); ++i) {
     const std::string path = root.KeyPath("events") + "." + std::to_string(i);
-    if (team) CheckTeamEventType(events[i], path, root);
+    if (team) CheckTeamEventType(events[i], path, onboard_sensors, root);
     const EventTarget target = TargetOf(events[i].action.get());
     const bool fault = dynamic_cast<const FaultEvent*>(events[i].action.get()) != nullptr;
     if (target.vehicle && target.on_payload) {

@@ -12,9 +12,11 @@ namespace hpa {
 class YamlMap;
 
 /// Checks the events of a scenario of `vehicles` vehicles (0: the single vehicle) against its
-/// kind: a team takes impulse, velocity_change and motor fault events only, each quadrotor event
-/// and fault naming a vehicle from 0 to vehicles - 1. `root` is the scenario's map (file and
-/// key paths of the messages); throws InputError naming `events.I.KEY`.
-void CheckEventVehicles(const std::vector<EventSpec>& events, int vehicles, const YamlMap& root);
+/// kind: a team takes impulse, velocity_change and fault events only, the faults of a motor,
+/// and of an IMU, VIO or rate gyro when its vehicles carry them (`onboard_sensors`), each
+/// quadrotor event and fault naming a vehicle from 0 to vehicles - 1. `root` is the scenario's
+/// map (file and key paths of the messages); throws InputError naming `events.I.KEY`.
+void CheckEventVehicles(const std::vector<EventSpec>& events, int vehicles, bool onboard_sensors,
+                        const YamlMap& root);
 
 }  // namespace hpa

@@ -45,8 +45,10 @@ struct TeamWorldConfig {
   GlBackend gl_backend = GlBackend::kOsMesa;  // GL context of the video's cameras (renderer())
   SensorNoiseConfig noise;                    // each vehicle's IMU and VIO noise (as WorldConfig's)
   RateTable rates;  // physics (1 kHz), IMU and VIO rates and latencies (as WorldConfig's)
-  // realism parts (default: all off, the ideal world): the onboard sensors' (imu, vio,
-  // rate_gyro) and the air's (aero, wind); a team's actuation stays ideal
+  // realism parts (default: all off, the ideal world), each on every vehicle: the onboard
+  // sensors' (imu, vio, rate_gyro), the air's (aero, wind), the actuation's (rotor spread,
+  // battery sag) and the model mismatch (each vehicle's parameters and cable, the payload's mass:
+  // team() is the drawn team); the single vehicle's contacts and camera are not a team's
   WorldProfile profile;
   // each vehicle carries the single vehicle's IMU, VIO and rate gyro (off: none sampled)
   bool onboard_sensors = false;
@@ -173,7 +175,8 @@ class TeamWorld {
   /// Smallest distance between two vehicles' centres now (m; infinity for one vehicle).
   double MinVehicleSeparation_m() const;
 
-  /// The team the world simulates.
+  /// The team the world simulates: config.team with the profile's mismatch draw (the flight
+  /// code's team is config.team).
   const CooperativeTeam& team() const;
 
   /// The team's video cameras (team_renderer.h), made on first use so a run that never renders

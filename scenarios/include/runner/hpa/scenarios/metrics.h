@@ -47,6 +47,13 @@ struct TeamLogRow {
     ControlStatus status = ControlStatus::kSuccess;
     double solve_time_ms = 0.0;
     bool mixer_saturated = false;  // its rate loop's last allocation fell short
+    // its own position as its flight code saw it at this step (onboard: its filter's estimate;
+    // else the motion capture's or the truth's reading)  (3)
+    Eigen::Vector3d p_WQ_seen_W = Eigen::Vector3d::Zero();
+    // its onboard filter's gated-out measurements and restarts plus forced accepts so far (0 on
+    // motion capture or the truth)
+    int estimator_rejected_updates = 0;
+    int estimator_resets = 0;
   };
   double time_s = 0.0;
   Eigen::VectorXd x_true;    // true team state (CooperativeStateIndex layout)
@@ -83,8 +90,10 @@ struct FaultRecovery {
   // largest error of the onboard estimate of the quadrotor's position in the span (null with
   // ground truth)
   std::optional<double> estimate_error_max_m;
-  int estimator_resets = 0;  // the filters' forced accepts in the span
-  int rejected_updates = 0;  // gated-out measurements in the span
+  // the filters' forced accepts and gated-out measurements in the span (null: no onboard
+  // estimator flew, as for a team on motion capture)
+  std::optional<int> estimator_resets = 0;
+  std::optional<int> rejected_updates = 0;
   // the health check's re-initialisations in the span, by cause (null: the log has no per-step
   // counts by cause, or the span has no control step)
   std::optional<EstimatorHealthResets> health_resets;
@@ -111,8 +120,8 @@ struct VehicleMetrics {
   int slack_events = 0;       // slack intervals of its cable (chatter under 30 ms ignored)
   int retaut_count = 0;       // slack to taut
   // the extremes, over every physics step of the log's span (PhysicsRateExtremes)
-  double tilt_max_deg = 0.0;         // largest angle between its body z axis and the world's
-  double cable_tension_max_N = 0.0;  // largest true tension of its cable
+  double tilt_max_deg = 0.0;              // largest angle between its body z axis and the world's
+  double cable_tension_max_N = 0.0;       // largest true tension of its cable
   double mixer_saturated_fraction = 0.0;  // share of its rate loop's allocations that fell short
   int control_failures = 0;               // updates that were not a plan or a recovery
   Quantiles solve_ms;                     // its controller's update wall time
@@ -122,6 +131,7 @@ struct VehicleMetrics {
 struct TeamMetrics {
   double min_vehicle_separation_m = 0.0;  // smallest distance between two vehicles' centres
   double payload_tilt_max_deg = 0.0;      // largest angle between the payload's z axis and up
+  bool onboard = false;  // each vehicle flew on its onboard estimate of its own state
 };
 
 /// The metrics.json contract (docs/design.md section 8) plus extensions.
@@ -189,9 +199,10 @@ struct Metrics {
 /// field in Metrics reads "not measured" (NaN; none for a count, whose null in metrics.json says
 /// it), so that expect keys, sweeps and the JSON agree.
 struct UnmeasuredMetric {
-  const char* json_key;      // its metrics.json path, dotted ("retaut.quad_vz_min_mps")
-  void (*mark)(Metrics* m);  // sets the field to not measured (nullptr: a count, or what the
-                             // run leaves null itself)
+  const char* json_key;           // its metrics.json path, dotted ("retaut.quad_vz_min_mps")
+  void (*mark)(Metrics* m);       // sets the field to not measured (nullptr: a count, or what the
+                                  // run leaves null itself)
+  bool onboard_measures = false;  // measured when the team's vehicles estimate on board
 };
 
 /// What a team run does not measure: the single vehicle's quadrotor, estimator, camera and
@@ -199,8 +210,9 @@ struct UnmeasuredMetric {
 const std::vector<UnmeasuredMetric>& TeamUnmeasuredMetrics();
 
 /// Whether a team run measures the metric at this metrics.json path (dotted): false for a path
-/// of TeamUnmeasuredMetrics() or inside one.
-bool TeamMeasures(const std::string& json_path);
+/// of TeamUnmeasuredMetrics() or inside one, but for those its vehicles' onboard estimates
+/// measure when `onboard` (a fault's health flag and estimate error).
+bool TeamMeasures(const std::string& json_path, bool onboard = false);
 
 /// Marks every metric of `unmeasured` not measured in m.
 void MarkUnmeasured(const std::vector<UnmeasuredMetric>& unmeasured, Metrics* m);

@@ -36,6 +36,10 @@ struct EstimationSpec {
   bool camera_randomize = false;      // floor and lighting of the rendered camera vary by seed
   // estimator variant (estimator_registry.h); unset: the one the controller is registered with
   std::optional<std::string> estimator;
+  // a team vehicle's own state, without the ground-truth switch: "motion_capture" (RotorTM's
+  // experiments) or "onboard" (its quadrotor filter on its own IMU and VIO); a single vehicle's
+  // is always its onboard estimator's
+  std::string vehicle_state = "motion_capture";
 };
 
 /// One vehicle of a team scenario (the `vehicles:` list): its cable, where the cable holds the
