@@ -1,3 +1,7 @@
+// RunLoop's frame: its setup from the scenario (the world, the flight stack, the autopilot, the
+// recorders, the lockstep schedule, the events and the latencies), the tick and its order of
+// steps (run_loop_steps.cc holds the steps), the progress line and the end of the run with its
+// metrics; and the runner's own log recorder.
 #include "scenarios/src/runner/run_loop.h"
 
 #include <unistd.h>
@@ -5,12 +9,11 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <sstream>
 #include <stdexcept>
+#include <string>
 #include <utility>
 
 #include "hpa/models/camera_model.h"
-#include "hpa/models/input_error.h"
 #include "hpa/models/seed_streams.h"
 #include "scenarios/src/runner/events/fault_event.h"
 
@@ -21,137 +24,65 @@ double Ms(std::chrono::steady_clock::time_point a, std::chrono::steady_clock::ti
   return std::chrono::duration<double, std::milli>(b - a).count();
 }
 
-// An attitude as the (w, x, y, z) vector TiltDeg reads.
-Eigen::Vector4d Wxyz(const Eigen::Quaterniond& q) { return {q.w(), q.x(), q.y(), q.z()}; }
+// The options of a flight stack run as a separate process: its command, its frame ring (a
+// rendered camera's frames), the scenario's rate table and its rate loop.
+ExternalFlightOptions ExternalOptionsOf(const Scenario& scenario, const Params& params,
+                                        const RunOptions& options, const RateTable& rates,
+                                        bool camera_frames) {
+  ExternalFlightOptions external;
+  external.command = options.flight_stack;
+  external.step_timeout_s = options.flight_step_timeout_s;
+  external.scenario = scenario.name;
+  external.seed = scenario.seed;
+  if (camera_frames) {
+    // frames in flight at once (capture to delivery), one being written, one spare
+    // two per frame (its region of interest and the whole frame)
+    external.frames.slots =
+        2 * (static_cast<int>(std::ceil(rates.camera.latency_s * rates.camera.rate_hz)) + 2);
+    external.frames.width_px = params.camera_width_px;
+    external.frames.height_px = params.camera_height_px;
+  }
+  nlohmann::json rate_rows = nlohmann::json::array();
+  for (const RateRow& r : ScenarioRateTable(scenario, params)) {
+    rate_rows.push_back({{"name", r.name}, {"rate_hz", r.rate_hz}, {"latency_s", r.latency_s}});
+  }
+  external.rates = rate_rows;
+  external.rate_loop = {scenario.rate_loop, rates.imu.rate_hz};  // MakeAutopilot's (RunLoop)
+  return external;
+}
+
+// Sizes the log and the camera's records once: one log row per control step (a stack that
+// commands faster than it says only makes the log grow) and one record per camera frame.
+void ReserveInputs(const Scenario& scenario, const RateTable& rates, double control_rate_hz,
+                   bool render_camera, MetricsInputs* inputs) {
+  if (std::isfinite(control_rate_hz) && control_rate_hz > 0.0 &&
+      control_rate_hz <= rates.physics_hz) {
+    inputs->rows.reserve(static_cast<size_t>(std::ceil(scenario.duration_s * control_rate_hz)) + 2);
+  }
+  const size_t frames =
+      static_cast<size_t>(std::ceil(scenario.duration_s * rates.camera.rate_hz)) + 2;
+  inputs->payload_in_fov_per_frame.reserve(frames);
+  if (render_camera) {
+    inputs->render_ms.reserve(frames);
+    inputs->image_model_ms.reserve(frames);
+    inputs->detector_ms.reserve(frames);
+  }
+}
+
+// An implausible event is flown as written, but said once at run start (the world's params,
+// which the event's plausibility depends on, are known only now).
+void WarnImplausibleEvents(const Scenario& scenario, const Params& world_params) {
+  for (size_t i = 0; i < scenario.events.size(); ++i) {
+    const EventSpec& event = scenario.events[i];
+    if (!event.action) continue;
+    const std::string warning = event.action->Warning(world_params);
+    if (warning.empty()) continue;
+    std::fprintf(stderr, "warning: %s: events.%zu (%s at %g s): %s\n", scenario.name.c_str(), i,
+                 event.type.c_str(), event.at_s, warning.c_str());
+  }
+}
 
 }  // namespace
-
-SystemState InitialState(const Reference& reference, const Params& params) {
-  SystemState s;
-  const ReferencePoint r = reference.At(0.0);
-  s.p_WL_W = r.p_WL_W;
-  s.p_WQ_W = r.p_WL_W + Eigen::Vector3d(0, 0, params.cable_length_m);
-  s.mode = CableMode::kTaut;
-  return s;
-}
-
-namespace {
-
-// "0.7" with up to 4 significant digits, for messages.
-std::string Num(double v) {
-  std::ostringstream out;
-  out.precision(4);
-  out << v;
-  return out.str();
-}
-
-}  // namespace
-
-void CheckFlyable(const Reference& reference, const Scenario& scenario, const Params& params) {
-  const double duration_s = scenario.duration_s;
-  const std::string& file = scenario.file;
-  // hover within the motors' range: full thrust at least 1.25 x the weight (hover at most 80 %
-  // of it, leaving a fifth to steer with: a quadrotor at its thrust limit cannot also tilt),
-  // and the idle thrust below the weight (else it cannot descend)
-  const double weight_N = (params.quad_mass_kg + params.payload_mass_kg) * params.gravity_mps2;
-  const double thrust_max_N = 4.0 * params.RotorThrustMaxN();
-  const double thrust_idle_N = 4.0 * params.RotorThrustMinN();
-  constexpr double kHoverFractionMax = 0.8;
-  if (!(weight_N <= kHoverFractionMax * thrust_max_N)) {
-    throw InputError(file, "params",
-                     "cannot hover: quadrotor and payload weigh " + Num(weight_N) +
-                         " N and the four rotors give at most " + Num(thrust_max_N) +
-                         " N (4 k_f w_max^2); hover must take at most 80 % of full thrust "
-                         "(raise rotor.k_f_N_per_radps2 or rotor.motor_speed_max_radps, or lower "
-                         "the masses or gravity_mps2)");
-  }
-  if (!(thrust_idle_N < kHoverFractionMax * weight_N)) {
-    throw InputError(file, "params.rotor.motor_speed_min_radps",
-                     "the idle thrust " + Num(thrust_idle_N) + " N is not below 80 % of the " +
-                         Num(weight_N) + " N weight: the vehicle could not descend");
-  }
-  // geometry: the payload hangs clear of the body, and the vehicle fits in the arena
-  const Eigen::Vector3d& half_B_m = params.body_half_size_m;
-  if (!(params.cable_length_m > params.payload_radius_m + half_B_m.z())) {
-    throw InputError(file, "params.cable.length_m",
-                     "a cable of " + Num(params.cable_length_m) + " m hangs a payload of radius " +
-                         Num(params.payload_radius_m) + " m into the body (half height " +
-                         Num(half_B_m.z()) + " m)");
-  }
-  if (!(std::max(half_B_m.x(), half_B_m.y()) < 0.5 * sim::kArenaHalfWidth_m)) {
-    throw InputError(file, "params.quadrotor.body_half_size_m",
-                     "a body " + Num(2 * half_B_m.x()) + " x " + Num(2 * half_B_m.y()) +
-                         " m wide does not fly in a " + Num(2 * sim::kArenaHalfWidth_m) +
-                         " m arena");
-  }
-  // the reference over the whole run: the payload above the ground, the vehicle hanging above
-  // it inside the arena (body included)
-  for (double t_s = 0.0; t_s <= duration_s + 1e-9; t_s += 0.01) {
-    const ReferencePoint r = reference.At(t_s);
-    const Eigen::Vector3d p_WL_W = r.p_WL_W;
-    const Eigen::Vector3d p_WQ_W = p_WL_W + Eigen::Vector3d(0, 0, params.cable_length_m);
-    const std::string at = " at t = " + Num(t_s) + " s";
-    if (!p_WL_W.allFinite()) throw InputError(file, "reference", "not finite" + at);
-    if (!(p_WL_W.z() >= params.payload_radius_m)) {
-      throw InputError(file, "reference",
-                       "the payload reference is " + Num(p_WL_W.z()) + " m high" + at +
-                           ": below the ground (the payload's radius, " +
-                           Num(params.payload_radius_m) + " m, is the lowest it can be)");
-    }
-    const bool inside = std::abs(p_WQ_W.x()) + half_B_m.x() <= sim::kArenaHalfWidth_m &&
-                        std::abs(p_WQ_W.y()) + half_B_m.y() <= sim::kArenaHalfWidth_m &&
-                        p_WQ_W.z() + half_B_m.z() <= sim::kArenaHeight_m;
-    if (!inside) {
-      throw InputError(
-          file, "reference",
-          "puts the payload at (" + Num(p_WL_W.x()) + ", " + Num(p_WL_W.y()) + ", " +
-              Num(p_WL_W.z()) + ") m" + at + ": the vehicle, " + Num(params.cable_length_m) +
-              " m above it, would be outside the " + Num(2 * sim::kArenaHalfWidth_m) + " x " +
-              Num(2 * sim::kArenaHalfWidth_m) + " x " + Num(sim::kArenaHeight_m) + " m arena");
-    }
-  }
-}
-
-}  // namespace hpa::runner
-
-namespace hpa {
-
-sim::WorldConfig WorldConfigOf(const Scenario& scenario, const Params& params,
-                               sim::GlBackend gl_backend) {
-  sim::WorldConfig world_config;
-  world_config.params = params;
-  world_config.overrides.payload_mass_kg = scenario.world_payload_mass_kg;
-  world_config.overrides.cable_length_m = scenario.world_cable_length_m;
-  world_config.seed = scenario.seed;
-  world_config.rates = ScenarioRates(scenario);
-  world_config.profile = scenario.world;
-  world_config.gl_backend = gl_backend;
-  world_config.randomize_appearance = scenario.estimation.camera_randomize;
-  world_config.camera.kind = scenario.estimation.ground_truth         ? sim::CameraKind::kNone
-                             : scenario.estimation.camera == "render" ? sim::CameraKind::kRendered
-                                                                      : sim::CameraKind::kAnalytic;
-  world_config.camera.detector_noise_scale = scenario.estimation.detector_noise_scale;
-  return world_config;
-}
-
-}  // namespace hpa
-
-namespace hpa::runner {
-
-flight::FlightConfig FlightConfigOf(const Scenario& scenario, const Params& params,
-                                    const SystemState& initial) {
-  flight::FlightConfig c;
-  c.params = params;
-  c.controller = scenario.controller;
-  c.estimator = EstimatorOf(scenario);
-  c.slack_tension_cue = scenario.estimation.slack_tension_cue;
-  c.reference = scenario.reference;
-  c.ground_truth = scenario.estimation.ground_truth;
-  c.estimate_latency_s = scenario.world.latency.estimate_s;
-  c.tick_hz = 1.0 / sim::World::kPhysicsDt_s;
-  c.initial_state = initial;
-  return c;
-}
 
 void LogRecorder::OnCameraFrame(const CameraFrameRecord& frame) {
   inputs_->payload_in_fov_per_frame.push_back(frame.payload_in_image);
@@ -191,45 +122,14 @@ RunLoop::RunLoop(const Scenario& scenario, const Params& params, const RunOption
   if (options.flight_stack.empty()) {
     flight_ = MakeInProcessFlight(flight_config);
   } else {
-    ExternalFlightOptions external;
-    external.command = options.flight_stack;
-    external.step_timeout_s = options.flight_step_timeout_s;
-    external.scenario = scenario.name;
-    external.seed = scenario.seed;
-    if (render_camera_ && !ground_truth_) {
-      // frames in flight at once (capture to delivery), one being written, one spare
-      // two per frame (its region of interest and the whole frame)
-      external.frames.slots =
-          2 * (static_cast<int>(std::ceil(rates.camera.latency_s * rates.camera.rate_hz)) + 2);
-      external.frames.width_px = params.camera_width_px;
-      external.frames.height_px = params.camera_height_px;
-    }
-    nlohmann::json rate_rows = nlohmann::json::array();
-    for (const RateRow& r : ScenarioRateTable(scenario, params)) {
-      rate_rows.push_back({{"name", r.name}, {"rate_hz", r.rate_hz}, {"latency_s", r.latency_s}});
-    }
-    external.rates = rate_rows;
-    external.rate_loop = {scenario.rate_loop, rates.imu.rate_hz};  // MakeAutopilot's, below
-    flight_ = StartExternalFlight(flight_config, external);
+    flight_ = StartExternalFlight(
+        flight_config,
+        ExternalOptionsOf(scenario, params, options, rates, render_camera_ && !ground_truth_));
   }
   metrics->flight_stack = flight_->name();
   metrics->controller = flight_->controller();  // what flies: a separate stack names its own
-  // one log row per control step: sized once (a stack that commands faster than it says only
-  // makes the log grow)
-  const double control_rate_hz = flight_->control_rate_hz();
-  if (std::isfinite(control_rate_hz) && control_rate_hz > 0.0 &&
-      control_rate_hz <= rates.physics_hz) {
-    inputs_.rows.reserve(static_cast<size_t>(std::ceil(scenario.duration_s * control_rate_hz)) + 2);
-  }
-  // and one record per camera frame
-  const size_t frames =
-      static_cast<size_t>(std::ceil(scenario.duration_s * rates.camera.rate_hz)) + 2;
-  inputs_.payload_in_fov_per_frame.reserve(frames);
-  if (render_camera_) {
-    inputs_.render_ms.reserve(frames);
-    inputs_.image_model_ms.reserve(frames);
-    inputs_.detector_ms.reserve(frames);
-  }
+  // one log row per control step and one record per camera frame, sized once
+  ReserveInputs(scenario, rates, flight_->control_rate_hz(), render_camera_, &inputs_);
   // the scenario's autopilot (the profile's rate loop): PX4's runs on the world's rate gyro; a
   // stack that owns the rate loop runs it on its side, on the same schedule and inputs
   autopilot_ = MakeAutopilot(params, scenario.rate_loop, rates.imu.rate_hz);
@@ -247,16 +147,7 @@ RunLoop::RunLoop(const Scenario& scenario, const Params& params, const RunOption
   clock_ = std::make_unique<LockstepClock>(rates.physics_hz);
   rate_loop_ = autopilot_->RunsOnGyro() ? -1 : clock_->AddLoop("rate", rates.imu.rate_hz);
   video_loop_ = video_rate_hz > 0.0 ? clock_->AddLoop("video", video_rate_hz) : -1;
-  // an implausible event is flown as written, but said once at run start (the world's params,
-  // which the event's plausibility depends on, are known only now)
-  for (size_t i = 0; i < scenario.events.size(); ++i) {
-    const EventSpec& event = scenario.events[i];
-    if (!event.action) continue;
-    const std::string warning = event.action->Warning(world_->world_params());
-    if (warning.empty()) continue;
-    std::fprintf(stderr, "warning: %s: events.%zu (%s at %g s): %s\n", scenario.name.c_str(), i,
-                 event.type.c_str(), event.at_s, warning.c_str());
-  }
+  WarnImplausibleEvents(scenario, world_->world_params());
   events_ = scenario.events;
   std::stable_sort(events_.begin(), events_.end(),
                    [](const EventSpec& a, const EventSpec& b) { return a.at_s < b.at_s; });
@@ -332,204 +223,6 @@ void RunLoop::ApplyDueEvents(double t) {
   while (next_event_ < events_.size() && events_[next_event_].at_s <= t + 1e-9) {
     ApplyEvent(events_[next_event_++], world_.get());
   }
-}
-
-// The payload camera: the world captures it if due (its message delivered after its latency),
-// a rendered frame read out by the flight stack in the region it asked for; then the camera's
-// messages delivered by now join this tick's inputs.
-void RunLoop::CameraStep() {
-  cv::Rect region;
-  if (render_camera_ && world_->CameraFrameDue()) {
-    region = flight_->detects_at_capture() ? flight_->CaptureRegion() : stack_roi_;
-  }
-  if (std::optional<sim::CameraCapture> capture = world_->CaptureTickStart(region)) {
-    if (capture->exposure) ReadOutExposure(&*capture);
-    for (RunRecorder* r : recorders_) r->OnCameraFrame(*capture);
-  }
-  // the gripper's switch, and a camera without latency, deliver at their capture tick
-  world_->TakeDelivered(&delivered_);
-  for (sim::SensorMessage& m : delivered_) KeepTickStartMessage(&m);
-  for (PayloadDetection& d : camera_detections_) pending_.detections.push_back(std::move(d));
-  for (CameraFrame& f : camera_frames_) pending_.frames.push_back(std::move(f));
-  camera_detections_.clear();
-  camera_frames_.clear();
-}
-
-// The flight stack reads a rendered exposure out: it detects at capture (in its region first,
-// the whole frame only when it asks), or it receives the region and the whole frame in its
-// frame ring; what it made of the frame is the camera's message.
-void RunLoop::ReadOutExposure(sim::CameraCapture* capture) {
-  sim::CameraExposure& exposure = *capture->exposure;
-  if (flight_->detects_at_capture()) {
-    // the whole frame's render time is not the detector's
-    double whole_read_ms = 0.0;
-    const WholeFrameReader read_whole = [&]() -> const cv::Mat& {
-      const Clock::time_point render_start = Clock::now();
-      const cv::Mat& whole = exposure.ReadWhole();
-      whole_read_ms += Ms(render_start, Clock::now());
-      return whole;
-    };
-    const Clock::time_point detect_start = Clock::now();
-    PayloadDetection detection = flight_->DetectCaptured(exposure.frame(), read_whole);
-    capture->detector_ms = Ms(detect_start, Clock::now()) - whole_read_ms;
-    capture->detected = detection.found;
-    world_->QueueCameraMessage(std::move(detection));
-  } else {
-    CameraFrame frames;
-    frames.capture_time_s = exposure.frame().capture_time_s;
-    const cv::Rect& roi = exposure.frame().region;
-    if (roi.area() > 0) {
-      cv::Mat* region = flight_->NextFrameSlot(&frames.region_slot);
-      exposure.frame().region_bgr(roi).copyTo((*region)(roi));
-      frames.region = roi;
-      frames.region_bgr = *region;
-    }
-    cv::Mat* whole = flight_->NextFrameSlot(&frames.whole_slot);
-    exposure.ReadWhole().copyTo(*whole);
-    frames.whole_bgr = *whole;
-    world_->QueueCameraMessage(std::move(frames));
-  }
-  capture->region_only = !exposure.whole_read();
-  capture->frame = &exposure.pixels();
-  capture->render_ms = exposure.render_ms();
-  capture->image_model_ms = exposure.image_model_ms();
-}
-
-// Keeps a delivered camera message for the flight stack's next tick (the gripper's switch for
-// this one).
-void RunLoop::KeepTickStartMessage(sim::SensorMessage* message) {
-  if (auto* g = std::get_if<GripperSample>(message)) pending_.gripper_active = g->active;
-  if (auto* d = std::get_if<PayloadDetection>(message)) camera_detections_.push_back(std::move(*d));
-  if (auto* f = std::get_if<CameraFrame>(message)) camera_frames_.push_back(std::move(*f));
-}
-
-namespace {
-// A log row's command fields.
-void FillCommand(const ControlOutput& computed, LogRow* row) {
-  row->command = computed.command;
-  row->status = computed.status;
-  row->solve_time_ms = computed.solve_time_ms;
-  row->cost = computed.cost;
-}
-}  // namespace
-
-// The flight stack's control step; its command reaches the rate loop after compute + transport
-// (one computed on the control thread is logged then, when it is taken).
-void RunLoop::ControlStep(double t, const sim::Truth& truth, const SystemState& state,
-                          const flight::FlightOutputs& out) {
-  if (!flown_) {
-    // the log's span starts here: its first state counts towards the extremes
-    flown_ = true;
-    UpdateVehicleExtremes(Wxyz(truth.state.q_WB), truth.cable_tension_N,
-                          &inputs_.extremes);
-  }
-  commands_in_flight_->Push(t, CommandInFlight{out.command, out.command_pending});
-  LogRow row;
-  row.time_s = t;
-  row.truth = truth.state;
-  row.estimate = state;
-  row.reference = reference_->At(t);
-  row.cable_tension_N = truth.cable_tension_N;
-  row.gripper_active = world_->gripper().active();
-  row.mixer_saturated = mixer_saturated_;
-  if (!ground_truth_) {
-    row.estimator_rejected_updates = out.estimator_rejected_updates;
-    row.estimator_resets = out.estimator_resets;
-    row.estimator_health_resets = out.estimator_health_resets;
-  }
-  if (out.command_pending) {
-    rows_awaiting_command_.push_back(std::move(row));  // logged when its command is taken
-    return;
-  }
-  FillCommand(out.command, &row);
-  for (RunRecorder* r : recorders_) r->OnControlStep(row);
-}
-
-// A command reaching the rate loop: one computed on the control thread is taken now (waiting
-// for it if need be) and its log row, held until now, logged.
-ControlOutput RunLoop::TakeCommand(CommandInFlight* command) {
-  if (!command->pending) return std::move(command->output);
-  LogRow row = std::move(rows_awaiting_command_.front());
-  rows_awaiting_command_.pop_front();
-  const ControlOutput output = AwaitPendingCommand(&row);  // a throw drops the row
-  for (RunRecorder* r : recorders_) r->OnControlStep(row);
-  return output;
-}
-
-// The oldest pending control step's command into its row, with the step's estimate and
-// estimator health when they came with the command (a separate stack's batched ticks).
-ControlOutput RunLoop::AwaitPendingCommand(LogRow* row) {
-  const flight::FlightOutputs reply = flight_->AwaitReply();
-  if (reply.has_estimate) {
-    row->estimate = reply.estimate;
-    row->estimate.time_s = row->time_s;
-    if (!ground_truth_) {
-      row->estimator_rejected_updates = reply.estimator_rejected_updates;
-      row->estimator_resets = reply.estimator_resets;
-      row->estimator_health_resets = reply.estimator_health_resets;
-    }
-  }
-  FillCommand(reply.command, row);
-  return reply.command;
-}
-
-// The body-rate loop: PX4's runs on each new sample of its gyro (none yet at the first tick: the
-// motors keep the world's initial hover command); the scenario's autopilot runs it, or the
-// flight stack when it owns the rate loop. The estimator is told the thrust the allocation made
-// (a saturated mixer lowers it).
-void RunLoop::RateLoopStep(const SystemState& state, bool rate_due) {
-  std::optional<Eigen::Vector3d> w_B_radps;
-  if (autopilot_->RunsOnGyro()) {
-    if (const std::optional<GyroSample> gyro = std::exchange(rate_gyro_, std::nullopt)) {
-      w_B_radps = gyro->gyro_B_radps;
-    }
-  } else if (rate_due) {
-    w_B_radps = state.w_B;
-  }
-  if (!w_B_radps) return;
-  const AutopilotOutput out =
-      flight_->owns_rate_loop()
-          ? flight_->RateLoop(flight::RateTick{state.time_s, control_.command, *w_B_radps})
-          : autopilot_->Update(control_.command, *w_B_radps);
-  world_->SetMotorSpeedCommand(out.w_cmd_radps);
-  pending_.allocation = flight::AllocationReport{out.thrust_allocated_N, out.saturated};
-  ++inputs_.rate_loop_steps;
-  inputs_.mixer_saturated_steps += out.saturated ? 1 : 0;
-  mixer_saturated_ = out.saturated;
-}
-
-void RunLoop::VideoStep(double t, const sim::Truth& truth, const SystemState& state) {
-  LogRow now;
-  now.time_s = t;
-  now.truth = truth.state;
-  now.estimate = state;
-  now.command = control_.command;
-  now.cable_tension_N = truth.cable_tension_N;
-  for (RunRecorder* r : recorders_) r->OnVideoTick(*world_, now, cv::Mat());
-}
-
-// One physics step, its sensor samples queued for the flight stack's next tick, then the crash
-// check.
-bool RunLoop::StepWorld() {
-  world_->Step();
-  if (flown_) {
-    const sim::Truth truth = world_->GetTruth();
-    UpdateVehicleExtremes(Wxyz(truth.state.q_WB), truth.cable_tension_N,
-                          &inputs_.extremes);
-  }
-  world_->TakeDelivered(&delivered_);
-  for (sim::SensorMessage& m : delivered_) {
-    if (auto* imu = std::get_if<ImuSample>(&m)) pending_.imu.push_back(*imu);
-    if (auto* vio = std::get_if<VioSample>(&m)) pending_.vio.push_back(*vio);
-    if (auto* gyro = std::get_if<GyroSample>(&m)) rate_gyro_ = *gyro;  // the newest counts
-    KeepTickStartMessage(&m);
-  }
-  const sim::CrashStatus crash = world_->Crash();
-  if (!crash.crashed) return true;
-  metrics_->crashed = true;
-  metrics_->crash_time_s = crash.time_s;
-  metrics_->crash_reason = crash.reason;
-  return false;
 }
 
 void RunLoop::ShowProgress(double t) {
