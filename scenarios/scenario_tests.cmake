@@ -178,6 +178,14 @@ add_test(NAME cli.external_stack_sweep
                  ${HPA_PYTHON3})
 set_tests_properties(cli.external_stack_sweep PROPERTIES LABELS "cli;scenario" TIMEOUT 600)
 
+# A run that never flew (a stack that does not start or exits before its hello; single vehicle
+# and team) fails its verdict with its cause in metrics.json, a sweep's records and summary,
+# hpa compare's table, and sweep-diff (its pairs left out as run errors, not crashes)
+add_test(NAME cli.never_flew
+         COMMAND bash ${SCEN}/tests/never_flew_test.sh ${HPA_BIN} ${CMAKE_SOURCE_DIR}
+                 ${HPA_PYTHON3})
+set_tests_properties(cli.never_flew PROPERTIES LABELS cli TIMEOUT 300)
+
 # hpa render-frame's --camera (payload | chase) and --size WxH: the PNG's size read back, bad
 # sizes and cameras refused with exit 2
 add_test(NAME cli.render_frame

@@ -2,6 +2,7 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <csignal>
@@ -126,9 +127,11 @@ Params WorldParams(const Scenario& scenario, const Params& params) {
   return p;
 }
 
-RunResult RunScenario(const Scenario& scenario, const Params& base_params,
-                      const RunOptions& options) {
-  if (scenario.team.IsTeam()) return RunTeamScenario(scenario, base_params, options);
+namespace {
+
+// Flies one vehicle's scenario (RunLoop) and checks its expect bounds.
+RunResult RunSingleScenario(const Scenario& scenario, const Params& base_params,
+                            const RunOptions& options) {
   // the scenario's params: block changes the flight code's model and the world alike
   const Params params = ScenarioParams(scenario, base_params);
   RunResult result;
@@ -168,6 +171,32 @@ RunResult RunScenario(const Scenario& scenario, const Params& base_params,
   }
   loop->Finish(&result);
   if (AddFaultFrameTallies(tallies, &metrics)) CheckExpectations(scenario.expect, &metrics);
+  return result;
+}
+
+// The verdict's last word, for every kind of run: a run with a run error never passes, and one
+// that stopped before its first control step (a flight stack that did not start, say hello or
+// answer its first tick) fails first of all as never flown, whatever its bounds read.
+void FailRunsThatDidNotFly(Metrics* m) {
+  if (!m->run_error) return;
+  if (m->control_steps == 0) {
+    const std::string aborted = "run aborted: " + *m->run_error;
+    std::vector<std::string>& failed = m->expect_failed;
+    failed.erase(std::remove(failed.begin(), failed.end(), aborted), failed.end());
+    failed.insert(failed.begin(), "never flew: " + *m->run_error);
+  } else if (m->expect_failed.empty()) {
+    m->expect_failed.push_back("run aborted: " + *m->run_error);
+  }
+  m->expect_passed = false;
+}
+
+}  // namespace
+
+RunResult RunScenario(const Scenario& scenario, const Params& base_params,
+                      const RunOptions& options) {
+  RunResult result = scenario.team.IsTeam() ? RunTeamScenario(scenario, base_params, options)
+                                            : RunSingleScenario(scenario, base_params, options);
+  FailRunsThatDidNotFly(&result.metrics);
   return result;
 }
 

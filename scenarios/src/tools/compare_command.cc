@@ -100,6 +100,12 @@ std::string ComparisonTable(const std::vector<RunResult>& results,
              "`, which flew as " + results[i].metrics.controller + " (flight_stack " +
              results[i].metrics.flight_stack + ")\n";
   }
+  // a run that ended in a run error, with its verdict's first cause ("never flew: ...")
+  for (size_t i = 0; i < results.size(); ++i) {
+    const Metrics& m = results[i].metrics;
+    if (!m.run_error || m.expect_failed.empty()) continue;
+    flown += "- " + entries[i].name + ": expect failed, " + m.expect_failed.front() + "\n";
+  }
   // the rows: every metric of the metric table with a label that this kind of run measures (a
   // team's metrics for a team, none of what a team does not measure), read from each run's
   // metrics.json

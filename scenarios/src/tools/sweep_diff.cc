@@ -49,22 +49,25 @@ struct PairedMetric {
   bool needs_equal_misses = false;
 };
 
-bool Crashed(const Run& r) {
-  return !r.ok || r.metrics.is_null() || r.metrics.value("crashed", false);
-}
+// A run that ended in a run error (a stack that never flew, a time limit, a dead worker): no
+// metric of it counts, and its pair is left out as a run error, never as a crash.
+bool RunError(const Run& r) { return !r.ok || r.metrics.is_null(); }
 
-// Continuous metrics are read only from runs that finished without a crash.
+// A run that crashed (one that ended in a run error did not).
+bool Crashed(const Run& r) { return !RunError(r) && r.metrics.value("crashed", false); }
+
+// Continuous metrics are read only from runs that finished without a run error or a crash.
 std::function<std::optional<double>(const Run&)> Field(
     std::function<std::optional<double>(const Json&)> read) {
   return [read](const Run& r) -> std::optional<double> {
-    if (Crashed(r)) return std::nullopt;
+    if (RunError(r) || Crashed(r)) return std::nullopt;
     return read(r.metrics);
   };
 }
 
 // A run that had slack events and missed one (never estimated slack during it).
 std::optional<double> MissedSlackEvent(const Run& r) {
-  if (!r.ok || r.metrics.is_null()) return std::nullopt;
+  if (RunError(r)) return std::nullopt;
   const Json& latency = r.metrics["slack_detection_latency_s"];
   if (!latency.is_object()) return std::nullopt;
   return latency.value("missed", 0) > 0 ? 1.0 : 0.0;
@@ -75,16 +78,16 @@ std::optional<double> MissedSlackEvent(const Run& r) {
 const std::vector<PairedMetric>& PairedMetrics() {
   static const std::vector<PairedMetric> defs = [] {
     std::vector<PairedMetric> d = {
-        // a run error (time limit, a dead worker) is no crash: the pair is left out
+        // rates count the runs that ended without a run error: a pair with one is left out
         {"crash_rate", false, true,
          [](const Run& r) -> std::optional<double> {
-           if (!r.ok || r.metrics.is_null()) return std::nullopt;
+           if (RunError(r)) return std::nullopt;
            return r.metrics.value("crashed", false) ? 1.0 : 0.0;
          },
          0.05, "fraction"},
         {"expect_failure_rate", false, true,
          [](const Run& r) -> std::optional<double> {
-           if (!r.ok || r.metrics.is_null()) return 1.0;
+           if (RunError(r)) return std::nullopt;
            return r.metrics["expect"].value("passed", true) ? 0.0 : 1.0;
          },
          0.05, "fraction"},
@@ -385,7 +388,8 @@ bool MissesDiffer(const RunPair& pair) {
 }
 
 // Compares one metric over the pairs in which both runs define it (the pairs left out are
-// counted by why): means, difference, interval, p-value and verdict.
+// counted by why; a pair with a run error in either run is counted in none of them, so the
+// pairs the counts leave are the run errors'): means, difference, interval, p-value and verdict.
 MetricDiff CompareMetric(const PairedMetric& def, const std::vector<RunPair>& pairs,
                          bool verdict_timing) {
   MetricDiff m;
@@ -399,6 +403,7 @@ MetricDiff CompareMetric(const PairedMetric& def, const std::vector<RunPair>& pa
   double sum_a = 0.0, sum_b = 0.0;
   int a_only = 0, b_only = 0;
   for (const auto& [ra, rb] : pairs) {
+    if (RunError(*ra) || RunError(*rb)) continue;
     const auto x = def.read(*ra), y = def.read(*rb);
     if (!x || !y || !std::isfinite(*x) || !std::isfinite(*y)) {
       // say why the pair does not count: a crash, or the metric undefined on one side only

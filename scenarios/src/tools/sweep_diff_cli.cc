@@ -24,6 +24,11 @@ using Json = nlohmann::json;
 // A number for diff.json; non-finite values (a metric no pair defines) are null.
 Json NumberOrNull(double v) { return std::isfinite(v) ? Json(v) : Json(); }
 
+// The pairs a metric left out for a run error in either run: every pair its counts do not hold.
+int RunErrorPairs(const SweepDiff& diff, const MetricDiff& m) {
+  return diff.runs_paired - m.pairs - m.dropped_crashed - m.dropped_one_side - m.dropped_both;
+}
+
 // Writes diff.json: the runs paired, what differs and every metric's comparison.
 void WriteDiffJson(const SweepDiff& diff, const SweepDiffOptions& options) {
   Json j;
@@ -46,7 +51,8 @@ void WriteDiffJson(const SweepDiff& diff, const SweepDiffOptions& options) {
                             {"unit", m.unit},
                             {"timing", m.timing},
                             {"pairs_dropped",
-                             {{"crashed", m.dropped_crashed},
+                             {{"run_error", RunErrorPairs(diff, m)},
+                              {"crashed", m.dropped_crashed},
                               {"defined_in_one_run", m.dropped_one_side},
                               {"defined_in_neither", m.dropped_both}}},
                             {"verdict", m.verdict},
@@ -57,17 +63,18 @@ void WriteDiffJson(const SweepDiff& diff, const SweepDiffOptions& options) {
 
 // One table of diff.md: the timing metrics or all the others, a row per metric.
 void DiffTableMarkdown(const SweepDiff& diff, bool timing, std::ostringstream& md) {
-  md << "| metric | min effect | pairs (left out: crash / one run / none) | A | B | B - A, mean | "
-        "B - A, estimate | 95 % CI | p | verdict |\n"
+  md << "| metric | min effect | pairs (left out: run error / crash / one run / none) | A | B | "
+        "B - A, mean | B - A, estimate | 95 % CI | p | verdict |\n"
      << "|---|---|---|---|---|---|---|---|---|---|\n";
   for (const MetricDiff& m : diff.metrics) {
     if (m.timing != timing) continue;
     md << "| " << m.name << (m.higher_is_better ? " (higher is better)" : "") << " | "
-       << Fixed(m.min_effect, 3) << " " << m.unit << " | " << m.pairs << " (" << m.dropped_crashed
-       << " / " << m.dropped_one_side << " / " << m.dropped_both << ") | " << Fixed(m.a) << " | "
-       << Fixed(m.b) << " | " << Fixed(m.difference) << " | " << Fixed(m.estimate) << " | ["
-       << Fixed(m.ci95.first) << ", " << Fixed(m.ci95.second) << "] | " << Fixed(m.p_value, 3)
-       << " | **" << m.verdict << "**" << (m.reason.empty() ? "" : ": " + m.reason) << " |\n";
+       << Fixed(m.min_effect, 3) << " " << m.unit << " | " << m.pairs << " ("
+       << RunErrorPairs(diff, m) << " / " << m.dropped_crashed << " / " << m.dropped_one_side
+       << " / " << m.dropped_both << ") | " << Fixed(m.a) << " | " << Fixed(m.b) << " | "
+       << Fixed(m.difference) << " | " << Fixed(m.estimate) << " | [" << Fixed(m.ci95.first) << ", "
+       << Fixed(m.ci95.second) << "] | " << Fixed(m.p_value, 3) << " | **" << m.verdict << "**"
+       << (m.reason.empty() ? "" : ": " + m.reason) << " |\n";
   }
 }
 

@@ -147,7 +147,17 @@ std::vector<Record> ReadRecords(const std::string& path) {
       if (n.contains("flight_stack")) r.flight_stack = n.at("flight_stack").get<std::string>();
       r.error = n.at("status").get<std::string>() != "ok";
       if (r.error) {
+        // a run error fails the run's verdict; its first cause says how ("never flew: ...")
+        r.expect_failed = true;
         r.error_text = n.at("error").is_string() ? n.at("error").get<std::string>() : "";
+        const Json m = n.contains("metrics") ? n["metrics"] : Json();
+        const Json* failed = m.is_object() && m.contains("expect") && m["expect"].is_object() &&
+                                     m["expect"].contains("failed")
+                                 ? &m["expect"]["failed"]
+                                 : nullptr;
+        if (failed && failed->is_array() && !failed->empty() && (*failed)[0].is_string()) {
+          r.error_text = (*failed)[0].get<std::string>();
+        }
       } else {
         const Json& m = n.at("metrics");
         r.crashed = m.at("crashed").get<bool>();
