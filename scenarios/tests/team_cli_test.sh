@@ -21,7 +21,7 @@ expect_exit 2 "vehicles.1.start_slack_m" run "$base" --set vehicles.1.start_slac
 expect_exit 2 "vehicles.0.*attach_m" run "$base" --set 'vehicles.0.attach_m=[0, 0]' \
   --out "$out/bad"
 expect_exit 2 "vehicles.0.*wheels" run "$base" --set vehicles.0.wheels=4 --out "$out/bad"
-expect_exit 2 "world.contact.*not the single vehicle's payload camera and contacts" run "$base" \
+expect_exit 2 "world.contact.*not the single vehicle's contacts" run "$base" \
   --set world.contact.enabled=true --out "$out/bad"
 expect_exit 2 "controller.type.*cooperative" run "$base" --set controller.type=nonhybrid_mpc \
   --out "$out/bad"

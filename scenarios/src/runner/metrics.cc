@@ -99,7 +99,8 @@ const std::vector<UnmeasuredMetric>& TeamUnmeasuredMetrics() {
       {"quad_rmse_m", [](Metrics* m) { m->quad_rmse_m.setConstant(NAN); }},
       {"quad_position_deviation_max_m", [](Metrics* m) { m->quad_position_deviation_max_m = NAN; }},
       {"mode_accuracy", [](Metrics* m) { m->mode_accuracy = NAN; }},
-      {"payload_in_fov_fraction", [](Metrics* m) { m->payload_in_fov_fraction = NAN; }},
+      {"payload_in_fov_fraction", [](Metrics* m) { m->payload_in_fov_fraction = NAN; }, false,
+       true},
       {"payload_lost_time_s", [](Metrics* m) { m->payload_lost_time_s = NAN; }},
       {"closed_loop_cost", [](Metrics* m) { m->closed_loop_cost = NAN; }},
       {"payload_quad_min_distance_m", [](Metrics* m) { m->payload_quad_min_distance_m = NAN; }},
@@ -120,9 +121,9 @@ const std::vector<UnmeasuredMetric>& TeamUnmeasuredMetrics() {
   return list;
 }
 
-bool TeamMeasures(const std::string& json_path, bool onboard) {
+bool TeamMeasures(const std::string& json_path, bool onboard, bool cameras) {
   for (const UnmeasuredMetric& u : TeamUnmeasuredMetrics()) {
-    if (onboard && u.onboard_measures) continue;
+    if ((onboard && u.onboard_measures) || (cameras && u.camera_measures)) continue;
     const std::string unmeasured = u.json_key;
     if (json_path == unmeasured || json_path.rfind(unmeasured + ".", 0) == 0) return false;
   }
@@ -365,6 +366,8 @@ void ComputeMetrics(const MetricsInputs& in, Metrics* m) {
   vehicle.mixer_saturated_fraction = m->mixer_saturated_fraction;
   vehicle.control_failures = m->mpc_failures;
   vehicle.solve_ms = m->mpc_solve_ms;
+  vehicle.camera_frames = m->camera_frames;
+  if (m->camera_frames > 0) vehicle.payload_in_fov_fraction = m->payload_in_fov_fraction;
   m->vehicles = {vehicle};
 }
 
@@ -565,7 +568,9 @@ std::string MetricsToJson(const Metrics& m) {
     // a team run measured none of the single vehicle's quadrotor, estimator, camera or contact
     // metrics: null, never a perfect-looking value (the re-taut's count is the team's)
     for (const UnmeasuredMetric& u : TeamUnmeasuredMetrics()) {
-      if (m.team->onboard && u.onboard_measures) continue;
+      if ((m.team->onboard && u.onboard_measures) || (m.team->cameras && u.camera_measures)) {
+        continue;
+      }
       const Json::json_pointer at("/" + ReplaceDots(u.json_key));
       if (o.contains(at)) o[at] = Json();
     }
@@ -580,7 +585,9 @@ std::string MetricsToJson(const Metrics& m) {
                   {"tilt_max_deg", measured(num(v.tilt_max_deg))},
                   {"cable_tension_max_N", measured(num(v.cable_tension_max_N))},
                   {"mixer_saturated_fraction", measured(num(v.mixer_saturated_fraction))},
-                  {"control_failures", v.control_failures}};
+                  {"control_failures", v.control_failures},
+                  {"camera_frames", v.camera_frames},
+                  {"payload_in_fov_fraction", opt_num(v.payload_in_fov_fraction)}};
     vehicles.push_back(entry);
     entry["solve_ms"] = quantiles(v.solve_ms);
     team_vehicles.push_back(entry);

@@ -187,7 +187,7 @@ void AsSingleVehicle(const YamlMap& root, Scenario* s) {
 // vehicle's payload camera and estimator read (a team vehicle flies on motion capture or on its
 // own IMU and VIO filter, the payload on motion capture), and the params a team gives per
 // vehicle and payload.
-void CheckTeamKeys(const YamlMap& root) {
+void CheckTeamKeys(const YamlMap& root, bool cameras) {
   const auto refuse_keys = [&](const char* block, const std::vector<std::string>& kept,
                                const std::string& why) {
     if (!root.Has(block)) return;
@@ -197,17 +197,21 @@ void CheckTeamKeys(const YamlMap& root) {
       throw InputError(root.file(), root.KeyPath(block) + "." + key, why);
     }
   };
-  refuse_keys("estimation", {"ground_truth", "vehicle_state"},
-              "a team's payload is seen by the motion-capture system, with no payload camera and "
-              "no payload estimator: of the estimation block a team takes ground_truth and "
-              "vehicle_state only");
-  refuse_keys("world",
-              {"profile", "rate_loop", "latency", "imu", "vio", "rate_gyro", "aero", "wind",
-               "actuation", "mismatch"},
+  refuse_keys("estimation",
+              {"ground_truth", "vehicle_state", "camera", "camera_latency", "detector_noise_scale"},
+              "a team's payload is seen by the motion-capture system and, with `camera`, by each "
+              "vehicle's payload camera, with no payload estimator: of the estimation block a "
+              "team takes ground_truth, vehicle_state, camera, camera_latency and "
+              "detector_noise_scale only");
+  std::vector<std::string> world_keys = {"profile",   "rate_loop", "latency", "imu",
+                                         "vio",       "rate_gyro", "aero",    "wind",
+                                         "actuation", "mismatch"};
+  if (cameras) world_keys.push_back("camera");  // its payload cameras' image model
+  refuse_keys("world", world_keys,
               "a team flies the profile's parts on every vehicle (docs/cooperative.md) but not "
-              "the single vehicle's payload camera and contacts (a team vehicle touching "
-              "anything is a crash); the payload's mass is payload.mass_kg, each cable's length "
-              "its vehicle's cable_length_m");
+              "the single vehicle's contacts (a team vehicle touching anything is a crash), nor "
+              "the camera part without payload cameras (estimation.camera); the payload's mass "
+              "is payload.mass_kg, each cable's length its vehicle's cable_length_m");
   if (!root.Has("params")) return;
   const YAML::Node params = root.Node("params");
   const auto refuse_param = [&](double Params::*member, const std::string& where) {
@@ -241,7 +245,7 @@ void CheckTeamScenario(const YamlMap& root, const Scenario& s) {
                        "every estimate)");
     }
   }
-  if (s.team.IsTeam()) CheckTeamKeys(root);
+  if (s.team.IsTeam()) CheckTeamKeys(root, s.team.payload_cameras);
   CheckEventVehicles(s.events, vehicles,
                      !s.estimation.ground_truth && s.estimation.vehicle_state == "onboard", root);
   // bounds on what this kind of run measures: a team's keys need a team, and a team does not
@@ -255,7 +259,7 @@ void CheckTeamScenario(const YamlMap& root, const Scenario& s) {
           "bounds a team's metric (" + k.metric + "); this scenario flies one vehicle");
     }
     const bool onboard = !s.estimation.ground_truth && s.estimation.vehicle_state == "onboard";
-    if (s.team.IsTeam() && !TeamMeasures(k.metric, onboard)) {
+    if (s.team.IsTeam() && !TeamMeasures(k.metric, onboard, s.team.payload_cameras)) {
       throw InputError(root.file(), path,
                        "bounds " + k.metric +
                            ", which a team run does not measure (the single "
@@ -360,6 +364,7 @@ Scenario ParseScenario(const YamlMap& root, const std::optional<std::string>& re
     s.estimation.camera_randomize = e.Bool("camera_randomize", false);
     if (e.Has("estimator")) s.estimation.estimator = e.Choice("estimator", EstimatorNames(), "");
     s.estimation.vehicle_state = e.Choice("vehicle_state", VehicleStateNames(), "motion_capture");
+    s.team.payload_cameras = s.team.IsTeam() && e.Has("camera");
     e.RejectUnknownKeys();
   }
   if (root.Has("reference")) {

@@ -209,6 +209,35 @@ std::vector<FaultRecovery> TeamFaultRecoveries(const std::vector<TeamLogRow>& te
   return recoveries;
 }
 
+// Each vehicle's payload-camera record into its metrics, and the team's: frames, detections and
+// the share of frames with the payload in view over every vehicle's, the render, image-model
+// and detector times over every rendered frame.
+void TeamCameraMetrics(const std::vector<runner::VehicleCameraCounts>& counts, Metrics* m) {
+  int frames = 0, in_view = 0;
+  std::vector<double> render_ms, image_model_ms, detector_ms;
+  m->detections = 0;
+  for (size_t i = 0; i < counts.size(); ++i) {
+    const runner::VehicleCameraCounts& c = counts[i];
+    VehicleMetrics& v = m->vehicles[i];
+    v.camera_frames = c.frames;
+    if (c.frames > 0) {
+      v.payload_in_fov_fraction = static_cast<double>(c.payload_in_view_frames) / c.frames;
+    }
+    frames += c.frames;
+    in_view += c.payload_in_view_frames;
+    m->detections += c.found_frames;
+    render_ms.insert(render_ms.end(), c.render_ms.begin(), c.render_ms.end());
+    image_model_ms.insert(image_model_ms.end(), c.image_model_ms.begin(), c.image_model_ms.end());
+    detector_ms.insert(detector_ms.end(), c.detector_ms.begin(), c.detector_ms.end());
+  }
+  m->camera_frames = frames;
+  if (frames > 0) m->payload_in_fov_fraction = static_cast<double>(in_view) / frames;
+  m->render_ms = ComputeQuantiles(render_ms);
+  m->image_model_ms = ComputeQuantiles(image_model_ms);
+  m->detector_ms = ComputeQuantiles(detector_ms);
+  m->team->cameras = true;
+}
+
 }  // namespace
 
 RunResult RunTeamScenario(const Scenario& scenario, const Params& base_params,
@@ -283,6 +312,7 @@ RunResult RunTeamScenario(const Scenario& scenario, const Params& base_params,
   loop.Finish();
   metrics.team->onboard = loop.onboard();
   ComputeTeamMetrics(result.team_rows, n, loop.rate_steps(), loop.saturated_steps(), &metrics);
+  if (loop.cameras() != nullptr) TeamCameraMetrics(loop.cameras()->counts(), &metrics);
   metrics.faults = TeamFaultRecoveries(
       result.team_rows, FaultWindows(scenario.events, metrics.sim_time_s), loop.onboard());
   metrics.wall_time_s = std::chrono::duration<double>(Clock::now() - wall_start).count();

@@ -75,6 +75,20 @@ TeamRunLoop::TeamRunLoop(const Scenario& scenario, const Params& params, const R
     video_rate_hz = std::max(video_rate_hz, r->video_rate_hz());
   }
   video_loop_ = video_rate_hz > 0.0 ? clock_.AddLoop("video", video_rate_hz) : -1;
+  if (scenario.team.payload_cameras) {
+    // each vehicle's payload camera: rendered from the world's mounts, detected with the flight
+    // code's numbers (the team's params)
+    CooperativeTeam flight_team = world_->team();
+    for (CooperativeVehicle& v : flight_team.vehicles) v.params = params;
+    TeamCameraConfig camera;
+    camera.kind = scenario.estimation.camera == "render" ? sim::CameraKind::kRendered
+                                                         : sim::CameraKind::kAnalytic;
+    camera.rate = ScenarioRates(scenario).camera;
+    camera.seed = scenario.seed;
+    camera.detector_noise_scale = scenario.estimation.detector_noise_scale;
+    cameras_ = std::make_unique<TeamPayloadCameras>(flight_team, scenario.world, camera);
+    camera_loop_ = clock_.AddLoop("camera", camera.rate.rate_hz);
+  }
 
   const size_t n = static_cast<size_t>(n_);
   if (world_->onboard_sensors()) {
@@ -135,6 +149,7 @@ bool TeamRunLoop::Tick() {
   ReadBodies(t);
   if (!own_in_flight_.empty()) DelayOwnStates(t);
   clock_.BeginTick();
+  if (cameras_) CameraStep(t);
   if (clock_.Fires(control_loop_)) ControlStep(t);
   if (!commands_in_flight_.empty()) DeliverCommands(t);
   if (onboard() && autopilots_.front()->RunsOnGyro()) {
@@ -211,6 +226,14 @@ void TeamRunLoop::DelayOwnStates(double t) {
     if (OwnState(i, t, &own)) own_in_flight_[k].Push(t, own);
     while (std::optional<TeamView> old = own_in_flight_[k].PopReady(t)) own_arrived_[k] = *old;
   }
+}
+
+// Each vehicle's camera frame when one is due (of the tick's state, before its step, as the
+// single vehicle's camera), and the detections whose latency has passed taken off its queue (a
+// team controller does not read them: the payload's state is motion capture's).
+void TeamRunLoop::CameraStep(double t) {
+  if (clock_.Fires(camera_loop_)) cameras_->Capture(*world_, t);
+  for (int i = 0; i < n_; ++i) cameras_->TakeDelivered(i, t, &detections_);
 }
 
 // The commands whose compute and transport latency has passed reach their rate loops.

@@ -16,6 +16,7 @@
 #include "hpa/models/lockstep.h"
 #include "hpa/scenarios/runner.h"
 #include "hpa/sim/team_world.h"
+#include "scenarios/src/runner/team_cameras.h"
 #include "scenarios/src/runner/team_flight_link.h"
 
 namespace hpa::runner {
@@ -45,6 +46,8 @@ class TeamRunLoop {
   /// Whether each vehicle flies on its onboard estimate of its own state (its VehicleFilter on
   /// its own IMU and VIO) rather than on motion capture or the truth.
   bool onboard() const { return !filters_.empty(); }
+  /// Each vehicle's payload camera (null: the scenario flies none).
+  const TeamPayloadCameras* cameras() const { return cameras_.get(); }
 
  private:
   using Clock = std::chrono::steady_clock;
@@ -57,6 +60,7 @@ class TeamRunLoop {
   void OnboardStep();  // each vehicle's delivered IMU, VIO and rate-gyro samples to its filter
   void DelayOwnStates(double t);   // each vehicle's own state into and out of its latency
   void DeliverCommands(double t);  // the commands whose latency has passed to the rate loops
+  void CameraStep(double t);       // each vehicle's camera frame, its detections taken
   // vehicle i's own state for its view: its filter's estimate, else its reading of itself
   bool OwnState(int i, double t, TeamView* view) const;
   void FlyRateLoop(int i, const Eigen::Vector3d& w_B_radps);  // one autopilot update
@@ -79,7 +83,7 @@ class TeamRunLoop {
   // schedule
   long tick_ = 0, end_tick_ = 0;
   LockstepClock clock_;
-  int control_loop_ = -1, rate_loop_ = -1, video_loop_ = -1;
+  int control_loop_ = -1, rate_loop_ = -1, video_loop_ = -1, camera_loop_ = -1;
   size_t next_event_ = 0;
 
   // what each vehicle's flight code holds: the latest reading of each body (payload first)
@@ -94,6 +98,9 @@ class TeamRunLoop {
   std::vector<DelayLine<BodyRateCommand>> commands_in_flight_;
   std::vector<DelayLine<TeamView>> own_in_flight_;
   std::vector<std::optional<TeamView>> own_arrived_;
+  // each vehicle's payload camera, and the detections delivered to a vehicle at a tick
+  std::unique_ptr<TeamPayloadCameras> cameras_;
+  std::vector<PayloadDetection> detections_;
   // onboard estimation: each vehicle's filter and its newest rate-gyro sample  (N each)
   std::vector<VehicleFilter> filters_;
   std::vector<std::optional<GyroSample>> rate_gyro_;

@@ -125,6 +125,10 @@ struct VehicleMetrics {
   double mixer_saturated_fraction = 0.0;  // share of its rate loop's allocations that fell short
   int control_failures = 0;               // updates that were not a plan or a recovery
   Quantiles solve_ms;                     // its controller's update wall time
+  // its payload camera: frames, and the share with the true payload centre in view (null
+  // without a camera)
+  int camera_frames = 0;
+  std::optional<double> payload_in_fov_fraction;
 };
 
 /// The team's metrics of a team run (metrics.json `team`; docs/cooperative.md).
@@ -132,6 +136,7 @@ struct TeamMetrics {
   double min_vehicle_separation_m = 0.0;  // smallest distance between two vehicles' centres
   double payload_tilt_max_deg = 0.0;      // largest angle between the payload's z axis and up
   bool onboard = false;  // each vehicle flew on its onboard estimate of its own state
+  bool cameras = false;  // each vehicle flew its payload camera
 };
 
 /// The metrics.json contract (docs/design.md section 8) plus extensions.
@@ -203,6 +208,7 @@ struct UnmeasuredMetric {
   void (*mark)(Metrics* m);       // sets the field to not measured (nullptr: a count, or what the
                                   // run leaves null itself)
   bool onboard_measures = false;  // measured when the team's vehicles estimate on board
+  bool camera_measures = false;   // measured when the team's vehicles fly their payload cameras
 };
 
 /// What a team run does not measure: the single vehicle's quadrotor, estimator, camera and
@@ -211,8 +217,9 @@ const std::vector<UnmeasuredMetric>& TeamUnmeasuredMetrics();
 
 /// Whether a team run measures the metric at this metrics.json path (dotted): false for a path
 /// of TeamUnmeasuredMetrics() or inside one, but for those its vehicles' onboard estimates
-/// measure when `onboard` (a fault's health flag and estimate error).
-bool TeamMeasures(const std::string& json_path, bool onboard = false);
+/// measure when `onboard` (a fault's health flag and estimate error) and their payload cameras
+/// when `cameras` (the share of frames with the payload in view).
+bool TeamMeasures(const std::string& json_path, bool onboard = false, bool cameras = false);
 
 /// Marks every metric of `unmeasured` not measured in m.
 void MarkUnmeasured(const std::vector<UnmeasuredMetric>& unmeasured, Metrics* m);

@@ -61,6 +61,9 @@ struct TeamSpec {
   // the payload starts resting on the ground below the reference's start (a lift) instead of at
   // it
   bool payload_on_ground = false;
+  // each vehicle flies the single vehicle's payload camera (the scenario's estimation.camera:
+  // rendered or analytic); without it the payload is seen by motion capture alone
+  bool payload_cameras = false;
   /// Whether the scenario flies a team.
   bool IsTeam() const { return !vehicles.empty(); }
 };
