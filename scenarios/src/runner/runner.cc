@@ -38,72 +38,84 @@ RateTable ScenarioRates(const Scenario& scenario) {
 
 namespace {
 
-// A team's loops and streams (RunTeamScenario): physics, the motion-capture system and each
-// vehicle's gyro, rate loop and controller.
-std::vector<RateRow> TeamRateTable(const Scenario& scenario, const Params& params) {
+// A team's own streams (RunTeamScenario): the motion-capture system (or the truth) that sees
+// the payload and, unless its vehicles estimate on board, each vehicle's own state and gyro.
+void AddTeamStreams(const Scenario& scenario, bool onboard, std::vector<RateRow>* rows) {
   const sim::MocapConfig mocap;
-  CooperativeTeam team;
-  for (const VehicleSpec& v : scenario.team.vehicles) {
-    team.vehicles.push_back({params, v.cable_length_m, v.p_PA_P_m});
-  }
-  const std::unique_ptr<TeamController> controller =
-      MakeTeamController(scenario.controller.type, team, 0, MakeReference(scenario, params));
   const auto number = [](double value) {
     char text[32];
     std::snprintf(text, sizeof text, "%g", value);
     return std::string(text);
   };
-  std::vector<RateRow> rows = {{"physics", 1.0 / sim::World::kPhysicsDt_s, 0.0,
-                                "MuJoCo timestep (sim::World::kPhysicsDt_s)", ""}};
   if (scenario.estimation.ground_truth) {
-    rows.push_back({"ground truth (every body)", 1.0 / sim::World::kPhysicsDt_s, 0.0,
-                    "estimation.ground_truth", ""});
-  } else {
-    rows.push_back({"motion capture (every body)", mocap.rate_hz, mocap.latency_s,
-                    "sim::MocapConfig",
-                    "position " + number(mocap.position_noise_m) + " m, velocity " +
-                        number(mocap.velocity_noise_mps) + " m/s, attitude " +
-                        number(mocap.attitude_noise_rad) + " rad"});
-    rows.push_back({"rate gyro (each vehicle)", 1.0 / sim::World::kPhysicsDt_s, 0.0,
-                    "sim::MocapConfig", number(mocap.rate_gyro_noise_radps) + " rad/s"});
+    rows->push_back({"ground truth (every body)", 1.0 / sim::World::kPhysicsDt_s, 0.0,
+                     "estimation.ground_truth", ""});
+    return;
   }
-  rows.push_back({"rate loop (body-rate P, each vehicle)", RateTable().imu.rate_hz, 0.0,
-                  "RateTable::imu", ""});
-  rows.push_back({"control (" + scenario.controller.type + ", each vehicle)", controller->RateHz(),
-                  0.0, "the team controller's RateHz()", ""});
-  return rows;
+  rows->push_back({onboard ? "motion capture (the payload)" : "motion capture (every body)",
+                   mocap.rate_hz, mocap.latency_s, "sim::MocapConfig",
+                   "position " + number(mocap.position_noise_m) + " m, velocity " +
+                       number(mocap.velocity_noise_mps) + " m/s, attitude " +
+                       number(mocap.attitude_noise_rad) + " rad"});
+  if (!onboard) {
+    rows->push_back({"rate gyro (each vehicle)", 1.0 / sim::World::kPhysicsDt_s, 0.0,
+                     "sim::MocapConfig", number(mocap.rate_gyro_noise_radps) + " rad/s"});
+  }
 }
 
 }  // namespace
 
 std::vector<RateRow> ScenarioRateTable(const Scenario& scenario, const Params& params) {
-  if (scenario.team.IsTeam()) return TeamRateTable(scenario, params);
+  const bool team = scenario.team.IsTeam();
+  const bool onboard = !team || (!scenario.estimation.ground_truth &&
+                                 scenario.estimation.vehicle_state == "onboard");
+  const bool cameras = team ? scenario.team.payload_cameras : !scenario.estimation.ground_truth;
+  const std::string each = team ? ", each vehicle" : "";
   const sim::LatencyProfile& latency = scenario.world.latency;
-  const std::unique_ptr<Controller> controller =
-      MakeController(scenario.controller, params, MakeReference(scenario, params));
-  // the sensors as the world declares them, for this scenario's world
+  double control_hz = 0.0;
+  if (team) {
+    CooperativeTeam cooperative;
+    for (const VehicleSpec& v : scenario.team.vehicles) {
+      cooperative.vehicles.push_back({params, v.cable_length_m, v.p_PA_P_m});
+    }
+    control_hz = MakeTeamController(scenario.controller.type, cooperative, 0,
+                                    MakeReference(scenario, params))
+                     ->RateHz();
+  } else {
+    control_hz =
+        MakeController(scenario.controller, params, MakeReference(scenario, params))->RateHz();
+  }
+  // the sensors as the world declares them, for this scenario's world (a team vehicle's
+  // onboard ones with its vehicle_state: onboard)
   sim::WorldConfig world;
   world.rates = ScenarioRates(scenario);
   world.profile = scenario.world;
   std::vector<RateRow> rows = {{"physics", 1.0 / sim::World::kPhysicsDt_s, 0.0,
                                 "MuJoCo timestep (sim::World::kPhysicsDt_s)", ""}};
+  if (team) AddTeamStreams(scenario, onboard, &rows);
   for (const sim::SensorDeclaration& s : sim::SensorDeclarations(world)) {
     if (s.name == "payload camera") {
-      if (scenario.estimation.ground_truth) continue;  // the flight code reads the truth
-      rows.push_back({s.name + " (" + scenario.estimation.camera + ")", s.rate_hz, s.latency_s,
-                      s.from, s.noise});
-    } else {
-      rows.push_back({s.name, s.rate_hz, s.latency_s, s.from, s.noise});
+      if (!cameras) continue;  // the flight code reads the truth, or a team flies none
+      rows.push_back({s.name + " (" + scenario.estimation.camera + each + ")", s.rate_hz,
+                      s.latency_s, s.from, s.noise});
+    } else if (s.name == "wind") {
+      rows.push_back({s.name, s.rate_hz, s.latency_s, s.from, s.noise});  // on every body
+    } else if (!team || (onboard && s.name.rfind("gripper", 0) != 0)) {
+      rows.push_back(
+          {team ? s.name + " (each vehicle)" : s.name, s.rate_hz, s.latency_s, s.from, s.noise});
     }
   }
-  if (scenario.rate_loop.px4) {
-    rows.push_back({"rate loop (PX4's, on the rate gyro)", scenario.rate_loop.params.rate_hz, 0.0,
+  if (scenario.rate_loop.px4 && onboard) {
+    rows.push_back({"rate loop (PX4's, on the rate gyro" + each + ")",
+                    scenario.rate_loop.params.rate_hz, 0.0,
                     "rate_loop.rate_hz (PX4's parameters, flight code)", ""});
   } else {
-    rows.push_back({"rate loop (body-rate P, on the IMU)", world.rates.imu.rate_hz, 0.0,
+    const std::string kind = scenario.rate_loop.px4 ? "PX4's" : "body-rate P";
+    const std::string on = onboard ? "on the IMU" : "on its gyro";
+    rows.push_back({"rate loop (" + kind + ", " + on + each + ")", world.rates.imu.rate_hz, 0.0,
                     "RateTable::imu", ""});
   }
-  rows.push_back({"control (" + scenario.controller.type + ")", controller->RateHz(),
+  rows.push_back({"control (" + scenario.controller.type + each + ")", control_hz,
                   latency.compute_s + latency.transport_s,
                   "the controller's RateHz(); world profile latency.compute_s + transport_s", ""});
   rows.push_back(
