@@ -249,7 +249,7 @@ TEST(TeamOnboardTest, EachVehicleFeelsTheSingleQuadrotorsDrag) {
   const VectorXd x = world.GetTruth().x;
   world.Step();
   const Vector3d v_W = x.segment<3>(I::Vehicle(1) + 3);
-  const Vector3d& h = Bar().vehicles[1].params.body_half_size_m;
+  const Vector3d h = Bar().vehicles[1].params.body_half_size_m;
   const double expected_N = 0.5 * 1.225 * 1.05 * (4 * h.y() * h.z()) * v_W.norm() * v_W.x();
   // the hanging vehicle is level to rounding: its drag is the closed form's to 1e-9 N
   EXPECT_NEAR(world.disturbances().aero_vehicle_W_N(1).x(), -expected_N, 1e-9);
