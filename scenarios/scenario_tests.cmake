@@ -186,6 +186,20 @@ add_test(NAME cli.never_flew
                  ${HPA_PYTHON3})
 set_tests_properties(cli.never_flew PROPERTIES LABELS cli TIMEOUT 300)
 
+# A stack's error text capped at 4 KiB with its length stated, and a second reply to one tick a
+# run error naming the stack and the tick at once
+add_test(NAME cli.stack_replies
+         COMMAND bash ${SCEN}/tests/stack_replies_test.sh ${HPA_BIN} ${CMAKE_SOURCE_DIR}
+                 ${HPA_PYTHON3})
+set_tests_properties(cli.stack_replies PROPERTIES LABELS cli TIMEOUT 300)
+
+# hpa run refuses to replace another scenario's results in --out (unless --overwrite), and
+# --set PATH+=VALUE appends an event checked as the file's
+add_test(NAME cli.run_habits
+         COMMAND bash ${SCEN}/tests/run_habits_test.sh ${HPA_BIN} ${CMAKE_SOURCE_DIR}
+                 ${HPA_PYTHON3})
+set_tests_properties(cli.run_habits PROPERTIES LABELS cli TIMEOUT 300)
+
 # hpa render-frame's --camera (payload | chase) and --size WxH: the PNG's size read back, bad
 # sizes and cameras refused with exit 2
 add_test(NAME cli.render_frame

@@ -70,6 +70,18 @@ class MessageWait {
 // Bytes a read asks for at most: many small messages arrive in one read.
 constexpr size_t kReadAheadBytes = 64 * 1024;
 
+// A peer's error text as a run error may carry it: its own words, which may not be UTF-8, made
+// UTF-8 (they end up in JSON), cut to its first kMaxErrorTextBytes (at a character's start)
+// with its full length stated.
+std::string ErrorText(const std::vector<uint8_t>& body) {
+  const std::string_view text(reinterpret_cast<const char*>(body.data()), body.size());
+  if (text.size() <= kMaxErrorTextBytes) return CleanUtf8(text);
+  size_t cut = kMaxErrorTextBytes;
+  while (cut > 0 && (static_cast<unsigned char>(text[cut]) & 0xC0) == 0x80) --cut;
+  return CleanUtf8(text.substr(0, cut)) + " ... (error text of " + std::to_string(text.size()) +
+         " bytes, first " + std::to_string(cut) + " shown)";
+}
+
 }  // namespace
 
 bool Channel::ReadExact(uint8_t* data, size_t n, const void* wait_ptr, size_t* got) {
@@ -190,13 +202,18 @@ MessageType Channel::Receive(std::vector<uint8_t>* body, const WaitLimit& limit)
   body->resize(header[2]);
   if (!ReadExact(body->data(), body->size(), &wait, &got)) throw late(sizeof header + header[2]);
   const auto type = static_cast<MessageType>(header[1]);
-  if (type == MessageType::kError) {
-    // the peer's own words, which may not be UTF-8: they end up in JSON (a run error)
-    throw ProtocolError(
-        "the peer reported: " +
-        CleanUtf8(std::string_view(reinterpret_cast<const char*>(body->data()), body->size())));
-  }
+  if (type == MessageType::kError) throw ProtocolError("the peer reported: " + ErrorText(*body));
   return type;
+}
+
+bool Channel::HasUnread() {
+  if (in_begin_ < in_end_) return true;
+  uint8_t byte = 0;
+  while (true) {
+    const ssize_t k = ::recv(fd_, &byte, 1, MSG_PEEK | MSG_DONTWAIT);
+    if (k < 0 && errno == EINTR) continue;
+    return k > 0;  // 0: the peer closed (the next receive says so); < 0: nothing waits
+  }
 }
 
 MessageType Channel::Receive(std::vector<uint8_t>* body, double timeout_s) {

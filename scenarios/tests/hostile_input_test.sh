@@ -153,7 +153,7 @@ echo "== a run killed with -9 leaves no complete-looking metrics.json"
 "$hpa" run "$base" --out "$out/killed" --quiet || fail "first run failed"
 [ -s "$out/killed/metrics.json" ] || fail "no metrics.json from the first run"
 "$hpa" run "$scen/lissajous_T5.yaml" --camera analytic --set duration=60 --out "$out/killed" \
-  --quiet > /dev/null 2>&1 &
+  --overwrite --quiet > /dev/null 2>&1 &
 pid=$!
 # killed once it has started (the previous run's outputs are gone), however loaded the machine
 for _ in $(seq 600); do [ -e "$out/killed/metrics.json" ] || break; sleep 0.05; done

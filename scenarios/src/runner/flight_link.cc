@@ -8,6 +8,7 @@
 #include "hpa/scenarios/runner.h"
 #include "scenarios/src/runner/flight_process.h"
 #include "scenarios/src/runner/frame_ring.h"
+#include "scenarios/src/runner/reply_order.h"
 #include "scenarios/src/runner/stack_process.h"
 
 namespace hpa::runner {
@@ -128,9 +129,11 @@ class ExternalFlight final : public FlightLink {
       process_.Guard(
           [&] {
             if (ring_) ring_->Check();  // frames rendered into a ring cut short are never sent
+            CheckNothingUnasked();
             channel().Send(MessageType::kTick, flight::EncodeTick(in), Limit());
             out = flight::DecodeReply(channel().Expect(MessageType::kTickReply, Limit()));
             flight::CheckReply(out, Bounds(in));
+            replies_.TickAnswered(out, in.time_s);
           },
           "tick at t = " + std::to_string(in.time_s) + " s");
       frames_unanswered_ = 0;
@@ -145,6 +148,7 @@ class ExternalFlight final : public FlightLink {
     process_.Guard(
         [&] {
           if (ring_) ring_->Check();
+          CheckNothingUnasked();
           tick_ = in;  // the tick as sent: no_reply when no reply to it is read
           tick_.no_reply = !wanted;
           channel().Queue(MessageType::kTick, flight::EncodeTick(tick_));
@@ -256,6 +260,7 @@ class ExternalFlight final : public FlightLink {
     AutopilotOutput out;
     process_.Guard(
         [&] {
+          CheckNothingUnasked();
           channel().Queue(MessageType::kRateTick, flight::EncodeRateTick(tick));
           channel().Flush(Limit());
           std::vector<uint8_t> body;
@@ -270,6 +275,7 @@ class ExternalFlight final : public FlightLink {
           }
           out = flight::DecodeRateReply(body);
           flight::CheckRateReply(out, params_);
+          replies_.Answered("rate_tick at t = " + std::to_string(tick.time_s) + " s");
         },
         "rate loop at t = " + std::to_string(tick.time_s) + " s");
     return out;
@@ -287,6 +293,7 @@ class ExternalFlight final : public FlightLink {
           // the replies still on their way come first
           channel().Flush(limit);
           while (!awaited_.empty()) ReadReply();
+          CheckNothingUnasked();
           channel().Send(MessageType::kFinish, flight::EncodeTick(pending), limit);
           // frames of ticks no reply answered are counted in the finish's
           const flight::FinishReply reply =
@@ -360,6 +367,7 @@ class ExternalFlight final : public FlightLink {
     try {
       out = flight::DecodeReply(body);
       flight::CheckReply(out, a.bounds);
+      replies_.TickAnswered(out, a.time_s);
     } catch (const flight::WaitInterrupted&) {
       throw;
     } catch (const ProtocolError& e) {
@@ -381,6 +389,7 @@ class ExternalFlight final : public FlightLink {
   // Sends a detect (after the ticks queued before it) and reads its reply (the replies of the
   // ticks before it first).
   flight::DetectReply Detect(const CameraFrame& frame) {
+    CheckNothingUnasked();
     channel().Queue(MessageType::kDetect, flight::EncodeDetect(frame));
     channel().Flush(Limit());
     std::vector<uint8_t> body;
@@ -394,6 +403,7 @@ class ExternalFlight final : public FlightLink {
       ReadReplyBody(body);
     }
     flight::DetectReply reply = flight::DecodeDetectReply(body);
+    replies_.Answered("detect at t = " + std::to_string(frame.capture_time_s) + " s");
     const cv::Rect& roi = reply.camera_roi;
     if (reply.region_wanted &&
         (roi.width <= 0 || roi.height <= 0 || roi.x < 0 || roi.y < 0 ||
@@ -406,6 +416,11 @@ class ExternalFlight final : public FlightLink {
                           std::to_string(options_.frames.height_px) + " image");
     }
     return reply;
+  }
+
+  // Refuses a message the stack sent unasked: bytes waiting while no reply is awaited.
+  void CheckNothingUnasked() {
+    if (awaited_.empty()) replies_.CheckNothingUnasked(channel(), Limit());
   }
 
   // The connection to the stack, and one message's wait on it.
@@ -434,6 +449,7 @@ class ExternalFlight final : public FlightLink {
   int frames_found_ = 0;          // frames_detected read, not yet reported to the run
   cv::Rect last_roi_;             // camera_roi of the last reply read
   cv::Rect capture_region_;       // the region of the frame being captured
+  ReplyOrder replies_;  // what the stack answered so far: a second reply is refused
 };
 
 }  // namespace

@@ -414,7 +414,11 @@ Scenario LoadScenarioText(const std::string& text, const std::string& path,
   YAML::Node root = LoadYamlText(text, path);
   if (!root.IsMap()) throw InputError(path, "", "expected a YAML map at the top level");
   if (sets.empty()) return ParseScenario(YamlMap(root, path, ""), reference_csv_text);
-  for (const ScenarioSet& set : sets) SetDottedPath(root, set.first, set.second, origin);
+  // each set's path as set (an appended entry's own: events+ sets events.2)
+  std::vector<std::string> set_paths;
+  for (const ScenarioSet& set : sets) {
+    set_paths.push_back(SetDottedPath(root, set.first, set.second, origin));
+  }
   // a bad value names the set it came from: `--set KEY=VALUE`, or the sweep file with the value
   const auto source = [&](const ScenarioSet& set) {
     return origin == "--set" ? "--set " + set.first + "=" + set.second
@@ -424,10 +428,10 @@ Scenario LoadScenarioText(const std::string& text, const std::string& path,
     return ParseScenario(YamlMap(root, path, ""), reference_csv_text);
   } catch (const InputError& e) {
     // a bad value that came from a set: name where it came from, not the file it is not in
-    for (auto it = sets.rbegin(); it != sets.rend(); ++it) {
-      const std::string& key = it->first;
+    for (size_t i = sets.size(); i-- > 0;) {
+      const std::string& key = set_paths[i];
       if (e.key() == key || e.key().rfind(key + ".", 0) == 0 || key.rfind(e.key() + ".", 0) == 0) {
-        throw InputError(source(*it), e.key(), e.detail());
+        throw InputError(source(sets[i]), e.key(), e.detail());
       }
     }
     throw;

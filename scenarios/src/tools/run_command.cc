@@ -4,7 +4,9 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <fstream>
 #include <memory>
+#include <nlohmann/json.hpp>
 #include <string>
 
 #include "hpa/controller/controller_registry.h"
@@ -65,12 +67,18 @@ struct RunArgs {
   std::string out_dir, controller, video, flight_stack, plot_format = "png";
   double flight_timeout_s = 10.0;
   bool slack_events = false, plots = false, no_control_thread = false;
+  bool overwrite = false;  // replace another scenario's results in --out
   std::string team_stack = "per_vehicle";
 };
 
 // Adds `hpa run`'s own options to its parser.
 void AddRunOptions(CLI::App& app, RunArgs* a) {
-  app.add_option("--out", a->out_dir, "output folder (default out/<scenario name>)");
+  app.add_option("--out", a->out_dir,
+                 "output folder (default out/<scenario name>); one holding another scenario's "
+                 "results is refused unless --overwrite");
+  app.add_flag("--overwrite", a->overwrite,
+               "replace the results of another scenario in --out (a rerun of the same scenario "
+               "replaces its own without it)");
   app.add_option("--controller", a->controller,
                  "a registered controller (see hpa --help); a team scenario's: a team controller "
                  "(cooperative | hpa_mpc, hpa schema controllers)");
@@ -134,6 +142,24 @@ void CheckTeamStackOption(const CLI::App& app, const Scenario& scenario, const R
   }
 }
 
+// Refuses to replace another scenario's results: a DIR/metrics.json that is not this scenario's
+// (another scenario's name, or not a run's metrics at all) stays unless --overwrite; a rerun of
+// the same scenario (any seed, controller or stack) replaces its own.
+void CheckOutFolder(const std::string& dir, const std::string& scenario_name, bool overwrite) {
+  if (overwrite) return;
+  std::ifstream in(dir + "/metrics.json");
+  if (!in) return;
+  const nlohmann::json j = nlohmann::json::parse(in, nullptr, false);
+  const bool named = j.is_object() && j.contains("scenario") && j.at("scenario").is_string();
+  if (named && j.at("scenario").get<std::string>() == scenario_name) return;
+  const std::string held = named ? "the results of scenario '" +
+                                       j.at("scenario").get<std::string>() + "'"
+                                 : "a metrics.json that is not a run's";
+  throw InputError("", "--out",
+                   dir + " holds " + held + ", and this run is scenario '" + scenario_name +
+                       "': give another --out, or --overwrite to replace them");
+}
+
 // The run's options from the command line (a video's recorder is added beside them).
 RunOptions RunOptionsOf(const ScenarioOptions& o, const RunArgs& a) {
   RunOptions options;
@@ -164,6 +190,7 @@ int RunMain(int argc, char** argv) {
   }
   CheckTeamStackOption(app, scenario, a);
   if (a.out_dir.empty()) a.out_dir = "out/" + scenario.name;
+  CheckOutFolder(a.out_dir, scenario.name, a.overwrite);
   MakeOutputDir(a.out_dir);
   RemoveStaleOutputs(a.out_dir);
   WriteRunRecord(a.out_dir, RecordOf(o, a.controller, params));

@@ -29,7 +29,9 @@ void AddScenarioOptions(CLI::App& app, ScenarioOptions* o, bool with_camera, boo
   app.add_option("--params", o->params_file, "parameter file (default models/params.yaml)");
   app.add_option("--set", o->sets,
                  "PATH=VALUE: changes one dotted key of the scenario (repeatable), e.g. "
-                 "--set events.1.impulse.2=0.5")
+                 "--set events.1.impulse.2=0.5; PATH+=VALUE appends VALUE to the list at PATH, "
+                 "e.g. --set 'events+={at: 2.0, type: impulse, body: payload, impulse: [0, 0, "
+                 "0.1]}'")
       ->allow_extra_args(false);  // one PATH=VALUE per --set: a later positional is not a set
   app.add_option("--seed", o->seed, "scenario seed")->check(CLI::Range(0UL, 4294967295UL));
   if (with_camera) {

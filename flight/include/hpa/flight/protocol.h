@@ -28,6 +28,9 @@ constexpr uint32_t kProtocolVersion = 1;
 constexpr uint32_t kMagic = 0x46415048;
 /// Largest message body accepted (a malformed length is refused before it is allocated).
 constexpr uint32_t kMaxMessageBytes = 64u << 20;
+/// Most bytes of a peer's error text a receiver keeps (its head): the text becomes a run error in
+/// metrics.json, which a stack's megabytes would swamp; its full length is stated beside it.
+constexpr size_t kMaxErrorTextBytes = 4096;
 
 /// The message kinds; each message is a 12-byte header (magic, type, body length) and a body.
 enum class MessageType : uint32_t {
@@ -267,6 +270,9 @@ class Channel {
   std::vector<uint8_t> Expect(MessageType type, const WaitLimit& limit);
   /// Expect within timeout_s (<= 0: no limit), no stop check.
   std::vector<uint8_t> Expect(MessageType type, double timeout_s);
+  /// Whether bytes from the peer wait unread (read ahead, or on the socket), without waiting:
+  /// in lockstep, a peer that was asked nothing has nothing to say (a second reply).
+  bool HasUnread();
   /// The socket (owned).
   int fd() const { return fd_; }
 
