@@ -277,3 +277,18 @@ set_tests_properties(cli.python_team_stack PROPERTIES LABELS "cli;scenario" TIME
 add_test(NAME cli.vehicle_input
          COMMAND bash ${SCEN}/tests/vehicle_input_test.sh ${HPA_BIN} ${CMAKE_SOURCE_DIR})
 set_tests_properties(cli.vehicle_input PROPERTIES LABELS cli TIMEOUT 600)
+
+# A sweep flown by a separate stack refuses a vary key only the in-process flight code reads
+# (controller.type, a controller setting, the estimator) when it takes several values, naming
+# the key; one value flies, and hpa-flight flies each value as its own controller
+add_test(NAME cli.sweep_stack_keys
+         COMMAND bash ${SCEN}/tests/sweep_stack_keys_test.sh ${HPA_BIN} ${CMAKE_SOURCE_DIR}
+                 ${HPA_PYTHON3})
+set_tests_properties(cli.sweep_stack_keys PROPERTIES LABELS cli TIMEOUT 300)
+# hpa sweep --runs N --set PATH=VALUE: a sweep file changed without copying it, the overrides in
+# every record, its replay commands and inputs.json, part of the sweep's identity on resume and
+# merge; a set on a varied key or a bad value refused
+add_test(NAME cli.sweep_overrides
+         COMMAND bash ${SCEN}/tests/sweep_overrides_test.sh ${HPA_BIN} ${CMAKE_SOURCE_DIR}
+                 ${HPA_PYTHON3})
+set_tests_properties(cli.sweep_overrides PROPERTIES LABELS cli TIMEOUT 300)

@@ -66,14 +66,18 @@ usage:
       --gl egl renders through EGL (a GPU where there is one) instead of OSMesa.
   hpa sweep SWEEP.yaml --out DIR [--jobs N] [--shard K/N] [--keep-logs worst:N[:METRIC]]
                         [--resume [--retry-errors] [--allow-changed-inputs]] [--gl osmesa|egl]
-                        [--flight-stack "CMD"] [--flight-timeout S]
+                        [--flight-stack "CMD"] [--flight-timeout S] [--runs N]
+                        [--set PATH=VALUE]...
       Monte Carlo sweep: one JSON line per run in DIR/runs.jsonl, then a summary. --jobs
       defaults to the number of cores; --shard K/N (K = 1..N) runs every N-th run; --resume
       skips recorded runs, --retry-errors runs the recorded errors (killed, timed out) again;
       a resume refuses a sweep or base file changed since, unless --allow-changed-inputs;
       --keep-logs replays the N worst runs and keeps their log.csv in DIR/logs/.
       --flight-stack (or the sweep file's flight_stack:) flies every run with its own process
-      of a separate flight stack; a resume or merge refuses another stack.
+      of a separate flight stack; a resume or merge refuses another stack, and a vary key
+      only the in-process flight code reads (controller.*) is refused with one.
+      --runs N replaces the file's runs:, --set PATH=VALUE sets a key of the base scenario
+      in every run (as hpa run --set), without copying the sweep file.
   hpa merge DIR... --out DIR
       Joins sweep shards and writes DIR/summary.json, DIR/summary.md and plots.
   hpa sweep-diff A B --out DIR [--a-where KEY=VALUE] [--b-where KEY=VALUE] [--verdict-timing]
@@ -207,6 +211,9 @@ int HpaMain(int argc, char** argv) {
   // SIGTERM / SIGINT: a run stops at its next tick and writes its metrics and log so far
   std::signal(SIGTERM, RequestStop);
   std::signal(SIGINT, RequestStop);
+  // a file-size limit (ulimit -f) would kill hpa mid-write with SIGXFSZ: ignored, the write
+  // fails with EFBIG instead and is reported as a full disk is (exit 4, no partial file kept)
+  std::signal(SIGXFSZ, SIG_IGN);
   if (argc >= 2 && !std::strcmp(argv[1], "--version")) {
     std::string data;
     try {

@@ -32,6 +32,8 @@ namespace {
 // What `hpa sweep` was asked for on its command line.
 struct SweepArgs {
   std::string sweep_file, out_dir, shard = "1/1", gl = "osmesa", keep_logs, flight_stack;
+  std::optional<int> runs;        // --runs: replaces the file's `runs:`
+  std::vector<std::string> sets;  // --set PATH=VALUE, in order
   double flight_timeout_s = 10.0;
   int jobs = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
   bool resume = false, retry_errors = false, allow_changed_inputs = false;
@@ -41,6 +43,15 @@ struct SweepArgs {
 void AddSweepOptions(CLI::App& app, SweepArgs* a) {
   app.add_option("SWEEP.yaml", a->sweep_file, "the sweep file")->required();
   app.add_option("--out", a->out_dir, "output folder (locked while the sweep runs)")->required();
+  app.add_option("--runs", a->runs,
+                 "N: the sweep's random draws, replacing the file's runs: (times the grid)")
+      ->check(CLI::Range(1, 1000000));
+  app.add_option("--set", a->sets,
+                 "PATH=VALUE: sets one dotted key of the base scenario in every run (repeatable; "
+                 "as hpa run --set, e.g. --set duration=2), without copying the sweep file; not "
+                 "a key vary draws. --runs and --set are part of the sweep's identity: a resume "
+                 "needs the same")
+      ->allow_extra_args(false);
   app.add_option("--jobs", a->jobs, "worker processes (default: the number of cores)")
       ->check(CLI::Range(1, 256));
   app.add_option("--shard", a->shard, "K/N: run every N-th run, starting at run K-1 (K = 1..N)");
@@ -138,13 +149,15 @@ std::set<int> RecordedRuns(const std::string& jsonl, const SweepArgs& a, SweepSp
         throw InputError(jsonl, "",
                          "holds runs of a different sweep (sweep_id " + r.sweep_id + ", the " +
                              "inputs now hash to " + inputs_id + "): the sweep or base file " +
-                             "changed; use another --out, or --resume --allow-changed-inputs " +
-                             "to continue with the changed inputs");
+                             "changed (or --runs, --set or a data file of hpa); use another " +
+                             "--out, or --resume --allow-changed-inputs to continue with the " +
+                             "changed inputs");
       }
       std::fprintf(stderr,
-                   "hpa: warning: the sweep or base file changed since %s was recorded (sweep_id "
-                   "%s, now %s); the runs still to do use the changed inputs and their records "
-                   "carry inputs_id %s\n",
+                   "hpa: warning: the sweep or base file changed since %s was recorded (or "
+                   "--runs, --set or a data file of hpa; sweep_id %s, now %s); the runs still to "
+                   "do use the changed inputs, their records carry inputs_id %s and inputs.json "
+                   "adds them under `resumed`\n",
                    jsonl.c_str(), r.sweep_id.c_str(), inputs_id.c_str(), inputs_id.c_str());
       spec->sweep_id = r.sweep_id;
       spec->inputs_id = inputs_id;
@@ -266,7 +279,9 @@ int SweepMain(int argc, char** argv) {
   const auto [shard_k, shard_n] = ParseShard(a.shard);
   CheckResumeFlags(a);
 
-  SweepSpec spec = LoadSweep(a.sweep_file, a.flight_stack);
+  SweepOverrides overrides{a.flight_stack, a.runs, {}};
+  for (const std::string& text : a.sets) overrides.sets.push_back(ParseSetArgument(text));
+  SweepSpec spec = LoadSweep(a.sweep_file, overrides);
   spec.flight_timeout_s = a.flight_timeout_s;
   const Params params = LoadParams(DefaultParamsPath());
   const std::vector<SweepRun> all_runs = ExpandSweep(spec);
@@ -348,12 +363,27 @@ std::vector<Record> ReadShardRecords(const std::vector<std::string>& dirs, std::
   return all;
 }
 
-// The sweep file's spec, with the flight stack its runs recorded, when it is still the sweep
-// recorded (same sweep_id), else nothing: then how many runs the sweep has is unknown.
+// The sweep file's spec, with the flight stack its runs recorded and the --runs and --set the
+// folders' inputs.json recorded, when it is still the sweep recorded (same sweep_id), else
+// nothing: then how many runs the sweep has is unknown.
 std::optional<SweepSpec> SameSweep(const std::string& sweep_file, const std::string& sweep_id,
-                                   const std::string& flight_stack) {
+                                   const std::string& flight_stack,
+                                   const std::vector<std::string>& dirs) {
+  SweepOverrides overrides;
+  overrides.flight_stack = flight_stack;
+  for (const std::string& dir : dirs) {
+    std::optional<sweep::InputsSnapshot> inputs;
+    try {
+      inputs = sweep::ReadInputsSnapshot(dir);
+    } catch (const InputError&) {
+    }
+    if (!inputs || inputs->sweep_id != sweep_id) continue;
+    overrides.runs = inputs->runs;
+    overrides.sets = inputs->sets;
+    break;
+  }
   try {
-    SweepSpec loaded = LoadSweep(sweep_file, flight_stack);
+    SweepSpec loaded = LoadSweep(sweep_file, overrides);
     if (loaded.sweep_id == sweep_id) return loaded;
   } catch (const InputError&) {
   }
@@ -410,7 +440,7 @@ int MergeMain(int argc, char** argv) {
   if (all.empty()) throw InputError("", "DIR", "no runs recorded in the folders given");
   // how many runs the sweep has: from its file when it is still the same sweep, else unknown
   const std::optional<SweepSpec> spec =
-      SameSweep(all.front().sweep_file, sweep_id, all.front().flight_stack);
+      SameSweep(all.front().sweep_file, sweep_id, all.front().flight_stack, dirs);
   const long expected = spec ? SweepRunCount(*spec) : -1;
   std::vector<std::string> warnings;
   const std::vector<Record> records = sweep::UniqueRecords(all, expected, &warnings);

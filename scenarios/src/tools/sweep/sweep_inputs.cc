@@ -58,9 +58,12 @@ std::string FirstDifferingLine(const std::string& a, const std::string& b) {
 
 }  // namespace
 
-void WriteInputsSnapshot(const SweepSpec& spec, const std::string& dir) {
-  struct stat st;
-  if (stat((dir + kInputsFile).c_str(), &st) == 0) return;  // a resume keeps the first
+namespace {
+
+// The files of a sweep's inputs as inputs.json keeps them: the sweep and base files' text, the
+// csv reference's, and the data files by their hash (the MJCF scene and the profiles are long),
+// params.yaml's text too, so that a changed parameter is named key by key.
+Json FilesJson(const SweepSpec& spec) {
   Json files = Json::array();
   files.push_back({{"role", "sweep"}, {"path", spec.file}, {"text", spec.sweep_text}});
   files.push_back({{"role", "base"}, {"path", spec.base_path}, {"text", spec.base_text}});
@@ -69,18 +72,92 @@ void WriteInputsSnapshot(const SweepSpec& spec, const std::string& dir) {
                      {"path", spec.reference_csv_path},
                      {"text", *spec.reference_csv_text}});
   }
-  // the data files by their hash (the MJCF scene and the profiles are long): params.yaml's text
-  // too, so that a changed parameter is named key by key
   for (const auto& [role, path] : DataInputFiles()) {
     const std::string text = ReadInputFile(path, "a data file of hpa");
     Json entry = {{"role", role}, {"path", path}, {"hash", HashText(text)}};
     if (role == "params") entry["text"] = text;
     files.push_back(entry);
   }
-  Json snapshot = {{"sweep_id", spec.sweep_id}, {"files", files}};
-  if (!spec.flight_stack.empty()) snapshot["flight_stack"] = spec.flight_stack;
-  WriteFileAtomic(dir + kInputsFile,
-                  snapshot.dump(1, ' ', false, Json::error_handler_t::replace) + "\n");
+  return files;
+}
+
+// Adds what flew beside the files: the flight stack, --runs and --set (each only when given).
+void AddCommandLine(const SweepSpec& spec, Json* part) {
+  if (!spec.flight_stack.empty()) (*part)["flight_stack"] = spec.flight_stack;
+  if (spec.runs_override) (*part)["runs"] = *spec.runs_override;
+  if (!spec.sets.empty()) {
+    Json sets = Json::array();
+    for (const auto& [key, value] : spec.sets) sets.push_back({key, value});
+    (*part)["sets"] = sets;
+  }
+}
+
+// Reads a list of files of inputs.json (`path` names the file in messages).
+std::vector<InputFile> ReadFiles(const Json& list, const std::string& path) {
+  std::vector<InputFile> files;
+  for (const Json& f : list) {
+    // a file kept by its hash alone compares by that hash; one kept by its text (which may come
+    // without a hash) by the text's
+    InputFile file{f.at("role").get<std::string>(), f.at("path").get<std::string>(), std::nullopt,
+                   ""};
+    if (!f.contains("text") && !f.contains("hash")) {
+      throw InputError(path, "", "malformed: a file with neither its text nor its hash");
+    }
+    if (f.contains("text")) file.text = f.at("text").get<std::string>();
+    file.hash = f.contains("hash") ? f.at("hash").get<std::string>() : HashText(*file.text);
+    files.push_back(file);
+  }
+  return files;
+}
+
+// Reads the stack, --runs and --set of one part of inputs.json.
+template <typename Part>
+void ReadCommandLine(const Json& j, Part* part) {
+  if (j.contains("flight_stack")) part->flight_stack = j.at("flight_stack").get<std::string>();
+  if (j.contains("runs")) part->runs = j.at("runs").get<int>();
+  if (j.contains("sets")) {
+    for (const Json& set : j.at("sets")) {
+      part->sets.emplace_back(set.at(0).get<std::string>(), set.at(1).get<std::string>());
+    }
+  }
+}
+
+}  // namespace
+
+void WriteInputsSnapshot(const SweepSpec& spec, const std::string& dir) {
+  const std::string path = dir + kInputsFile;
+  struct stat st;
+  const bool exists = stat(path.c_str(), &st) == 0;
+  if (exists && spec.inputs_id.empty()) return;  // a resume of the same inputs keeps the first
+  Json snapshot;
+  if (exists) {
+    try {
+      snapshot = Json::parse(ReadInputFile(path, "a sweep's inputs.json"));
+    } catch (const Json::exception& e) {
+      throw InputError(path, "", std::string("malformed: ") + e.what());
+    }
+  } else if (!spec.inputs_id.empty()) {
+    // the folder's first runs were recorded without inputs.json: their inputs are unknown
+    snapshot = {{"sweep_id", spec.sweep_id},
+                {"files", Json::array()},
+                {"note", "the first runs' inputs were not recorded (an older hpa)"}};
+  } else {
+    snapshot = {{"sweep_id", spec.sweep_id}, {"files", FilesJson(spec)}};
+    AddCommandLine(spec, &snapshot);
+  }
+  if (!spec.inputs_id.empty()) {
+    // a part resumed with changed inputs: recorded once per inputs_id, in the order flown
+    if (!snapshot.contains("resumed") || !snapshot["resumed"].is_array()) {
+      snapshot["resumed"] = Json::array();
+    }
+    for (const Json& part : snapshot["resumed"]) {
+      if (part.value("inputs_id", "") == spec.inputs_id) return;
+    }
+    Json part = {{"inputs_id", spec.inputs_id}, {"files", FilesJson(spec)}};
+    AddCommandLine(spec, &part);
+    snapshot["resumed"].push_back(part);
+  }
+  WriteFileAtomic(path, snapshot.dump(1, ' ', false, Json::error_handler_t::replace) + "\n");
 }
 
 std::optional<InputsSnapshot> ReadInputsSnapshot(const std::string& dir) {
@@ -91,18 +168,14 @@ std::optional<InputsSnapshot> ReadInputsSnapshot(const std::string& dir) {
   try {
     const Json j = Json::parse(ReadInputFile(path, "a sweep's inputs.json"));
     snapshot.sweep_id = j.at("sweep_id").get<std::string>();
-    if (j.contains("flight_stack")) snapshot.flight_stack = j.at("flight_stack").get<std::string>();
-    for (const Json& f : j.at("files")) {
-      // a file kept by its hash alone compares by that hash; one kept by its text (which
-      // may come without a hash) by the text's
-      InputFile file{f.at("role").get<std::string>(), f.at("path").get<std::string>(),
-                     std::nullopt, ""};
-      if (!f.contains("text") && !f.contains("hash")) {
-        throw InputError(path, "", "malformed: a file with neither its text nor its hash");
-      }
-      if (f.contains("text")) file.text = f.at("text").get<std::string>();
-      file.hash = f.contains("hash") ? f.at("hash").get<std::string>() : HashText(*file.text);
-      snapshot.files.push_back(file);
+    snapshot.files = ReadFiles(j.at("files"), path);
+    ReadCommandLine(j, &snapshot);
+    for (const Json& p : j.value("resumed", Json::array())) {
+      ResumedInputs part;
+      part.inputs_id = p.at("inputs_id").get<std::string>();
+      part.files = ReadFiles(p.at("files"), path);
+      ReadCommandLine(p, &part);
+      snapshot.resumed.push_back(part);
     }
   } catch (const Json::exception& e) {
     throw InputError(path, "", std::string("malformed: ") + e.what());
@@ -121,8 +194,12 @@ void CopyInputsSnapshot(const std::vector<std::string>& from_dirs, const std::st
   }
 }
 
-std::vector<std::string> DescribeInputChanges(const InputsSnapshot& a, const InputsSnapshot& b) {
-  std::vector<std::string> changes;
+namespace {
+
+// What differs between two sweeps' command lines: the flight stack, --runs and --set.
+void DescribeCommandLineChanges(const InputsSnapshot& a, const InputsSnapshot& b,
+                                std::vector<std::string>* out) {
+  std::vector<std::string>& changes = *out;
   if (a.flight_stack != b.flight_stack) {
     const auto shown = [](const std::string& command) {
       return command.empty() ? std::string("in process") : "'" + command + "'";
@@ -130,6 +207,30 @@ std::vector<std::string> DescribeInputChanges(const InputsSnapshot& a, const Inp
     changes.push_back("flight stack: " + shown(a.flight_stack) + " (A) vs " +
                       shown(b.flight_stack) + " (B)");
   }
+  // the command line's overrides of the sweep file
+  if (a.runs != b.runs) {
+    const auto shown = [](const std::optional<int>& runs) {
+      return runs ? std::to_string(*runs) : std::string("the file's");
+    };
+    changes.push_back("--runs: " + shown(a.runs) + " (A) vs " + shown(b.runs) + " (B)");
+  }
+  std::map<std::string, std::string> sets_a(a.sets.begin(), a.sets.end()),
+      sets_b(b.sets.begin(), b.sets.end());
+  for (const auto& [key, value] : sets_a) {
+    const auto it = sets_b.find(key);
+    const std::string other = it == sets_b.end() ? "(not set)" : it->second;
+    if (other != value) changes.push_back("--set " + key + ": " + value + " (A) vs " + other + " (B)");
+  }
+  for (const auto& [key, value] : sets_b) {
+    if (!sets_a.count(key)) changes.push_back("--set " + key + ": (not set) (A) vs " + value + " (B)");
+  }
+}
+
+}  // namespace
+
+std::vector<std::string> DescribeInputChanges(const InputsSnapshot& a, const InputsSnapshot& b) {
+  std::vector<std::string> changes;
+  DescribeCommandLineChanges(a, b, &changes);
   for (const InputFile& fa : a.files) {
     for (const InputFile& fb : b.files) {
       if (fa.role != fb.role || fa.hash == fb.hash) continue;

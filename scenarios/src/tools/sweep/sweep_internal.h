@@ -104,15 +104,29 @@ struct InputFile {
   std::string hash;                 // HashText of the text (every file has one)
 };
 
-/// DIR/inputs.json: the files a sweep ran from, with its sweep_id.
+/// The inputs a part of a sweep's runs was flown from after `--resume --allow-changed-inputs`.
+struct ResumedInputs {
+  std::string inputs_id;  // the changed inputs' hash, as the part's records carry it
+  std::vector<InputFile> files;
+  std::string flight_stack;                                // as InputsSnapshot's
+  std::optional<int> runs;                                 // --runs, when given
+  std::vector<std::pair<std::string, std::string>> sets;  // --set PATH=VALUE, in order
+};
+
+/// DIR/inputs.json: the files a sweep ran from, with its sweep_id, and those of every part
+/// resumed with changed inputs.
 struct InputsSnapshot {
   std::string sweep_id;
   std::vector<InputFile> files;
   std::string flight_stack;  // the flight-stack command every run flew ("": in process)
+  std::optional<int> runs;   // hpa sweep --runs, when given
+  std::vector<std::pair<std::string, std::string>> sets;  // hpa sweep --set, in order
+  std::vector<ResumedInputs> resumed;  // one per inputs_id, in the order first flown
 };
 
 /// Writes DIR/inputs.json from the spec's snapshots unless the folder has one (a resume keeps
-/// the first).
+/// the first); a resume with changed inputs (spec.inputs_id set) adds their files as a resumed
+/// part, once per inputs_id.
 void WriteInputsSnapshot(const SweepSpec& spec, const std::string& dir);
 
 /// DIR/inputs.json, or nothing when the folder has none; InputError if it is malformed.

@@ -135,6 +135,99 @@ void ValidateRuns(const SweepSpec& s, const std::string& path) {
   }
 }
 
+// Whether a vary entry takes more than one value: a grid or list of two distinct values, a
+// uniform of some width, a normal of some spread.
+bool TakesSeveralValues(const VarySpec& v) {
+  switch (v.kind) {
+    case VarySpec::Kind::kUniform:
+      return v.b > v.a;
+    case VarySpec::Kind::kNormal:
+      return v.b > 0.0;
+    case VarySpec::Kind::kGrid:
+    case VarySpec::Kind::kList:
+      for (const std::string& value : v.values) {
+        double x = 0.0, y = 0.0;
+        const std::string& first = v.values.front();
+        const bool same = sweep::IsNumber(value, &x) && sweep::IsNumber(first, &y)
+                              ? x == y
+                              : value == first;
+        if (!same) return true;
+      }
+      return false;
+  }
+  return false;
+}
+
+// The scenario keys only the flight code reads (the hello's `config` beside the params and the
+// reference): the controller and its settings, the estimator variant and its tension cue. A
+// separate stack flies its own code, so these change nothing it flies.
+bool FlightCodeKey(const std::string& path) {
+  return path == "controller" || path.rfind("controller.", 0) == 0 ||
+         path == "estimation.estimator" || path == "estimation.slack_tension_cue";
+}
+
+// Whether the stack `command` flies the hello's setting at `path`: hpa-flight builds the
+// scenario's controller and estimator from the hello, unless its --controller or --estimator
+// names one of its own.
+bool StackReadsFlightCode(const std::string& command, const std::string& path) {
+  std::istringstream words(command);
+  std::string program, word;
+  words >> program;
+  if (program.substr(program.rfind('/') + 1) != "hpa-flight") return false;
+  const std::string own = path.rfind("estimation.", 0) == 0 ? "--estimator" : "--controller";
+  while (words >> word) {
+    if (word == own || word.rfind(own + "=", 0) == 0) return false;
+  }
+  return true;
+}
+
+// A sweep flown by a separate stack that varies a key only the in-process flight code reads
+// would fly the same stack on the same seeds once per value, under as many labels (n doubled,
+// intervals too narrow): refused before any run, naming the key.
+void RefuseKeysTheStackIgnores(const SweepSpec& s, const std::string& path) {
+  if (s.flight_stack.empty()) return;
+  for (const VarySpec& v : s.vary) {
+    if (!FlightCodeKey(v.path) || !TakesSeveralValues(v) ||
+        StackReadsFlightCode(s.flight_stack, v.path)) {
+      continue;
+    }
+    throw InputError(path, "vary." + v.path,
+                     "takes several values, but the flight stack '" + s.flight_stack +
+                         "' flies its own flight code and ignores " + v.path +
+                         ": each value would fly the same stack on the same seeds under another "
+                         "label. Leave " + v.path +
+                         " out of vary (sweep it in process), or compare stacks with one sweep "
+                         "per --flight-stack and hpa sweep-diff");
+  }
+}
+
+// The command line's --set PATH=VALUE: each must leave the vary keys to `vary` (a set on a
+// varied key, inside one or holding one would overwrite draws or be overwritten by them), and
+// the base with the sets alone must be a valid scenario (the message names --set).
+void CheckSets(const SweepSpec& s) {
+  for (const auto& [set_key, value] : s.sets) {
+    // `PATH+=VALUE` appends to the list at PATH: the same key for this check
+    const std::string key =
+        !set_key.empty() && set_key.back() == '+' ? set_key.substr(0, set_key.size() - 1) : set_key;
+    for (const VarySpec& v : s.vary) {
+      const auto inside = [](const std::string& a, const std::string& b) {
+        return a == b || (a.size() > b.size() && a.rfind(b + ".", 0) == 0);
+      };
+      if (inside(key, v.path) || inside(v.path, key)) {
+        throw InputError("", "--set " + key,
+                         "the sweep varies " + v.path + ": --set cannot change a varied key " +
+                             "(change its `vary:` entry instead)");
+      }
+    }
+  }
+  if (s.sets.empty()) return;
+  try {
+    LoadScenarioText(s.base_text, s.base_path, s.sets, "--set", s.reference_csv_text);
+  } catch (const InputError& e) {
+    throw InputError("", "--set", std::string("the base scenario with the sets: ") + e.what());
+  }
+}
+
 }  // namespace
 
 // The base's reference CSV, read once when the sweep is loaded: every run flies this text, so
@@ -160,6 +253,13 @@ void SnapshotReferencedFiles(SweepSpec* s) {
 }
 
 SweepSpec LoadSweep(const std::string& path, const std::string& flight_stack) {
+  SweepOverrides overrides;
+  overrides.flight_stack = flight_stack;
+  return LoadSweep(path, overrides);
+}
+
+SweepSpec LoadSweep(const std::string& path, const SweepOverrides& overrides) {
+  const std::string& flight_stack = overrides.flight_stack;
   SweepSpec s;
   s.file = path;
   s.sweep_text = ReadYamlFile(path);
@@ -174,6 +274,15 @@ SweepSpec LoadSweep(const std::string& path, const std::string& flight_stack) {
     throw InputError(path, "base", e.what());
   }
   s.runs = static_cast<int>(root.Integer("runs", 1, 1000000));
+  if (overrides.runs) {
+    if (*overrides.runs < 1 || *overrides.runs > 1000000) {
+      throw InputError("", "--runs",
+                       "expected 1 .. 1000000 draws, got " + std::to_string(*overrides.runs));
+    }
+    s.runs = *overrides.runs;
+    s.runs_override = overrides.runs;
+  }
+  s.sets = overrides.sets;
   s.seed = static_cast<unsigned long>(root.Integer("seed", 0, 4294967295L, 1));
   s.time_limit_s = root.Number("time_limit", 1.0, 1e6, 600.0);
   s.flight_stack = root.String("flight_stack", "");
@@ -198,7 +307,9 @@ SweepSpec LoadSweep(const std::string& path, const std::string& flight_stack) {
                      "runs times the grid's cells is over " + std::to_string(kMaxSweepRuns) +
                          " runs: split the sweep");
   }
+  RefuseKeysTheStackIgnores(s, path);
   SnapshotReferencedFiles(&s);
+  CheckSets(s);
   ValidateRuns(s, path);
   // the id hashes every input: the sweep and base files, the reference CSV, the data files
   // every run reads (params, the MJCF scene, the world profiles) and the flight stack that flies
@@ -206,6 +317,9 @@ SweepSpec LoadSweep(const std::string& path, const std::string& flight_stack) {
   std::string inputs = s.sweep_text + "\n--base--\n" + s.base_text;
   if (s.reference_csv_text) inputs += "\n--reference.file--\n" + *s.reference_csv_text;
   if (!s.flight_stack.empty()) inputs += "\n--flight_stack--\n" + s.flight_stack;
+  // the command line's overrides, absent when none (a sweep without them keeps its id)
+  if (s.runs_override) inputs += "\n--runs--\n" + std::to_string(*s.runs_override);
+  for (const auto& [key, value] : s.sets) inputs += "\n--set--\n" + key + "=" + value;
   for (const auto& [role, file] : DataInputFiles()) {
     inputs += "\n--" + role + "--\n" + ReadInputFile(file, "a data file of hpa");
   }
@@ -278,6 +392,7 @@ std::vector<SweepRun> ExpandSweep(const SweepSpec& spec) {
       r.seed = static_cast<unsigned long>(SplitMix64(draw_seed) & 0xFFFFFFFFULL);
       r.values = drawn;
       r.values.insert(r.values.end(), cells[g].begin(), cells[g].end());
+      r.values.insert(r.values.end(), spec.sets.begin(), spec.sets.end());
       runs.push_back(r);
     }
   }

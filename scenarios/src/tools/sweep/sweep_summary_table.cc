@@ -37,12 +37,12 @@ double MainValue(const Record& r, const std::string& main_path) {
 }
 
 // The main varied quantity: the first numeric vary path that is neither the controller type
-// nor a grid variable ("" when there is none).
-std::string MainPath(const std::vector<Record>& records, const std::set<std::string>& grid_keys) {
+// nor one of `not_main` (the grid variables, the command line's sets) ("" when there is none).
+std::string MainPath(const std::vector<Record>& records, const std::set<std::string>& not_main) {
   std::string main_path;
   for (const Record& r : records) {
     for (const auto& [path, value] : r.values) {
-      if (path != "controller.type" && !grid_keys.count(path) && IsNumber(value) &&
+      if (path != "controller.type" && !not_main.count(path) && IsNumber(value) &&
           main_path.empty()) {
         main_path = path;
       }
@@ -131,7 +131,11 @@ SummaryTable Tabulate(const std::vector<Record>& records, const SweepSpec* spec)
         t.grid_keys.insert(v.path);
     }
   }
-  t.main_path = MainPath(records, t.grid_keys);
+  std::set<std::string> not_main = t.grid_keys;
+  if (spec != nullptr) {
+    for (const auto& [key, value] : spec->sets) not_main.insert(key);
+  }
+  t.main_path = MainPath(records, not_main);
   const VarySpec* main_vary = vary_of.count(t.main_path) ? vary_of[t.main_path] : nullptr;
   t.main_label = main_vary != nullptr && !main_vary->label.empty() ? main_vary->label : t.main_path;
   t.bins = MainBins(records, t.main_path, main_vary);

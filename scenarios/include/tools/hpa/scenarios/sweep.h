@@ -39,6 +39,19 @@ struct SweepSpec {
   double flight_timeout_s = 10.0;  // longest wait for the stack's whole reply to one tick
   std::string sweep_id;            // hash of the sweep and base files: merge refuses mixes
   std::string inputs_id;           // set when a resume continues with changed inputs: their hash
+  // `hpa sweep --runs N` when given (it replaced the file's `runs:`), for inputs.json
+  std::optional<int> runs_override;
+  // `hpa sweep --set PATH=VALUE`, in order: set in every run, after its drawn and grid values
+  // (a set key is never a vary key, inside one or holding one), so each record's `values`
+  // names it
+  std::vector<std::pair<std::string, std::string>> sets;
+};
+
+/// What `hpa sweep`'s command line changes in a sweep file without copying it.
+struct SweepOverrides {
+  std::string flight_stack;  // replaces the file's `flight_stack:` ("": the file's)
+  std::optional<int> runs;   // replaces the file's `runs:`
+  std::vector<std::pair<std::string, std::string>> sets;  // --set PATH=VALUE, in order
 };
 
 /// One expanded run: which draw, which grid cell, its seed and its values.
@@ -53,6 +66,12 @@ struct SweepRun {
 /// value within its key's range), else InputError naming the run and its values. A non-empty
 /// `flight_stack` (hpa sweep --flight-stack) replaces the file's `flight_stack:`.
 SweepSpec LoadSweep(const std::string& path, const std::string& flight_stack = "");
+
+/// LoadSweep with the command line's overrides: --flight-stack, --runs (1 .. 1 000 000) and
+/// --set PATH=VALUE (a scenario key set in every run, as `hpa run --set`; InputError naming
+/// --set for a bad value or a key that `vary` draws). The overrides are part of the sweep_id,
+/// so a resume needs the same ones (or --allow-changed-inputs).
+SweepSpec LoadSweep(const std::string& path, const SweepOverrides& overrides);
 
 /// Expands the sweep into its runs (deterministic in the sweep seed).
 std::vector<SweepRun> ExpandSweep(const SweepSpec& spec);
