@@ -187,14 +187,14 @@ VectorXd SpreadMovingState(const CooperativeTeam& team, double lean_rad) {
 
 TEST(CooperativePhysicsTest, TwoVehiclesHangingABarAtHover) {
   // a 0.2 kg, 0.5 m bar hanging level under two vehicles, each at its share of hover
-  const CooperativeTeam team = TestTeam(2, 0.2, Vector3d(1e-4, 4.2e-3, 4.2e-3), 0.2);
+  const CooperativeTeam team = TestBar();
   const CooperativeModel model(team);
   ExpectAgree(Rollout("bar hanging", team, model.HangingState(Vector3d(0, 0, 1.5)),
                       ShareOfHover(team), 0.5));
 }
 
 TEST(CooperativePhysicsTest, TwoVehiclesSpreadAndMovingWithUnequalRotors) {
-  const CooperativeTeam team = TestTeam(2, 0.2, Vector3d(1e-4, 4.2e-3, 4.2e-3), 0.2);
+  const CooperativeTeam team = TestBar();
   const CooperativeModel model(team);
   const VectorXd x0 = SpreadMovingState(team, 0.35);
   VectorXd u = ShareOfHover(team);
@@ -206,7 +206,7 @@ TEST(CooperativePhysicsTest, TwoVehiclesSpreadAndMovingWithUnequalRotors) {
 
 TEST(CooperativePhysicsTest, ThreeVehiclesOnATriangleSpreadAndTurning) {
   // a 0.3 kg triangular plate, attachments 0.2 m from its centre, cables 0.5, 0.6, 0.7 m
-  const CooperativeTeam team = TestTeam(3, 0.3, Vector3d(3e-3, 3e-3, 6e-3), 0.2);
+  const CooperativeTeam team = TestTriangle();
   const CooperativeModel model(team);
   const VectorXd x0 = SpreadMovingState(team, 0.3);
   VectorXd u = ShareOfHover(team);
@@ -234,7 +234,7 @@ TEST(CooperativePhysicsTest, TwoCablesSnappingTautTogetherAreRotorTmsInelasticCo
   // zero gravity, rotors at their minimum thrust: a bar at rest, both cables 0.5 % short of their
   // length, the vehicles flying away along them at 1.0 and 0.6 m/s so that both snap taut at the
   // fifth step; the model takes RotorTM's multi-cable collision there and flies on taut
-  CooperativeTeam team = TestTeam(2, 0.2, Vector3d(1e-4, 4.2e-3, 4.2e-3), 0.2);
+  CooperativeTeam team = TestBar();
   team.gravity_mps2 = 0;
   for (CooperativeVehicle& v : team.vehicles) v.params.gravity_mps2 = 0;
   const CooperativeModel model(team);
@@ -317,7 +317,7 @@ TEST(CooperativePhysicsTest, TwoCablesSnappingTautTogetherAreRotorTmsInelasticCo
 }
 
 TEST(CooperativePhysicsTest, SceneReadsTheSingleSceneCable) {
-  const CooperativeTeam team = TestTeam(3, 0.3, Vector3d(3e-3, 3e-3, 6e-3), 0.2);
+  const CooperativeTeam team = TestTriangle();
   const std::string xml = CooperativeSceneXml(team, DataPath("models/scene.xml"));
   EXPECT_NE(xml.find("solreflimit=\"0.002 10\""), std::string::npos) << xml;
   EXPECT_NE(xml.find("range=\"0 0.69999999999999996\""), std::string::npos);

@@ -22,12 +22,9 @@ using Eigen::Vector3d;
 using Eigen::VectorXd;
 using I = CooperativeStateIndex;
 
-// A 0.2 kg, 0.5 m bar under two vehicles.
-CooperativeTeam Bar() { return TestTeam(2, 0.2, Vector3d(1e-4, 4.2e-3, 4.2e-3), 0.2); }
-
 TeamWorldConfig OnboardConfig(uint64_t seed = 1) {
   TeamWorldConfig c;
-  c.team = Bar();
+  c.team = TestBar();
   c.seed = seed;
   c.onboard_sensors = true;
   return c;
@@ -84,7 +81,7 @@ std::vector<std::vector<std::vector<double>>> Delivered(TeamWorld* world, int st
 // over the run (under 1e-3 m/s^2 at 6 sigma).
 TEST(TeamOnboardTest, EachVehicleReceivesItsImuAndVioAtTheirRates) {
   TeamWorld world(OnboardConfig());
-  world.Reset(CooperativeModel(Bar()).HangingState(Vector3d(0, 0, 1.5)));
+  world.Reset(CooperativeModel(TestBar()).HangingState(Vector3d(0, 0, 1.5)));
   ASSERT_TRUE(world.onboard_sensors());
   ASSERT_EQ(world.sensors(0).size(), 2u);  // IMU and VIO: the ideal profile has no rate gyro
   EXPECT_EQ(world.sensors(1)[0]->declaration().name, "imu");
@@ -95,7 +92,7 @@ TEST(TeamOnboardTest, EachVehicleReceivesItsImuAndVioAtTheirRates) {
 
   const RateTable rates;
   const SensorNoiseConfig noise;
-  const double g_mps2 = Bar().gravity_mps2;
+  const double g_mps2 = TestBar().gravity_mps2;
   const double sigma_mps2 = noise.accel_noise_density_mps2_rthz * std::sqrt(rates.imu.rate_hz);
   const int steps = 2000;  // 2 s
   int imu[2] = {0, 0}, vio[2] = {0, 0};
@@ -137,7 +134,7 @@ TEST(TeamOnboardTest, EachVehicleReceivesItsImuAndVioAtTheirRates) {
 // window and leaves vehicle 1's and every IMU message.
 TEST(TeamOnboardTest, AVioFaultOnOneVehicleLeavesTheOther) {
   TeamWorld world(OnboardConfig());
-  world.Reset(CooperativeModel(Bar()).HangingState(Vector3d(0, 0, 1.5)));
+  world.Reset(CooperativeModel(TestBar()).HangingState(Vector3d(0, 0, 1.5)));
   Fault off;
   off.component = FaultComponent::kVio;
   off.mode = FaultMode::kOff;
@@ -166,7 +163,7 @@ TEST(TeamOnboardTest, AVioFaultOnOneVehicleLeavesTheOther) {
 // seed draws other noise, the two vehicles' noises differ, and the motion capture is the same
 // with and without onboard sensors (their generators are their own).
 TEST(TeamOnboardTest, SameSeedSameMessagesAndAResetReplaysThem) {
-  const VectorXd x0 = CooperativeModel(Bar()).HangingState(Vector3d(0, 0, 1.5));
+  const VectorXd x0 = CooperativeModel(TestBar()).HangingState(Vector3d(0, 0, 1.5));
   TeamWorld a(OnboardConfig(7)), b(OnboardConfig(7)), other(OnboardConfig(8));
   a.Reset(x0);
   b.Reset(x0);
@@ -211,9 +208,9 @@ TEST(TeamOnboardTest, AnImpulseOnAVehicleLastsItsDurationAndGivesItsMomentum) {
   TeamWorldConfig config = OnboardConfig();
   config.onboard_sensors = false;
   TeamWorld world(config);
-  world.Reset(CooperativeModel(Bar()).HangingState(Vector3d(0, 0, 1.5)));
+  world.Reset(CooperativeModel(TestBar()).HangingState(Vector3d(0, 0, 1.5)));
   for (int s = 0; s < 100; ++s) world.Step();
-  const double m_kg = Bar().vehicles[1].params.quad_mass_kg;
+  const double m_kg = TestBar().vehicles[1].params.quad_mass_kg;
   const double dv_mps = 0.2;
   const int vx = I::Vehicle(1) + 3;  // vehicle 1's x velocity
   const double v0_mps = world.GetTruth().x(vx);
@@ -244,12 +241,12 @@ TEST(TeamOnboardTest, EachVehicleFeelsTheSingleQuadrotorsDrag) {
   config.profile.aero.body_drag_coefficient_xy = 1.05;
   config.profile.aero.payload_drag_coefficient = 0.47;
   TeamWorld world(config);
-  world.Reset(CooperativeModel(Bar()).HangingState(Vector3d(0, 0, 1.5)));
+  world.Reset(CooperativeModel(TestBar()).HangingState(Vector3d(0, 0, 1.5)));
   world.AddVelocity(1, Vector3d(3.0, 0, 0));
   const VectorXd x = world.GetTruth().x;
   world.Step();
   const Vector3d v_W = x.segment<3>(I::Vehicle(1) + 3);
-  const Vector3d h = Bar().vehicles[1].params.body_half_size_m;
+  const Vector3d h = TestBar().vehicles[1].params.body_half_size_m;
   const double expected_N = 0.5 * 1.225 * 1.05 * (4 * h.y() * h.z()) * v_W.norm() * v_W.x();
   // the hanging vehicle is level to rounding: its drag is the closed form's to 1e-9 N
   EXPECT_NEAR(world.disturbances().aero_vehicle_W_N(1).x(), -expected_N, 1e-9);

@@ -23,11 +23,6 @@ using Eigen::Vector3d;
 using Eigen::VectorXd;
 using I = CooperativeStateIndex;
 
-// A 0.2 kg, 0.5 m bar under two vehicles.
-CooperativeTeam Bar() { return TestTeam(2, 0.2, Vector3d(1e-4, 4.2e-3, 4.2e-3), 0.2); }
-// A 0.3 kg triangular plate under three vehicles.
-CooperativeTeam Triangle() { return TestTeam(3, 0.3, Vector3d(3e-3, 3e-3, 6e-3), 0.2); }
-
 TeamWorldConfig Config(const CooperativeTeam& team, uint64_t seed = 1) {
   TeamWorldConfig c;
   c.team = team;
@@ -82,9 +77,9 @@ void ExpectHoldsHover(const CooperativeTeam& team) {
   for (double tension_N : t.cable_tension_N) EXPECT_GT(tension_N, 0.0);
 }
 
-TEST(TeamWorldTest, TwoVehiclesHoldTheBarAtHover) { ExpectHoldsHover(Bar()); }
+TEST(TeamWorldTest, TwoVehiclesHoldTheBarAtHover) { ExpectHoldsHover(TestBar()); }
 
-TEST(TeamWorldTest, ThreeVehiclesHoldThePlateAtHover) { ExpectHoldsHover(Triangle()); }
+TEST(TeamWorldTest, ThreeVehiclesHoldThePlateAtHover) { ExpectHoldsHover(TestTriangle()); }
 
 TEST(TeamWorldTest, OneVehicleHoldsAPointPayloadAtHover) {
   ExpectHoldsHover(CooperativeTeam::SingleVehicle(LoadParams(DefaultParamsPath())));
@@ -92,7 +87,7 @@ TEST(TeamWorldTest, OneVehicleHoldsAPointPayloadAtHover) {
 
 // (b) Reset writes the state MuJoCo holds: the truth is x0 up to MuJoCo's copy of it.
 TEST(TeamWorldTest, TruthAfterResetIsTheResetState) {
-  const CooperativeTeam team = Triangle();
+  const CooperativeTeam team = TestTriangle();
   TeamWorld world(Config(team));
   const CooperativeModel model(team);
   VectorXd x0 = model.HangingState(Vector3d(0.1, 0.2, 1.2));
@@ -117,7 +112,7 @@ TEST(TeamWorldTest, TruthAfterResetIsTheResetState) {
 
 // The Reset's motor speeds: a slack cable's vehicle holds its own weight only.
 TEST(TeamWorldTest, ResetHoldsASlackVehicleAtItsOwnHover) {
-  const CooperativeTeam team = Bar();
+  const CooperativeTeam team = TestBar();
   TeamWorld world(Config(team));
   world.Reset(PayloadOnGround(team, 0.4));
   const TeamTruth t = world.GetTruth();
@@ -141,7 +136,7 @@ struct NoiseSums {
 // of three axes the sample standard deviation's own spread is about 1 %; 20 % is the brief's
 // bound, which a wrong scale (a variance used as a deviation, a missing noise) fails.
 TEST(TeamWorldTest, MocapArrivesAtItsRateAfterItsLatencyWithItsNoise) {
-  const CooperativeTeam team = Bar();
+  const CooperativeTeam team = TestBar();
   TeamWorldConfig config = Config(team);
   config.mocap.rate_hz = 100.0;
   config.mocap.latency_s = 0.015;
@@ -215,7 +210,7 @@ TEST(TeamWorldTest, MocapArrivesAtItsRateAfterItsLatencyWithItsNoise) {
 // (d) Vehicle 0 pushed into vehicle 1 (cables slack, the payload on the ground): the collision
 // latches naming both, and later conditions do not replace it.
 TEST(TeamWorldTest, VehiclesPushedTogetherCollide) {
-  CooperativeTeam team = Bar();
+  CooperativeTeam team = TestBar();
   TeamWorld world(Config(team));
   world.Reset(PayloadOnGround(team, 0.45));
   ASSERT_GT(world.MinVehicleSeparation_m(), 0.35);
@@ -235,7 +230,7 @@ TEST(TeamWorldTest, VehiclesPushedTogetherCollide) {
 // do not collide, so the world checks it); the same vehicle beside the cable, just beyond its
 // rotors' reach, is not.
 TEST(TeamWorldTest, ACableThroughAnotherVehiclesRotorsCrashes) {
-  CooperativeTeam team = Bar();
+  CooperativeTeam team = TestBar();
   team.vehicles[1].cable_length_m = 1.0;  // slack wherever vehicle 1 is placed below
   const CooperativeModel model(team);
   const VectorXd hanging = model.HangingState(Vector3d(0, 0, 1.0));
@@ -262,7 +257,7 @@ TEST(TeamWorldTest, ACableThroughAnotherVehiclesRotorsCrashes) {
 // (e) A vehicle with its motors at their minimum falls onto the ground: the crash names it. The
 // payload resting on the ground under hovering vehicles is not a crash.
 TEST(TeamWorldTest, AVehicleOnTheGroundCrashesAPayloadOnTheGroundDoesNot) {
-  const CooperativeTeam team = Triangle();
+  const CooperativeTeam team = TestTriangle();
   {
     TeamWorld world(Config(team));
     world.Reset(PayloadOnGround(team, 0.45));
@@ -279,7 +274,7 @@ TEST(TeamWorldTest, AVehicleOnTheGroundCrashesAPayloadOnTheGroundDoesNot) {
 
 // A vehicle falling onto the payload lying on the ground crashes naming it.
 TEST(TeamWorldTest, AVehicleFallingOnThePayloadCrashes) {
-  const CooperativeTeam team = Bar();
+  const CooperativeTeam team = TestBar();
   TeamWorld world(Config(team));
   VectorXd x0 = PayloadOnGround(team, 0.45);
   x0.segment<3>(I::Vehicle(0)) = Vector3d(0, 0, 0.2);  // above the payload's sphere
@@ -292,7 +287,7 @@ TEST(TeamWorldTest, AVehicleFallingOnThePayloadCrashes) {
 
 // A vehicle upside down, and a vehicle or the payload leaving the arena, crash naming the body.
 TEST(TeamWorldTest, TiltAndArenaCrashesNameTheBody) {
-  const CooperativeTeam team = Bar();
+  const CooperativeTeam team = TestBar();
   const CooperativeModel model(team);
   {
     TeamWorld world(Config(team));
@@ -324,7 +319,7 @@ TEST(TeamWorldTest, TiltAndArenaCrashesNameTheBody) {
 // one step and J / m by its end. The cables' pull across the push over 50 ms (a 5 mm swing on
 // 0.5 m cables: tension times 0.01) bounds the error at 5 % of J / m; measured about 1 %.
 TEST(TeamWorldTest, AnImpulseIsSpreadOverItsDuration) {
-  const CooperativeTeam team = Bar();
+  const CooperativeTeam team = TestBar();
   TeamWorld world(Config(team));
   world.Reset(CooperativeModel(team).HangingState(Vector3d(0, 0, 1.5)));
   for (int s = 0; s < 100; ++s) world.Step();
@@ -347,7 +342,7 @@ TEST(TeamWorldTest, AnImpulseIsSpreadOverItsDuration) {
 // (f) An upward impulse on the payload lifts it towards the vehicles: its cables go slack, and
 // taut again once it falls back.
 TEST(TeamWorldTest, UpwardImpulseOnThePayloadSlacksItsCablesBriefly) {
-  const CooperativeTeam team = Bar();
+  const CooperativeTeam team = TestBar();
   TeamWorld world(Config(team));
   world.Reset(CooperativeModel(team).HangingState(Vector3d(0, 0, 1.5)));
   for (int s = 0; s < 200; ++s) world.Step();
@@ -405,7 +400,7 @@ bool SameReadings(const RunRecord& a, const RunRecord& b) {
 // (g) One seed, one run: two worlds of the same seed agree bit for bit, a Reset world replays
 // its noise, and another seed draws other noise on the same physics.
 TEST(TeamWorldTest, SameSeedSameRunOtherSeedOtherNoise) {
-  const CooperativeTeam team = Triangle();
+  const CooperativeTeam team = TestTriangle();
   TeamWorld a(Config(team, 7)), b(Config(team, 7)), c(Config(team, 8));
   const RunRecord ra = RunThousandSteps(&a), rb = RunThousandSteps(&b);
   const RunRecord rc = RunThousandSteps(&c), ra2 = RunThousandSteps(&a);
@@ -430,37 +425,37 @@ void ExpectInputError(const TeamWorldConfig& config, const std::string& names) {
 }
 
 TEST(TeamWorldTest, BadInputIsNamed) {
-  TeamWorldConfig config = Config(Bar());
+  TeamWorldConfig config = Config(TestBar());
   config.team.vehicles.clear();
   ExpectInputError(config, "team.vehicles");
 
   config = Config(TestTeam(4, 0.3, Vector3d(3e-3, 3e-3, 6e-3), 0.2));
   ExpectInputError(config, "team.vehicles");
 
-  config = Config(Bar());
+  config = Config(TestBar());
   config.team.vehicles[1].cable_length_m = 0.0;
   ExpectInputError(config, "team.vehicles[1].cable_length_m");
   config.team.vehicles[1].cable_length_m = -0.5;
   ExpectInputError(config, "team.vehicles[1].cable_length_m");
 
-  config = Config(Bar());
+  config = Config(TestBar());
   config.team.payload_mass_kg = 0.0;
   ExpectInputError(config, "team.payload_mass_kg");
 
-  config = Config(Bar());
+  config = Config(TestBar());
   config.team.vehicles[0].params.quad_mass_kg = -1.0;
   ExpectInputError(config, "team.vehicles[0].params.quad_mass_kg");
 
-  config = Config(Bar());
+  config = Config(TestBar());
   config.mocap.rate_hz = 300.0;  // not a whole number of 1 ms steps
   ExpectInputError(config, "mocap.rate_hz");
 
-  config = Config(Bar());
+  config = Config(TestBar());
   config.scene_path = "/nonexistent/scene.xml";
   ExpectInputError(config, "/nonexistent/scene.xml");
 
   // a state of the wrong size, a command to a vehicle the team does not have
-  TeamWorld world(Config(Bar()));
+  TeamWorld world(Config(TestBar()));
   EXPECT_THROW(world.Reset(VectorXd::Zero(13)), std::invalid_argument);
   EXPECT_THROW(world.SetMotorSpeedCommand(2, InputVector::Zero()), std::out_of_range);
   EXPECT_THROW(world.SetMotorSpeedCommand(0, InputVector::Constant(NAN)), std::invalid_argument);

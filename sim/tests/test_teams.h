@@ -30,4 +30,14 @@ inline CooperativeTeam TestTeam(int n, double payload_mass_kg,
   return team;
 }
 
+/// A 0.2 kg, 0.5 m bar under two vehicles.
+inline CooperativeTeam TestBar() {
+  return TestTeam(2, 0.2, Eigen::Vector3d(1e-4, 4.2e-3, 4.2e-3), 0.2);
+}
+
+/// A 0.3 kg triangle under three vehicles.
+inline CooperativeTeam TestTriangle() {
+  return TestTeam(3, 0.3, Eigen::Vector3d(3e-3, 3e-3, 6e-3), 0.2);
+}
+
 }  // namespace hpa::sim
