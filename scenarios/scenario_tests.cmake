@@ -200,6 +200,13 @@ add_test(NAME cli.run_habits
                  ${HPA_PYTHON3})
 set_tests_properties(cli.run_habits PROPERTIES LABELS cli TIMEOUT 300)
 
+# A stack that declares uses_pixels: false is sent no rendered frame and the run renders none
+# (as fast as the analytic camera, the same flight), its metrics saying the camera was not flown
+add_test(NAME cli.no_pixels
+         COMMAND bash ${SCEN}/tests/no_pixels_test.sh ${HPA_BIN} ${CMAKE_SOURCE_DIR}
+                 ${HPA_PYTHON3})
+set_tests_properties(cli.no_pixels PROPERTIES LABELS cli TIMEOUT 300)
+
 # hpa render-frame's --camera (payload | chase) and --size WxH: the PNG's size read back, bad
 # sizes and cameras refused with exit 2
 add_test(NAME cli.render_frame

@@ -99,6 +99,12 @@ HelloAck ParseHelloAck(const std::vector<uint8_t>& body, double tick_hz) {
   ack.batched_ticks = j.value("batched_ticks", false);
   ack.detects_at_capture = j.value("detects_at_capture", false);
   ack.owns_rate_loop = j.value("owns_rate_loop", false);
+  ack.uses_pixels = j.value("uses_pixels", true);
+  if (ack.detects_at_capture && !ack.uses_pixels) {
+    throw ProtocolError(
+        "hello_ack's detects_at_capture is true and uses_pixels false: a stack that detects in "
+        "each frame at its capture reads its pixels");
+  }
   if (ack.batched_ticks && !(ack.control_rate_hz > 0.0 && ack.control_rate_hz <= tick_hz)) {
     throw ProtocolError(
         "hello_ack's batched_ticks needs the control rate its ticks follow: "

@@ -687,10 +687,12 @@ class FlightStackClient:
         """Sends one message."""
         self.sock.sendall(struct.pack("<III", MAGIC, kind, len(body)) + body)
 
-    def hello(self, name, control_rate_hz, batched_ticks=False, owns_rate_loop=False):
+    def hello(self, name, control_rate_hz, batched_ticks=False, owns_rate_loop=False,
+              uses_pixels=True):
         """Receives the hello (a dict), maps the frame ring, answers with the ack (declaring
         batched_ticks and owns_rate_loop when asked: docs/protocol.md, Batched ticks, rate_tick
-        and rate_reply)."""
+        and rate_reply). uses_pixels=False declares that the stack reads no rendered frame: the
+        ring is not mapped, and the simulator sends no frame and renders none."""
         kind, body = self.receive()
         if kind != HELLO:
             raise ProtocolError("expected a hello, got a %s message" % MESSAGE_TYPES[kind])
@@ -699,7 +701,7 @@ class FlightStackClient:
             self.send(ERROR, ("this client speaks protocol version %d" % PROTOCOL_VERSION).encode())
             raise ProtocolError("the simulator speaks protocol version %d" % hello["protocol_version"])
         camera = hello.get("camera")
-        if camera:
+        if camera and uses_pixels:
             name_ = camera["ring"]
             fd = os.open("/dev/shm/" + name_.lstrip("/"), os.O_RDONLY)
             try:
@@ -713,6 +715,8 @@ class FlightStackClient:
             ack["batched_ticks"] = True
         if owns_rate_loop:
             ack["owns_rate_loop"] = True
+        if not uses_pixels:
+            ack["uses_pixels"] = False
         check_json("hello_ack", ack)
         self.send(HELLO_ACK, json.dumps(ack).encode())
         return hello
@@ -790,7 +794,7 @@ class _ControlClock:
 
 
 def run(controller_class, name=None, control_rate_hz=0.0, batched_ticks=False,
-        owns_rate_loop=False):
+        owns_rate_loop=False, uses_pixels=True):
     """Serves one run: builds controller_class(hello) and calls its step(tick) every tick.
     step returns a Command (a new command), or None (the rate loop keeps the last one); the
     controller may set `estimate` (a state dict) for the simulator's log and rate loop, else the
@@ -800,13 +804,16 @@ def run(controller_class, name=None, control_rate_hz=0.0, batched_ticks=False,
     and the simulator answers with fewer round trips (docs/protocol.md, Batched ticks).
     owns_rate_loop=True declares that the stack runs the vehicle's rate loop: the simulator runs
     none and at each of the loop's steps (the hello's rate_loop) calls the controller's
-    rate_loop(rate_tick), a dict as decode_rate_tick gives it, which returns a RotorCommand."""
+    rate_loop(rate_tick), a dict as decode_rate_tick gives it, which returns a RotorCommand.
+    uses_pixels=False declares that the controller reads no rendered frame (tick.frames stays
+    empty): on the rendered camera the simulator then renders and sends none, so the run is as
+    fast as on the analytic one, and its metrics say the camera was not flown."""
     if batched_ticks and not control_rate_hz > 0:
         raise ValueError("batched_ticks needs the control_rate_hz its commands follow")
     client = FlightStackClient()
     try:
         hello = client.hello(name or controller_class.__name__, control_rate_hz, batched_ticks,
-                             owns_rate_loop)
+                             owns_rate_loop, uses_pixels)
         tick_hz = hello.get("config", {}).get("tick_hz", 1000.0)
         clock = _ControlClock(tick_hz, control_rate_hz) if control_rate_hz > 0 else None
         controller = controller_class(hello)

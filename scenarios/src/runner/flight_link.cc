@@ -102,7 +102,10 @@ class ExternalFlight final : public FlightLink {
                         : !ack.name.empty()     ? ack.name
                                                 : "external";
           control_rate_hz_ = ack.control_rate_hz;
-          // the rendered frames: read at capture by a stack that says it can, else all sent
+          // the rendered frames: none for a stack that uses no pixels (the ring the hello named
+          // goes), read at capture by a stack that says it can, else all sent
+          uses_pixels_ = ack.uses_pixels;
+          if (!uses_pixels_) ring_.reset();
           detects_at_capture_ = ring_ && ack.detects_at_capture;
           // batched ticks: the replies the simulator needs follow the stack's control loop and
           // the ticks that read the estimate; the region a rendered frame reads follows the
@@ -191,6 +194,7 @@ class ExternalFlight final : public FlightLink {
   ControlOutput AwaitCommand() override { return AwaitReply().command; }
 
   bool detects_at_capture() const override { return detects_at_capture_; }
+  bool uses_pixels() const override { return uses_pixels_; }
 
   cv::Rect CaptureRegion() override {
     flight::DetectReply reply;
@@ -438,6 +442,7 @@ class ExternalFlight final : public FlightLink {
   double tick_hz_;                // the lockstep clock's rate
   double next_tick_s_ = 0.0;      // time of the tick after the last one stepped
   bool detects_at_capture_ = false;  // the stack reads each rendered frame at its capture
+  bool uses_pixels_ = true;          // the stack reads rendered frames (its hello_ack)
   bool batched_ = false;             // the stack declared batched_ticks (see Start)
   bool owns_rate_loop_ = false;      // the stack declared owns_rate_loop: it runs the rate loop
   LockstepClock control_clock_;      // the stack's control loop as it declared it (batched)

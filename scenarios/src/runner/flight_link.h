@@ -59,6 +59,9 @@ class FlightLink {
     (void)read_whole;
     throw std::logic_error("this flight stack does not detect at capture");
   }
+  /// Whether the stack reads rendered frames: false for a separate stack that declared
+  /// uses_pixels false in its hello_ack (it is sent none, and the run renders none for it).
+  virtual bool uses_pixels() const { return true; }
   /// Whether the stack runs the vehicle's rate loop (declared owns_rate_loop in its hello_ack):
   /// the runner then runs no autopilot and asks RateLoop at each of the loop's steps.
   virtual bool owns_rate_loop() const { return false; }

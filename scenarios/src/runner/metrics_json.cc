@@ -166,6 +166,20 @@ void AddVehicles(const Metrics& m, bool controlled, Json* o) {
   }
 }
 
+// A run whose rendered camera was not flown (a separate stack that uses no pixels): the camera's
+// counts and timings are null, not a perfect-looking zero.
+void NullCameraNotFlown(const Metrics& m, Json* o) {
+  if (m.camera_flown) return;
+  for (const char* key : {"camera_frames", "detections", "payload_in_fov_fraction", "render_ms",
+                          "image_model_ms", "detector_ms", "camera_region_fraction"}) {
+    (*o)[key] = Json();
+  }
+  for (Json& vehicle : (*o)["vehicles"]) {
+    vehicle["camera_frames"] = Json();
+    vehicle["payload_in_fov_fraction"] = Json();
+  }
+}
+
 // The run's identity, its end, and the tracking, slack and camera metrics.
 Json RunJson(const Metrics& m, bool controlled) {
   // a run that ended before its first control step (or camera frame) measured nothing: null,
@@ -231,6 +245,7 @@ std::string MetricsToJson(const Metrics& m) {
   if (!m.faults.empty()) AddFaults(m, &o);
   if (m.team) NullTeamUnmeasured(m, &o);
   AddVehicles(m, controlled, &o);
+  NullCameraNotFlown(m, &o);
   o["expect"] = {{"passed", m.expect_passed}, {"failed", m.expect_failed}};
   return o.dump(2) + "\n";
 }

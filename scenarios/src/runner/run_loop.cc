@@ -128,6 +128,13 @@ RunLoop::RunLoop(const Scenario& scenario, const Params& params, const RunOption
   }
   metrics->flight_stack = flight_->name();
   metrics->controller = flight_->controller();  // what flies: a separate stack names its own
+  // a separate stack that uses no pixels flies without the rendered camera: no frame is rendered
+  // or sent for it, and what the camera would count is null (metrics.json's camera "none")
+  if (render_camera_ && !ground_truth_ && !flight_->uses_pixels()) {
+    render_camera_ = false;
+    metrics->camera = "none";
+    metrics->camera_flown = false;
+  }
   // one log row per control step and one record per camera frame, sized once
   ReserveInputs(scenario, rates, flight_->control_rate_hz(), render_camera_, &inputs_);
   // the scenario's autopilot (the profile's rate loop): PX4's runs on the world's rate gyro; a
@@ -273,6 +280,7 @@ void RunLoop::Finish(RunResult* result) {
   metrics.contacts_quad_ground = contacts.quad_ground;
   metrics.contacts_payload_gripper = contacts.payload_gripper;
   ComputeMetrics(inputs_, &metrics);
+  if (!metrics.camera_flown) metrics.payload_in_fov_fraction = NAN;  // not measured: no frame
   result->rows = std::move(inputs_.rows);
   CheckExpectations(scenario_.expect, &metrics);
   metrics.wall_time_s = Ms(wall_start_, Clock::now()) / 1000.0;

@@ -21,13 +21,16 @@ Eigen::Vector4d Wxyz(const Eigen::Quaterniond& q) { return {q.w(), q.x(), q.y(),
 
 // The payload camera: the world captures it if due (its message delivered after its latency),
 // a rendered frame read out by the flight stack in the region it asked for; then the camera's
-// messages delivered by now join this tick's inputs.
+// messages delivered by now join this tick's inputs. A camera not flown (a stack that uses no
+// pixels) reads nothing out and records no frame: the capture only keeps the world's clocks and
+// the gripper's switch.
 void RunLoop::CameraStep() {
   cv::Rect region;
   if (render_camera_ && world_->CameraFrameDue()) {
     region = flight_->detects_at_capture() ? flight_->CaptureRegion() : stack_roi_;
   }
-  if (std::optional<sim::CameraCapture> capture = world_->CaptureTickStart(region)) {
+  std::optional<sim::CameraCapture> capture = world_->CaptureTickStart(region);
+  if (capture && metrics_->camera_flown) {
     if (capture->exposure) ReadOutExposure(&*capture);
     for (RunRecorder* r : recorders_) r->OnCameraFrame(*capture);
   }

@@ -184,13 +184,16 @@ struct HelloAck {
   bool detects_at_capture = false;
   // the stack runs the vehicle's rate loop: the simulator runs none and sends it rate_tick
   bool owns_rate_loop = false;
+  // the stack reads rendered frames; false: it is sent none and the run renders none (its
+  // camera is not flown)
+  bool uses_pixels = true;
 };
 
 /// Parses a hello_ack; throws ProtocolError naming the field and value for a protocol_version
 /// that is not the integer kProtocolVersion, a name or controller that is not a string of at most
 /// kMaxNameBytes, a control rate that is not a finite number >= 0, batched_ticks,
-/// detects_at_capture or owns_rate_loop not a bool, or batched_ticks without a control rate in
-/// (0, tick_hz].
+/// detects_at_capture, owns_rate_loop or uses_pixels not a bool, batched_ticks without a control
+/// rate in (0, tick_hz], or detects_at_capture with uses_pixels false.
 HelloAck ParseHelloAck(const std::vector<uint8_t>& body, double tick_hz = 1000.0);
 
 /// The finish_reply's content.

@@ -167,6 +167,9 @@ struct Metrics {
   double payload_lost_time_s = 0.0;       // time the estimator reported the payload lost
   double mixer_saturated_fraction = 0.0;  // share of rate-loop allocations that fell short
   int camera_frames = 0, detections = 0;
+  // false: a separate stack that uses no pixels flew the rendered camera's run without it (no
+  // frame rendered or sent): camera "none", and the camera's counts and timings are null
+  bool camera_flown = true;
   int retaut_count = 0;
   // lowest quad z velocity and highest |w_B| within 0.5 s of a re-taut; none without a re-taut
   std::optional<double> retaut_quad_vz_min_mps;
