@@ -52,6 +52,14 @@ std::string PartialPath(const std::string& path) {
   return has_ext ? path.substr(0, dot) + ".partial" + path.substr(dot) : path + ".partial";
 }
 
+std::string WriteErrorText(int errnum) {
+  if (errnum == 0) return "write failed (disk full?)";
+  const std::string text = std::strerror(errnum);
+  if (errnum == EFBIG) return text + ": the file-size limit (ulimit -f) is reached";
+  if (errnum == ENOSPC || errnum == EDQUOT) return text + ": the disk (or quota) is full";
+  return text;
+}
+
 void CommitPartial(const std::string& path) {
   const std::string partial = PartialPath(path);
   const int fd = open(partial.c_str(), O_RDONLY);
@@ -60,7 +68,7 @@ void CommitPartial(const std::string& path) {
   if (fd >= 0) close(fd);
   if (!synced) {
     std::remove(partial.c_str());
-    throw OutputError(path, std::strerror(sync_errno));
+    throw OutputError(path, WriteErrorText(sync_errno));
   }
   if (std::rename(partial.c_str(), path.c_str()) != 0) {
     const int rename_errno = errno;
@@ -74,14 +82,14 @@ void WriteFileAtomic(const std::string& path, const std::string& text) {
   {
     std::ofstream out(partial, std::ios::binary | std::ios::trunc);
     if (!out) throw OutputError(path, std::strerror(errno));
+    errno = 0;
     out << text;
     out.flush();
     if (!out) {
       const int write_errno = errno;
       out.close();
       std::remove(partial.c_str());
-      throw OutputError(path,
-                        write_errno ? std::strerror(write_errno) : "write failed (disk full?)");
+      throw OutputError(path, WriteErrorText(write_errno));
     }
   }
   CommitPartial(path);

@@ -271,13 +271,26 @@ void CheckRecordable(const std::string& name, const Json& now) {
   }
 }
 
-// Compares one scenario's metrics with its golden copy and prints what changed; returns 1 when
-// the scenario counts as changed (a scenario new to the file does, unless updating), else 0.
-int CompareScenario(const std::string& name, const Json& now, const Json& scenarios,
-                    const Json& tolerances, const GoldenOptions& options) {
+// What a golden check found, scenario by scenario: each list names its scenarios.
+struct GoldenTally {
+  std::vector<std::string> changed;       // compared, and beyond tolerance (or not bit for bit)
+  std::vector<std::string> not_in_file;   // shipped but missing from the golden file
+  std::vector<std::string> not_compared;  // build-sensitive, flown with another compiler
+  std::vector<std::string> dropped;       // in the golden file but no longer shipped
+};
+
+// Compares one scenario's metrics with its golden copy and prints what changed; a scenario the
+// golden file lacks cannot be compared and is named (on stdout, --quiet or not) and counted apart
+// (not when updating: the update records it).
+void CompareScenario(const std::string& name, const Json& now, const Json& scenarios,
+                     const Json& tolerances, const GoldenOptions& options, GoldenTally* tally) {
   if (!scenarios.contains(name)) {
     if (!options.quiet) std::cerr << " not in the golden file\n";
-    return options.update ? 0 : 1;
+    if (options.update) return;
+    std::cout << name << ": not in the golden file, so not compared (a new scenario: "
+              << "`hpa golden --update --reason \"...\"` records it)\n";
+    tally->not_in_file.push_back(name);
+    return;
   }
   GoldenDiff diff;
   Compare(now, scenarios[name], "", tolerances, &diff);
@@ -288,20 +301,60 @@ int CompareScenario(const std::string& name, const Json& now, const Json& scenar
     for (const std::string& k : diff.new_keys) std::cout << k << " ";
     std::cout << "\n";
   }
-  return diff.changes.empty() ? 0 : 1;
+  if (!diff.changes.empty()) tally->changed.push_back(name);
 }
 
-// Names the golden file's scenarios that are no longer shipped; returns how many count as
-// changed (none when updating: the update drops them).
-int CountDropped(const Json& scenarios, const Json& updated, const GoldenOptions& options) {
-  int changed = 0;
+// "a, b, c" of a list of scenario names.
+std::string Listed(const std::vector<std::string>& names) {
+  std::string text;
+  for (const std::string& n : names) text += (text.empty() ? "" : ", ") + n;
+  return text;
+}
+
+// Prints the verdict of a comparison, naming every scenario that changed or could not be
+// compared; the exit code: 1 when one changed, is missing from the file or was dropped from the
+// shipped set, else 0 (build-sensitive scenarios flown by another compiler are named, not
+// failed).
+int ReportGolden(const GoldenTally& t, const GoldenOptions& options, size_t scenario_count,
+                 const std::string& path) {
+  if (!t.not_compared.empty()) {
+    std::cout << "golden: " << t.not_compared.size()
+              << " build-sensitive scenarios not compared (flown with another compiler than the "
+                 "one that recorded them): "
+              << Listed(t.not_compared) << "\n";
+  }
+  const size_t failing = t.changed.size() + t.not_in_file.size() + t.dropped.size();
+  if (failing > 0) {
+    std::cout << "golden: " << t.changed.size() << " of " << scenario_count
+              << " scenarios changed (" << (options.exact ? "not bit for bit" : "beyond tolerance")
+              << ")" << (t.changed.empty() ? "" : ": " + Listed(t.changed));
+    if (!t.not_in_file.empty()) {
+      std::cout << "; " << t.not_in_file.size()
+                << " not in the golden file, not compared: " << Listed(t.not_in_file);
+    }
+    if (!t.dropped.empty()) {
+      std::cout << "; " << t.dropped.size() << " in the file but no longer shipped: "
+                << Listed(t.dropped);
+    }
+    std::cout << "; if deliberate, run `hpa golden --update --reason \"...\"` and commit the "
+                 "file\n";
+    return 1;
+  }
+  std::cout << "golden: all " << scenario_count - t.not_compared.size() << " scenarios "
+            << (options.exact ? "bit for bit" : "within tolerance") << " of " << path << "\n";
+  return 0;
+}
+
+// Names the golden file's scenarios that are no longer shipped (when not updating, they fail
+// the check; an update drops them).
+void NameDropped(const Json& scenarios, const Json& updated, const GoldenOptions& options,
+                 GoldenTally* tally) {
   for (const auto& [name, value] : scenarios.items()) {
     if (!updated.contains(name)) {
       std::cout << name << ": in the golden file but no longer shipped\n";
-      if (!options.update) ++changed;
+      if (!options.update) tally->dropped.push_back(name);
     }
   }
-  return changed;
 }
 
 // Rewrites the golden file with the current metrics and the reason for the change.
@@ -332,7 +385,7 @@ int RunGolden(const GoldenOptions& options) {
   const Params params = LoadParams(DefaultParamsPath());
   const std::vector<std::string> names = GoldenScenarioNames();
 
-  int changed = 0, not_compared = 0;
+  GoldenTally tally;
   Json updated = Json::object();
   const std::string recorded_compiler =
       golden.contains("recorded_with") && golden["recorded_with"].is_object()
@@ -350,12 +403,10 @@ int RunGolden(const GoldenOptions& options) {
                                      : ThisBuild().compiler;
     if (!options.update && sensitive.contains(name) && !recorded_compiler.empty() &&
         compiler != recorded_compiler) {
-      if (!options.quiet) {
-        std::cerr << " not compared: build-sensitive (" << sensitive[name].get<std::string>()
-                  << "); recorded with " << recorded_compiler << ", flown with " << compiler
-                  << "\n";
-      }
-      ++not_compared;
+      if (!options.quiet) std::cerr << " not compared\n";
+      std::cout << name << ": not compared: build-sensitive (" << sensitive[name].get<std::string>()
+                << "); recorded with " << recorded_compiler << ", flown with " << compiler << "\n";
+      tally.not_compared.push_back(name);
       updated[name] = now;
       continue;
     }
@@ -367,30 +418,14 @@ int RunGolden(const GoldenOptions& options) {
     }
     if (options.update) CheckRecordable(name, now);
     updated[name] = now;
-    changed += CompareScenario(name, now, golden["scenarios"], tolerances, options);
+    CompareScenario(name, now, golden["scenarios"], tolerances, options, &tally);
   }
-  changed += CountDropped(golden["scenarios"], updated, options);
-
+  NameDropped(golden["scenarios"], updated, options, &tally);
   if (options.update) {
     WriteGolden(path, golden, updated, options, names.size());
     return 0;
   }
-  const char* within = options.exact ? "bit for bit" : "within tolerance";
-  if (changed > 0) {
-    std::cout << "golden: " << changed << " of " << names.size() << " scenarios changed ("
-              << (options.exact ? "not bit for bit" : "beyond tolerance")
-              << "); if deliberate, run `hpa golden --update --reason \"...\"` and commit the "
-                 "file\n";
-    return 1;
-  }
-  std::cout << "golden: all " << names.size() - not_compared << " scenarios " << within << " of "
-            << path;
-  if (not_compared > 0) {
-    std::cout << " (" << not_compared << " build-sensitive scenarios not compared: flown with "
-              << "another compiler than the one that recorded them)";
-  }
-  std::cout << "\n";
-  return 0;
+  return ReportGolden(tally, options, names.size(), path);
 }
 
 int GoldenMain(int argc, char** argv) {

@@ -91,7 +91,8 @@ usage:
       sweep --keep-logs in DIR/logs/run_N); default DIR/replay.mp4.
   hpa golden [--exact] [--update --reason TEXT] [--from DIR] [--golden FILE]
       Compares every shipped scenario's metrics with scenarios/ci/golden.json (exit 1 on a
-      change beyond tolerance; --exact: on any change at all); --update rewrites it.
+      change beyond tolerance; --exact: on any change at all; each scenario that changed or
+      cannot be compared, e.g. missing from the file, is named); --update rewrites it.
   hpa schema [SECTION] [SCENARIO.yaml]
       Prints as Markdown what the tools accept and measure, from their registries: controllers,
       estimators, solvers, events, expect keys, metrics, world-profile keys with their
@@ -104,7 +105,8 @@ usage:
 
 exit codes: 0 ok and every `expect` bound holds; 1 an expectation failed (or an unexpected
 crash); 2 bad input (file, key, value; the message names them); 3 internal error; 4 an output
-could not be written (disk full, no permission); 130 / 143 a sweep stopped by SIGINT / SIGTERM.
+could not be written (disk full, the file-size limit of ulimit -f, no permission); 130 / 143 a
+sweep stopped by SIGINT / SIGTERM.
 )";
 
 // The usage text plus the registered controllers and estimator variants (from their registries).

@@ -1,11 +1,18 @@
 // `hpa sweep-diff`: its command line and what it writes (diff.json, diff.md and the plot of
 // each compared metric's difference).
 
+#include <stdlib.h>
+#include <unistd.h>
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
 #include <iostream>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <sstream>
 
 #include "hpa/models/file_io.h"
@@ -138,6 +145,106 @@ void WriteDiffPlot(const SweepDiff& diff, const SweepDiffOptions& options) {
   fig.Write(options.out_dir + "/diff", ParsePlotFormat(options.plot_format));
 }
 
+// The byte count of `path` up to and including its last newline, or nothing when the file is
+// empty, ends in a newline, cannot be read or is no regular file (a FIFO would block the open;
+// ReadRuns refuses it): then it has no torn last line.
+std::optional<uintmax_t> WholeLinesBytes(const std::string& path) {
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(path, ec)) return std::nullopt;
+  std::ifstream in(path, std::ios::binary | std::ios::ate);
+  if (!in) return std::nullopt;
+  const std::streamoff size = in.tellg();
+  char last = '\n';
+  if (size <= 0 || !in.seekg(size - 1).get(last) || last == '\n') return std::nullopt;
+  // back from the end in blocks to the last newline (0 when the only line is torn)
+  constexpr std::streamoff kBlock = 1 << 16;
+  std::string block;
+  for (std::streamoff end = size; end > 0;) {
+    const std::streamoff begin = std::max<std::streamoff>(0, end - kBlock);
+    block.resize(static_cast<size_t>(end - begin));
+    if (!in.seekg(begin).read(block.data(), static_cast<std::streamsize>(block.size()))) break;
+    const size_t newline = block.rfind('\n');
+    if (newline != std::string::npos) return static_cast<uintmax_t>(begin) + newline + 1;
+    end = begin;
+  }
+  return 0;
+}
+
+// A sweep folder read as `hpa sweep --resume` repairs it: when its runs.jsonl ends in an
+// unterminated line (a sweep killed mid-write), that line is left out with a note (its run has
+// no record, as after a resume's cut). The folder itself is not changed: its whole lines are
+// copied to a temporary folder (beside a link to its inputs.json), which is read instead and
+// removed at the end.
+class RepairedSweepDir {
+ public:
+  RepairedSweepDir(const std::string& dir, const std::string& side) : dir_(dir) {
+    const std::string jsonl = dir + "/runs.jsonl";
+    const std::optional<uintmax_t> keep = WholeLinesBytes(jsonl);
+    if (!keep) return;
+    namespace fs = std::filesystem;
+    std::string pattern = (fs::temp_directory_path() / "hpa-sweep-diff-XXXXXX").string();
+    if (mkdtemp(pattern.data()) == nullptr) {
+      throw OutputError(pattern, std::string("a temporary folder: ") + std::strerror(errno));
+    }
+    staged_ = pattern;
+    std::error_code ec;
+    fs::copy_file(jsonl, staged_ + "/runs.jsonl", ec);
+    if (ec || truncate((staged_ + "/runs.jsonl").c_str(), static_cast<off_t>(*keep)) != 0) {
+      throw OutputError(staged_ + "/runs.jsonl", "a copy of " + jsonl + " without its torn line");
+    }
+    if (fs::exists(dir + "/inputs.json")) {
+      fs::create_symlink(fs::absolute(dir + "/inputs.json"), staged_ + "/inputs.json", ec);
+    }
+    std::fprintf(stderr,
+                 "hpa: note: %s (%s) ends in an unterminated line (a sweep killed mid-write): its "
+                 "last %ju bytes are left out, as hpa sweep --resume cuts them (that run has no "
+                 "record)\n",
+                 jsonl.c_str(), side.c_str(), fs::file_size(jsonl, ec) - *keep);
+  }
+  ~RepairedSweepDir() {
+    std::error_code ec;
+    if (!staged_.empty()) std::filesystem::remove_all(staged_, ec);
+  }
+  RepairedSweepDir(const RepairedSweepDir&) = delete;
+  RepairedSweepDir& operator=(const RepairedSweepDir&) = delete;
+
+  // The folder to read: the repaired copy, or the sweep's own when it needed no repair.
+  const std::string& dir() const { return staged_.empty() ? dir_ : staged_; }
+  // `text` with the repaired copy's path named as the sweep's folder, for messages.
+  std::string Named(std::string text) const {
+    if (staged_.empty()) return text;
+    for (size_t at = text.find(staged_); at != std::string::npos;
+         at = text.find(staged_, at + dir_.size())) {
+      text.replace(at, staged_.size(), dir_);
+    }
+    return text;
+  }
+
+ private:
+  std::string dir_;     // the sweep's output folder
+  std::string staged_;  // the temporary folder with the repaired copy ("" when none)
+};
+
+// Compares the two sweeps, each read as --resume repairs it (a torn last line left out).
+SweepDiff CompareRepaired(const SweepDiffOptions& options) {
+  const RepairedSweepDir a(options.a_dir, "A"), b(options.b_dir, "B");
+  SweepDiffOptions read = options;
+  read.a_dir = a.dir();
+  read.b_dir = b.dir();
+  const auto named = [&](const std::string& text) { return b.Named(a.Named(text)); };
+  try {
+    SweepDiff diff = CompareSweeps(read);
+    for (std::string& line : diff.differs) line = named(line);
+    return diff;
+  } catch (const InputError& e) {
+    throw InputError(named(e.file()), e.key(), named(e.detail()));
+  } catch (const nlohmann::json::exception& e) {
+    // a metric of the wrong type inside a record (a hand-edited runs.jsonl)
+    throw InputError(options.a_dir + "/runs.jsonl or " + options.b_dir + "/runs.jsonl", "metrics",
+                     std::string("a metric of the wrong type: ") + e.what());
+  }
+}
+
 // Writes everything `hpa sweep-diff` outputs into its --out folder.
 void WriteOutputs(const SweepDiff& diff, const SweepDiffOptions& options) {
   MakeOutputDir(options.out_dir);
@@ -160,7 +267,9 @@ int SweepDiffMain(int argc, char** argv) {
       "interval disagree, below the minimum effect, the minimum effect not excluded, or slack "
       "events missed differently). Timing metrics are listed apart and not compared unless "
       "--verdict-timing. Writes DIR/diff.json, DIR/diff.md and DIR/diff.png. Runs pair by draw, "
-      "seed and drawn values; the setting that differs is named.",
+      "seed and drawn values; the setting that differs is named. A runs.jsonl that ends in an "
+      "unterminated line (a sweep killed mid-write) is read without it, with a note, as hpa "
+      "sweep --resume cuts it; the folder is not changed.",
       "hpa sweep-diff"};
   app.add_option("A", options.a_dir, "sweep output folder (runs.jsonl), the reference")->required();
   app.add_option("B", options.b_dir, "sweep output folder compared against A")->required();
@@ -177,14 +286,7 @@ int SweepDiffMain(int argc, char** argv) {
                  "png | svg | pdf: the format of diff.png (diff.csv holds its numbers)");
   if (const auto code = ParseCommandLine(app, argc, argv)) return *code;
   ParsePlotFormat(options.plot_format);  // refused before any work
-  SweepDiff diff;
-  try {
-    diff = CompareSweeps(options);
-  } catch (const nlohmann::json::exception& e) {
-    // a metric of the wrong type inside a record (a hand-edited runs.jsonl)
-    throw InputError(options.a_dir + "/runs.jsonl or " + options.b_dir + "/runs.jsonl", "metrics",
-                     std::string("a metric of the wrong type: ") + e.what());
-  }
+  const SweepDiff diff = CompareRepaired(options);
   WriteOutputs(diff, options);
   std::cout << diff.runs_paired << " paired runs";
   for (const std::string& d : diff.differs) std::cout << "; " << d;

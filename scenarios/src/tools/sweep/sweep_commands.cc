@@ -183,8 +183,16 @@ class ResultsAppender {
 
   // Records one run's line and updates the progress shown.
   void Append(const std::string& line, bool failed, const SweepRun& run) {
+    const long before = std::ftell(out_);
+    errno = 0;
     if (std::fprintf(out_, "%s\n", line.c_str()) < 0 || std::fflush(out_) != 0) {
-      throw OutputError(jsonl_, std::string("cannot append: ") + std::strerror(errno));
+      // a full disk or the file-size limit: the part of the line written is cut off again, so
+      // the file ends with the last whole record
+      const int write_errno = errno;
+      if (before >= 0 && ftruncate(fileno(out_), before) != 0) {
+        std::fprintf(stderr, "hpa: %s: cannot cut the record written in part\n", jsonl_.c_str());
+      }
+      throw OutputError(jsonl_, "cannot append a run's record: " + WriteErrorText(write_errno));
     }
     fsync(fileno(out_));
     ++finished_;

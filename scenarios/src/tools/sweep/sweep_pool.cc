@@ -21,6 +21,7 @@
 #include <string>
 #include <vector>
 
+#include "hpa/models/input_error.h"
 #include "hpa/scenarios/metrics.h"
 #include "hpa/scenarios/runner.h"
 #include "scenarios/src/runner/flight_process.h"
@@ -30,6 +31,8 @@ namespace hpa::sweep {
 namespace {
 
 using Clock = std::chrono::steady_clock;
+// A worker's exit status when it could not write a run's record: the sweep stops (exit 4).
+constexpr int kWorkerCannotWrite = 74;
 // What the pool calls with each finished run's JSON line, whether it failed, and the run.
 using RecordFn = std::function<void(const std::string& line, bool failed, const SweepRun&)>;
 
@@ -224,6 +227,14 @@ class Pool {
       const std::string line = RunOne(spec_, runs_[position], params, gl_backend);
       std::ofstream out(PathOf(position));
       out << line;
+      out.flush();
+      if (!out) {
+        // a record cut short (a full disk, the file-size limit) is none: the worker ends with
+        // the code that stops the sweep (Collect), never passing a torn record on
+        out.close();
+        std::remove(PathOf(position).c_str());
+        _exit(kWorkerCannotWrite);
+      }
     };
   }
 
@@ -286,6 +297,11 @@ class Pool {
         w.SetIdle();
       } else if (answer == Worker::Answer::kDied) {
         const int status = w.End(true);
+        if (WIFEXITED(status) && WEXITSTATUS(status) == kWorkerCannotWrite) {
+          throw OutputError(tmp_dir_, "a worker could not write the record of run " +
+                                          std::to_string(runs_[*w.run()].index) +
+                                          " (the disk is full or the file-size limit reached)");
+        }
         if (w.run()) RecordLost(*w.run(), EndedBecause(status));
         ReclaimStack();
         continue;

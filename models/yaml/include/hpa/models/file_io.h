@@ -29,6 +29,12 @@ std::string ReadInputFile(const std::string& path, const std::string& what,
 /// "out/replay.partial.mp4".
 std::string PartialPath(const std::string& path);
 
+/// Why a write failed, for a message naming the file: strerror(errnum), saying for EFBIG that
+/// the file-size limit (`ulimit -f`) was reached and for ENOSPC or EDQUOT that the disk or the
+/// quota is full (hpa ignores SIGXFSZ, so a write past the limit fails with EFBIG, reported as a
+/// full disk is). errnum 0 (a stream that set no errno): "write failed (disk full?)".
+std::string WriteErrorText(int errnum);
+
 /// Moves a finished PartialPath(path) onto path (fsync first): the one step that makes an output
 /// visible. Throws OutputError naming `path`; the partial file is removed on failure.
 void CommitPartial(const std::string& path);
