@@ -184,8 +184,11 @@ std::vector<FaultRecovery> TeamFaultRecoveries(const std::vector<TeamLogRow>& te
                                                bool onboard) {
   std::vector<FaultRecovery> recoveries(windows.size());
   std::vector<LogRow> rows(team_rows.size());
-  for (size_t k = 0; k < windows.size(); ++k) {
-    const int vehicle = windows[k].vehicle;
+  std::vector<bool> done(windows.size(), false);
+  for (size_t first = 0; first < windows.size(); ++first) {
+    if (done[first]) continue;
+    // the rows of this window's vehicle, computed once for every window on that vehicle
+    const int vehicle = windows[first].vehicle;
     for (size_t i = 0; i < team_rows.size(); ++i) {
       const TeamLogRow& in = team_rows[i];
       const TeamLogRow::Vehicle& v = in.vehicles[static_cast<size_t>(vehicle)];
@@ -199,11 +202,17 @@ std::vector<FaultRecovery> TeamFaultRecoveries(const std::vector<TeamLogRow>& te
       row.estimator_rejected_updates = v.estimator_rejected_updates;
       row.estimator_resets = v.estimator_resets;
     }
-    // the spans need every window; this window's entry is the one computed on its vehicle's rows
-    recoveries[k] = FaultRecoveries(rows, windows, /*ground_truth=*/!onboard)[k];
-    if (!onboard) {
-      recoveries[k].estimator_resets.reset();
-      recoveries[k].rejected_updates.reset();
+    // the spans need every window; a window's entry is the one computed on its vehicle's rows
+    const std::vector<FaultRecovery> on_vehicle =
+        FaultRecoveries(rows, windows, /*ground_truth=*/!onboard);
+    for (size_t k = first; k < windows.size(); ++k) {
+      if (windows[k].vehicle != vehicle) continue;
+      recoveries[k] = on_vehicle[k];
+      done[k] = true;
+      if (!onboard) {
+        recoveries[k].estimator_resets.reset();
+        recoveries[k].rejected_updates.reset();
+      }
     }
   }
   return recoveries;
