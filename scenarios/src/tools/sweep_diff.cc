@@ -17,6 +17,7 @@
 #include "scenarios/src/tools/cli_parse.h"
 #include "scenarios/src/tools/significant_digits.h"
 #include "scenarios/src/tools/sweep/sweep_internal.h"
+#include "scenarios/src/tools/sweep_diff_basis.h"
 
 namespace hpa {
 namespace {
@@ -34,6 +35,7 @@ struct Run {
   std::string controller;  // what flew: a controller type or the name a flight stack gave
   std::string inputs_id;   // hash of the sweep and base files the run was flown from
   std::string build;       // the build that flew it (DescribeBuild), "not recorded" if unknown
+  std::optional<std::string> basis;  // what its flight code acted on (EstimationBasis)
 };
 
 // A metric read from one run; nullopt where the run does not define it.
@@ -168,6 +170,7 @@ std::vector<Run> ReadRuns(const std::string& dir, const std::string& where) {
       }
       r.ok = j.value("status", "") == "ok";
       r.metrics = j.contains("metrics") ? j["metrics"] : Json();
+      r.basis = EstimationBasis(r.metrics);
     } catch (const Json::exception& e) {
       throw InputError(path, where, std::string("malformed run record: ") + e.what());
     }
@@ -388,8 +391,8 @@ bool MissesDiffer(const RunPair& pair) {
 }
 
 // Compares one metric over the pairs in which both runs define it (the pairs left out are
-// counted by why; a pair with a run error in either run is counted in none of them, so the
-// pairs the counts leave are the run errors'): means, difference, interval, p-value and verdict.
+// counted by why: a run error in either run first, then a crash, then the metric undefined):
+// means, difference, interval, p-value and verdict.
 MetricDiff CompareMetric(const PairedMetric& def, const std::vector<RunPair>& pairs,
                          bool verdict_timing) {
   MetricDiff m;
@@ -403,7 +406,10 @@ MetricDiff CompareMetric(const PairedMetric& def, const std::vector<RunPair>& pa
   double sum_a = 0.0, sum_b = 0.0;
   int a_only = 0, b_only = 0;
   for (const auto& [ra, rb] : pairs) {
-    if (RunError(*ra) || RunError(*rb)) continue;
+    if (RunError(*ra) || RunError(*rb)) {
+      ++m.dropped_run_error;
+      continue;
+    }
     const auto x = def.read(*ra), y = def.read(*rb);
     if (!x || !y || !std::isfinite(*x) || !std::isfinite(*y)) {
       // say why the pair does not count: a crash, or the metric undefined on one side only
@@ -465,6 +471,12 @@ SweepDiff CompareSweeps(const SweepDiffOptions& options) {
   diff.runs_paired = static_cast<int>(pairs.size());
   diff.differs = DescribeDifferences(pairs, differing, a, b);
   for (std::string& line : DescribeInputs(options, a, b)) diff.differs.push_back(std::move(line));
+  // the estimation basis of each pair whose runs both flew: a difference is named as a warning
+  std::vector<std::pair<std::optional<std::string>, std::optional<std::string>>> bases;
+  for (const auto& [ra, rb] : pairs) {
+    if (!RunError(*ra) && !RunError(*rb)) bases.emplace_back(ra->basis, rb->basis);
+  }
+  for (std::string& line : DescribeBasisDifferences(bases)) diff.differs.push_back(std::move(line));
   const std::set<std::string> builds_a = Distinct(a, &Run::build);
   const std::set<std::string> builds_b = Distinct(b, &Run::build);
   diff.build_a = Join(builds_a);

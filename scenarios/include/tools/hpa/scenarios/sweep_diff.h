@@ -49,6 +49,7 @@ struct MetricDiff {
   double min_effect = 0.0;  // smallest difference that matters, in `unit`
   std::string unit;
   int pairs = 0;                         // pairs in which both runs have the metric
+  int dropped_run_error = 0;             // pairs left out: a run ended in a run error (all)
   int dropped_crashed = 0;               // pairs left out: a run crashed (continuous metrics)
   int dropped_one_side = 0;              // pairs left out: defined in one run only
   int dropped_both = 0;                  // pairs left out: defined in neither run
@@ -73,9 +74,11 @@ struct SweepDiffOptions {
 /// The comparison of two loaded sweep outputs.
 struct SweepDiff {
   int runs_paired = 0;
-  std::vector<std::string> differs;  // what differs between A and B ("controller.type: x vs y")
-  std::string build_a, build_b;      // the builds that flew A's and B's runs (DescribeBuild)
-  bool same_build = false;           // one build, recorded, flew every run of both
+  // what differs between A and B ("controller.type: x vs y"), a different estimation basis (truth
+  // or estimate, camera, a team's vehicle state) of the pairs whose runs flew among it
+  std::vector<std::string> differs;
+  std::string build_a, build_b;  // the builds that flew A's and B's runs (DescribeBuild)
+  bool same_build = false;       // one build, recorded, flew every run of both
   std::vector<MetricDiff> metrics;
 };
 
