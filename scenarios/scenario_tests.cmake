@@ -234,6 +234,21 @@ add_test(NAME cli.readme_your_controller
                  ${HPA_PYTHON3} ${CMAKE_BINARY_DIR}/readme_your_controller)
 set_tests_properties(cli.readme_your_controller PROPERTIES LABELS "cli;scenario" TIMEOUT 600)
 
+# The README's Python example, run as written: the example controller passes its own scenario's
+# bounds (examples/python/hover_gripper_pull_example.yaml) with the estimate's mode flown
+add_test(NAME cli.python_example
+         COMMAND bash ${SCEN}/tests/python_example_test.sh ${HPA_BIN} ${CMAKE_SOURCE_DIR}
+                 ${HPA_PYTHON3})
+set_tests_properties(cli.python_example PROPERTIES LABELS "cli;scenario" TIMEOUT 300)
+
+# docs/python.md lists every field of the estimate, the command and the tick, as generated from
+# the message table (python -m hpa_sim.message_docs)
+add_test(NAME python.message_docs
+         COMMAND ${HPA_PYTHON3} -m unittest -v test_message_docs
+         WORKING_DIRECTORY ${PROJECT_SOURCE_DIR}/python/tests)
+set_tests_properties(python.message_docs PROPERTIES LABELS cli TIMEOUT 60
+                     ENVIRONMENT "PYTHONPATH=${PROJECT_SOURCE_DIR}/python;PYTHONDONTWRITEBYTECODE=1")
+
 # The scenarios layers enforced by the build: with the runner's include directories an output or
 # tools header is not found, with output's a tools header is not (their own are)
 add_test(NAME build.scenarios_layers

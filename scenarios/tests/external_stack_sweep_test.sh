@@ -180,8 +180,8 @@ assert d["runs_paired"] == 8, d["runs_paired"]
 verdicts = {m: v["verdict"] for m, v in d["metrics"].items() if v["pairs"] > 0}
 known = {"better", "worse", "no difference shown", "inconclusive", "not compared"}
 assert verdicts and set(verdicts.values()) <= known, verdicts
-# the example holds the vehicle from VIO alone: on these 8 draws it deviates 1.5 to 4 times as
-# far as hpa_mpc in every pair (measured +0.021 to +0.100 m, the minimum effect is 0.01 m),
+# the example holds the vehicle from VIO and the IMU: on these 8 draws it deviates 1.4 to 2.2
+# times as far as hpa_mpc in every pair (measured +0.015 to +0.034 m, the minimum effect 0.01 m),
 # which 8 pairs can show (the signed-rank test's smallest p is 2 / 2^8 = 0.008)
 dev = d["metrics"]["quad_position_deviation_max_m"]
 assert dev["pairs"] == 8 and dev["verdict"] == "worse", dev
