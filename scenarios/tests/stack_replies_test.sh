@@ -2,7 +2,7 @@
 # What a separate flight stack says is bounded and its replies are counted: an error message of
 # megabytes reaches metrics.json cut to its first 4 KiB with its full length stated, and a second
 # reply to one tick ends the run at once with a run error naming the stack and the tick it
-# answered twice (not read as the next tick's reply).
+# answered twice (not read as the next tick's reply), for a single vehicle's stack and a team's.
 # usage: stack_replies_test.sh HPA_BIN SOURCE_DIR PYTHON
 source "$(dirname "$0")/cli_test_lib.sh"
 cli_test_start "$@"
@@ -57,6 +57,36 @@ expect_exit 3 "second reply" run "$out/short.yaml" --quiet --out "$out/double" \
 error=$(run_error "$out/double")
 grep -q "^flight stack '$python $out/stack.py double': tick at t = 0.100000 s: a second reply to \
 the tick at t = 0.099000 s" <<< "$error" || fail "the second reply's run error: $error"
+
+# 3. a team's stack (one for the team) that answers its 50th team_tick twice: a run error at a
+# later team_tick naming the stack and the team_tick answered twice (a team_tick_reply carries no
+# time, so the bytes waiting before the next send are what shows it)
+cat > "$out/team_stack.py" <<PY
+import sys
+sys.path.insert(0, "$src/python")
+from hpa_sim import lockstep
+client = lockstep.FlightStackClient()
+hello = client.team_hello()
+client.team_hello_ack(hello, "double team", 100)
+ticks = 0
+while True:
+    kind, body = client.receive()
+    if kind == lockstep.FINISH:
+        client.send(lockstep.FINISH_REPLY, b"{}")
+        break
+    time_s, views = lockstep.decode_team_tick(body)
+    reply = lockstep.encode_team_tick_reply(
+        [(v.vehicle, lockstep.Command([0, 0, 0], 8.0), True) for v in views])
+    client.send(lockstep.TEAM_TICK_REPLY, reply)
+    ticks += 1
+    if ticks == 50:
+        client.send(lockstep.TEAM_TICK_REPLY, reply)
+PY
+expect_exit 3 "second reply" run "$src/scenarios/ci/team2_line.yaml" --set duration=1 --quiet \
+  --out "$out/team_double" --team-stack one --flight-stack "$python $out/team_stack.py"
+error=$(run_error "$out/team_double")
+grep -q "^flight stack '$python $out/team_stack.py': team_tick at t = [0-9.]* s: a second reply \
+to the team_tick at t = [0-9.]* s" <<< "$error" || fail "the team's second reply: $error"
 
 [ "$failures" -eq 0 ] || { echo "$failures check(s) failed"; exit 1; }
 echo "stack replies: all checks passed"

@@ -13,6 +13,7 @@
 #include "hpa/flight/team_protocol.h"
 #include "hpa/sim/world.h"
 #include "scenarios/src/runner/flight_process.h"
+#include "scenarios/src/runner/reply_order.h"
 #include "scenarios/src/runner/stack_process.h"
 #include "scenarios/src/runner/team_flight_link.h"
 
@@ -65,13 +66,17 @@ class TeamStack {
                                           vehicles_, 1.0 / sim::World::kPhysicsDt_s);
         },
         "team_hello");
+    replies_.Answered("team_hello");
     return ack;
   }
 
   // Sends a team_tick (its reply is read by ReadReply).
   void SendTick(const flight::TeamTick& tick) {
     process_.Guard(
-        [&] { channel().Send(MessageType::kTeamTick, flight::EncodeTeamTick(tick), Limit()); },
+        [&] {
+          replies_.CheckNothingUnasked(channel(), Limit());
+          channel().Send(MessageType::kTeamTick, flight::EncodeTeamTick(tick), Limit());
+        },
         Step(tick.time_s));
   }
 
@@ -85,6 +90,7 @@ class TeamStack {
           flight::CheckTeamTickReply(replies, tick);
         },
         Step(tick.time_s));
+    replies_.Answered(Step(tick.time_s));
     return replies;
   }
 
@@ -95,8 +101,12 @@ class TeamStack {
   void SendFinish(double time_s) {
     flight::FlightInputs in;
     in.time_s = time_s;
-    process_.Guard([&] { channel().Send(MessageType::kFinish, flight::EncodeTick(in), Limit()); },
-                   "finish");
+    process_.Guard(
+        [&] {
+          replies_.CheckNothingUnasked(channel(), Limit());
+          channel().Send(MessageType::kFinish, flight::EncodeTick(in), Limit());
+        },
+        "finish");
   }
 
   // Reads and checks its finish_reply.
@@ -128,6 +138,7 @@ class TeamStack {
   std::vector<int> vehicles_;  // the vehicles it flies, ascending
   int vehicle_env_;            // its HPA_VEHICLE (-1: none)
   StackProcess process_;       // its process and socket
+  ReplyOrder replies_;  // what it answered so far: a second reply is refused before the next send
 };
 
 // The team's separate stacks: one per vehicle, or one for all.
