@@ -4,6 +4,9 @@
 # estimator) that takes several values is refused before any run (exit 2, naming the key, no
 # output folder); one value is no duplicate and flies; hpa-flight, which builds the hello's
 # controller, flies each value as its own controller, and its --controller makes it refuse too.
+# Stacks compared on the same draws are the sweep's factor: --flight-stack NAME=CMD, twice or
+# more, labels each run by its stack (values.flight_stack), pairs them in sweep-diff, and is part
+# of the sweep's identity; the factor as a file's vary key and malformed names are refused.
 # usage: sweep_stack_keys_test.sh HPA_BIN SOURCE_DIR PYTHON
 source "$(dirname "$0")/cli_test_lib.sh"
 cli_test_start "$@"
@@ -51,6 +54,49 @@ records = [json.loads(line) for line in open(sys.argv[1])]
 assert sorted(r["controller"] for r in records) == ["hpa_mpc", "nonhybrid_mpc"], records
 assert all(r["values"]["controller.type"] == r["controller"] for r in records)
 PY
+
+# 4. the stacks as the sweep's factor: --flight-stack NAME=CMD twice, each draw flown by each
+sweep "$out/gust.yaml" "events.0.force.0: {uniform: [0.1, 0.3]}"
+"$hpa" sweep "$out/gust.yaml" --out "$out/F" --set duration=1 --set events.0.at=0.3 --jobs 2 \
+  --flight-stack py="$stack" --flight-stack mpc=hpa-flight > "$out/f.log" 2>&1 \
+  || fail "the stacks factor: $(tail -3 "$out/f.log")"
+"$python" - "$out/F" "$stack" <<'PY' || fail "the stacks factor's records"
+import json, sys
+d, stack = sys.argv[1], sys.argv[2]
+records = [json.loads(line) for line in open(d + "/runs.jsonl")]
+assert len(records) == 4 and all(r["status"] == "ok" for r in records), records
+by = {(r["draw"], r["values"]["flight_stack"]): r for r in records}
+for draw in (0, 1):
+    py, mpc = by[(draw, "py")], by[(draw, "mpc")]
+    assert py["seed"] == mpc["seed"] and py["flight_stack"] == stack, py
+    assert mpc["flight_stack"] == "hpa-flight" and mpc["controller"] == "geometric", mpc
+    assert py["controller"] not in ("geometric", "external"), py["controller"]
+inputs = json.load(open(d + "/inputs.json"))
+assert inputs["flight_stacks"] == [["py", stack], ["mpc", "hpa-flight"]], inputs
+summary = open(d + "/summary.md").read()
+assert "flight_stack=py" in summary and "flight_stack=mpc" in summary, summary[:800]
+assert "--flight-stack 'hpa-flight'" in summary and "--set flight_stack" not in summary
+PY
+expect_exit 0 "2 paired runs; flight_stack: py \(A\) vs mpc \(B\)" sweep-diff "$out/F" "$out/F" \
+  --out "$out/FD" --a-where flight_stack=py --b-where flight_stack=mpc
+expect_exit 0 "0 to run \(4 already done\)" sweep "$out/gust.yaml" --out "$out/F" --resume \
+  --set duration=1 --set events.0.at=0.3 --flight-stack py="$stack" --flight-stack mpc=hpa-flight
+expect_exit 2 "holds runs flown by the flight stack 'hpa-flight'" sweep "$out/gust.yaml" \
+  --out "$out/F" --resume --allow-changed-inputs --set duration=1 --set events.0.at=0.3 \
+  --flight-stack py="$stack" --flight-stack mpc="hpa-flight --per-tick"
+# refused: a controller grid with a stack that ignores it, the factor as a file's vary key, names
+expect_exit 2 "vary.controller.type" sweep "$out/grid.yaml" --out "$out/bad" \
+  --flight-stack py="$stack" --flight-stack mpc=hpa-flight
+sweep "$out/file_factor.yaml" "flight_stack: {grid: [a, b]}"
+expect_exit 2 "vary.flight_stack.*--flight-stack NAME=CMD" sweep "$out/file_factor.yaml" \
+  --out "$out/bad"
+expect_exit 2 "given 2 times, so each is NAME=CMD" sweep "$out/gust.yaml" --out "$out/bad" \
+  --flight-stack py="$stack" --flight-stack hpa-flight
+expect_exit 2 "NAME 'py' is given twice" sweep "$out/gust.yaml" --out "$out/bad" \
+  --flight-stack py="$stack" --flight-stack py=hpa-flight
+expect_exit 2 "not a safe name" sweep "$out/gust.yaml" --out "$out/bad" \
+  --flight-stack ../py="$stack" --flight-stack mpc=hpa-flight
+[ -e "$out/bad" ] && fail "a refused sweep made its output folder"
 
 [ "$failures" -eq 0 ] && echo "sweep_stack_keys: all checks passed"
 exit $((failures > 0))

@@ -333,8 +333,8 @@ int ReportGolden(const GoldenTally& t, const GoldenOptions& options, size_t scen
                 << " not in the golden file, not compared: " << Listed(t.not_in_file);
     }
     if (!t.dropped.empty()) {
-      std::cout << "; " << t.dropped.size() << " in the file but no longer shipped: "
-                << Listed(t.dropped);
+      std::cout << "; " << t.dropped.size()
+                << " in the file but no longer shipped: " << Listed(t.dropped);
     }
     std::cout << "; if deliberate, run `hpa golden --update --reason \"...\"` and commit the "
                  "file\n";

@@ -75,7 +75,9 @@ usage:
       --keep-logs replays the N worst runs and keeps their log.csv in DIR/logs/.
       --flight-stack (or the sweep file's flight_stack:) flies every run with its own process
       of a separate flight stack; a resume or merge refuses another stack, and a vary key
-      only the in-process flight code reads (controller.*) is refused with one.
+      only the in-process flight code reads (controller.*) is refused with one. Given twice
+      or more as NAME=CMD, the stacks are the sweep's grid factor flight_stack (each draw flown
+      by each stack; sweep-diff DIR DIR --a-where flight_stack=A --b-where flight_stack=B).
       --runs N replaces the file's runs:, --set PATH=VALUE sets a key of the base scenario
       in every run (as hpa run --set), without copying the sweep file.
   hpa merge DIR... --out DIR

@@ -1,4 +1,4 @@
-// `hpa sweep` and `hpa merge`: argument parsing, resume and shards, progress, the summary.
+// `hpa sweep`: argument parsing, resume and shards, progress, the summary.
 
 #include <sys/stat.h>
 #include <unistd.h>
@@ -31,9 +31,10 @@ namespace {
 
 // What `hpa sweep` was asked for on its command line.
 struct SweepArgs {
-  std::string sweep_file, out_dir, shard = "1/1", gl = "osmesa", keep_logs, flight_stack;
-  std::optional<int> runs;        // --runs: replaces the file's `runs:`
-  std::vector<std::string> sets;  // --set PATH=VALUE, in order
+  std::string sweep_file, out_dir, shard = "1/1", gl = "osmesa", keep_logs;
+  std::vector<std::string> flight_stacks;  // --flight-stack: one CMD, or NAME=CMD per stack
+  std::optional<int> runs;                 // --runs: replaces the file's `runs:`
+  std::vector<std::string> sets;           // --set PATH=VALUE, in order
   double flight_timeout_s = 10.0;
   int jobs = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
   bool resume = false, retry_errors = false, allow_changed_inputs = false;
@@ -66,11 +67,14 @@ void AddSweepOptions(CLI::App& app, SweepArgs* a) {
                  "worst:N[:METRIC]: after the sweep, replay the N worst runs (crashes first, then "
                  "by METRIC, default quad_position_deviation_max_m) and keep their log.csv in "
                  "DIR/logs/run_<index>/ (whole sweeps, not shards)");
-  app.add_option("--flight-stack", a->flight_stack,
+  app.add_option("--flight-stack", a->flight_stacks,
                  "every run flies this separate flight stack (a shell command started once per "
                  "run, as hpa run --flight-stack; replaces the sweep file's flight_stack:); part "
-                 "of the sweep's identity, so --resume and merge refuse another stack")
-      ->check([](const std::string& text) { return FlightStackCommandError(text); });
+                 "of the sweep's identity, so --resume and merge refuse another stack. Given "
+                 "twice or more, each as NAME=CMD: the stacks are a grid factor (vary key "
+                 "flight_stack, its values the NAMEs), every draw flown by each on the same seed")
+      ->check([](const std::string& text) { return FlightStackCommandError(text); })
+      ->allow_extra_args(false);
   app.add_option("--flight-timeout", a->flight_timeout_s,
                  "with a flight stack: seconds to wait for its whole reply to one tick before "
                  "that run ends with a run error, in [0.001, 3600]")
@@ -97,6 +101,27 @@ std::pair<int, int> ParseShard(const std::string& shard) {
                          " (whole numbers), got '" + shard + "'");
   }
   return {static_cast<int>(k), static_cast<int>(n)};
+}
+
+// The command line's changes to the sweep file: one --flight-stack CMD replaces its stack, two
+// or more NAME=CMD are the stacks factor; --runs; each --set PATH=VALUE.
+SweepOverrides OverridesOf(const SweepArgs& a) {
+  SweepOverrides overrides;
+  overrides.runs = a.runs;
+  for (const std::string& text : a.sets) overrides.sets.push_back(ParseSetArgument(text));
+  if (a.flight_stacks.size() == 1) overrides.flight_stack = a.flight_stacks.front();
+  if (a.flight_stacks.size() < 2) return overrides;
+  for (const std::string& text : a.flight_stacks) {
+    const size_t eq = text.find('=');
+    if (eq == std::string::npos || eq == 0) {
+      throw InputError("", "--flight-stack",
+                       "given " + std::to_string(a.flight_stacks.size()) +
+                           " times, so each is NAME=CMD (a stack of the factor), got '" + text +
+                           "'");
+    }
+    overrides.flight_stacks.emplace_back(text.substr(0, eq), text.substr(eq + 1));
+  }
+  return overrides;
 }
 
 // Refuses the flags that only make sense with --resume when it is not given.
@@ -135,14 +160,16 @@ std::set<int> RecordedRuns(const std::string& jsonl, const SweepArgs& a, SweepSp
     return command.empty() ? std::string("in process") : "by the flight stack '" + command + "'";
   };
   for (const Record& r : sweep::ReadRecords(jsonl)) {
-    // one sweep flies one stack: its runs compare with each other only then (not even
-    // --allow-changed-inputs mixes them)
-    if (r.flight_stack != spec->flight_stack) {
+    // one sweep flies one stack (or each of its stacks factor): its runs compare with each other
+    // only then (not even --allow-changed-inputs mixes them)
+    SweepRun recorded;
+    recorded.values = r.values;
+    const std::string stack = FlightStackOf(*spec, recorded);
+    if (r.flight_stack != stack) {
       throw InputError(jsonl, "",
                        "holds runs flown " + shown(r.flight_stack) + " (run " +
                            std::to_string(r.run) + "), but this sweep's runs are flown " +
-                           shown(spec->flight_stack) +
-                           ": one sweep flies one flight stack; use another --out");
+                           shown(stack) + ": one sweep flies one flight stack; use another --out");
     }
     if (r.sweep_id != spec->sweep_id) {
       if (!a.allow_changed_inputs || !done.empty()) {
@@ -287,8 +314,7 @@ int SweepMain(int argc, char** argv) {
   const auto [shard_k, shard_n] = ParseShard(a.shard);
   CheckResumeFlags(a);
 
-  SweepOverrides overrides{a.flight_stack, a.runs, {}};
-  for (const std::string& text : a.sets) overrides.sets.push_back(ParseSetArgument(text));
+  SweepOverrides overrides = OverridesOf(a);
   SweepSpec spec = LoadSweep(a.sweep_file, overrides);
   spec.flight_timeout_s = a.flight_timeout_s;
   const Params params = LoadParams(DefaultParamsPath());
@@ -314,6 +340,10 @@ int SweepMain(int argc, char** argv) {
               a.jobs);
   if (!spec.flight_stack.empty()) {
     std::printf("each run flies its own flight stack: %s\n", spec.flight_stack.c_str());
+  }
+  for (const auto& [name, command] : spec.flight_stacks) {
+    std::printf("each draw is flown by the stack %s (its own process per run): %s\n", name.c_str(),
+                command.c_str());
   }
   std::fflush(stdout);
   ResultsAppender results(out, jsonl, runs.size());
@@ -344,130 +374,6 @@ int SweepMain(int argc, char** argv) {
       results.finished() * 60.0 / std::max(wall_s, 1e-9), jsonl.c_str());
   FinishSweep(spec, jsonl, a.out_dir, shard_k, shard_n, keep, params, gl_backend);
   return 0;
-}
-
-namespace {
-
-// Every record of the shards' runs.jsonl files, all of one sweep (whose id goes to *sweep_id).
-std::vector<Record> ReadShardRecords(const std::vector<std::string>& dirs, std::string* sweep_id) {
-  std::vector<Record> all;
-  for (const std::string& d : dirs) {
-    const std::string path = d + "/runs.jsonl";
-    struct stat st;
-    if (stat(path.c_str(), &st) != 0) throw InputError(path, "", "no runs.jsonl in this folder");
-    if (!S_ISREG(st.st_mode) || access(path.c_str(), R_OK) != 0) {
-      throw InputError(path, "", "not a readable file");
-    }
-    for (Record& r : sweep::ReadRecords(path)) {
-      if (sweep_id->empty()) *sweep_id = r.sweep_id;
-      if (r.sweep_id != *sweep_id) {
-        throw InputError(path, "sweep_id",
-                         "mixes sweeps (" + r.sweep_id + " vs " + *sweep_id +
-                             "); merge only shards of one sweep");
-      }
-      all.push_back(std::move(r));
-    }
-  }
-  return all;
-}
-
-// The sweep file's spec, with the flight stack its runs recorded and the --runs and --set the
-// folders' inputs.json recorded, when it is still the sweep recorded (same sweep_id), else
-// nothing: then how many runs the sweep has is unknown.
-std::optional<SweepSpec> SameSweep(const std::string& sweep_file, const std::string& sweep_id,
-                                   const std::string& flight_stack,
-                                   const std::vector<std::string>& dirs) {
-  SweepOverrides overrides;
-  overrides.flight_stack = flight_stack;
-  for (const std::string& dir : dirs) {
-    std::optional<sweep::InputsSnapshot> inputs;
-    try {
-      inputs = sweep::ReadInputsSnapshot(dir);
-    } catch (const InputError&) {
-    }
-    if (!inputs || inputs->sweep_id != sweep_id) continue;
-    overrides.runs = inputs->runs;
-    overrides.sets = inputs->sets;
-    break;
-  }
-  try {
-    SweepSpec loaded = LoadSweep(sweep_file, overrides);
-    if (loaded.sweep_id == sweep_id) return loaded;
-  } catch (const InputError&) {
-  }
-  return std::nullopt;
-}
-
-// Writes the merged runs.jsonl, replaced in one rename: a folder that is also one of the
-// inputs is read before it is written.
-void WriteMergedRuns(const std::vector<Record>& records, const std::string& out_dir) {
-  std::string merged;
-  for (const Record& r : records) merged += r.line + "\n";
-  WriteFileAtomic(out_dir + "/runs.jsonl", merged);
-}
-
-// Names the runs of the sweep that no folder recorded: the merge is incomplete (exit 1);
-// 0 when every run is there.
-int ReportMissingRuns(const std::vector<Record>& records, long expected) {
-  std::vector<int> missing;
-  size_t next = 0;
-  for (int index = 0; index < expected; ++index) {
-    while (next < records.size() && records[next].run < index) ++next;
-    if (next < records.size() && records[next].run == index) continue;
-    missing.push_back(index);
-  }
-  if (missing.empty()) return 0;
-  std::string listed;
-  for (size_t i = 0; i < std::min<size_t>(10, missing.size()); ++i) {
-    listed += (listed.empty() ? "" : ", ") + std::to_string(missing[i]);
-  }
-  std::fprintf(stderr,
-               "hpa: merge incomplete: %zu of %ld runs missing (%s%s): a shard not merged or not "
-               "finished; the merged runs are written\n",
-               missing.size(), expected, listed.c_str(), missing.size() > 10 ? ", ..." : "");
-  return 1;
-}
-
-}  // namespace
-
-int MergeMain(int argc, char** argv) {
-  std::vector<std::string> dirs;
-  std::string out_dir;
-  CLI::App app{
-      "Joins sweep shards (or resumed parts) into one runs.jsonl and its summary. One record per "
-      "run (a finished record wins over an error; two different finished records keep the first, "
-      "with a warning; runs outside the sweep are left out, with a warning). Exits 1, after "
-      "writing what it has, when runs of the sweep are missing (a shard not merged or not "
-      "finished); 2 when the folders hold no runs or mix sweeps.",
-      "hpa merge"};
-  app.add_option("DIR", dirs, "sweep output folders, each with a runs.jsonl")->required();
-  app.add_option("--out", out_dir, "output folder")->required();
-  if (const auto code = ParseCommandLine(app, argc, argv)) return *code;
-  std::string sweep_id;
-  const std::vector<Record> all = ReadShardRecords(dirs, &sweep_id);
-  if (all.empty()) throw InputError("", "DIR", "no runs recorded in the folders given");
-  // how many runs the sweep has: from its file when it is still the same sweep, else unknown
-  const std::optional<SweepSpec> spec =
-      SameSweep(all.front().sweep_file, sweep_id, all.front().flight_stack, dirs);
-  const long expected = spec ? SweepRunCount(*spec) : -1;
-  std::vector<std::string> warnings;
-  const std::vector<Record> records = sweep::UniqueRecords(all, expected, &warnings);
-  for (const std::string& w : warnings) std::fprintf(stderr, "hpa: warning: %s\n", w.c_str());
-  MakeOutputDir(out_dir);
-  WriteMergedRuns(records, out_dir);
-  sweep::CopyInputsSnapshot(dirs, sweep_id, out_dir);
-  sweep::WriteSummary(records, out_dir, spec ? &*spec : nullptr);
-  std::printf(
-      "merged %zu runs from %zu folders into %s (summary.md, summary.json, crash_rate.png)\n",
-      records.size(), dirs.size(), out_dir.c_str());
-  // runs the sweep has that no folder recorded: the merge is incomplete (exit 1)
-  if (expected < 0) {
-    std::fprintf(stderr,
-                 "hpa: warning: the sweep file %s is gone or changed: missing runs not checked\n",
-                 all.front().sweep_file.c_str());
-    return 0;
-  }
-  return ReportMissingRuns(records, expected);
 }
 
 }  // namespace hpa

@@ -81,9 +81,15 @@ Json FilesJson(const SweepSpec& spec) {
   return files;
 }
 
-// Adds what flew beside the files: the flight stack, --runs and --set (each only when given).
+// Adds what flew beside the files: the flight stack or the stacks factor's named stacks, --runs
+// and --set (each only when given).
 void AddCommandLine(const SweepSpec& spec, Json* part) {
   if (!spec.flight_stack.empty()) (*part)["flight_stack"] = spec.flight_stack;
+  if (!spec.flight_stacks.empty()) {
+    Json stacks = Json::array();
+    for (const auto& [name, command] : spec.flight_stacks) stacks.push_back({name, command});
+    (*part)["flight_stacks"] = stacks;
+  }
   if (spec.runs_override) (*part)["runs"] = *spec.runs_override;
   if (!spec.sets.empty()) {
     Json sets = Json::array();
@@ -114,6 +120,12 @@ std::vector<InputFile> ReadFiles(const Json& list, const std::string& path) {
 template <typename Part>
 void ReadCommandLine(const Json& j, Part* part) {
   if (j.contains("flight_stack")) part->flight_stack = j.at("flight_stack").get<std::string>();
+  if (j.contains("flight_stacks")) {
+    for (const Json& stack : j.at("flight_stacks")) {
+      part->flight_stacks.emplace_back(stack.at(0).get<std::string>(),
+                                       stack.at(1).get<std::string>());
+    }
+  }
   if (j.contains("runs")) part->runs = j.at("runs").get<int>();
   if (j.contains("sets")) {
     for (const Json& set : j.at("sets")) {
@@ -207,6 +219,17 @@ void DescribeCommandLineChanges(const InputsSnapshot& a, const InputsSnapshot& b
     changes.push_back("flight stack: " + shown(a.flight_stack) + " (A) vs " +
                       shown(b.flight_stack) + " (B)");
   }
+  if (a.flight_stacks != b.flight_stacks) {
+    const auto shown = [](const std::vector<std::pair<std::string, std::string>>& stacks) {
+      std::string text;
+      for (const auto& [name, command] : stacks) {
+        text += (text.empty() ? "" : ", ") + name + "='" + command + "'";
+      }
+      return text.empty() ? std::string("none") : text;
+    };
+    changes.push_back("flight stacks factor: " + shown(a.flight_stacks) + " (A) vs " +
+                      shown(b.flight_stacks) + " (B)");
+  }
   // the command line's overrides of the sweep file
   if (a.runs != b.runs) {
     const auto shown = [](const std::optional<int>& runs) {
@@ -219,10 +242,12 @@ void DescribeCommandLineChanges(const InputsSnapshot& a, const InputsSnapshot& b
   for (const auto& [key, value] : sets_a) {
     const auto it = sets_b.find(key);
     const std::string other = it == sets_b.end() ? "(not set)" : it->second;
-    if (other != value) changes.push_back("--set " + key + ": " + value + " (A) vs " + other + " (B)");
+    if (other != value)
+      changes.push_back("--set " + key + ": " + value + " (A) vs " + other + " (B)");
   }
   for (const auto& [key, value] : sets_b) {
-    if (!sets_a.count(key)) changes.push_back("--set " + key + ": (not set) (A) vs " + value + " (B)");
+    if (!sets_a.count(key))
+      changes.push_back("--set " + key + ": (not set) (A) vs " + value + " (B)");
   }
 }
 

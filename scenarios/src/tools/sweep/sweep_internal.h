@@ -108,9 +108,10 @@ struct InputFile {
 struct ResumedInputs {
   std::string inputs_id;  // the changed inputs' hash, as the part's records carry it
   std::vector<InputFile> files;
-  std::string flight_stack;                                // as InputsSnapshot's
-  std::optional<int> runs;                                 // --runs, when given
-  std::vector<std::pair<std::string, std::string>> sets;  // --set PATH=VALUE, in order
+  std::string flight_stack;                                        // as InputsSnapshot's
+  std::vector<std::pair<std::string, std::string>> flight_stacks;  // as InputsSnapshot's
+  std::optional<int> runs;                                         // --runs, when given
+  std::vector<std::pair<std::string, std::string>> sets;           // --set PATH=VALUE, in order
 };
 
 /// DIR/inputs.json: the files a sweep ran from, with its sweep_id, and those of every part
@@ -119,7 +120,9 @@ struct InputsSnapshot {
   std::string sweep_id;
   std::vector<InputFile> files;
   std::string flight_stack;  // the flight-stack command every run flew ("": in process)
-  std::optional<int> runs;   // hpa sweep --runs, when given
+  // the stacks factor's named stacks (hpa sweep --flight-stack NAME=CMD, twice or more)
+  std::vector<std::pair<std::string, std::string>> flight_stacks;
+  std::optional<int> runs;                                // hpa sweep --runs, when given
   std::vector<std::pair<std::string, std::string>> sets;  // hpa sweep --set, in order
   std::vector<ResumedInputs> resumed;  // one per inputs_id, in the order first flown
 };

@@ -77,7 +77,7 @@ void KeepWorstLogs(const SweepSpec& spec, const std::vector<Record>& records,
     if (run == runs.end()) continue;
     RunOptions options;
     options.gl_backend = gl_backend;
-    options.flight_stack = spec.flight_stack;  // the stack that flew it flies the replay
+    options.flight_stack = FlightStackOf(spec, *run);  // the stack that flew it flies the replay
     options.flight_step_timeout_s = spec.flight_timeout_s;
     const RunResult result = RunScenario(BuildScenario(spec, *run), params, options);
     const std::string dir = out_dir + "/logs/run_" + std::to_string(run->index);
@@ -87,7 +87,10 @@ void KeepWorstLogs(const SweepSpec& spec, const std::vector<Record>& records,
     RunRecord record;
     record.scenario_file = spec.base_path;
     record.scenario_text = spec.base_text.empty() ? ReadYamlFile(spec.base_path) : spec.base_text;
-    record.sets = run->values;
+    // the run's values but the stack factor's (no scenario key)
+    for (const auto& value : run->values) {
+      if (value.first != kStackFactor) record.sets.push_back(value);
+    }
     record.seed = run->seed;
     record.params = params;
     WriteRunRecord(dir, record);

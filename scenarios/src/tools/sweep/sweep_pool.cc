@@ -39,7 +39,7 @@ using RecordFn = std::function<void(const std::string& line, bool failed, const 
 // What flew a run whose process died: its controller type, or "external" for a flight stack
 // (its name is known only from its hello, which the dead worker did not pass on).
 std::string ControllerOf(const SweepSpec& spec, const SweepRun& run) {
-  if (!spec.flight_stack.empty()) return "external";
+  if (!FlightStackOf(spec, run).empty()) return "external";
   try {
     return BuildScenario(spec, run).controller.type;
   } catch (const std::exception&) {
@@ -52,13 +52,14 @@ std::string ControllerOf(const SweepSpec& spec, const SweepRun& run) {
 // parallel workers' never meet); its failure is this run's run error.
 std::string RunOne(const SweepSpec& spec, const SweepRun& run, const Params& params,
                    sim::GlBackend gl_backend) {
-  std::string controller = spec.flight_stack.empty() ? "?" : "external";
+  const std::string flight_stack = FlightStackOf(spec, run);
+  std::string controller = flight_stack.empty() ? "?" : "external";
   try {
     const Scenario scenario = BuildScenario(spec, run);
-    if (spec.flight_stack.empty()) controller = scenario.controller.type;
+    if (flight_stack.empty()) controller = scenario.controller.type;
     RunOptions options;
     options.gl_backend = gl_backend;
-    options.flight_stack = spec.flight_stack;
+    options.flight_stack = flight_stack;
     options.flight_step_timeout_s = spec.flight_timeout_s;
     const RunResult result = RunScenario(scenario, params, options);
     const std::string metrics = MetricsToJson(result.metrics);
@@ -351,7 +352,9 @@ class Pool {
   // A worker killed in a run leaves its flight stack's processes, socket folder and frame ring
   // (it could not clean up): reclaimed as soon as it is reaped, not at the next stack's start.
   void ReclaimStack() const {
-    if (!spec_.flight_stack.empty()) runner::RemoveStaleFlightRuns();
+    if (!spec_.flight_stack.empty() || !spec_.flight_stacks.empty()) {
+      runner::RemoveStaleFlightRuns();
+    }
   }
 
   // The file a worker writes the record of the run at `position` into.

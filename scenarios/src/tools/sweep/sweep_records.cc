@@ -206,7 +206,8 @@ std::string RecordLine(const SweepSpec& spec, const SweepRun& run, const std::st
     line["values"][path] = IsNumber(value, &number) ? Json(number) : Json(value);
   }
   line["controller"] = controller;
-  if (!spec.flight_stack.empty()) line["flight_stack"] = spec.flight_stack;
+  const std::string flight_stack = FlightStackOf(spec, run);
+  if (!flight_stack.empty()) line["flight_stack"] = flight_stack;
   line["status"] = error.empty() ? "ok" : "error";
   line["error"] = error.empty() ? Json() : Json(error);
   line["metrics"] = metrics_json.empty() ? Json() : Json::parse(metrics_json);

@@ -46,15 +46,31 @@ std::string HashText(const std::string& text) {
 }
 
 Scenario BuildScenario(const SweepSpec& spec, const SweepRun& run) {
+  // the stack that flies the run is no key of its scenario
+  std::vector<std::pair<std::string, std::string>> values;
+  for (const auto& value : run.values) {
+    if (value.first != kStackFactor) values.push_back(value);
+  }
   // the base as it was when the sweep was loaded: an edit during the sweep changes no run
-  Scenario s = spec.base_text.empty() ? LoadScenario(spec.base_path, run.values, spec.file)
-                                      : LoadScenarioText(spec.base_text, spec.base_path, run.values,
+  Scenario s = spec.base_text.empty() ? LoadScenario(spec.base_path, values, spec.file)
+                                      : LoadScenarioText(spec.base_text, spec.base_path, values,
                                                          spec.file, spec.reference_csv_text);
   s.seed = run.seed;
   return s;
 }
 
 }  // namespace sweep
+
+std::string FlightStackOf(const SweepSpec& spec, const SweepRun& run) {
+  if (spec.flight_stacks.empty()) return spec.flight_stack;
+  for (const auto& [path, name] : run.values) {
+    if (path != kStackFactor) continue;
+    for (const auto& [stack_name, command] : spec.flight_stacks) {
+      if (stack_name == name) return command;
+    }
+  }
+  return "";
+}
 
 namespace {
 
@@ -70,6 +86,11 @@ std::string Dirname(const std::string& path) {
 VarySpec LoadVary(const YamlMap& vary, const std::string& path) {
   VarySpec v;
   v.path = path;
+  if (v.path == kStackFactor) {
+    vary.Fail(v.path,
+              "the flight stack is no scenario key: fly stacks as a factor with hpa sweep "
+              "--flight-stack NAME=CMD, once per stack");
+  }
   if (v.path == "seed") {
     vary.Fail("seed",
               "the seed cannot be varied: each run's seed is drawn from the sweep's "
@@ -148,9 +169,8 @@ bool TakesSeveralValues(const VarySpec& v) {
       for (const std::string& value : v.values) {
         double x = 0.0, y = 0.0;
         const std::string& first = v.values.front();
-        const bool same = sweep::IsNumber(value, &x) && sweep::IsNumber(first, &y)
-                              ? x == y
-                              : value == first;
+        const bool same =
+            sweep::IsNumber(value, &x) && sweep::IsNumber(first, &y) ? x == y : value == first;
         if (!same) return true;
       }
       return false;
@@ -185,20 +205,51 @@ bool StackReadsFlightCode(const std::string& command, const std::string& path) {
 // would fly the same stack on the same seeds once per value, under as many labels (n doubled,
 // intervals too narrow): refused before any run, naming the key.
 void RefuseKeysTheStackIgnores(const SweepSpec& s, const std::string& path) {
-  if (s.flight_stack.empty()) return;
-  for (const VarySpec& v : s.vary) {
-    if (!FlightCodeKey(v.path) || !TakesSeveralValues(v) ||
-        StackReadsFlightCode(s.flight_stack, v.path)) {
-      continue;
+  std::vector<std::string> stacks;
+  if (!s.flight_stack.empty()) stacks.push_back(s.flight_stack);
+  for (const auto& [name, command] : s.flight_stacks) stacks.push_back(command);
+  for (const std::string& stack : stacks) {
+    for (const VarySpec& v : s.vary) {
+      if (!FlightCodeKey(v.path) || !TakesSeveralValues(v) || StackReadsFlightCode(stack, v.path)) {
+        continue;
+      }
+      throw InputError(path, "vary." + v.path,
+                       "takes several values, but the flight stack '" + stack +
+                           "' flies its own flight code and ignores " + v.path +
+                           ": each value would fly the same stack on the same seeds under another "
+                           "label. Leave " +
+                           v.path +
+                           " out of vary (sweep it in process), or fly the stacks as the "
+                           "factor: --flight-stack NAME=CMD, once per stack");
     }
-    throw InputError(path, "vary." + v.path,
-                     "takes several values, but the flight stack '" + s.flight_stack +
-                         "' flies its own flight code and ignores " + v.path +
-                         ": each value would fly the same stack on the same seeds under another "
-                         "label. Leave " + v.path +
-                         " out of vary (sweep it in process), or compare stacks with one sweep "
-                         "per --flight-stack and hpa sweep-diff");
   }
+}
+
+// The named stacks of --flight-stack NAME=CMD (twice or more) as the sweep's last grid factor:
+// each NAME a safe name used once, each CMD a command FlightStackCommandError accepts.
+void AddStackFactor(const std::vector<std::pair<std::string, std::string>>& stacks, SweepSpec* s) {
+  VarySpec factor;
+  factor.path = kStackFactor;
+  factor.kind = VarySpec::Kind::kGrid;
+  factor.label = "flight stack";
+  for (const auto& [name, command] : stacks) {
+    const auto fail = [&, name = name](const std::string& why) {
+      throw InputError("", "--flight-stack", "'" + name + "=...': " + why);
+    };
+    if (!IsSafeName(name)) {
+      fail("NAME '" + name +
+           "' is not a safe name: 1 to 64 of A-Z a-z 0-9 _ - ., not starting "
+           "with '.'");
+    }
+    if (std::find(factor.values.begin(), factor.values.end(), name) != factor.values.end()) {
+      fail("NAME '" + name + "' is given twice");
+    }
+    if (const std::string why = FlightStackCommandError(command); !why.empty()) fail(why);
+    factor.values.push_back(name);
+  }
+  s->flight_stacks = stacks;
+  s->flight_stack.clear();
+  s->vary.push_back(factor);
 }
 
 // The command line's --set PATH=VALUE: each must leave the vary keys to `vary` (a set on a
@@ -301,6 +352,7 @@ SweepSpec LoadSweep(const std::string& path, const SweepOverrides& overrides) {
     for (const auto& kv : node) s.vary.push_back(LoadVary(vary, kv.first.as<std::string>()));
   }
   root.RejectUnknownKeys();
+  if (!overrides.flight_stacks.empty()) AddStackFactor(overrides.flight_stacks, &s);
 
   if (SweepRunCount(s) > kMaxSweepRuns) {
     throw InputError(path, "runs",
@@ -317,6 +369,9 @@ SweepSpec LoadSweep(const std::string& path, const SweepOverrides& overrides) {
   std::string inputs = s.sweep_text + "\n--base--\n" + s.base_text;
   if (s.reference_csv_text) inputs += "\n--reference.file--\n" + *s.reference_csv_text;
   if (!s.flight_stack.empty()) inputs += "\n--flight_stack--\n" + s.flight_stack;
+  for (const auto& [name, command] : s.flight_stacks) {
+    inputs += "\n--flight_stacks--\n" + name + "=" + command;
+  }
   // the command line's overrides, absent when none (a sweep without them keeps its id)
   if (s.runs_override) inputs += "\n--runs--\n" + std::to_string(*s.runs_override);
   for (const auto& [key, value] : s.sets) inputs += "\n--set--\n" + key + "=" + value;

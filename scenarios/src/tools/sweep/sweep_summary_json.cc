@@ -33,7 +33,10 @@ std::string ShellQuoted(const std::string& text) {
 // The command that replays a run exactly (with the flight stack that flew it).
 std::string ReplayCommand(const Record& r) {
   std::string command = "hpa run " + r.base + " --seed " + std::to_string(r.seed);
-  for (const auto& [path, value] : r.values) command += " --set " + path + "=" + value;
+  for (const auto& [path, value] : r.values) {
+    // the stack factor's value names the stack, whose command follows
+    if (path != kStackFactor) command += " --set " + path + "=" + value;
+  }
   if (!r.flight_stack.empty()) command += " --flight-stack " + ShellQuoted(r.flight_stack);
   return command;
 }

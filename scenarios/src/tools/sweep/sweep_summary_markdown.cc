@@ -204,9 +204,15 @@ void WriteSummaryMarkdown(const std::vector<Record>& records, const SummaryTable
     md << " of `" << records.front().sweep_file << "` (base `" << records.front().base << "`)";
   md << ". Crash rates with 95 % Wilson intervals; RMSE is the norm of the per-axis payload RMSE "
         "over runs that did not crash.\n\n";
-  if (!records.empty() && !records.front().flight_stack.empty()) {
-    md << "Flown by the flight stack `" << records.front().flight_stack
-       << "`, started once per run; a run's controller is the name the stack gave in its hello "
+  std::set<std::string> stacks;
+  for (const Record& r : records) {
+    if (!r.flight_stack.empty()) stacks.insert("`" + r.flight_stack + "`");
+  }
+  if (!stacks.empty()) {
+    std::string listed;
+    for (const std::string& s : stacks) listed += (listed.empty() ? "" : ", ") + s;
+    md << "Flown by the flight stack" << (stacks.size() > 1 ? "s " : " ") << listed
+       << ", started once per run; a run's controller is the name the stack gave in its hello "
           "(`external`: it never did).\n\n";
   }
   GroupTableMarkdown(t, md);

@@ -36,6 +36,10 @@ struct SweepSpec {
   // which replaces it): a shell command, started once per run; empty: the flight code in
   // process. Part of the sweep_id: a resume or merge with another stack is refused
   std::string flight_stack;
+  // the named stacks of `hpa sweep --flight-stack NAME=CMD`, given twice or more, in order:
+  // a grid factor (the vary entry kStackFactor, whose values are the NAMEs), every draw flown
+  // by each stack on the same seed. Empty: flight_stack flies every run
+  std::vector<std::pair<std::string, std::string>> flight_stacks;
   double flight_timeout_s = 10.0;  // longest wait for the stack's whole reply to one tick
   std::string sweep_id;            // hash of the sweep and base files: merge refuses mixes
   std::string inputs_id;           // set when a resume continues with changed inputs: their hash
@@ -47,10 +51,17 @@ struct SweepSpec {
   std::vector<std::pair<std::string, std::string>> sets;
 };
 
+/// The vary path of the stacks factor: each run's value is the NAME of the stack that flies it
+/// (not a scenario key: the run's scenario never sees it).
+constexpr char kStackFactor[] = "flight_stack";
+
 /// What `hpa sweep`'s command line changes in a sweep file without copying it.
 struct SweepOverrides {
   std::string flight_stack;  // replaces the file's `flight_stack:` ("": the file's)
-  std::optional<int> runs;   // replaces the file's `runs:`
+  // --flight-stack NAME=CMD given twice or more: the stacks as a grid factor (replaces the
+  // file's `flight_stack:`)
+  std::vector<std::pair<std::string, std::string>> flight_stacks;
+  std::optional<int> runs;                                // replaces the file's `runs:`
   std::vector<std::pair<std::string, std::string>> sets;  // --set PATH=VALUE, in order
 };
 
@@ -61,6 +72,10 @@ struct SweepRun {
   unsigned long seed = 0;  // scenario seed (same for every grid value of a draw)
   std::vector<std::pair<std::string, std::string>> values;  // path -> YAML scalar text
 };
+
+/// The shell command of the separate flight stack that flies `run` ("": in process): the named
+/// stack of its kStackFactor value, else the spec's flight_stack.
+std::string FlightStackOf(const SweepSpec& spec, const SweepRun& run);
 
 /// Loads and validates a sweep file: every expanded run must be a valid scenario (each drawn
 /// value within its key's range), else InputError naming the run and its values. A non-empty
