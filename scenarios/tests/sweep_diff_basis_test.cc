@@ -109,8 +109,9 @@ TEST(SweepDiffBasisTest, ADifferentBasisIsNamedWithAWarning) {
   EXPECT_TRUE(BasisLines(Diff(a, a)).empty());
 }
 
-// The camera kind and a team's vehicle state are part of the basis; a pair with a run error is
-// not compared (its metrics may be missing), and a side that records no basis is said to.
+// The camera kind and a team's vehicle state are part of the basis (a stack's declining the
+// rendered frames is noted without a warning); a pair with a run error is not compared (its
+// metrics may be missing), and a side that records no basis is said to.
 TEST(SweepDiffBasisTest, CameraTeamStateRunErrorsAndOldRecords) {
   BasisRun analytic, render;
   render.camera = "render";
@@ -135,6 +136,18 @@ TEST(SweepDiffBasisTest, CameraTeamStateRunErrorsAndOldRecords) {
   EXPECT_NE(team[0].find("vehicle state motion_capture (A) vs estimate, vehicle state onboard"),
             std::string::npos)
       << team[0];
+
+  // a stack that declared it uses no pixels was offered the same rendered camera: no warning
+  BasisRun no_pixels;
+  no_pixels.camera = "none";
+  const std::vector<std::string> declined =
+      BasisLines(Diff(WriteRuns("render_all", std::vector<BasisRun>(3, render)),
+                      WriteRuns("no_pixels", std::vector<BasisRun>(3, no_pixels))));
+  ASSERT_EQ(declined.size(), 1u);
+  EXPECT_NE(declined[0].find("rendered camera (A) vs estimate, no camera frames"),
+            std::string::npos)
+      << declined[0];
+  EXPECT_EQ(declined[0].find("WARNING"), std::string::npos) << declined[0];
 
   const std::vector<std::string> old = DescribeBasisDifferences(
       {{std::nullopt, std::string("ground truth")}, {std::nullopt, std::string("ground truth")}});

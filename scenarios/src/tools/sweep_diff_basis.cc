@@ -3,6 +3,17 @@
 #include <map>
 
 namespace hpa {
+namespace {
+
+constexpr char kRendered[] = "estimate, rendered camera";
+constexpr char kNoPixels[] = "estimate, no camera frames (the stack uses no pixels)";
+
+// Whether two bases differ only in a stack's declining the rendered frames it was offered.
+bool OnlyPixelsDeclined(const std::string& a, const std::string& b) {
+  return (a == kRendered && b == kNoPixels) || (a == kNoPixels && b == kRendered);
+}
+
+}  // namespace
 
 std::optional<std::string> EstimationBasis(const nlohmann::json& metrics) {
   if (!metrics.is_object() || !metrics.contains("camera") || !metrics["camera"].is_string()) {
@@ -18,9 +29,9 @@ std::optional<std::string> EstimationBasis(const nlohmann::json& metrics) {
         state != team->end() && state->is_string() ? state->get<std::string>() : camera;
     return "estimate, vehicle state " + source;
   }
-  if (camera == "render") return "estimate, rendered camera";
+  if (camera == "render") return kRendered;
   if (camera == "analytic") return "estimate, analytic camera";
-  if (camera == "none") return "estimate, no camera frames (the stack uses no pixels)";
+  if (camera == "none") return kNoPixels;
   return "estimate, camera " + camera;
 }
 
@@ -37,12 +48,18 @@ std::vector<std::string> DescribeBasisDifferences(
   }
   std::vector<std::string> lines;
   for (const auto& [ab, pairs] : differing) {
-    lines.push_back("estimation basis: " + ab.first + " (A) vs " + ab.second + " (B), in " +
-                    std::to_string(pairs) + " of " + std::to_string(compared) +
-                    " pairs: WARNING, the pairing compares flights given different information, "
-                    "not the controller or stack alone (give both sides the same "
-                    "estimation.ground_truth, estimation.camera and estimation.vehicle_state, e.g. "
-                    "--set estimation.ground_truth=false on both)");
+    const std::string head = "estimation basis: " + ab.first + " (A) vs " + ab.second +
+                             " (B), in " + std::to_string(pairs) + " of " +
+                             std::to_string(compared) + " pairs: ";
+    // a stack that declared it uses no pixels was offered the same camera: a note, no warning
+    lines.push_back(
+        head + (OnlyPixelsDeclined(ab.first, ab.second)
+                    ? "both were given the rendered camera; a stack that declared it uses no "
+                      "pixels was sent no frame (its own choice, not a different offering)"
+                    : "WARNING, the pairing compares flights given different information, not the "
+                      "controller or stack alone (give both sides the same "
+                      "estimation.ground_truth, estimation.camera and estimation.vehicle_state, "
+                      "e.g. --set estimation.ground_truth=false on both)"));
   }
   // a side that records no basis (an older hpa): say the check could not be made
   if (!bases.empty() && (unrecorded_a > 0) != (unrecorded_b > 0)) {

@@ -19,7 +19,8 @@ std::optional<std::string> EstimationBasis(const nlohmann::json& metrics);
 
 /// The lines "What differs" gets from the pairs' bases (A's, B's; nullopt where not recorded):
 /// each combination of differing bases with its pair count and a warning that the pairing
-/// compares flights given different information, and a note when one side records no basis.
+/// compares flights given different information (a note without a warning when a stack only
+/// declined the rendered frames it was offered), and a note when one side records no basis.
 /// Empty when every pair that records both flew on the same basis.
 std::vector<std::string> DescribeBasisDifferences(
     const std::vector<std::pair<std::optional<std::string>, std::optional<std::string>>>& bases);
