@@ -56,9 +56,12 @@ struct CsvLine {
 void CloseLog(const std::string& path, std::ofstream* out) {
   out->flush();
   if (!*out) {
+    // the failed write's errno (a stream's later operations are no-ops once it has failed):
+    // EFBIG names the file-size limit, ENOSPC the full disk
+    const int errnum = errno;
     out->close();
     std::remove(PartialPath(path).c_str());
-    throw OutputError(path, "disk full?");
+    throw OutputError(path, WriteErrorText(errnum));
   }
   out->close();
   CommitPartial(path);
