@@ -284,6 +284,13 @@ add_test(NAME build.dependency_rule
                  ${CMAKE_BINARY_DIR}/dependency_rule)
 set_tests_properties(build.dependency_rule PROPERTIES LABELS build)
 
+# The dependency rule on the built programs: hpa-flight holds no MuJoCo or GL symbol and needs no
+# MuJoCo or GL library, while hpa does (so the check can fail)
+add_test(NAME build.flight_program_links
+         COMMAND bash ${SCEN}/tests/flight_program_links_test.sh $<TARGET_FILE:hpa-flight>
+                 ${HPA_BIN})
+set_tests_properties(build.flight_program_links PROPERTIES LABELS build)
+
 # The Python client's team runner (hpa_sim.run_team): the example team controller flies
 # team2_line per vehicle and as one stack (the same run), its payload RMSE within a bound held on
 # seeds it was not measured on; a sweep flown by it is diffed against the in-process sweep; a
