@@ -106,11 +106,29 @@ TEST(MetricsTest, ASingleVehicleIsAListOfOneVehicle) {
 // What a team run does not measure is one list: the team runner marks each field and
 // metrics.json writes each path null, whatever the field held (a single vehicle's defaults, such
 // as payload_in_fov_fraction's 1.0, read as measured by an expect key otherwise).
+// Whether metrics.json holds null at a dotted path, in every entry of a list on the way (a
+// document without the path's first key does not hold it).
+bool NullAt(const nlohmann::json& j, const std::string& dotted) {
+  const size_t dot = dotted.find('.');
+  const std::string key = dotted.substr(0, dot);
+  if (!j.is_object() || !j.contains(key)) return false;
+  const nlohmann::json& at = j.at(key);
+  if (dot == std::string::npos) return at.is_null();
+  const std::string rest = dotted.substr(dot + 1);
+  if (!at.is_array()) return NullAt(at, rest);
+  for (const nlohmann::json& entry : at) {
+    if (!NullAt(entry, rest)) return false;
+  }
+  return !at.empty();
+}
+
 TEST(MetricsTest, ATeamNullsExactlyWhatItDoesNotMeasure) {
   Metrics m;
   m.control_steps = 10;
   m.team = TeamMetrics{0.7, 1.0};
   m.vehicles.resize(2);
+  m.faults.resize(1);
+  m.faults[0].payload_lost = true;
   m.contacts_payload_rotor = 0;
   m.slack_detection_latency_max_s = 0.01;
   m.retaut_quad_vz_min_mps = -0.3;
@@ -121,12 +139,7 @@ TEST(MetricsTest, ATeamNullsExactlyWhatItDoesNotMeasure) {
   EXPECT_FALSE(m.retaut_quad_vz_min_mps.has_value());
   const nlohmann::json j = nlohmann::json::parse(MetricsToJson(m));
   for (const UnmeasuredMetric& u : TeamUnmeasuredMetrics()) {
-    std::string pointer = std::string("/") + u.json_key;
-    std::replace(pointer.begin(), pointer.end(), '.', '/');
-    // (a fault's recovery only in a run with a fault event)
-    const nlohmann::json::json_pointer at(pointer);
-    if (std::string(u.json_key).rfind("fault_recovery.", 0) == 0 && !j.contains(at)) continue;
-    EXPECT_TRUE(j.at(at).is_null()) << u.json_key;
+    EXPECT_TRUE(NullAt(j, u.json_key)) << u.json_key;
   }
   EXPECT_EQ(j["retaut"]["count"], 2);  // the team's own re-tauts are measured
   EXPECT_EQ(j["vehicles"].size(), 2u);
@@ -137,6 +150,32 @@ TEST(MetricsTest, ATeamNullsExactlyWhatItDoesNotMeasure) {
     entry.erase("solve_ms");
     EXPECT_EQ(entry, j["vehicles"][i]);
   }
+  ExpectSpec e;
+  e.bounds["payload_in_fov_min"] = {0.9};
+  CheckExpectations(e, &m);
+  EXPECT_FALSE(m.expect_passed);
+}
+
+TEST(MetricsTest, ARunWithoutItsCameraNullsWhatTheCameraWouldMeasure) {
+  Metrics m;
+  m.control_steps = 10;
+  m.vehicles.resize(1);
+  m.camera_frames = 3;
+  m.payload_in_fov_fraction = 1.0;
+  m.vehicles[0].payload_in_fov_fraction = 1.0;
+  m.camera_region_fraction = 0.5;
+  const nlohmann::json flown = nlohmann::json::parse(MetricsToJson(m));
+  m.camera_flown = false;
+  MarkUnmeasured(CameraNotFlownMetrics(), &m);
+  EXPECT_TRUE(std::isnan(m.payload_in_fov_fraction));
+  EXPECT_FALSE(m.vehicles[0].payload_in_fov_fraction.has_value());
+  EXPECT_FALSE(m.camera_region_fraction.has_value());
+  const nlohmann::json j = nlohmann::json::parse(MetricsToJson(m));
+  for (const UnmeasuredMetric& u : CameraNotFlownMetrics()) {
+    EXPECT_FALSE(NullAt(flown, u.json_key)) << u.json_key;  // a flown camera measures it
+    EXPECT_TRUE(NullAt(j, u.json_key)) << u.json_key;
+  }
+  // an expect key on the share in view fails: not measured is never a pass
   ExpectSpec e;
   e.bounds["payload_in_fov_min"] = {0.9};
   CheckExpectations(e, &m);

@@ -99,6 +99,26 @@ const std::vector<UnmeasuredMetric>& TeamUnmeasuredMetrics() {
       {"fault_recovery.estimate_error_max_m", nullptr, true},
       {"fault_recovery.false_detection_rate", nullptr},
       {"retaut.peak_body_rate_radps", [](Metrics* m) { m->retaut_peak_body_rate_radps.reset(); }},
+      // what a fault's payload camera would lose
+      {"faults.payload_lost", nullptr},
+  };
+  return list;
+}
+
+const std::vector<UnmeasuredMetric>& CameraNotFlownMetrics() {
+  static const std::vector<UnmeasuredMetric> list = {
+      {"camera_frames", nullptr},
+      {"detections", nullptr},
+      {"payload_in_fov_fraction", [](Metrics* m) { m->payload_in_fov_fraction = NAN; }},
+      {"render_ms", nullptr},
+      {"image_model_ms", nullptr},
+      {"detector_ms", nullptr},
+      {"camera_region_fraction", [](Metrics* m) { m->camera_region_fraction.reset(); }},
+      {"vehicles.camera_frames", nullptr},
+      {"vehicles.payload_in_fov_fraction",
+       [](Metrics* m) {
+         for (VehicleMetrics& v : m->vehicles) v.payload_in_fov_fraction.reset();
+       }},
   };
   return list;
 }

@@ -9,17 +9,26 @@
 namespace hpa {
 namespace {
 
-// "retaut/quad_vz_min_mps" for "retaut.quad_vz_min_mps": a dotted path as a JSON pointer's.
-std::string ReplaceDots(std::string path) {
-  std::replace(path.begin(), path.end(), '.', '/');
-  return path;
-}
-
-}  // namespace
-
-namespace {
-
 using Json = nlohmann::ordered_json;
+
+// Writes null at a dotted metrics.json path ("retaut.quad_vz_min_mps"), into every entry of a
+// list on the way ("vehicles.camera_frames"); a path the document does not hold is left alone.
+void NullAtPath(const std::string& dotted, Json* o) {
+  const size_t dot = dotted.find('.');
+  const std::string key = dotted.substr(0, dot);
+  if (!o->is_object() || !o->contains(key)) return;
+  Json& at = (*o)[key];
+  if (dot == std::string::npos) {
+    at = Json();
+    return;
+  }
+  const std::string rest = dotted.substr(dot + 1);
+  if (at.is_array()) {
+    for (Json& entry : at) NullAtPath(rest, &entry);
+  } else {
+    NullAtPath(rest, &at);
+  }
+}
 
 // JSON of a number: null when not finite
 Json Num(double v) { return std::isfinite(v) ? Json(v) : Json(); }
@@ -62,10 +71,8 @@ Json HealthResetsJson(const std::optional<EstimatorHealthResets>& resets) {
 }
 
 // One fault event's entry of metrics.json's `faults`.
-Json FaultJson(const Metrics& m, const FaultRecovery& r) {
+Json FaultJson(const FaultRecovery& r) {
   const FaultWindow& w = r.window;
-  // a team has no payload camera: what it would count is null
-  const Json payload_lost = m.team ? Json() : Json(r.payload_lost);
   return {{"event", w.event},
           {"vehicle", w.vehicle},
           {"component", w.component},
@@ -74,7 +81,7 @@ Json FaultJson(const Metrics& m, const FaultRecovery& r) {
           {"end_s", OptNum(w.end_s)},
           {"span_end_s", Num(r.span_end_s)},
           {"health_flag_s", OptNum(r.health_flag_s)},
-          {"payload_lost", payload_lost},
+          {"payload_lost", r.payload_lost},
           {"payload_back_in_view_s", OptNum(r.payload_back_in_view_s)},
           {"tracking_bound_m", Num(w.tracking_bound_m)},
           {"tracking_left_bound", r.tracking_left_bound},
@@ -102,7 +109,7 @@ void AddFaults(const Metrics& m, Json* o) {
     if (v && (!*w || *v > **w)) *w = v;
   };
   for (const FaultRecovery& r : m.faults) {
-    faults.push_back(FaultJson(m, r));
+    faults.push_back(FaultJson(r));
     worst(&worst_flag_s, r.health_flag_s);
     worst(&worst_view_s, r.payload_back_in_view_s);
     worst(&worst_tracking_s, r.tracking_recovered_s);
@@ -131,8 +138,7 @@ void NullTeamUnmeasured(const Metrics& m, Json* o) {
     if ((m.team->onboard && u.onboard_measures) || (m.team->cameras && u.camera_measures)) {
       continue;
     }
-    const Json::json_pointer at("/" + ReplaceDots(u.json_key));
-    if (o->contains(at)) (*o)[at] = Json();
+    NullAtPath(u.json_key, o);
   }
 }
 
@@ -170,14 +176,7 @@ void AddVehicles(const Metrics& m, bool controlled, Json* o) {
 // counts and timings are null, not a perfect-looking zero.
 void NullCameraNotFlown(const Metrics& m, Json* o) {
   if (m.camera_flown) return;
-  for (const char* key : {"camera_frames", "detections", "payload_in_fov_fraction", "render_ms",
-                          "image_model_ms", "detector_ms", "camera_region_fraction"}) {
-    (*o)[key] = Json();
-  }
-  for (Json& vehicle : (*o)["vehicles"]) {
-    vehicle["camera_frames"] = Json();
-    vehicle["payload_in_fov_fraction"] = Json();
-  }
+  for (const UnmeasuredMetric& u : CameraNotFlownMetrics()) NullAtPath(u.json_key, o);
 }
 
 // The run's identity, its end, and the tracking, slack and camera metrics.

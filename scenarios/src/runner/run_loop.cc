@@ -280,7 +280,7 @@ void RunLoop::Finish(RunResult* result) {
   metrics.contacts_quad_ground = contacts.quad_ground;
   metrics.contacts_payload_gripper = contacts.payload_gripper;
   ComputeMetrics(inputs_, &metrics);
-  if (!metrics.camera_flown) metrics.payload_in_fov_fraction = NAN;  // not measured: no frame
+  if (!metrics.camera_flown) MarkUnmeasured(CameraNotFlownMetrics(), &metrics);
   result->rows = std::move(inputs_.rows);
   CheckExpectations(scenario_.expect, &metrics);
   metrics.wall_time_s = Ms(wall_start_, Clock::now()) / 1000.0;

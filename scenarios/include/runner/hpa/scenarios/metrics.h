@@ -207,7 +207,8 @@ struct Metrics {
 /// field in Metrics reads "not measured" (NaN; none for a count, whose null in metrics.json says
 /// it), so that expect keys, sweeps and the JSON agree.
 struct UnmeasuredMetric {
-  const char* json_key;           // its metrics.json path, dotted ("retaut.quad_vz_min_mps")
+  const char* json_key;           // its metrics.json path, dotted ("retaut.quad_vz_min_mps"); a
+                                  // list on the path (vehicles, faults) means each entry's field
   void (*mark)(Metrics* m);       // sets the field to not measured (nullptr: a count, or what the
                                   // run leaves null itself)
   bool onboard_measures = false;  // measured when the team's vehicles estimate on board
@@ -217,6 +218,11 @@ struct UnmeasuredMetric {
 /// What a team run does not measure: the single vehicle's quadrotor, estimator, camera and
 /// contact metrics. The one list the team runner marks and MetricsToJson writes null.
 const std::vector<UnmeasuredMetric>& TeamUnmeasuredMetrics();
+
+/// What a run whose rendered camera was not flown (a separate stack that uses no pixels) does
+/// not measure: the camera's counts, share in view and timings, its own and each vehicle's. The
+/// one list the run loop marks and MetricsToJson writes null.
+const std::vector<UnmeasuredMetric>& CameraNotFlownMetrics();
 
 /// Whether a team run measures the metric at this metrics.json path (dotted): false for a path
 /// of TeamUnmeasuredMetrics() or inside one, but for those its vehicles' onboard estimates
