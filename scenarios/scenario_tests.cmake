@@ -133,12 +133,13 @@ add_test(NAME cli.retaut_pushes_finding
                  ${SCEN_OUT}/retaut_pushes_finding)
 set_tests_properties(cli.retaut_pushes_finding PROPERTIES LABELS "cli;scenario" TIMEOUT 900)
 
-# Every shipped scenario's bounds on the two seeds after its own derivation seeds (1-30 unless the
-# file says otherwise)
-# (ci/check_bounds.sh: the ten after)
+# Every shipped scenario's bounds on the seed after its own derivation seeds (1-30 unless the
+# file says otherwise): a bound that no longer holds beyond its fit fails here. The tails are
+# checked on 100 unseen seeds per file by ci/check_bounds.sh --unseen (a developer tool: an hour
+# on 2 cores), the ten seeds after by ci/check_bounds.sh.
 add_test(NAME cli.bounds_held_out
          COMMAND /usr/bin/python3 ${CMAKE_SOURCE_DIR}/scripts/scenario_bounds.py --check
-                 --hpa ${HPA_BIN} --held-out 2 ${HPA_SHIPPED_SCENARIOS})
+                 --hpa ${HPA_BIN} --held-out 1 ${HPA_SHIPPED_SCENARIOS})
 set_tests_properties(cli.bounds_held_out PROPERTIES LABELS "cli;scenario" TIMEOUT 900)
 
 # The Python client's loaders and lockstep decoding on hostile files and messages (stdlib + numpy)
