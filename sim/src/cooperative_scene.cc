@@ -73,21 +73,12 @@ double SingleSceneRotorRadius_m(const std::string& single_scene_path) {
   return m->geom_size[3 * RequireId(m.get(), mjOBJ_GEOM, "rotor0_disc", single_scene_path)];
 }
 
-std::string CooperativeSceneXml(const CooperativeTeam& team, const std::string& single_scene_path) {
-  const SingleSceneSettings s = ReadSingleScene(single_scene_path);
-  const int n = static_cast<int>(team.vehicles.size());
-  std::ostringstream x;
-  x << std::setprecision(17);
-  x << "<mujoco model=\"hpa_cooperative_" << n << "\">\n"
-    << "  <compiler angle=\"radian\" coordinate=\"local\" inertiafromgeom=\"false\"/>\n"
-    << "  <option timestep=\"" << s.timestep_s << "\" gravity=\"" << Triple(s.gravity_W_mps2)
-    << "\" integrator=\"Euler\" cone=\"pyramidal\"/>\n"
-    << "  <size njmax=\"" << 100 * (n + 1) << "\" nconmax=\"" << 25 * (n + 1) << "\"/>\n"
-    << "  <worldbody>\n"
-    << "    <geom name=\"ground\" type=\"plane\" size=\"10 10 1\" contype=\"1\" "
-       "conaffinity=\"1\"/>\n";
+namespace {
 
-  // the payload: a rigid body with the team's mass and inertia, one site per attachment point
+// The payload: a rigid body with the team's mass and inertia, one site per attachment point.
+void WritePayload(const CooperativeTeam& team, const SingleSceneSettings& s, std::ostream* out) {
+  std::ostream& x = *out;
+  const int n = static_cast<int>(team.vehicles.size());
   const double payload_radius_m = team.vehicles.front().params.payload_radius_m;
   x << "    <body name=\"payload\" pos=\"0 0 0.5\">\n"
     << "      <freejoint name=\"payload_joint\"/>\n"
@@ -106,8 +97,12 @@ std::string CooperativeSceneXml(const CooperativeTeam& team, const std::string& 
     }
   }
   x << "    </body>\n";
+}
 
-  // the vehicles: models/scene.xml's quadrotor, numbers from each vehicle's params
+// The vehicles: models/scene.xml's quadrotor, numbers from each vehicle's params.
+void WriteVehicles(const CooperativeTeam& team, const SingleSceneSettings& s, std::ostream* out) {
+  std::ostream& x = *out;
+  const int n = static_cast<int>(team.vehicles.size());
   for (int i = 0; i < n; ++i) {
     const CooperativeVehicle& v = team.vehicles[i];
     const Params& p = v.params;
@@ -127,9 +122,12 @@ std::string CooperativeSceneXml(const CooperativeTeam& team, const std::string& 
     x << "      <site name=\"cable_quadrotor_" << i << "\" pos=\"0 0 0\" size=\"0.005\"/>\n"
       << "    </body>\n";
   }
-  x << "  </worldbody>\n";
+}
 
-  // the cables: the single-vehicle cable's limit settings, each at its own length
+// The cables: the single-vehicle cable's limit settings, each at its own length.
+void WriteCables(const CooperativeTeam& team, const SingleSceneSettings& s, std::ostream* out) {
+  std::ostream& x = *out;
+  const int n = static_cast<int>(team.vehicles.size());
   x << "  <tendon>\n";
   for (int i = 0; i < n; ++i) {
     x << "    <spatial name=\"cable_" << i << "\" limited=\"true\" range=\"0 "
@@ -143,8 +141,13 @@ std::string CooperativeSceneXml(const CooperativeTeam& team, const std::string& 
       << "    </spatial>\n";
   }
   x << "  </tendon>\n";
+}
 
-  // rotors: ctrl = thrust (N) within the motors' range, yaw gear spin * k_m / k_f
+// The rotors (ctrl = thrust (N) within the motors' range, yaw gear spin * k_m / k_f) and each
+// cable's tension sensor.
+void WriteActuatorsAndSensors(const CooperativeTeam& team, std::ostream* out) {
+  std::ostream& x = *out;
+  const int n = static_cast<int>(team.vehicles.size());
   x << "  <actuator>\n";
   for (int i = 0; i < n; ++i) {
     const Params& p = team.vehicles[i].params;
@@ -163,6 +166,29 @@ std::string CooperativeSceneXml(const CooperativeTeam& team, const std::string& 
   }
   x << "  </sensor>\n"
     << "</mujoco>\n";
+}
+
+}  // namespace
+
+std::string CooperativeSceneXml(const CooperativeTeam& team, const std::string& single_scene_path) {
+  const SingleSceneSettings s = ReadSingleScene(single_scene_path);
+  const int n = static_cast<int>(team.vehicles.size());
+  std::ostringstream x;
+  x << std::setprecision(17);
+  x << "<mujoco model=\"hpa_cooperative_" << n << "\">\n"
+    << "  <compiler angle=\"radian\" coordinate=\"local\" inertiafromgeom=\"false\"/>\n"
+    << "  <option timestep=\"" << s.timestep_s << "\" gravity=\"" << Triple(s.gravity_W_mps2)
+    << "\" integrator=\"Euler\" cone=\"pyramidal\"/>\n"
+    << "  <size njmax=\"" << 100 * (n + 1) << "\" nconmax=\"" << 25 * (n + 1) << "\"/>\n"
+    << "  <worldbody>\n"
+    << "    <geom name=\"ground\" type=\"plane\" size=\"10 10 1\" contype=\"1\" "
+       "conaffinity=\"1\"/>\n";
+
+  WritePayload(team, s, &x);
+  WriteVehicles(team, s, &x);
+  x << "  </worldbody>\n";
+  WriteCables(team, s, &x);
+  WriteActuatorsAndSensors(team, &x);
   return x.str();
 }
 

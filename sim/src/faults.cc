@@ -77,105 +77,131 @@ FaultKeyDecl GyroNoise() {
                 0.0, &Fault::gyro_noise_radps);
 }
 
-std::vector<FaultComponentDecl> BuildComponents() {
+// The VIO stream's faults.
+FaultComponentDecl VioComponent() {
+  return {FaultComponent::kVio,
+          "vio",
+          "visual-inertial odometry (the VioSample stream)",
+          {Off("failure vio off"),
+           Stuck("failure vio stuck", "pose"),
+           {FaultMode::kWrong,
+            "wrong",
+            "failure vio wrong",
+            "position jumped by `offset` while the fault lasts",
+            {Vector("offset", "m", "added to the position (world frame)", -100.0, 100.0,
+                    std::nullopt, &Fault::offset_W_m)}},
+           Delayed("failure vio delayed"),
+           Slow("failure vio slow"),
+           Intermittent("failure vio intermittent")}};
+}
+
+// The IMU's faults.
+FaultComponentDecl ImuComponent() {
+  return {FaultComponent::kImu,
+          "imu",
+          "the IMU (gyro and accelerometer, the estimator's prediction)",
+          {Stuck("failure gyro stuck; failure accel stuck", "sample"),
+           {FaultMode::kBias,
+            "bias",
+            "failure gyro wrong; failure accel wrong",
+            "a bias step on the gyro and the accelerometer",
+            {GyroBias(), Vector("accel_bias", "m/s^2",
+                                "added to every specific force sample (body "
+                                "frame)",
+                                -100.0, 100.0, 0.0, &Fault::accel_bias_B_mps2)}},
+           {FaultMode::kNoise,
+            "noise",
+            "failure gyro garbage; failure accel garbage",
+            "a burst of white noise on the gyro and the accelerometer",
+            {GyroNoise(), Number("accel_noise", "m/s^2",
+                                 "standard deviation added per sample and "
+                                 "axis",
+                                 0.0, 100.0, 0.0, &Fault::accel_noise_mps2)}}}};
+}
+
+// The rate loop gyro's faults.
+FaultComponentDecl RateGyroComponent() {
+  return {FaultComponent::kRateGyro,
+          "rate_gyro",
+          "the rate loop's gyro (PX4's rate controller flies on it)",
+          {Stuck("failure gyro stuck", "sample"),
+           {FaultMode::kBias, "bias", "failure gyro wrong", "a gyro bias step", {GyroBias()}},
+           {FaultMode::kNoise,
+            "noise",
+            "failure gyro garbage",
+            "a burst of white gyro noise",
+            {GyroNoise()}}}};
+}
+
+// A rotor's faults.
+FaultComponentDecl MotorComponent() {
   const FaultKeyDecl motor = Number("motor", "1", "rotor index (PX4's -i, counted from 0)", 0, 3,
                                     std::nullopt, &Fault::motor, true);
   return {
-      {FaultComponent::kVio,
-       "vio",
-       "visual-inertial odometry (the VioSample stream)",
-       {Off("failure vio off"),
-        Stuck("failure vio stuck", "pose"),
-        {FaultMode::kWrong,
-         "wrong",
-         "failure vio wrong",
-         "position jumped by `offset` while the fault lasts",
-         {Vector("offset", "m", "added to the position (world frame)", -100.0, 100.0, std::nullopt,
-                 &Fault::offset_W_m)}},
-        Delayed("failure vio delayed"),
-        Slow("failure vio slow"),
-        Intermittent("failure vio intermittent")}},
-      {FaultComponent::kImu,
-       "imu",
-       "the IMU (gyro and accelerometer, the estimator's prediction)",
-       {Stuck("failure gyro stuck; failure accel stuck", "sample"),
-        {FaultMode::kBias,
-         "bias",
-         "failure gyro wrong; failure accel wrong",
-         "a bias step on the gyro and the accelerometer",
-         {GyroBias(), Vector("accel_bias", "m/s^2",
-                             "added to every specific force sample (body "
-                             "frame)",
-                             -100.0, 100.0, 0.0, &Fault::accel_bias_B_mps2)}},
-        {FaultMode::kNoise,
-         "noise",
-         "failure gyro garbage; failure accel garbage",
-         "a burst of white noise on the gyro and the accelerometer",
-         {GyroNoise(), Number("accel_noise", "m/s^2",
-                              "standard deviation added per sample and "
-                              "axis",
-                              0.0, 100.0, 0.0, &Fault::accel_noise_mps2)}}}},
-      {FaultComponent::kRateGyro,
-       "rate_gyro",
-       "the rate loop's gyro (PX4's rate controller flies on it)",
-       {Stuck("failure gyro stuck", "sample"),
-        {FaultMode::kBias, "bias", "failure gyro wrong", "a gyro bias step", {GyroBias()}},
-        {FaultMode::kNoise,
-         "noise",
-         "failure gyro garbage",
-         "a burst of white gyro noise",
-         {GyroNoise()}}}},
-      {FaultComponent::kMotor,
-       "motor",
-       "one rotor's thrust (and its yaw torque with it)",
-       {{FaultMode::kLoss,
-         "loss",
-         "",
-         "loss of effectiveness: the rotor gives (1 - `loss`) of its thrust",
-         {motor,
-          Number("loss", "1", "share of thrust lost, 0-1", 0.0, 1.0, std::nullopt, &Fault::loss)}},
-        {FaultMode::kOff, "off", "failure motor off -i N", "the rotor gives no thrust", {motor}}}},
-      {FaultComponent::kGripper,
-       "gripper",
-       "the gripper holding the payload (the test rig's hand)",
-       {{FaultMode::kEarly, "early", "", "lets the payload go at `at` on its own", {}, false},
-        {FaultMode::kLate,
-         "late",
-         "",
-         "a release commanded in the fault's window happens at its end",
-         {}}}},
-      {FaultComponent::kCamera,
-       "payload_camera",
-       "the payload camera (its detections in process, its frames for a separate stack)",
-       {Off(""),
-        Stuck("", "frame"),
-        {FaultMode::kGarbage,
-         "garbage",
-         "",
-         "a uniform noise image in place of each frame (detected like any frame)",
-         {}},
-        Delayed(""),
-        Slow(""),
-        Intermittent(""),
-        {FaultMode::kDistractor,
-         "distractor",
-         "",
-         "a second payload (same sphere, same material) in the rendered scene at `position`, "
-         "moving at `velocity`, drawn in a frame with probability `visible_rate` (a flickering "
-         "red object): clutter the detector sees in real pixels (the analytic camera has none)",
-         {Vector("position", "m", "where it is at the fault's start (world frame)", -10.0, 10.0,
-                 std::nullopt, &Fault::distractor_W_m),
-          Vector("velocity", "m/s", "its constant velocity (world frame)", -10.0, 10.0, 0.0,
-                 &Fault::distractor_velocity_W_mps),
-          Number("visible_rate", "1",
-                 "probability that it is drawn in a frame (each frame a draw from the fault's "
-                 "seeded stream; 1: in every frame)",
-                 0.0, 1.0, 1.0, &Fault::distractor_visible_fraction),
-          Vector("sign_size", "m",
-                 "draws it as a level box (a red sign) of these full sizes x, y, z (world frame) "
-                 "in the payload's material; any 0: the payload's sphere",
-                 0.0, 2.0, 0.0, &Fault::distractor_sign_size_m)}}}},
-  };
+      FaultComponent::kMotor,
+      "motor",
+      "one rotor's thrust (and its yaw torque with it)",
+      {{FaultMode::kLoss,
+        "loss",
+        "",
+        "loss of effectiveness: the rotor gives (1 - `loss`) of its thrust",
+        {motor,
+         Number("loss", "1", "share of thrust lost, 0-1", 0.0, 1.0, std::nullopt, &Fault::loss)}},
+       {FaultMode::kOff, "off", "failure motor off -i N", "the rotor gives no thrust", {motor}}}};
+}
+
+// The gripper's faults.
+FaultComponentDecl GripperComponent() {
+  return {FaultComponent::kGripper,
+          "gripper",
+          "the gripper holding the payload (the test rig's hand)",
+          {{FaultMode::kEarly, "early", "", "lets the payload go at `at` on its own", {}, false},
+           {FaultMode::kLate,
+            "late",
+            "",
+            "a release commanded in the fault's window happens at its end",
+            {}}}};
+}
+
+// The payload camera's faults.
+FaultComponentDecl CameraComponent() {
+  return {
+      FaultComponent::kCamera,
+      "payload_camera",
+      "the payload camera (its detections in process, its frames for a separate stack)",
+      {Off(""),
+       Stuck("", "frame"),
+       {FaultMode::kGarbage,
+        "garbage",
+        "",
+        "a uniform noise image in place of each frame (detected like any frame)",
+        {}},
+       Delayed(""),
+       Slow(""),
+       Intermittent(""),
+       {FaultMode::kDistractor,
+        "distractor",
+        "",
+        "a second payload (same sphere, same material) in the rendered scene at `position`, "
+        "moving at `velocity`, drawn in a frame with probability `visible_rate` (a flickering "
+        "red object): clutter the detector sees in real pixels (the analytic camera has none)",
+        {Vector("position", "m", "where it is at the fault's start (world frame)", -10.0, 10.0,
+                std::nullopt, &Fault::distractor_W_m),
+         Vector("velocity", "m/s", "its constant velocity (world frame)", -10.0, 10.0, 0.0,
+                &Fault::distractor_velocity_W_mps),
+         Number("visible_rate", "1",
+                "probability that it is drawn in a frame (each frame a draw from the fault's "
+                "seeded stream; 1: in every frame)",
+                0.0, 1.0, 1.0, &Fault::distractor_visible_fraction),
+         Vector("sign_size", "m",
+                "draws it as a level box (a red sign) of these full sizes x, y, z (world frame) "
+                "in the payload's material; any 0: the payload's sphere",
+                0.0, 2.0, 0.0, &Fault::distractor_sign_size_m)}}}};
+}
+
+std::vector<FaultComponentDecl> BuildComponents() {
+  return {VioComponent(),   ImuComponent(),     RateGyroComponent(),
+          MotorComponent(), GripperComponent(), CameraComponent()};
 }
 
 // The component a sensor message belongs to (none for the gripper's switch).

@@ -56,6 +56,23 @@ void CheckRate(double rate_hz) {
   }
 }
 
+// A log row's time as a run of duration_s writes it: from 0, after the row before, up to its end;
+// an InputError naming the row otherwise.
+void CheckRowTime(const std::string& path, const std::string& time_key, double time_s,
+                  std::optional<double> previous_s, double duration_s) {
+  if (time_s < 0.0) throw InputError(path, time_key, "time " + Num(time_s) + " s is negative");
+  if (previous_s && !(time_s > *previous_s)) {
+    throw InputError(path, time_key,
+                     "time " + Num(time_s) + " s is not after the row before (" +
+                         Num(*previous_s) + " s)");
+  }
+  if (time_s > duration_s + kLogTimeSlack_s) {
+    throw InputError(path, time_key,
+                     "time " + Num(time_s) + " s is past the run's duration, " + Num(duration_s) +
+                         " s (run.json's scenario)");
+  }
+}
+
 }  // namespace
 
 std::vector<LogRow> ReadLogCsv(const std::string& path, double duration_s) {
@@ -111,21 +128,9 @@ std::vector<LogRow> ReadLogCsv(const std::string& path, double duration_s) {
     };
     LogRow r;
     r.time_s = number(time);
-    // times a run of duration_s writes: from 0, increasing, up to its end
-    const std::string time_key = where + " column time_s";
-    if (r.time_s < 0.0) {
-      throw InputError(path, time_key, "time " + Num(r.time_s) + " s is negative");
-    }
-    if (!rows.empty() && !(r.time_s > rows.back().time_s)) {
-      throw InputError(path, time_key,
-                       "time " + Num(r.time_s) + " s is not after the row before (" +
-                           Num(rows.back().time_s) + " s)");
-    }
-    if (r.time_s > duration_s + kLogTimeSlack_s) {
-      throw InputError(path, time_key,
-                       "time " + Num(r.time_s) + " s is past the run's duration, " +
-                           Num(duration_s) + " s (run.json's scenario)");
-    }
+    CheckRowTime(path, where + " column time_s", r.time_s,
+                 rows.empty() ? std::nullopt : std::optional<double>(rows.back().time_s),
+                 duration_s);
     StateVector xt, xe;
     for (int i = 0; i < kNx; ++i) xt(i) = number(truth[i]), xe(i) = number(est[i]);
     r.truth.FromVector(xt);

@@ -292,20 +292,10 @@ const std::vector<std::string>& CameraNames() {
   return names;
 }
 
-Scenario ParseScenario(const YamlMap& root, const std::optional<std::string>& reference_csv_text) {
-  Scenario s;
-  s.file = root.file();
-  s.name = root.String("name");
-  if (!IsSafeName(s.name)) {
-    root.Fail("name", "'" + s.name +
-                          "' is not a safe folder name: 1 to 64 of A-Z a-z 0-9 _ - ., "
-                          "not starting with '.' (it names the default output folder)");
-  }
-  s.duration_s = root.Number("duration", 1e-3, kMaxScenarioDuration_s);
-  s.seed = static_cast<unsigned long>(root.Integer("seed", 0, 4294967295L, 1));
-
-  // the world's realism profile (flight unless the scenario says), then its single-number
-  // overrides and the explicit world-only parameters
+// The world's realism profile (flight unless the scenario says), then its single-number
+// overrides and the explicit world-only parameters, and the params block.
+void ParseWorld(const YamlMap& root, Scenario* scenario) {
+  Scenario& s = *scenario;
   WorldProfileSpec profile = LoadWorldProfile("flight");
   if (root.Has("world")) {
     const YamlMap w = root.Map("world");
@@ -332,6 +322,52 @@ Scenario ParseScenario(const YamlMap& root, const std::optional<std::string>& re
     s.params_yaml = YAML::Dump(block);
   }
   s.rate_loop = profile.rate_loop;
+}
+
+// The estimation block: what the flight code estimates from and how.
+void ParseEstimation(const YamlMap& e, Scenario* scenario) {
+  Scenario& s = *scenario;
+  s.estimation.camera = e.Choice("camera", CameraNames(), "render");
+  s.estimation.ground_truth = e.Bool("ground_truth", false);
+  // the estimator keeps 0.5 s of history to apply late detections at their capture time
+  s.estimation.camera_latency_s = e.Number("camera_latency", 0.0, 0.4, 0.03);
+  s.estimation.detector_noise_scale = e.Number("detector_noise_scale", 0.0, 100.0, 1.0);
+  s.estimation.slack_tension_cue = e.Bool("slack_tension_cue", true);
+  s.estimation.camera_randomize = e.Bool("camera_randomize", false);
+  if (e.Has("estimator")) s.estimation.estimator = e.Choice("estimator", EstimatorNames(), "");
+  s.estimation.vehicle_state = e.Choice("vehicle_state", VehicleStateNames(), "motion_capture");
+  s.team.payload_cameras = s.team.IsTeam() && e.Has("camera");
+  e.RejectUnknownKeys();
+}
+
+// The events list, each event before the scenario's end.
+void ParseEvents(const YamlMap& root, Scenario* scenario) {
+  Scenario& s = *scenario;
+  const YAML::Node list = root.Node("events");
+  if (!list.IsSequence()) root.Fail("events", "expected a list of events");
+  for (size_t i = 0; i < list.size(); ++i) {
+    const std::string path = root.KeyPath("events") + "." + std::to_string(i);
+    if (!list[i].IsMap()) throw InputError(root.file(), path, "expected an event map");
+    s.events.push_back(ParseEvent(YamlMap(list[i], root.file(), path)));
+    if (s.events.back().at_s > s.duration_s) {
+      throw InputError(root.file(), path + ".at", "event after the end of the scenario");
+    }
+  }
+}
+
+Scenario ParseScenario(const YamlMap& root, const std::optional<std::string>& reference_csv_text) {
+  Scenario s;
+  s.file = root.file();
+  s.name = root.String("name");
+  if (!IsSafeName(s.name)) {
+    root.Fail("name", "'" + s.name +
+                          "' is not a safe folder name: 1 to 64 of A-Z a-z 0-9 _ - ., "
+                          "not starting with '.' (it names the default output folder)");
+  }
+  s.duration_s = root.Number("duration", 1e-3, kMaxScenarioDuration_s);
+  s.seed = static_cast<unsigned long>(root.Integer("seed", 0, 4294967295L, 1));
+
+  ParseWorld(root, &s);
   if (root.Has("vehicles")) {
     s.team = ParseTeam(root);
     if (s.team.vehicles.size() == 1) {
@@ -353,35 +389,11 @@ Scenario ParseScenario(const YamlMap& root, const std::optional<std::string>& re
     }
     c.RejectUnknownKeys();
   }
-  if (root.Has("estimation")) {
-    const YamlMap e = root.Map("estimation");
-    s.estimation.camera = e.Choice("camera", CameraNames(), "render");
-    s.estimation.ground_truth = e.Bool("ground_truth", false);
-    // the estimator keeps 0.5 s of history to apply late detections at their capture time
-    s.estimation.camera_latency_s = e.Number("camera_latency", 0.0, 0.4, 0.03);
-    s.estimation.detector_noise_scale = e.Number("detector_noise_scale", 0.0, 100.0, 1.0);
-    s.estimation.slack_tension_cue = e.Bool("slack_tension_cue", true);
-    s.estimation.camera_randomize = e.Bool("camera_randomize", false);
-    if (e.Has("estimator")) s.estimation.estimator = e.Choice("estimator", EstimatorNames(), "");
-    s.estimation.vehicle_state = e.Choice("vehicle_state", VehicleStateNames(), "motion_capture");
-    s.team.payload_cameras = s.team.IsTeam() && e.Has("camera");
-    e.RejectUnknownKeys();
-  }
+  if (root.Has("estimation")) ParseEstimation(root.Map("estimation"), &s);
   if (root.Has("reference")) {
     s.reference = ParseReferenceBlock(root.Map("reference"), reference_csv_text);
   }
-  if (root.Has("events")) {
-    const YAML::Node list = root.Node("events");
-    if (!list.IsSequence()) root.Fail("events", "expected a list of events");
-    for (size_t i = 0; i < list.size(); ++i) {
-      const std::string path = root.KeyPath("events") + "." + std::to_string(i);
-      if (!list[i].IsMap()) throw InputError(root.file(), path, "expected an event map");
-      s.events.push_back(ParseEvent(YamlMap(list[i], root.file(), path)));
-      if (s.events.back().at_s > s.duration_s) {
-        throw InputError(root.file(), path + ".at", "event after the end of the scenario");
-      }
-    }
-  }
+  if (root.Has("events")) ParseEvents(root, &s);
   if (root.Has("expect")) s.expect = ParseExpect(root.Map("expect"));
   root.RejectUnknownKeys();
   CheckTeamScenario(root, s);

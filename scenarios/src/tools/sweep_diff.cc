@@ -124,61 +124,48 @@ bool SameValue(const std::string& a, const std::string& b) {
 // Smallest two-sided p-value an exact sign-flip test can reach with n informative pairs.
 double SmallestAttainableP(int n) { return n <= 0 ? 1.0 : std::min(1.0, 2.0 / std::pow(2.0, n)); }
 
-std::vector<Run> ReadRuns(const std::string& dir, const std::string& where) {
-  const std::string path = dir + "/runs.jsonl";
-  CheckInputFile(path, "a sweep's runs.jsonl");
-  std::ifstream in(path);
-  if (!in) throw InputError(path, "", "cannot read (not a sweep output folder?)");
-  std::string filter_key, filter_value;
-  if (!where.empty()) {
-    const size_t eq = where.find('=');
-    if (eq == std::string::npos || eq == 0) {
-      throw InputError("--a-where/--b-where", "", "expected KEY=VALUE, got '" + where + "'");
-    }
-    filter_key = where.substr(0, eq);
-    filter_value = where.substr(eq + 1);
+// One line of runs.jsonl as a Run; an InputError naming the line for one that is no run record.
+Run ParseRunRecord(const std::string& path, const std::string& line, int number) {
+  Json j;
+  try {
+    j = Json::parse(line);
+  } catch (const Json::exception& e) {
+    throw InputError(path, "line " + std::to_string(number), e.what());
   }
-  std::vector<Run> runs;
-  std::string line;
-  for (int number = 1; std::getline(in, line); ++number) {
-    if (line.empty()) continue;
-    Json j;
-    try {
-      j = Json::parse(line);
-    } catch (const Json::exception& e) {
-      throw InputError(path, "line " + std::to_string(number), e.what());
-    }
-    // the record's shape, checked before it is read (a hand-edited or foreign file)
-    const std::string where = "line " + std::to_string(number);
-    if (!j.is_object()) throw InputError(path, where, "expected a JSON object (a run record)");
-    if (j.contains("values") && !j["values"].is_object()) {
-      throw InputError(path, where + ": values", "expected an object of varied values");
-    }
-    if (j.contains("metrics") && !j["metrics"].is_object() && !j["metrics"].is_null()) {
-      throw InputError(path, where + ": metrics", "expected a metrics.json object or null");
-    }
-    Run r;
-    try {
-      r.draw = j.value("draw", 0);
-      r.seed = j.value("seed", 0ul);
-      r.sweep = j.value("sweep", "");
-      r.controller = j.value("controller", "");
-      r.inputs_id = j.contains("inputs_id") ? j.value("inputs_id", "") : j.value("sweep_id", "");
-      r.build = j.contains("build") ? DescribeBuild(BuildFromJson(j["build"])) : "not recorded";
-      for (const auto& [key, value] : j["values"].items()) {
-        r.values[key] = value.is_string() ? value.get<std::string>() : value.dump();
-      }
-      r.ok = j.value("status", "") == "ok";
-      r.metrics = j.contains("metrics") ? j["metrics"] : Json();
-      r.basis = EstimationBasis(r.metrics);
-    } catch (const Json::exception& e) {
-      throw InputError(path, where, std::string("malformed run record: ") + e.what());
-    }
-    runs.push_back(std::move(r));
+  // the record's shape, checked before it is read (a hand-edited or foreign file)
+  const std::string where = "line " + std::to_string(number);
+  if (!j.is_object()) throw InputError(path, where, "expected a JSON object (a run record)");
+  if (j.contains("values") && !j["values"].is_object()) {
+    throw InputError(path, where + ": values", "expected an object of varied values");
   }
-  if (runs.empty()) throw InputError(path, "", "no runs recorded");
-  if (filter_key.empty()) return runs;
-  // the filter: numeric values match numerically; the error lists what there is
+  if (j.contains("metrics") && !j["metrics"].is_object() && !j["metrics"].is_null()) {
+    throw InputError(path, where + ": metrics", "expected a metrics.json object or null");
+  }
+  Run r;
+  try {
+    r.draw = j.value("draw", 0);
+    r.seed = j.value("seed", 0ul);
+    r.sweep = j.value("sweep", "");
+    r.controller = j.value("controller", "");
+    r.inputs_id = j.contains("inputs_id") ? j.value("inputs_id", "") : j.value("sweep_id", "");
+    r.build = j.contains("build") ? DescribeBuild(BuildFromJson(j["build"])) : "not recorded";
+    for (const auto& [key, value] : j["values"].items()) {
+      r.values[key] = value.is_string() ? value.get<std::string>() : value.dump();
+    }
+    r.ok = j.value("status", "") == "ok";
+    r.metrics = j.contains("metrics") ? j["metrics"] : Json();
+    r.basis = EstimationBasis(r.metrics);
+  } catch (const Json::exception& e) {
+    throw InputError(path, where, std::string("malformed run record: ") + e.what());
+  }
+  return r;
+}
+
+// The runs whose varied `filter_key` has `filter_value` (numeric values match numerically); an
+// InputError listing the keys or values there are when none has it.
+std::vector<Run> FilterRuns(std::vector<Run> runs, const std::string& filter_key,
+                            const std::string& filter_value, const std::string& path,
+                            const std::string& where) {
   std::vector<Run> kept;
   std::set<std::string> present;
   for (Run& r : runs) {
@@ -205,6 +192,31 @@ std::vector<Run> ReadRuns(const std::string& dir, const std::string& where) {
         "no run has " + filter_key + " = " + filter_value + "; values present: " + listed);
   }
   return kept;
+}
+
+std::vector<Run> ReadRuns(const std::string& dir, const std::string& where) {
+  const std::string path = dir + "/runs.jsonl";
+  CheckInputFile(path, "a sweep's runs.jsonl");
+  std::ifstream in(path);
+  if (!in) throw InputError(path, "", "cannot read (not a sweep output folder?)");
+  std::string filter_key, filter_value;
+  if (!where.empty()) {
+    const size_t eq = where.find('=');
+    if (eq == std::string::npos || eq == 0) {
+      throw InputError("--a-where/--b-where", "", "expected KEY=VALUE, got '" + where + "'");
+    }
+    filter_key = where.substr(0, eq);
+    filter_value = where.substr(eq + 1);
+  }
+  std::vector<Run> runs;
+  std::string line;
+  for (int number = 1; std::getline(in, line); ++number) {
+    if (line.empty()) continue;
+    runs.push_back(ParseRunRecord(path, line, number));
+  }
+  if (runs.empty()) throw InputError(path, "", "no runs recorded");
+  if (filter_key.empty()) return runs;
+  return FilterRuns(std::move(runs), filter_key, filter_value, path, where);
 }
 
 // Keys whose set of values differs between A and B: the setting being compared.
