@@ -79,6 +79,23 @@ SweepDiff Diff(const std::string& a, const std::string& b) {
   return CompareSweeps(options);
 }
 
+// The one "What differs" line naming the basis of runs `a` against runs `b` (written under the
+// names given); empty, with a test failure, when there is not exactly one.
+std::string OneBasisLine(const std::string& a_name, const std::vector<BasisRun>& a,
+                         const std::string& b_name, const std::vector<BasisRun>& b) {
+  const std::vector<std::string> lines =
+      BasisLines(Diff(WriteRuns(a_name, a), WriteRuns(b_name, b)));
+  if (lines.size() == 1) return lines[0];
+  ADD_FAILURE() << lines.size() << " basis lines for " << a_name << " vs " << b_name;
+  return "";
+}
+
+// Whether `line` holds `text`, showing the line when it does not.
+::testing::AssertionResult Holds(const std::string& line, const std::string& text) {
+  if (line.find(text) != std::string::npos) return ::testing::AssertionSuccess();
+  return ::testing::AssertionFailure() << "'" << text << "' not in: " << line;
+}
+
 TEST(SweepDiffBasisTest, ReadsTheBasisEachRunRecords) {
   EXPECT_EQ(*EstimationBasis(Json{{"camera", "ground_truth"}}), "ground truth");
   EXPECT_EQ(*EstimationBasis(Json{{"camera", "render"}}), "estimate, rendered camera");
@@ -100,11 +117,10 @@ TEST(SweepDiffBasisTest, ADifferentBasisIsNamedWithAWarning) {
   const std::string b = WriteRuns("estimate", std::vector<BasisRun>(6, estimate));
   const std::vector<std::string> lines = BasisLines(Diff(a, b));
   ASSERT_EQ(lines.size(), 1u);
-  EXPECT_NE(lines[0].find("ground truth (A) vs estimate, analytic camera (B), in 6 of 6 pairs"),
-            std::string::npos)
-      << lines[0];
-  EXPECT_NE(lines[0].find("WARNING"), std::string::npos) << lines[0];
-  EXPECT_NE(lines[0].find("--set estimation.ground_truth=false"), std::string::npos) << lines[0];
+  EXPECT_TRUE(
+      Holds(lines[0], "ground truth (A) vs estimate, analytic camera (B), in 6 of 6 pairs"));
+  EXPECT_TRUE(Holds(lines[0], "WARNING"));
+  EXPECT_TRUE(Holds(lines[0], "--set estimation.ground_truth=false"));
   EXPECT_TRUE(BasisLines(Diff(b, b)).empty());
   EXPECT_TRUE(BasisLines(Diff(a, a)).empty());
 }
@@ -118,41 +134,29 @@ TEST(SweepDiffBasisTest, CameraTeamStateRunErrorsAndOldRecords) {
   std::vector<BasisRun> b(4, render);
   b[0].run_error = true;
   b[0].metrics_written = false;  // a dead worker: no metrics
-  const std::vector<std::string> camera = BasisLines(
-      Diff(WriteRuns("analytic", std::vector<BasisRun>(4, analytic)), WriteRuns("render", b)));
-  ASSERT_EQ(camera.size(), 1u);
-  EXPECT_NE(camera[0].find("analytic camera (A) vs estimate, rendered camera (B), in 3 of 3"),
-            std::string::npos)
-      << camera[0];
+  EXPECT_TRUE(Holds(OneBasisLine("analytic", std::vector<BasisRun>(4, analytic), "render", b),
+                    "analytic camera (A) vs estimate, rendered camera (B), in 3 of 3"));
 
   BasisRun mocap, onboard;
   mocap.camera = onboard.camera = "mocap";
   mocap.vehicle_state = "motion_capture";
   onboard.vehicle_state = "onboard";
-  const std::vector<std::string> team =
-      BasisLines(Diff(WriteRuns("mocap", std::vector<BasisRun>(3, mocap)),
-                      WriteRuns("onboard", std::vector<BasisRun>(3, onboard))));
-  ASSERT_EQ(team.size(), 1u);
-  EXPECT_NE(team[0].find("vehicle state motion_capture (A) vs estimate, vehicle state onboard"),
-            std::string::npos)
-      << team[0];
+  EXPECT_TRUE(Holds(OneBasisLine("mocap", std::vector<BasisRun>(3, mocap), "onboard",
+                                 std::vector<BasisRun>(3, onboard)),
+                    "vehicle state motion_capture (A) vs estimate, vehicle state onboard"));
 
   // a stack that declared it uses no pixels was offered the same rendered camera: no warning
   BasisRun no_pixels;
   no_pixels.camera = "none";
-  const std::vector<std::string> declined =
-      BasisLines(Diff(WriteRuns("render_all", std::vector<BasisRun>(3, render)),
-                      WriteRuns("no_pixels", std::vector<BasisRun>(3, no_pixels))));
-  ASSERT_EQ(declined.size(), 1u);
-  EXPECT_NE(declined[0].find("rendered camera (A) vs estimate, no camera frames"),
-            std::string::npos)
-      << declined[0];
-  EXPECT_EQ(declined[0].find("WARNING"), std::string::npos) << declined[0];
+  const std::string declined = OneBasisLine("render_all", std::vector<BasisRun>(3, render),
+                                            "no_pixels", std::vector<BasisRun>(3, no_pixels));
+  EXPECT_TRUE(Holds(declined, "rendered camera (A) vs estimate, no camera frames"));
+  EXPECT_FALSE(Holds(declined, "WARNING"));
 
   const std::vector<std::string> old = DescribeBasisDifferences(
       {{std::nullopt, std::string("ground truth")}, {std::nullopt, std::string("ground truth")}});
   ASSERT_EQ(old.size(), 1u);
-  EXPECT_NE(old[0].find("not recorded in A's runs (2)"), std::string::npos) << old[0];
+  EXPECT_TRUE(Holds(old[0], "not recorded in A's runs (2)"));
 }
 
 // B's runs: 3 never flew (a run error, expect failed with its cause), 2 crashed, the rest as A's.
