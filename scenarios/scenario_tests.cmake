@@ -4,6 +4,13 @@ set(HPA_BIN $<TARGET_FILE:hpa>)
 set(SCEN ${CMAKE_CURRENT_SOURCE_DIR})
 set(SCEN_OUT ${CMAKE_BINARY_DIR}/scenario_out)
 
+# hpa_script_test(NAME SCRIPT LABELS TIMEOUT ARG...): ctest NAME runs
+# `bash scenarios/tests/SCRIPT ARG...` with those labels and that timeout (s)
+function(hpa_script_test name script labels timeout)
+  add_test(NAME ${name} COMMAND bash ${SCEN}/tests/${script} ${ARGN})
+  set_tests_properties(${name} PROPERTIES LABELS "${labels}" TIMEOUT ${timeout})
+endfunction()
+
 # every shipped scenario (hpa golden flies the same set)
 file(GLOB HPA_SHIPPED_SCENARIOS CONFIGURE_DEPENDS ${SCEN}/*.yaml ${SCEN}/ci/*.yaml)
 foreach(path ${HPA_SHIPPED_SCENARIOS})
@@ -32,25 +39,17 @@ add_test(NAME cli.golden_exact
 set_tests_properties(cli.golden_exact PROPERTIES LABELS cli FIXTURES_REQUIRED scenario_metrics)
 
 # Observing a run never changes it: --video, --video-slack-events and --plots give the same metrics
-add_test(NAME cli.observation_invariance
-         COMMAND bash ${SCEN}/tests/observation_invariance_test.sh ${HPA_BIN} ${SCEN}
-                 ${SCEN_OUT}/observation_invariance)
-set_tests_properties(cli.observation_invariance PROPERTIES LABELS "cli;scenario" TIMEOUT 600)
+hpa_script_test(cli.observation_invariance observation_invariance_test.sh "cli;scenario" 600
+                ${HPA_BIN} ${SCEN} ${SCEN_OUT}/observation_invariance)
 
 # Hostile input: signals to a sweep, shard overflow, list-index spellings, multi-document and
 # tagged YAML, messages, killed runs, golden's refusals, FIFOs and devices, unwritable outputs
-add_test(NAME cli.hostile_input
-         COMMAND bash ${SCEN}/tests/hostile_input_test.sh ${HPA_BIN} ${SCEN}
-                 ${SCEN_OUT}/hostile_input)
-set_tests_properties(cli.hostile_input PROPERTIES LABELS cli TIMEOUT 600)
+hpa_script_test(cli.hostile_input hostile_input_test.sh cli 600 ${HPA_BIN} ${SCEN}
+                ${SCEN_OUT}/hostile_input)
 
 # CLI contracts: exit codes, error messages, determinism, render-frame, sweeps
-add_test(NAME cli.contract
-         COMMAND bash ${SCEN}/tests/cli_contract_test.sh ${HPA_BIN} ${SCEN} ${SCEN_OUT}/cli)
-set_tests_properties(cli.contract PROPERTIES LABELS cli TIMEOUT 600)
-add_test(NAME cli.sweep
-         COMMAND bash ${SCEN}/tests/sweep_cli_test.sh ${HPA_BIN} ${SCEN} ${SCEN_OUT}/sweep)
-set_tests_properties(cli.sweep PROPERTIES LABELS cli TIMEOUT 900)
+hpa_script_test(cli.contract cli_contract_test.sh cli 600 ${HPA_BIN} ${SCEN} ${SCEN_OUT}/cli)
+hpa_script_test(cli.sweep sweep_cli_test.sh cli 900 ${HPA_BIN} ${SCEN} ${SCEN_OUT}/sweep)
 
 # A real single-node Slurm cluster on localhost runs a sweep as a job array (README's recipe)
 add_test(NAME cli.slurm
@@ -58,24 +57,19 @@ add_test(NAME cli.slurm
 set_tests_properties(cli.slurm PROPERTIES LABELS "cli;slurm" TIMEOUT 600 RUN_SERIAL TRUE)
 
 # Paired sweep comparison: finds a deliberate regression, finds nothing between identical runs
-add_test(NAME cli.sweep_diff
-         COMMAND bash ${SCEN}/tests/sweep_diff_cli_test.sh ${HPA_BIN} ${SCEN} ${SCEN_OUT}/sweep_diff)
-set_tests_properties(cli.sweep_diff PROPERTIES LABELS cli TIMEOUT 600)
+hpa_script_test(cli.sweep_diff sweep_diff_cli_test.sh cli 600 ${HPA_BIN} ${SCEN}
+                ${SCEN_OUT}/sweep_diff)
 
 # The paper's impulse finding over a Monte Carlo sweep: hpa_mpc crashes less than the baseline
-add_test(NAME cli.impulse_finding
-         COMMAND bash ${SCEN}/tests/impulse_finding_test.sh ${HPA_BIN} ${SCEN} ${SCEN_OUT}/impulse_finding)
-set_tests_properties(cli.impulse_finding PROPERTIES LABELS "cli;scenario" TIMEOUT 900)
+hpa_script_test(cli.impulse_finding impulse_finding_test.sh "cli;scenario" 900 ${HPA_BIN} ${SCEN}
+                ${SCEN_OUT}/impulse_finding)
 
 # The paper's VI-C finding: L_cam keeps a held payload in view, on the shipped path and faster
-add_test(NAME cli.perception_finding
-         COMMAND bash ${SCEN}/tests/perception_finding_test.sh ${HPA_BIN} ${SCEN}
-                 ${SCEN_OUT}/perception_finding)
-set_tests_properties(cli.perception_finding PROPERTIES LABELS "cli;scenario" TIMEOUT 600)
+hpa_script_test(cli.perception_finding perception_finding_test.sh "cli;scenario" 600 ${HPA_BIN}
+                ${SCEN} ${SCEN_OUT}/perception_finding)
 
-add_test(NAME cli.retaut_finding
-         COMMAND bash ${SCEN}/tests/retaut_finding_test.sh ${HPA_BIN} ${SCEN} ${SCEN_OUT}/retaut_finding)
-set_tests_properties(cli.retaut_finding PROPERTIES LABELS "cli;scenario" TIMEOUT 600)
+hpa_script_test(cli.retaut_finding retaut_finding_test.sh "cli;scenario" 600 ${HPA_BIN} ${SCEN}
+                ${SCEN_OUT}/retaut_finding)
 
 # The flight stack as its own process over the lockstep protocol: hpa-flight equals in process,
 # the Python example flies, hostile stacks are run errors. Debian's python3 (numpy from
@@ -84,54 +78,39 @@ find_program(HPA_PYTHON3 NAMES python3 PATHS /usr/bin NO_DEFAULT_PATH)
 if(NOT HPA_PYTHON3)
   find_program(HPA_PYTHON3 NAMES python3 REQUIRED)
 endif()
-add_test(NAME cli.flight_stack
-         COMMAND bash ${SCEN}/tests/flight_stack_test.sh ${HPA_BIN} ${CMAKE_SOURCE_DIR} ${HPA_PYTHON3})
-set_tests_properties(cli.flight_stack PROPERTIES LABELS "cli;scenario" TIMEOUT 600)
+hpa_script_test(cli.flight_stack flight_stack_test.sh "cli;scenario" 600 ${HPA_BIN}
+                ${CMAKE_SOURCE_DIR} ${HPA_PYTHON3})
 # A stack that owns the rate loop: hpa-flight --own-rate-loop equals in process with PX4's loop
 # and the own loop; a non-finite or out-of-range rotor speed is a run error naming it
-add_test(NAME cli.flight_stack_rate_loop
-         COMMAND bash ${SCEN}/tests/flight_stack_rate_loop_test.sh ${HPA_BIN} ${CMAKE_SOURCE_DIR}
-                 ${HPA_PYTHON3})
-set_tests_properties(cli.flight_stack_rate_loop PROPERTIES LABELS "cli;scenario" TIMEOUT 600)
+hpa_script_test(cli.flight_stack_rate_loop flight_stack_rate_loop_test.sh "cli;scenario" 600
+                ${HPA_BIN} ${CMAKE_SOURCE_DIR} ${HPA_PYTHON3})
 # Team runs (docs/cooperative.md): bad input named by key, determinism, per-vehicle log columns,
 # plots, the rate table, a push slackening the named vehicle's cable, the baseline
-add_test(NAME cli.team
-         COMMAND bash ${SCEN}/tests/team_cli_test.sh ${HPA_BIN} ${CMAKE_SOURCE_DIR} ${HPA_PYTHON3})
-set_tests_properties(cli.team PROPERTIES LABELS "cli;scenario" TIMEOUT 600)
+hpa_script_test(cli.team team_cli_test.sh "cli;scenario" 600 ${HPA_BIN} ${CMAKE_SOURCE_DIR}
+                ${HPA_PYTHON3})
 # A one-vehicle `vehicles:` list is the single vehicle: the same run as without it, bit for bit;
 # team-only keys and a team's leftovers refused by key (docs/cooperative.md, "One vehicle")
-add_test(NAME cli.one_vehicle_list
-         COMMAND bash ${SCEN}/tests/one_vehicle_list_test.sh ${HPA_BIN} ${CMAKE_SOURCE_DIR}
-                 ${HPA_PYTHON3})
-set_tests_properties(cli.one_vehicle_list PROPERTIES LABELS "cli;scenario" TIMEOUT 600)
+hpa_script_test(cli.one_vehicle_list one_vehicle_list_test.sh "cli;scenario" 600 ${HPA_BIN}
+                ${CMAKE_SOURCE_DIR} ${HPA_PYTHON3})
 
 # Plots in PNG, SVG and PDF, each with the CSV of what it draws; plots never change a run
-add_test(NAME cli.plot_formats
-         COMMAND bash ${SCEN}/tests/plot_formats_test.sh ${HPA_BIN} ${CMAKE_SOURCE_DIR} ${HPA_PYTHON3})
-set_tests_properties(cli.plot_formats PROPERTIES LABELS cli TIMEOUT 300)
+hpa_script_test(cli.plot_formats plot_formats_test.sh cli 300 ${HPA_BIN} ${CMAKE_SOURCE_DIR}
+                ${HPA_PYTHON3})
 
 # hpa replay: a run's video from its log after the fact, on hpa run's and a sweep's kept runs
-add_test(NAME cli.replay
-         COMMAND bash ${SCEN}/tests/replay_cli_test.sh ${HPA_BIN} ${CMAKE_SOURCE_DIR})
-set_tests_properties(cli.replay PROPERTIES LABELS cli TIMEOUT 300)
+hpa_script_test(cli.replay replay_cli_test.sh cli 300 ${HPA_BIN} ${CMAKE_SOURCE_DIR})
 
 # cmake --install, the installed binaries reading the prefix's data, and a controller built
 # out of tree against find_package(hpa)
-add_test(NAME cli.install
-         COMMAND bash ${SCEN}/tests/install_test.sh ${CMAKE_BINARY_DIR} ${CMAKE_SOURCE_DIR})
-set_tests_properties(cli.install PROPERTIES LABELS cli TIMEOUT 600)
+hpa_script_test(cli.install install_test.sh cli 600 ${CMAKE_BINARY_DIR} ${CMAKE_SOURCE_DIR})
 
 # The crash ordering on the wide impulse sweep (sideways 0.15 N s), onboard and with the true state
-add_test(NAME cli.impulse_wide_finding
-         COMMAND bash ${SCEN}/tests/impulse_wide_finding_test.sh ${HPA_BIN} ${SCEN}
-                 ${SCEN_OUT}/impulse_wide_finding)
-set_tests_properties(cli.impulse_wide_finding PROPERTIES LABELS "cli;scenario" TIMEOUT 900)
+hpa_script_test(cli.impulse_wide_finding impulse_wide_finding_test.sh "cli;scenario" 900 ${HPA_BIN}
+                ${SCEN} ${SCEN_OUT}/impulse_wide_finding)
 
 # The re-taut claim on a line, a diagonal and a sideways push and the gripper lift, paired
-add_test(NAME cli.retaut_pushes_finding
-         COMMAND bash ${SCEN}/tests/retaut_pushes_finding_test.sh ${HPA_BIN} ${CMAKE_SOURCE_DIR}
-                 ${SCEN_OUT}/retaut_pushes_finding)
-set_tests_properties(cli.retaut_pushes_finding PROPERTIES LABELS "cli;scenario" TIMEOUT 900)
+hpa_script_test(cli.retaut_pushes_finding retaut_pushes_finding_test.sh "cli;scenario" 900
+                ${HPA_BIN} ${CMAKE_SOURCE_DIR} ${SCEN_OUT}/retaut_pushes_finding)
 
 # Every shipped scenario's bounds on the seed after its own derivation seeds (1-30 unless the
 # file says otherwise): a bound that no longer holds beyond its fit fails here. The tails are
@@ -150,97 +129,76 @@ set_tests_properties(python.hostile_inputs PROPERTIES LABELS cli TIMEOUT 120
 
 # A csv reference's file: not a regular file, rows too close, positions and speeds out of bounds,
 # an undefined quadrotor reference refused by file and line; a byte order mark accepted
-add_test(NAME cli.csv_reference_inputs
-         COMMAND bash ${SCEN}/tests/csv_reference_cli_test.sh ${HPA_BIN} ${CMAKE_SOURCE_DIR})
-set_tests_properties(cli.csv_reference_inputs PROPERTIES LABELS cli TIMEOUT 300)
+hpa_script_test(cli.csv_reference_inputs csv_reference_cli_test.sh cli 300 ${HPA_BIN}
+                ${CMAKE_SOURCE_DIR})
 
 # The flight-stack boundary on hostile input: bad --flight-timeout / --flight-stack, SIGINT and
 # SIGTERM during every wait on a stack, a reply's whole-message time limit, a stack's invalid
 # UTF-8, a truncated frame ring, out-of-range values, and what a killed hpa leaves (reclaimed by
 # the next); the stop times it measures are printed
-add_test(NAME cli.flight_boundary
-         COMMAND bash ${SCEN}/tests/flight_boundary_test.sh ${HPA_BIN} ${CMAKE_SOURCE_DIR} ${HPA_PYTHON3})
-set_tests_properties(cli.flight_boundary PROPERTIES LABELS "cli;scenario" TIMEOUT 300)
+hpa_script_test(cli.flight_boundary flight_boundary_test.sh "cli;scenario" 300 ${HPA_BIN}
+                ${CMAKE_SOURCE_DIR} ${HPA_PYTHON3})
 
 # The Python client as a package: pip-installed offline into a fresh venv (Debian's python3,
 # setuptools and wheel; numpy through --system-site-packages), the example stack flown from it
 # with PYTHONPATH unset, and a raising stack's run error naming its file:line
-add_test(NAME python.package
-         COMMAND bash ${SCEN}/tests/python_package_test.sh ${HPA_BIN} ${CMAKE_SOURCE_DIR}
-                 ${HPA_PYTHON3} ${PROJECT_VERSION})
-set_tests_properties(python.package PROPERTIES LABELS cli TIMEOUT 600)
+hpa_script_test(python.package python_package_test.sh cli 600 ${HPA_BIN} ${CMAKE_SOURCE_DIR}
+                ${HPA_PYTHON3} ${PROJECT_VERSION})
 
 # An external flight stack as a first-class controller: the Python example stack against
 # hpa_mpc through compare (its own folder, column and label) and through sweeps (its record
 # labels, parallel workers' stacks, shards and merge, resume refused with another stack, a failing
 # stack as its run's error, hpa-flight equal to in process) and sweep-diff's paired verdicts
-add_test(NAME cli.external_stack_sweep
-         COMMAND bash ${SCEN}/tests/external_stack_sweep_test.sh ${HPA_BIN} ${CMAKE_SOURCE_DIR}
-                 ${HPA_PYTHON3})
-set_tests_properties(cli.external_stack_sweep PROPERTIES LABELS "cli;scenario" TIMEOUT 600)
+hpa_script_test(cli.external_stack_sweep external_stack_sweep_test.sh "cli;scenario" 600 ${HPA_BIN}
+                ${CMAKE_SOURCE_DIR} ${HPA_PYTHON3})
 
 # A run that never flew (a stack that does not start or exits before its hello; single vehicle
 # and team) fails its verdict with its cause in metrics.json, a sweep's records and summary,
 # hpa compare's table, and sweep-diff (its pairs left out as run errors, not crashes)
-add_test(NAME cli.never_flew
-         COMMAND bash ${SCEN}/tests/never_flew_test.sh ${HPA_BIN} ${CMAKE_SOURCE_DIR}
-                 ${HPA_PYTHON3})
-set_tests_properties(cli.never_flew PROPERTIES LABELS cli TIMEOUT 300)
+hpa_script_test(cli.never_flew never_flew_test.sh cli 300 ${HPA_BIN} ${CMAKE_SOURCE_DIR}
+                ${HPA_PYTHON3})
 
 # A stack's error text capped at 4 KiB with its length stated, and a second reply to one tick a
 # run error naming the stack and the tick at once
-add_test(NAME cli.stack_replies
-         COMMAND bash ${SCEN}/tests/stack_replies_test.sh ${HPA_BIN} ${CMAKE_SOURCE_DIR}
-                 ${HPA_PYTHON3})
-set_tests_properties(cli.stack_replies PROPERTIES LABELS cli TIMEOUT 300)
+hpa_script_test(cli.stack_replies stack_replies_test.sh cli 300 ${HPA_BIN} ${CMAKE_SOURCE_DIR}
+                ${HPA_PYTHON3})
 
 # hpa run refuses to replace another scenario's results in --out (unless --overwrite), and
 # --set PATH+=VALUE appends an event checked as the file's
-add_test(NAME cli.run_habits
-         COMMAND bash ${SCEN}/tests/run_habits_test.sh ${HPA_BIN} ${CMAKE_SOURCE_DIR}
-                 ${HPA_PYTHON3})
-set_tests_properties(cli.run_habits PROPERTIES LABELS cli TIMEOUT 300)
+hpa_script_test(cli.run_habits run_habits_test.sh cli 300 ${HPA_BIN} ${CMAKE_SOURCE_DIR}
+                ${HPA_PYTHON3})
 
 # A stack that declares uses_pixels: false is sent no rendered frame and the run renders none
 # (as fast as the analytic camera, the same flight), its metrics saying the camera was not flown
-add_test(NAME cli.no_pixels
-         COMMAND bash ${SCEN}/tests/no_pixels_test.sh ${HPA_BIN} ${CMAKE_SOURCE_DIR}
-                 ${HPA_PYTHON3})
-set_tests_properties(cli.no_pixels PROPERTIES LABELS cli TIMEOUT 300)
+hpa_script_test(cli.no_pixels no_pixels_test.sh cli 300 ${HPA_BIN} ${CMAKE_SOURCE_DIR}
+                ${HPA_PYTHON3})
 
 # hpa render-frame's --camera (payload | chase) and --size WxH: the PNG's size read back, bad
 # sizes and cameras refused with exit 2
-add_test(NAME cli.render_frame
-         COMMAND bash ${SCEN}/tests/render_frame_test.sh ${HPA_BIN} ${SCEN} ${SCEN_OUT}/render_frame)
-set_tests_properties(cli.render_frame PROPERTIES LABELS cli TIMEOUT 300)
+hpa_script_test(cli.render_frame render_frame_test.sh cli 300 ${HPA_BIN} ${SCEN}
+                ${SCEN_OUT}/render_frame)
 
 # scripts/redraw_plots.py redraws a run's and a comparison's plot with matplotlib
 # (python3-matplotlib, installed by ci/setup.sh)
-add_test(NAME cli.redraw_plots
-         COMMAND bash ${SCEN}/tests/redraw_plots_test.sh ${HPA_BIN} ${CMAKE_SOURCE_DIR} ${HPA_PYTHON3})
-set_tests_properties(cli.redraw_plots PROPERTIES LABELS cli TIMEOUT 300)
+hpa_script_test(cli.redraw_plots redraw_plots_test.sh cli 300 ${HPA_BIN} ${CMAKE_SOURCE_DIR}
+                ${HPA_PYTHON3})
 
 # A sweep with two grid factors: crash_rate.png in small multiples (one panel per grid cell, one
 # colour per controller, one legend above the panels) and summary.md's pivot tables (rows the
 # first factor, columns the second, one table per controller); one factor keeps today's layout
-add_test(NAME cli.sweep_grid_factors
-         COMMAND bash ${SCEN}/tests/sweep_grid_factors_test.sh ${HPA_BIN} ${SCEN}
-                 ${SCEN_OUT}/sweep_grid_factors)
-set_tests_properties(cli.sweep_grid_factors PROPERTIES LABELS cli TIMEOUT 300)
+hpa_script_test(cli.sweep_grid_factors sweep_grid_factors_test.sh cli 300 ${HPA_BIN} ${SCEN}
+                ${SCEN_OUT}/sweep_grid_factors)
 
 # The README's "your controller against hpa_mpc" block, run as written (a Python stack compared
 # and swept against hpa_mpc, then sweep-diff): labels, run counts and the diff's names checked
-add_test(NAME cli.readme_your_controller
-         COMMAND bash ${SCEN}/tests/readme_your_controller_test.sh ${HPA_BIN} ${CMAKE_SOURCE_DIR}
-                 ${HPA_PYTHON3} ${CMAKE_BINARY_DIR}/readme_your_controller)
-set_tests_properties(cli.readme_your_controller PROPERTIES LABELS "cli;scenario" TIMEOUT 600)
+hpa_script_test(cli.readme_your_controller readme_your_controller_test.sh "cli;scenario" 600
+                ${HPA_BIN} ${CMAKE_SOURCE_DIR} ${HPA_PYTHON3}
+                ${CMAKE_BINARY_DIR}/readme_your_controller)
 
 # The README's Python example, run as written: the example controller passes its own scenario's
 # bounds (examples/python/hover_gripper_pull_example.yaml) with the estimate's mode flown
-add_test(NAME cli.python_example
-         COMMAND bash ${SCEN}/tests/python_example_test.sh ${HPA_BIN} ${CMAKE_SOURCE_DIR}
-                 ${HPA_PYTHON3})
-set_tests_properties(cli.python_example PROPERTIES LABELS "cli;scenario" TIMEOUT 300)
+hpa_script_test(cli.python_example python_example_test.sh "cli;scenario" 300 ${HPA_BIN}
+                ${CMAKE_SOURCE_DIR} ${HPA_PYTHON3})
 
 # docs/python.md lists every field of the estimate, the command and the tick, as generated from
 # the message table (python -m hpa_sim.message_docs)
@@ -261,22 +219,16 @@ set_tests_properties(build.scenarios_layers PROPERTIES LABELS build)
 
 # Faults reach a separate flight stack as they reach the in-process one: a VIO, an IMU and two
 # rendered-camera faults through hpa-flight give the in-process metrics (docs/faults.md)
-add_test(NAME cli.fault_flight_stack
-         COMMAND bash ${SCEN}/tests/fault_flight_stack_test.sh ${HPA_BIN} ${CMAKE_SOURCE_DIR}
-                 ${HPA_PYTHON3})
-set_tests_properties(cli.fault_flight_stack PROPERTIES LABELS "cli;scenario" TIMEOUT 600)
+hpa_script_test(cli.fault_flight_stack fault_flight_stack_test.sh "cli;scenario" 600 ${HPA_BIN}
+                ${CMAKE_SOURCE_DIR} ${HPA_PYTHON3})
 
 # A team run's video: --video writes one 960x540 frame per video tick of team2_cable_slack,
 # --video-slack-events the frames around its cable's slack event, and neither changes the run
-add_test(NAME cli.team_video
-         COMMAND bash ${SCEN}/tests/team_video_test.sh ${HPA_BIN} ${CMAKE_SOURCE_DIR}
-                 ${HPA_PYTHON3})
-set_tests_properties(cli.team_video PROPERTIES LABELS "cli;scenario" TIMEOUT 300)
+hpa_script_test(cli.team_video team_video_test.sh "cli;scenario" 300 ${HPA_BIN} ${CMAKE_SOURCE_DIR}
+                ${HPA_PYTHON3})
 # a team's separate flight stacks (per vehicle and one for all) give the in-process run
-add_test(NAME cli.team_flight_stack
-         COMMAND bash ${SCEN}/tests/team_flight_stack_test.sh ${HPA_BIN} ${CMAKE_SOURCE_DIR}
-                 ${HPA_PYTHON3})
-set_tests_properties(cli.team_flight_stack PROPERTIES LABELS "cli;scenario" TIMEOUT 600)
+hpa_script_test(cli.team_flight_stack team_flight_stack_test.sh "cli;scenario" 600 ${HPA_BIN}
+                ${CMAKE_SOURCE_DIR} ${HPA_PYTHON3})
 
 # The dependency rule (docs/design.md section 1) as a test: ci/dependency_rule.sh holds on the
 # source tree and catches a planted MuJoCo, GL, EGL, OpenCV or flight-code include in a copy
@@ -296,37 +248,27 @@ set_tests_properties(build.flight_program_links PROPERTIES LABELS build)
 # team2_line per vehicle and as one stack (the same run), its payload RMSE within a bound held on
 # seeds it was not measured on; a sweep flown by it is diffed against the in-process sweep; a
 # controller that raises is a run error with its traceback (about 10 s on 2 cores)
-add_test(NAME cli.python_team_stack
-         COMMAND bash ${SCEN}/tests/python_team_stack_test.sh ${HPA_BIN} ${CMAKE_SOURCE_DIR}
-                 ${HPA_PYTHON3})
-set_tests_properties(cli.python_team_stack PROPERTIES LABELS "cli;scenario" TIMEOUT 300)
+hpa_script_test(cli.python_team_stack python_team_stack_test.sh "cli;scenario" 300 ${HPA_BIN}
+                ${CMAKE_SOURCE_DIR} ${HPA_PYTHON3})
 
 # Bad input around vehicles (a vehicle index out of range in an event, a fault or a --set path, a
 # team's key on one vehicle, a single vehicle's key on a team, a team's gripper) refused naming
 # the key, and vehicle 0 of a single vehicle flown
-add_test(NAME cli.vehicle_input
-         COMMAND bash ${SCEN}/tests/vehicle_input_test.sh ${HPA_BIN} ${CMAKE_SOURCE_DIR})
-set_tests_properties(cli.vehicle_input PROPERTIES LABELS cli TIMEOUT 600)
+hpa_script_test(cli.vehicle_input vehicle_input_test.sh cli 600 ${HPA_BIN} ${CMAKE_SOURCE_DIR})
 
 # A sweep flown by a separate stack refuses a vary key only the in-process flight code reads
 # (controller.type, a controller setting, the estimator) when it takes several values, naming
 # the key; one value flies, and hpa-flight flies each value as its own controller
-add_test(NAME cli.sweep_stack_keys
-         COMMAND bash ${SCEN}/tests/sweep_stack_keys_test.sh ${HPA_BIN} ${CMAKE_SOURCE_DIR}
-                 ${HPA_PYTHON3})
-set_tests_properties(cli.sweep_stack_keys PROPERTIES LABELS cli TIMEOUT 300)
+hpa_script_test(cli.sweep_stack_keys sweep_stack_keys_test.sh cli 300 ${HPA_BIN}
+                ${CMAKE_SOURCE_DIR} ${HPA_PYTHON3})
 # hpa sweep --runs N --set PATH=VALUE: a sweep file changed without copying it, the overrides in
 # every record, its replay commands and inputs.json, part of the sweep's identity on resume and
 # merge; a set on a varied key or a bad value refused
-add_test(NAME cli.sweep_overrides
-         COMMAND bash ${SCEN}/tests/sweep_overrides_test.sh ${HPA_BIN} ${CMAKE_SOURCE_DIR}
-                 ${HPA_PYTHON3})
-set_tests_properties(cli.sweep_overrides PROPERTIES LABELS cli TIMEOUT 300)
+hpa_script_test(cli.sweep_overrides sweep_overrides_test.sh cli 300 ${HPA_BIN} ${CMAKE_SOURCE_DIR}
+                ${HPA_PYTHON3})
 # Outputs cut short are never taken for results: a file-size limit (ulimit -f) exits 4 like a
 # full disk with no partial file and a whole last record in runs.jsonl; golden names every
 # scenario it cannot compare; sweep-diff reads a torn last line as --resume repairs it; inputs.json
 # keeps every resumed part's inputs
-add_test(NAME cli.output_leftovers
-         COMMAND bash ${SCEN}/tests/output_leftovers_test.sh ${HPA_BIN} ${CMAKE_SOURCE_DIR}
-                 ${HPA_PYTHON3})
-set_tests_properties(cli.output_leftovers PROPERTIES LABELS cli TIMEOUT 300)
+hpa_script_test(cli.output_leftovers output_leftovers_test.sh cli 300 ${HPA_BIN}
+                ${CMAKE_SOURCE_DIR} ${HPA_PYTHON3})
