@@ -44,7 +44,7 @@ build-asan/bin/hpa run scenarios/ci/team2_cable_slack.yaml --set duration=4 \
 
 echo "== fuzzing the YAML loaders for $fuzz_s s"
 mkdir -p "$out/corpus"
-cp scenarios/fuzz/corpus/* scenarios/*.yaml scenarios/sweeps/*.yaml "$out/corpus/"
+cp harness/fuzz/corpus/* scenarios/*.yaml scenarios/sweeps/*.yaml "$out/corpus/"
 build-asan/bin/yaml_loaders_fuzz "$out/corpus" -max_total_time="$fuzz_s" -timeout=10 \
   -rss_limit_mb=2048 -artifact_prefix="$out/" -print_final_stats=1 2>&1 | tail -n 12
 echo "sanitizers and fuzzing: clean"

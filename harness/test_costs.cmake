@@ -3,7 +3,7 @@
 # of its own, so without these the longest tests may start last and leave one core idle at the
 # end of the suite. Only the order depends on these numbers, never a verdict.
 set(_hpa_test_costs
-  cli.impulse_wide_finding 160   cli.bounds_held_out 120   cli.observation_invariance 75
+  cli.impulse_wide_finding 160   cli.bounds_held_out 60    cli.observation_invariance 75
   cli.retaut_pushes_finding 50   cli.flight_stack 45       cli.perception_finding 40
   cli.flight_boundary 40         scenario.ci_team3_lift_cameras 30   cli.replay 25
   cli.readme_your_controller 25  cli.install 20            cli.sweep_diff 20

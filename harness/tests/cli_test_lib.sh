@@ -17,7 +17,7 @@ cli_test_start() {
 # but the timings and what flew; with --rows N, the log row for row but the solve times)
 same_run() {
   local a=$1 b=$2 label=$3; shift 3
-  "$python" "$src/scenarios/tests/same_run.py" "$a" "$b" "$@" || fail "$label: the runs differ"
+  "$python" "$src/harness/tests/same_run.py" "$a" "$b" "$@" || fail "$label: the runs differ"
 }
 
 # fail MESSAGE...: counts and prints a failed check

@@ -11,7 +11,7 @@
 # and gives verdicts.
 # Usage: external_stack_sweep_test.sh HPA_BINARY SOURCE_DIR PYTHON
 set -uo pipefail
-source "$2/scenarios/tests/cli_test_lib.sh"
+source "$2/harness/tests/cli_test_lib.sh"
 cli_test_start "$@"  # hpa, src, python; out: a folder removed at exit
 export PYTHONPATH="$src/python${PYTHONPATH:+:$PYTHONPATH}" PYTHONDONTWRITEBYTECODE=1
 stack="$python $src/examples/python/hover_controller.py"

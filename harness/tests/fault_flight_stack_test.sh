@@ -6,7 +6,7 @@
 # the stack's name aside.
 # Usage: fault_flight_stack_test.sh HPA_BINARY SOURCE_DIR PYTHON
 set -uo pipefail
-source "$2/scenarios/tests/cli_test_lib.sh"
+source "$2/harness/tests/cli_test_lib.sh"
 cli_test_start "$@"  # hpa, src, python; out: a folder removed at exit
 
 for name in fault_vio_wrong fault_imu_bias fault_payload_camera_garbage \

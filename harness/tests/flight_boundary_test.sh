@@ -11,11 +11,11 @@ set -uo pipefail
 hpa=$1
 src=$2
 python=$3
-source "$src/scenarios/tests/cli_test_lib.sh"
+source "$src/harness/tests/cli_test_lib.sh"
 out=$(mktemp -d)
 started=()  # pids this test started that may outlive a failed check
 trap 'for p in "${started[@]}"; do kill -9 "$p" 2>/dev/null; done; rm -rf "$out"' EXIT
-stack="$python $src/scenarios/tests/hostile_boundary_stack.py"
+stack="$python $src/harness/tests/hostile_boundary_stack.py"
 run_error_exit=3  # a run's error exit code (docs/design.md, exit codes)
 
 # a short run; the ideal world's rate loop flies the estimate's body rate, so ticks ask for it

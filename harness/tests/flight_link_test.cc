@@ -1,12 +1,12 @@
 // The in-process flight link states the control rate its controller runs at (the runner sizes
 // the run's log with it).
-#include "scenarios/src/runner/flight_link.h"
+#include "harness/runner/src/flight_link.h"
 
 #include <gtest/gtest.h>
 
 #include "hpa/models/params.h"
 #include "hpa/scenarios/scenario.h"
-#include "scenarios/src/runner/run_loop.h"
+#include "harness/runner/src/run_loop.h"
 
 namespace hpa {
 namespace {

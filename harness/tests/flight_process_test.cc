@@ -2,7 +2,7 @@
 // short ends the run with an error instead of killing hpa with SIGBUS, and what a killed hpa
 // left behind (socket folder, ring, stack processes) is reclaimed by the next one.
 
-#include "scenarios/src/runner/flight_process.h"
+#include "harness/runner/src/flight_process.h"
 
 #include <fcntl.h>
 #include <gtest/gtest.h>
@@ -19,7 +19,7 @@
 #include <thread>
 
 #include "hpa/flight/protocol.h"
-#include "scenarios/src/runner/frame_ring.h"
+#include "harness/runner/src/frame_ring.h"
 
 namespace hpa::runner {
 namespace {

@@ -7,7 +7,7 @@
 # a non-finite or out-of-range rotor speed is a run error naming it (exit 3, metrics.json written
 # with the run so far). Usage: flight_stack_rate_loop_test.sh HPA_BINARY SOURCE_DIR PYTHON
 set -uo pipefail
-source "$2/scenarios/tests/cli_test_lib.sh"
+source "$2/harness/tests/cli_test_lib.sh"
 cli_test_start "$@"  # hpa, src, python; out: a folder removed at exit
 
 # fly NAME SCENARIO [ARGS...]: the scenario in process and through hpa-flight --own-rate-loop

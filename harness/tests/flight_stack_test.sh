@@ -5,7 +5,7 @@
 # happened (exit 3, metrics.json written), never a hung simulator; the Python loaders read
 # what a run writes. Usage: flight_stack_test.sh HPA_BINARY SOURCE_DIR PYTHON
 set -uo pipefail
-source "$2/scenarios/tests/cli_test_lib.sh"
+source "$2/harness/tests/cli_test_lib.sh"
 cli_test_start "$@"  # hpa, src, python; out: a folder removed at exit
 
 # 1. hpa-flight flies the rendered hover_gripper_pull exactly as the in-process stack does:
@@ -83,7 +83,7 @@ print("python: deviation %.3f m over %d control steps" % (m["quad_position_devia
 PY
 
 # 3. hostile stacks: a clear run error, exit 3, within the step timeout, metrics kept
-hostile="$python $src/scenarios/tests/hostile_flight_stack.py"
+hostile="$python $src/harness/tests/hostile_flight_stack.py"
 hover="$src/scenarios/hover.yaml"
 expect_exit 3 "exited with status 1 before connecting" run "$hover" --quiet --out "$out/h0" \
   --flight-stack "exit 1"

@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
-# The scenarios layers (runner <- output <- tools) as the build enforces them: compiled with a
-# library's own include directories, a header of a layer above it is not found, and its own and
-# those below are. Each check is an #if on __has_include, so nothing else is compiled.
+# The harness layers (runner <- reports (hpa_output) <- sweeps and cli (hpa_tools)) as the build
+# enforces them: compiled with a library's own include directories, a header of a layer above it
+# is not found, and its own and those below are. Each check is an #if on __has_include, so nothing
+# else is compiled.
 # usage: layers_test.sh CXX RUNNER_INCLUDES OUTPUT_INCLUDES TOOLS_INCLUDES (;-separated lists)
 set -uo pipefail
 cxx=$1
@@ -24,24 +25,29 @@ check() {
 
 # the runner sees its own headers, public and private, and neither output's nor tools'
 check runner true hpa/scenarios/scenario.h
-check runner true scenarios/src/runner/run_loop.h
+check runner true harness/runner/src/run_loop.h
 check runner false hpa/scenarios/plots.h
 check runner false hpa/scenarios/video_recorder.h
 check runner false hpa/scenarios/cli.h
 check runner false hpa/scenarios/sweep.h
-check runner false scenarios/src/output/media.h
-check runner false scenarios/src/tools/cli_parse.h
+check runner false harness/reports/src/media.h
+check runner false harness/cli/src/cli_parse.h
+check runner false harness/sweeps/src/sweep_internal.h
 # output sees the runner's public headers and its own, not tools'
 check output true hpa/scenarios/plots.h
 check output true hpa/scenarios/runner.h
-check output true scenarios/src/output/media.h
+check output true harness/reports/src/media.h
 check output false hpa/scenarios/cli.h
 check output false hpa/scenarios/golden.h
-check output false scenarios/src/tools/cli_parse.h
-check output false scenarios/src/runner/run_loop.h
+check output false harness/cli/src/cli_parse.h
+check output false harness/runner/src/run_loop.h
+check output false harness/sweeps/src/sweep_internal.h
 # tools sees every layer
 check tools true hpa/scenarios/cli.h
 check tools true hpa/scenarios/plots.h
-check tools true scenarios/src/runner/flight_process.h
+check tools true harness/runner/src/flight_process.h
+check tools true harness/sweeps/src/sweep_internal.h
+check tools true harness/cli/src/cli_parse.h
+check tools true hpa/scenarios/sweep.h
 [ "$failures" -eq 0 ] || { echo "$failures layer check(s) failed"; exit 1; }
-echo "the scenarios layers hold: runner <- output <- tools, enforced by each library's includes"
+echo "the harness layers hold: runner <- reports <- sweeps and cli, enforced by each library's includes"

@@ -4,7 +4,7 @@
 # drawn point); SVG is well-formed XML, PDF a PDF; an unknown format is refused before the run;
 # plots never change the metrics. Usage: plot_formats_test.sh HPA_BINARY SOURCE_DIR PYTHON
 set -uo pipefail
-source "$2/scenarios/tests/cli_test_lib.sh"
+source "$2/harness/tests/cli_test_lib.sh"
 cli_test_start "$@"  # hpa, src, python; out: a folder removed at exit
 scenario="$src/scenarios/hover.yaml"
 

@@ -8,7 +8,7 @@
 # the run error (exit 3), and a single vehicle's hello is refused.
 # Usage: python_team_stack_test.sh HPA_BINARY SOURCE_DIR PYTHON
 set -uo pipefail
-source "$2/scenarios/tests/cli_test_lib.sh"
+source "$2/harness/tests/cli_test_lib.sh"
 cli_test_start "$@"  # hpa, src, python; out: a folder removed at exit
 # the example imports hpa_sim from the source tree: no __pycache__ written there
 export PYTHONDONTWRITEBYTECODE=1

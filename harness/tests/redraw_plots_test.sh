@@ -6,7 +6,7 @@
 # shading per run), and each controller of the sweep keeps one colour in every panel.
 # Usage: redraw_plots_test.sh HPA_BINARY SOURCE_DIR PYTHON
 set -uo pipefail
-source "$2/scenarios/tests/cli_test_lib.sh"
+source "$2/harness/tests/cli_test_lib.sh"
 cli_test_start "$@"  # hpa, src, python; out: a folder removed at exit
 "$hpa" compare "$src/scenarios/hover.yaml" --controllers geometric,nonhybrid_mpc --quiet \
   --set duration=2.5 --out "$out/cmp" > /dev/null 2>&1 || fail "compare failed"

@@ -10,7 +10,7 @@
 set -uo pipefail
 hpa=$1
 src=$2
-source "$src/scenarios/tests/cli_test_lib.sh"
+source "$src/harness/tests/cli_test_lib.sh"
 out=$(mktemp -d)
 trap 'rm -rf "$out"' EXIT
 

@@ -10,7 +10,7 @@
 set -euo pipefail
 hpa=$(realpath "$1"); scen=$(realpath "$2"); out=$3
 # shellcheck source=cli_test_lib.sh
-source "$scen/tests/cli_test_lib.sh"
+source "$(dirname "$0")/cli_test_lib.sh"
 ctld_port=${HPA_SLURM_CTLD_PORT:-6817}
 slurmd_port=${HPA_SLURM_SLURMD_PORT:-6818}
 timeout_s=${HPA_SLURM_TIMEOUT_S:-300}

@@ -3,7 +3,7 @@
 // the left-out pairs of every metric, rates included, counted as run errors or crashes by what
 // ended each run.
 
-#include "scenarios/src/tools/sweep_diff_basis.h"
+#include "harness/sweeps/src/sweep_diff_basis.h"
 
 #include <gtest/gtest.h>
 #include <sys/stat.h>

@@ -11,7 +11,7 @@ set -uo pipefail
 hpa=$1; scen=$2; out=$3
 rm -rf "$out"; mkdir -p "$out"
 # shellcheck source=cli_test_lib.sh
-source "$scen/tests/cli_test_lib.sh"
+source "$(dirname "$0")/cli_test_lib.sh"
 
 # a fast base: ground truth, the analytic camera, a short hover with a drawn impulse
 impulse_hover_base "$out/base.yaml" grid_factors_base 0.6 0.2

@@ -11,7 +11,7 @@
 
 #include "hpa/models/input_error.h"
 #include "models/tests/temp_dir.h"
-#include "scenarios/src/tools/sweep/sweep_internal.h"
+#include "harness/sweeps/src/sweep_internal.h"
 
 namespace hpa {
 namespace {

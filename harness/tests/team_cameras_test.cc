@@ -2,7 +2,7 @@
 // on every vehicle of a team. Three vehicles hang at rest over their payload: each camera sees it
 // and finds it in every frame where it truly is, delivered after the latency; the same seed gives
 // the same detections; a camera turned away finds nothing; capturing never changes the world.
-#include "scenarios/src/runner/team_cameras.h"
+#include "harness/runner/src/team_cameras.h"
 
 #include <gtest/gtest.h>
 

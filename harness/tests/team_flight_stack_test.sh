@@ -7,7 +7,7 @@
 # with a run error naming it (exit 3, metrics.json written with the run so far).
 # Usage: team_flight_stack_test.sh HPA_BINARY SOURCE_DIR PYTHON
 set -uo pipefail
-source "$2/scenarios/tests/cli_test_lib.sh"
+source "$2/harness/tests/cli_test_lib.sh"
 cli_test_start "$@"  # hpa, src, python; out: a folder removed at exit
 
 # same_team_run A B LABEL: the same run, metrics (timings left out at any depth) and log row for

@@ -18,7 +18,7 @@ from hpa_sim import InputError, ProtocolError, load_log, load_metrics, load_runs
 
 import fake_simulator
 
-# log.csv's header as the simulator writes it (scenarios/src/runner/metrics.cc, WriteLogCsv)
+# log.csv's header as the simulator writes it (harness/runner/src/metrics.cc, WriteLogCsv)
 _STATE = ["pL_x", "pL_y", "pL_z", "vL_x", "vL_y", "vL_z", "pQ_x", "pQ_y", "pQ_z", "vQ_x", "vQ_y",
           "vQ_z", "q_w", "q_x", "q_y", "q_z", "w_x", "w_y", "w_z", "mode"]
 LOG_HEADER = (["time_s"] + ["true_" + n for n in _STATE] + ["est_" + n for n in _STATE] +

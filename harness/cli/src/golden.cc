@@ -17,8 +17,8 @@
 #include "hpa/scenarios/provenance.h"
 #include "hpa/scenarios/runner.h"
 #include "hpa/scenarios/scenario.h"
-#include "scenarios/src/tools/cli_parse.h"
-#include "scenarios/src/tools/scenario_commands.h"
+#include "harness/cli/src/cli_parse.h"
+#include "harness/cli/src/scenario_commands.h"
 
 namespace hpa {
 namespace {

@@ -25,8 +25,8 @@
 #include "hpa/scenarios/sweep_diff.h"
 #include "hpa/scenarios/video_recorder.h"
 #include "hpa_version.h"
-#include "scenarios/src/tools/cli_parse.h"
-#include "scenarios/src/tools/scenario_commands.h"
+#include "harness/cli/src/cli_parse.h"
+#include "harness/cli/src/scenario_commands.h"
 
 namespace hpa {
 namespace {

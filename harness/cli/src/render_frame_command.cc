@@ -15,10 +15,10 @@
 #include "hpa/scenarios/scenario.h"
 #include "hpa/scenarios/video_recorder.h"
 #include "hpa/sim/world.h"
-#include "scenarios/src/output/media.h"
-#include "scenarios/src/tools/cli_parse.h"
-#include "scenarios/src/tools/scenario_command_common.h"
-#include "scenarios/src/tools/scenario_commands.h"
+#include "harness/reports/src/media.h"
+#include "harness/cli/src/cli_parse.h"
+#include "harness/cli/src/scenario_command_common.h"
+#include "harness/cli/src/scenario_commands.h"
 
 namespace hpa {
 namespace {

@@ -18,9 +18,9 @@
 #include "hpa/scenarios/runner.h"
 #include "hpa/scenarios/scenario.h"
 #include "hpa/scenarios/video_recorder.h"
-#include "scenarios/src/tools/cli_parse.h"
-#include "scenarios/src/tools/scenario_command_common.h"
-#include "scenarios/src/tools/scenario_commands.h"
+#include "harness/cli/src/cli_parse.h"
+#include "harness/cli/src/scenario_command_common.h"
+#include "harness/cli/src/scenario_commands.h"
 
 namespace hpa {
 namespace {

@@ -1,5 +1,5 @@
 #pragma once
-// What `hpa run`, `hpa compare` and `hpa render-frame` share (private to scenarios/src/tools/,
+// What `hpa run`, `hpa compare` and `hpa render-frame` share (private to harness/cli/src/,
 // defined in scenario_commands.cc): the options every scenario command takes and the scenario
 // and parameters they load, and what a run leaves behind (its record, its outputs cleared before
 // it, its summary lines, where its video went).

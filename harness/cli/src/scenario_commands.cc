@@ -18,8 +18,8 @@
 #include "hpa/scenarios/plots.h"
 #include "hpa/scenarios/run_record.h"
 #include "hpa/scenarios/scenario.h"
-#include "scenarios/src/tools/cli_parse.h"
-#include "scenarios/src/tools/scenario_command_common.h"
+#include "harness/cli/src/cli_parse.h"
+#include "harness/cli/src/scenario_command_common.h"
 
 namespace hpa {
 

@@ -20,7 +20,7 @@
 #include "hpa/scenarios/scenario.h"
 #include "hpa/scenarios/world_profile_yaml.h"
 #include "hpa/sim/faults.h"
-#include "scenarios/src/tools/cli_parse.h"
+#include "harness/cli/src/cli_parse.h"
 
 namespace hpa {
 namespace {

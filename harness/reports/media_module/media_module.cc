@@ -1,10 +1,10 @@
 // libhpa_media.so: image and video files through OpenCV's imgcodecs and videoio, loaded by
-// scenarios/src/output/media.cc when a process first writes one (see media.h for why).
+// harness/reports/src/media.cc when a process first writes one (see media.h for why).
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/videoio.hpp>
 #include <string>
 
-#include "scenarios/src/output/media.h"
+#include "harness/reports/src/media.h"
 
 namespace hpa {
 namespace {

@@ -1,5 +1,5 @@
 #pragma once
-// How the plot canvas draws its text and lines (private to scenarios/src/output/, shared by the
+// How the plot canvas draws its text and lines (private to harness/reports/src/, shared by the
 // figure in plot_canvas.cc and its panels in plot_panel.cc): the raster's font and colours, and
 // the size the vector formats give its text.
 

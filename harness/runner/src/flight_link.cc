@@ -1,4 +1,4 @@
-#include "scenarios/src/runner/flight_link.h"
+#include "harness/runner/src/flight_link.h"
 
 #include <algorithm>
 #include <atomic>
@@ -6,10 +6,10 @@
 #include <deque>
 
 #include "hpa/scenarios/runner.h"
-#include "scenarios/src/runner/flight_process.h"
-#include "scenarios/src/runner/frame_ring.h"
-#include "scenarios/src/runner/reply_order.h"
-#include "scenarios/src/runner/stack_process.h"
+#include "harness/runner/src/flight_process.h"
+#include "harness/runner/src/frame_ring.h"
+#include "harness/runner/src/reply_order.h"
+#include "harness/runner/src/stack_process.h"
 
 namespace hpa::runner {
 namespace {

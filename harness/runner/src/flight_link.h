@@ -10,7 +10,7 @@
 #include <string>
 
 #include "hpa/flight/protocol.h"
-#include "scenarios/src/runner/stack_process.h"
+#include "harness/runner/src/stack_process.h"
 
 namespace hpa::runner {
 

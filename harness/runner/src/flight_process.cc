@@ -1,4 +1,4 @@
-#include "scenarios/src/runner/flight_process.h"
+#include "harness/runner/src/flight_process.h"
 
 #include <dirent.h>
 #include <fcntl.h>

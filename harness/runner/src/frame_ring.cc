@@ -1,4 +1,4 @@
-#include "scenarios/src/runner/frame_ring.h"
+#include "harness/runner/src/frame_ring.h"
 
 #include <fcntl.h>
 #include <signal.h>

@@ -1,5 +1,5 @@
 // The order of a separate flight stack's replies (reply_order.h).
-#include "scenarios/src/runner/reply_order.h"
+#include "harness/runner/src/reply_order.h"
 
 #include <vector>
 

@@ -2,7 +2,7 @@
 // recorders, the lockstep schedule, the events and the latencies), the tick and its order of
 // steps (run_loop_steps.cc holds the steps), the progress line and the end of the run with its
 // metrics; and the runner's own log recorder.
-#include "scenarios/src/runner/run_loop.h"
+#include "harness/runner/src/run_loop.h"
 
 #include <unistd.h>
 
@@ -15,7 +15,7 @@
 
 #include "hpa/models/camera_model.h"
 #include "hpa/models/seed_streams.h"
-#include "scenarios/src/runner/events/fault_event.h"
+#include "harness/runner/src/events/fault_event.h"
 
 namespace hpa::runner {
 namespace {

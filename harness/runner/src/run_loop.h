@@ -12,7 +12,7 @@
 #include "hpa/models/ring_queue.h"
 #include "hpa/scenarios/runner.h"
 #include "hpa/sim/world.h"
-#include "scenarios/src/runner/flight_link.h"
+#include "harness/runner/src/flight_link.h"
 
 namespace hpa::runner {
 

@@ -5,7 +5,7 @@
 #include <optional>
 #include <utility>
 
-#include "scenarios/src/runner/run_loop.h"
+#include "harness/runner/src/run_loop.h"
 
 namespace hpa::runner {
 namespace {

@@ -6,7 +6,7 @@
 #include <string>
 
 #include "hpa/models/input_error.h"
-#include "scenarios/src/runner/run_loop.h"
+#include "harness/runner/src/run_loop.h"
 
 namespace hpa::runner {
 

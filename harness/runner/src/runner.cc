@@ -15,7 +15,7 @@
 #include "hpa/controller/team_controller.h"
 #include "hpa/sim/team_world.h"
 #include "hpa/sim/world.h"
-#include "scenarios/src/runner/run_loop.h"
+#include "harness/runner/src/run_loop.h"
 
 namespace hpa {
 namespace {

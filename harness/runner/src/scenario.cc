@@ -16,8 +16,8 @@
 #include "hpa/scenarios/metrics.h"
 #include "hpa/scenarios/reference_types.h"
 #include "hpa/scenarios/world_profile_yaml.h"
-#include "scenarios/src/runner/events/event_vehicles.h"
-#include "scenarios/src/runner/scenario_set_path.h"
+#include "harness/runner/src/events/event_vehicles.h"
+#include "harness/runner/src/scenario_set_path.h"
 
 namespace hpa {
 namespace {

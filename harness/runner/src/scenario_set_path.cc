@@ -1,6 +1,6 @@
 // A scenario's YAML tree changed at a dotted key path (scenario_set_path.h).
 
-#include "scenarios/src/runner/scenario_set_path.h"
+#include "harness/runner/src/scenario_set_path.h"
 
 #include <cmath>
 #include <cstdlib>

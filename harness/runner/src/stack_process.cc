@@ -1,4 +1,4 @@
-#include "scenarios/src/runner/stack_process.h"
+#include "harness/runner/src/stack_process.h"
 
 #include <poll.h>
 #include <signal.h>
@@ -15,7 +15,7 @@
 #include <thread>
 
 #include "hpa/scenarios/runner.h"
-#include "scenarios/src/runner/flight_process.h"
+#include "harness/runner/src/flight_process.h"
 
 namespace hpa::runner {
 namespace {

@@ -1,6 +1,6 @@
 // TeamPayloadCameras: the single vehicle's payload camera on every vehicle of a team.
 
-#include "scenarios/src/runner/team_cameras.h"
+#include "harness/runner/src/team_cameras.h"
 
 #include <chrono>
 #include <cmath>

@@ -12,10 +12,10 @@
 #include "hpa/flight/protocol.h"
 #include "hpa/flight/team_protocol.h"
 #include "hpa/sim/world.h"
-#include "scenarios/src/runner/flight_process.h"
-#include "scenarios/src/runner/reply_order.h"
-#include "scenarios/src/runner/stack_process.h"
-#include "scenarios/src/runner/team_flight_link.h"
+#include "harness/runner/src/flight_process.h"
+#include "harness/runner/src/reply_order.h"
+#include "harness/runner/src/stack_process.h"
+#include "harness/runner/src/team_flight_link.h"
 
 namespace hpa::runner {
 namespace {

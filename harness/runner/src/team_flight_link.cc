@@ -1,4 +1,4 @@
-#include "scenarios/src/runner/team_flight_link.h"
+#include "harness/runner/src/team_flight_link.h"
 
 #include <chrono>
 

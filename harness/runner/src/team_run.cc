@@ -16,9 +16,9 @@
 #include "hpa/models/rotor_model.h"
 #include "hpa/scenarios/runner.h"
 #include "hpa/sim/team_world.h"
-#include "scenarios/src/runner/events/fault_event.h"
-#include "scenarios/src/runner/team_flight_link.h"
-#include "scenarios/src/runner/team_run_loop.h"
+#include "harness/runner/src/events/fault_event.h"
+#include "harness/runner/src/team_flight_link.h"
+#include "harness/runner/src/team_run_loop.h"
 
 namespace hpa {
 namespace {

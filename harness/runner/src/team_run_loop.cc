@@ -1,7 +1,7 @@
 // The lockstep loop of one team run: events, motion capture, each vehicle's control step and
 // rate loop, the video and the world's step, tick by tick on the physics clock.
 
-#include "scenarios/src/runner/team_run_loop.h"
+#include "harness/runner/src/team_run_loop.h"
 
 #include <unistd.h>
 
@@ -16,7 +16,7 @@
 #include "hpa/controller/team_controller.h"
 #include "hpa/estimator/estimator.h"
 #include "hpa/models/cooperative_model.h"
-#include "scenarios/src/runner/events/fault_event.h"
+#include "harness/runner/src/events/fault_event.h"
 
 namespace hpa::runner {
 namespace {

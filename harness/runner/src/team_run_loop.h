@@ -16,8 +16,8 @@
 #include "hpa/models/lockstep.h"
 #include "hpa/scenarios/runner.h"
 #include "hpa/sim/team_world.h"
-#include "scenarios/src/runner/team_cameras.h"
-#include "scenarios/src/runner/team_flight_link.h"
+#include "harness/runner/src/team_cameras.h"
+#include "harness/runner/src/team_flight_link.h"
 
 namespace hpa::runner {
 

@@ -12,9 +12,9 @@
 #include "hpa/models/input_error.h"
 #include "hpa/scenarios/metrics.h"
 #include "hpa/scenarios/sweep.h"
-#include "scenarios/src/tools/cli_parse.h"
-#include "scenarios/src/tools/scenario_commands.h"
-#include "scenarios/src/tools/sweep/sweep_internal.h"
+#include "harness/cli/src/cli_parse.h"
+#include "harness/cli/src/scenario_commands.h"
+#include "harness/sweeps/src/sweep_internal.h"
 
 namespace hpa {
 

@@ -19,9 +19,9 @@
 #include "hpa/scenarios/runner.h"
 #include "hpa/sim/camera_image_model.h"
 #include "hpa/sim/world.h"
-#include "scenarios/src/tools/cli_parse.h"
-#include "scenarios/src/tools/scenario_commands.h"
-#include "scenarios/src/tools/sweep/sweep_internal.h"
+#include "harness/cli/src/cli_parse.h"
+#include "harness/cli/src/scenario_commands.h"
+#include "harness/sweeps/src/sweep_internal.h"
 
 namespace hpa {
 

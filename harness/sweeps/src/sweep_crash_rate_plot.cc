@@ -9,8 +9,8 @@
 #include <vector>
 
 #include "hpa/scenarios/plot_canvas.h"
-#include "scenarios/src/tools/sweep/sweep_internal.h"
-#include "scenarios/src/tools/sweep/sweep_summary_table.h"
+#include "harness/sweeps/src/sweep_internal.h"
+#include "harness/sweeps/src/sweep_summary_table.h"
 
 namespace hpa::sweep {
 namespace {

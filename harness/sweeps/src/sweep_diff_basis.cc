@@ -1,4 +1,4 @@
-#include "scenarios/src/tools/sweep_diff_basis.h"
+#include "harness/sweeps/src/sweep_diff_basis.h"
 
 #include <map>
 

@@ -19,9 +19,9 @@
 #include "hpa/scenarios/metrics.h"
 #include "hpa/scenarios/plot_canvas.h"
 #include "hpa/scenarios/sweep_diff.h"
-#include "scenarios/src/tools/cli_parse.h"
-#include "scenarios/src/tools/significant_digits.h"
-#include "scenarios/src/tools/sweep/sweep_internal.h"
+#include "harness/cli/src/cli_parse.h"
+#include "harness/cli/src/significant_digits.h"
+#include "harness/sweeps/src/sweep_internal.h"
 
 namespace hpa {
 namespace {

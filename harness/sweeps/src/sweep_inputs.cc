@@ -12,7 +12,7 @@
 #include "hpa/models/file_io.h"
 #include "hpa/models/input_error.h"
 #include "hpa/models/yaml_reader.h"
-#include "scenarios/src/tools/sweep/sweep_internal.h"
+#include "harness/sweeps/src/sweep_internal.h"
 
 namespace hpa::sweep {
 

@@ -1,5 +1,5 @@
 #pragma once
-// Private pieces of `hpa sweep` and `hpa merge`, shared by the files of scenarios/src/tools/sweep/
+// Private pieces of `hpa sweep` and `hpa merge`, shared by the files of harness/sweeps/src/
 // and their unit tests: results I/O (runs.jsonl records, the output-folder lock), the worker pool
 // and the summary.
 

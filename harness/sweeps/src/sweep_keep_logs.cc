@@ -14,7 +14,7 @@
 #include "hpa/scenarios/metric_defs.h"
 #include "hpa/scenarios/run_record.h"
 #include "hpa/scenarios/runner.h"
-#include "scenarios/src/tools/sweep/sweep_internal.h"
+#include "harness/sweeps/src/sweep_internal.h"
 
 namespace hpa::sweep {
 

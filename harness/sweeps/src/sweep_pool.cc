@@ -24,8 +24,8 @@
 #include "hpa/models/input_error.h"
 #include "hpa/scenarios/metrics.h"
 #include "hpa/scenarios/runner.h"
-#include "scenarios/src/runner/flight_process.h"
-#include "scenarios/src/tools/sweep/sweep_internal.h"
+#include "harness/runner/src/flight_process.h"
+#include "harness/sweeps/src/sweep_internal.h"
 
 namespace hpa::sweep {
 namespace {

@@ -16,8 +16,8 @@
 #include "hpa/models/input_error.h"
 #include "hpa/scenarios/metric_defs.h"
 #include "hpa/scenarios/provenance.h"
-#include "scenarios/src/tools/cli_parse.h"
-#include "scenarios/src/tools/sweep/sweep_internal.h"
+#include "harness/cli/src/cli_parse.h"
+#include "harness/sweeps/src/sweep_internal.h"
 
 namespace hpa::sweep {
 

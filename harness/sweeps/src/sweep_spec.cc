@@ -17,8 +17,8 @@
 #include "hpa/models/seed_streams.h"
 #include "hpa/models/yaml_reader.h"
 #include "hpa/scenarios/world_profile_yaml.h"
-#include "scenarios/src/tools/cli_parse.h"
-#include "scenarios/src/tools/sweep/sweep_internal.h"
+#include "harness/cli/src/cli_parse.h"
+#include "harness/sweeps/src/sweep_internal.h"
 
 namespace hpa {
 namespace sweep {

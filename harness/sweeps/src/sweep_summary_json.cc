@@ -10,8 +10,8 @@
 
 #include "hpa/models/file_io.h"
 #include "hpa/scenarios/metrics.h"
-#include "scenarios/src/tools/sweep/sweep_internal.h"
-#include "scenarios/src/tools/sweep/sweep_summary_table.h"
+#include "harness/sweeps/src/sweep_internal.h"
+#include "harness/sweeps/src/sweep_summary_table.h"
 
 namespace hpa::sweep {
 namespace {

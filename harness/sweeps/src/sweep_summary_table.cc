@@ -2,7 +2,7 @@
 // and its bins, the grid factors, each group's and each bin's tallies, and the grid layout of a
 // sweep with two or more grid factors.
 
-#include "scenarios/src/tools/sweep/sweep_summary_table.h"
+#include "harness/sweeps/src/sweep_summary_table.h"
 
 #include <algorithm>
 #include <cstddef>
@@ -12,7 +12,7 @@
 #include <utility>
 #include <vector>
 
-#include "scenarios/src/tools/sweep/sweep_internal.h"
+#include "harness/sweeps/src/sweep_internal.h"
 
 namespace hpa::sweep {
 

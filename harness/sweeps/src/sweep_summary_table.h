@@ -1,5 +1,5 @@
 #pragma once
-// How a sweep's summary groups and bins its runs (private to the files of scenarios/src/tools/
+// How a sweep's summary groups and bins its runs (private to the files of harness/cli/src/
 // sweep/ that write the summary): the tallies of each group and bin, the grid layout of a sweep
 // with two or more grid factors, and the pieces summary.json, summary.md and crash_rate.png share.
 // sweep_summary_table.cc tabulates; sweep_summary_json.cc, sweep_summary_markdown.cc and
@@ -13,7 +13,7 @@
 #include <vector>
 
 #include "hpa/scenarios/sweep.h"
-#include "scenarios/src/tools/sweep/sweep_internal.h"
+#include "harness/sweeps/src/sweep_internal.h"
 
 namespace hpa::sweep {
 

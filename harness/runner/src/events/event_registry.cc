@@ -4,7 +4,7 @@
 #include "hpa/models/registry.h"
 #include "hpa/models/yaml_reader.h"
 #include "hpa/scenarios/events.h"
-#include "scenarios/src/runner/events/fault_event.h"
+#include "harness/runner/src/events/fault_event.h"
 
 namespace hpa {
 namespace {

@@ -1,6 +1,6 @@
 // Which vehicle each event of a scenario acts on (event_vehicles.h).
 
-#include "scenarios/src/runner/events/event_vehicles.h"
+#include "harness/runner/src/events/event_vehicles.h"
 
 #include <algorithm>
 #include <optional>
@@ -8,7 +8,7 @@
 
 #include "hpa/models/input_error.h"
 #include "hpa/models/yaml_reader.h"
-#include "scenarios/src/runner/events/fault_event.h"
+#include "harness/runner/src/events/fault_event.h"
 
 namespace hpa {
 namespace {

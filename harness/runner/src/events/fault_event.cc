@@ -1,7 +1,7 @@
 // A fault of a sensor or an actuator for a while (docs/faults.md): `component` and `mode` from
 // the world's fault declaration (sim::FaultComponents), the mode's keys read from the same table.
 
-#include "scenarios/src/runner/events/fault_event.h"
+#include "harness/runner/src/events/fault_event.h"
 
 #include <algorithm>
 #include <limits>

@@ -1,6 +1,6 @@
 #pragma once
 // Scripted disturbances of a scenario (docs/design.md section 5). Each event type is a struct with
-// its own parsing, validation and application, in its own file under scenarios/src/runner/events/,
+// its own parsing, validation and application, in its own file under harness/runner/src/events/,
 // deriving from EventAction; a new type is that file (its struct declared here or in its own
 // header) and one registration line in event_registry.cc.
 
