@@ -3,8 +3,8 @@
 # (scenarios/*.yaml, scenarios/ci/*.yaml) on the ten seeds after those its bounds were derived
 # from (1-30 unless its comment says otherwise, scripts/scenario_bounds.py) and lists every seed
 # that fails; exit 1 if any does. With SEEDS, those seeds instead (1-40: the derivation seeds
-# too). A developer tool (several minutes on 2 cores); ctest `cli.bounds_held_out` runs the two
-# seeds after each file's derivation seeds.
+# too). A developer tool (several minutes on 2 cores); ctest `cli.bounds_held_out` runs the seed
+# after each file's derivation seeds.
 # With --unseen, each file on 100 seeds from 100001 on, which no derivation uses, and a file fails
 # when fewer than 99 of them pass (the bounds rule's tail allowance); it prints how many held.
 # --from N starts those 100 seeds at N instead (100101: a second, fresh set for a file whose
