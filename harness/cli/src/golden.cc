@@ -80,7 +80,8 @@ Json ParseJson(const std::string& text, const std::string& file) {
   }
 }
 
-// Tolerance of a dotted key: the entry for the key without list indices, else the default.
+// Tolerance of a dotted key: the entry for the key without list indices, else the default, else
+// none (exact).
 std::pair<double, double> ToleranceOf(const Json& tolerances, const std::string& path) {
   std::string key;
   std::stringstream parts(path);
@@ -88,10 +89,16 @@ std::pair<double, double> ToleranceOf(const Json& tolerances, const std::string&
     if (!part.empty() && std::all_of(part.begin(), part.end(), ::isdigit)) continue;
     key += (key.empty() ? "" : ".") + part;
   }
-  const Json& entry = tolerances.contains("keys") && tolerances["keys"].contains(key)
-                          ? tolerances["keys"][key]
-                          : tolerances["default"];
-  return {entry.value("rel", 0.0), entry.value("abs", 0.0)};
+  // a key's own tolerance, else the default one, else none (exact); never a const document's
+  // operator[] on a key it lacks, which is undefined
+  const Json* entry = nullptr;
+  if (tolerances.contains("keys") && tolerances["keys"].contains(key)) {
+    entry = &tolerances["keys"][key];
+  } else if (tolerances.contains("default")) {
+    entry = &tolerances["default"];
+  }
+  if (entry == nullptr || !entry->is_object()) return {0.0, 0.0};
+  return {entry->value("rel", 0.0), entry->value("abs", 0.0)};
 }
 
 // A value as the change list prints it: floats with `digits` significant digits.
